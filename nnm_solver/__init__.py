@@ -1,0 +1,13 @@
+"""nnm_solver: nonlinear normal modes by shooting and pseudo-arclength continuation.
+
+Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
+
+    import nnm_solver as nnm
+    model = nnm.Model(M, K, springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+    branch = nnm.continue_nnm(model, mode=1, energy_max=1e2)
+"""
+from .errors import NNMFileError, NNMInputError
+from .model import CubicSpring, DisplayMesh, Model
+from .io import load_extra, load_model, save_model
+
+__version__ = "0.1.0"
