@@ -11,3 +11,5 @@ from .model import CubicSpring, DisplayMesh, Model
 from .io import load_extra, load_model, save_model
 
 __version__ = "0.1.0"
+from .branch import Branch, mac
+from .nnm_continuation import continue_nnm

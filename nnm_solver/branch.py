@@ -1,0 +1,187 @@
+"""A computed NNM branch: one row per converged periodic orbit, plus tools to look at the orbits."""
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import NNMInputError
+from .floquet import detect_events
+from .shooting import modal_system
+
+
+class Branch:
+    """NNM branch of a model (columns have one row per converged point).
+
+    energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
+    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers, stable (N,)
+    bool, events: list of dicts (kind, index, energy, frequency_hz, detail).
+    status: 'done' | 'max_points' | 'cancelled' | 'failed' | 'running'; message: why it stopped.
+    settings: dict (steps_per_period, tol, symmetric, method, ...).
+    """
+
+    def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
+                 events=None, status="done", message="", settings=None, name=""):
+        self.model = model
+        self.mode = int(mode)
+        self.energy = np.asarray(energy, dtype=float).reshape(-1)
+        N = len(self.energy)
+        self.frequency_hz = np.asarray(frequency_hz, dtype=float).reshape(N)
+        self.period = np.asarray(period, dtype=float).reshape(N)
+        self.x0 = np.asarray(x0, dtype=float).reshape(N, model.n)
+        self.v0 = np.asarray(v0, dtype=float).reshape(N, model.n)
+        self.floquet = (np.full((N, 0), np.nan, dtype=complex) if floquet is None
+                        else np.asarray(floquet, dtype=complex).reshape(N, -1))
+        self.stable = (np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N))
+        if events is None:
+            events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable) \
+                if self.floquet.shape[1] else []
+        self.events = list(events)
+        self.status = str(status)
+        self.message = str(message)
+        self.settings = dict(settings or {})
+        self.name = str(name)
+
+    def __len__(self):
+        return len(self.energy)
+
+    def __repr__(self):
+        return (f"Branch(mode={self.mode}, points={len(self)}, "
+                f"energy={self.energy.min() if len(self) else 0:.3g}..{self.energy.max() if len(self) else 0:.3g} J, "
+                f"status={self.status!r})")
+
+    # ------------------------------------------------------------------ selection
+    def _check_index(self, i):
+        if not isinstance(i, (int, np.integer)) or not -len(self) <= i < len(self):
+            raise NNMInputError(f"point index {i!r} is out of range: the branch has {len(self)} points")
+        return int(i) % len(self)
+
+    def subset(self, index):
+        """Branch made of the rows ``index`` (slice, index array or boolean mask)."""
+        fl = self.floquet[index]
+        return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
+                      self.x0[index], self.v0[index], fl, self.stable[index], None, self.status,
+                      self.message, self.settings, self.name)
+
+    def interpolate(self, s):
+        """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
+        N = len(self)
+        if N == 0:
+            raise NNMInputError("the branch is empty")
+        s = float(s)
+        if not 0 <= s <= N - 1:
+            raise NNMInputError(f"fractional index {s} is outside 0..{N - 1}")
+        j = min(int(np.floor(s)), max(N - 2, 0))
+        w = s - j if N > 1 else 0.0
+        k = min(j + 1, N - 1)
+
+        def lerp(a):
+            return (1 - w) * a[j] + w * a[k]
+
+        x0, v0 = lerp(self.x0), lerp(self.v0)
+        near = j if w < 0.5 else k
+        return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
+                      [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
+                      [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
+                      self.name)
+
+    def at_energy(self, energy):
+        """One-point Branch at energy (J): the first crossing of that energy along the branch."""
+        E = self.energy
+        for j in range(len(E) - 1):
+            lo, hi = sorted((E[j], E[j + 1]))
+            if lo <= energy <= hi:
+                w = 0.0 if hi == lo else (energy - E[j]) / (E[j + 1] - E[j])
+                return self.interpolate(j + w)
+        if len(E) and energy == E[-1]:
+            return self.interpolate(len(E) - 1)
+        raise NNMInputError(f"energy {energy:.4g} J is outside the branch's range "
+                            f"{E.min():.4g}..{E.max():.4g} J" if len(E) else "the branch is empty")
+
+    # ------------------------------------------------------------------ orbits
+    def motion(self, i, samples=256):
+        """The periodic orbit of point i over one period: (t (samples,) s, x (samples, n) m).
+
+        Integrated with the branch's Newmark scheme at (at least) its steps per period.
+        """
+        i = self._check_index(i)
+        samples = int(samples)
+        if samples < 2:
+            raise NNMInputError("samples must be at least 2")
+        spp = int(self.settings.get("steps_per_period", 200))
+        sub = max(1, int(np.ceil(spp / samples)))
+        ms = modal_system(self.model)
+        T = self.period[i]
+        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), T, samples * sub)
+        if not ok:
+            raise RuntimeError(f"time integration of point {i} failed")
+        t = np.arange(samples) * T / samples
+        return t, ms.to_physical(Q[:-1:sub])
+
+    def velocity(self, i, samples=256):
+        """Velocities (samples, n) m/s along the orbit of point i, at the times of motion()."""
+        i = self._check_index(i)
+        spp = int(self.settings.get("steps_per_period", 200))
+        sub = max(1, int(np.ceil(spp / samples)))
+        ms = modal_system(self.model)
+        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), self.period[i], samples * sub)
+        return ms.to_physical(V[:-1:sub])
+
+    def harmonics(self, i, n=15):
+        """Fourier amplitudes (n+1, n_dof) of the orbit of point i: row k = harmonic k (k=0: mean), m."""
+        n = int(n)
+        if n < 1:
+            raise NNMInputError("n (number of harmonics) must be at least 1")
+        samples = max(256, 4 * (n + 1))
+        t, x = self.motion(i, samples)
+        X = np.fft.rfft(x, axis=0) / samples
+        amps = np.abs(X[: n + 1])
+        amps[1:] *= 2.0
+        return amps
+
+    def mac_to_linear(self, i):
+        """MAC (n_modes,) of the NNM shape x0 of point i with each linear mode shape (index k-1: mode k)."""
+        i = self._check_index(i)
+        _, shapes = self.model.linear_modes()
+        return mac_vector(self.x0[i], shapes)
+
+    def shape(self, i):
+        """Displacement shape of point i: x0, or the largest-norm configuration if x0 is ~0."""
+        i = self._check_index(i)
+        return self.x0[i]
+
+    # ------------------------------------------------------------------ scaling
+    def scaled(self, factor):
+        """The branch of the same model with every k3 multiplied by ``factor`` (> 0).
+
+        Exact for cubic springs: frequencies unchanged, displacements and velocities / sqrt(factor),
+        energies / factor, multipliers unchanged.
+        """
+        factor = float(factor)
+        if not factor > 0 or not np.isfinite(factor):
+            raise NNMInputError(f"scale factor must be a positive number, got {factor}")
+        r = 1.0 / np.sqrt(factor)
+        events = [dict(e, energy=e["energy"] / factor) for e in self.events]
+        settings = dict(self.settings, k3_factor=self.settings.get("k3_factor", 1.0) * factor)
+        return Branch(self.model.scaled(factor), self.mode, self.energy / factor, self.frequency_hz,
+                      self.period, self.x0 * r, self.v0 * r, self.floquet, self.stable, events, self.status,
+                      self.message, settings, self.name)
+
+
+def mac_vector(x, shapes):
+    """MAC of one shape x (n,) with each column of shapes (n, m)."""
+    x = np.asarray(x, dtype=float)
+    num = (shapes.T @ x) ** 2
+    den = np.sum(shapes * shapes, axis=0) * (x @ x)
+    return num / np.maximum(den, 1e-300)
+
+
+def mac(a, b):
+    """MAC between two shapes (n,) -> float, or between the columns of two (n, k) arrays -> (k_a, k_b)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    if a.ndim == 1 and b.ndim == 1:
+        return float(mac_vector(a, b[:, None])[0])
+    a2 = a if a.ndim == 2 else a[:, None]
+    b2 = b if b.ndim == 2 else b[:, None]
+    num = (a2.T @ b2) ** 2
+    den = np.outer(np.sum(a2 * a2, axis=0), np.sum(b2 * b2, axis=0))
+    return num / np.maximum(den, 1e-300)

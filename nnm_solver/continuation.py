@@ -1,0 +1,171 @@
+r"""Pseudo-arclength continuation of the solutions of F(u) = 0 (seed paper, eq. 7-11).
+
+Generic: it knows nothing about shooting or harmonic balance.  A *problem* provides
+
+    problem.residual(u) -> r                  F(u), shape (m,), m >= len(u) - 1
+    problem.jacobian(u) -> (r, J)             F(u) and dF/du, shape (m, len(u))
+    problem.error(u, r) -> float              relative error used for convergence (eq. 11)
+    problem.accept(u, J)                      called once a point is accepted (e.g. moves the
+                                              phase-condition reference)
+    problem.max_step(u) -> float              optional: largest step from u (e.g. relative to
+                                              the amplitude)
+
+The system may be over-determined with a redundant row (shooting of a conservative system has
+one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
+
+Predictor (eq. 7-8): u~ = u_j + s p_j, with p_j the unit tangent, i.e. the solution of
+[J; p_{j-1}^T] p = [0; 1] normalised.  Corrector (eq. 9-10): Newton on [F(u); p_j^T (u - u~)] = 0,
+i.e. corrections orthogonal to the tangent.  The Jacobian is re-used between iterations (chord
+Newton) and refreshed only when the iteration stops contracting fast, so most iterations cost only
+a residual evaluation.  Step control: the step grows when the corrector converges in few iterations,
+shrinks when it needs many, and is halved on failure or when the new tangent turns by more than
+``max_angle`` (which guards against jumping between nearby branches).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+
+@dataclass(frozen=True)
+class ContinuationSettings:
+    """Step control of the pseudo-arclength continuation (step lengths in units of u)."""
+
+    step: float
+    step_min: float
+    step_max: float
+    max_iter: int = 12
+    target_iter: int = 4
+    max_angle: float = 0.35      # rad, largest turn of the tangent between two points
+    max_correction: float = 0.5  # largest corrector displacement, relative to the step
+    max_failures: int = 12       # consecutive halvings before giving up
+    refresh_ratio: float = 0.3   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
+
+
+@dataclass
+class ContinuationPoint:
+    u: np.ndarray
+    tangent: np.ndarray
+    jacobian: np.ndarray
+    iterations: int
+    step: float
+    error: float
+
+
+class LeastSquares:
+    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once."""
+
+    def __init__(self, A):
+        self.Q, self.R = sla.qr(A, mode="economic", check_finite=False)
+        d = np.abs(np.diag(self.R))
+        self.rcond = d.min() / max(d.max(), 1e-300)
+
+    def solve(self, b):
+        return sla.solve_triangular(self.R, self.Q.T @ b, check_finite=False)
+
+
+def tangent(J, previous):
+    """Unit tangent p of F(u) = 0 from J = dF/du, oriented along ``previous`` (eq. 8)."""
+    A = np.vstack([J, previous[None, :]])
+    b = np.zeros(A.shape[0])
+    b[-1] = 1.0
+    p = LeastSquares(A).solve(b)
+    p /= np.linalg.norm(p)
+    return p if p @ previous >= 0 else -p
+
+
+class CorrectorFailure(Exception):
+    pass
+
+
+def correct(problem, u_pred, p, settings, tol, J=None):
+    """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p.
+
+    Returns (u, J, iterations, error).  J is the Jacobian at the converged point.
+    """
+    u = u_pred.copy()
+    factor = None
+    last_norm = None
+    for it in range(settings.max_iter + 1):
+        fresh = False
+        if factor is None or J is None:
+            r, J = problem.jacobian(u)
+            fresh = True
+            factor = LeastSquares(np.vstack([J, p[None, :]]))
+        else:
+            r = problem.residual(u)
+        if not np.all(np.isfinite(r)):
+            raise CorrectorFailure("the time integration diverged (non-finite state)")
+        err = problem.error(u, r)
+        if err < tol:
+            if not fresh:  # the monodromy/Jacobian must belong to the converged point
+                r, J = problem.jacobian(u)
+                err = problem.error(u, r)
+                if not err < tol:
+                    raise CorrectorFailure("the residual changed when the Jacobian was refreshed")
+            return u, J, it, err
+        if it == settings.max_iter:
+            break
+        rhs = np.concatenate([-r, [-(p @ (u - u_pred))]])
+        du = factor.solve(rhs)
+        nrm = np.linalg.norm(du)
+        if not np.isfinite(nrm):
+            raise CorrectorFailure("singular corrector system")
+        if last_norm is not None and nrm > settings.refresh_ratio * last_norm and not fresh:
+            factor = None  # poor contraction: refresh the Jacobian at the next iterate
+        last_norm = nrm
+        u = u + du
+    raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
+
+
+def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
+    """Iterate over converged points along the branch through u0 (first yielded point: u0 corrected).
+
+    u0 : approximate first point; p0 : approximate direction (the first point is corrected with
+    corrections orthogonal to p0).  Yields ContinuationPoint; the caller stops the iteration.
+    When a step cannot be completed even at ``step_min`` the generator returns with a
+    ``StopIteration`` value: the reason (str).
+    """
+    p0 = p0 / np.linalg.norm(p0)
+    try:
+        u, J, it, err = correct(problem, u0, p0, settings, tol, J0)
+    except CorrectorFailure as exc:
+        return f"the starting point did not converge: {exc}"
+    p = tangent(J, p0)
+    problem.accept(u, J)
+    s = settings.step
+    yield ContinuationPoint(u, p, J, it, 0.0, err)
+    failures = 0
+    while True:
+        u_pred = u + s * p
+        try:
+            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol, J)
+            dist = np.linalg.norm(u_new - u_pred)
+            if dist > settings.max_correction * s:
+                raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
+            p_new = tangent(J_new, p)
+            if p_new @ p < np.cos(settings.max_angle):
+                raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(p_new @ p, -1, 1))):.0f} deg")
+        except CorrectorFailure as exc:
+            failures += 1
+            s *= 0.5
+            if s < settings.step_min or failures > settings.max_failures:
+                return f"continuation stopped: {exc}; step {s:.2e} below the minimum"
+            continue
+        failures = 0
+        u, J, p = u_new, J_new, p_new
+        problem.accept(u, J)
+        yield ContinuationPoint(u, p, J, it, s, err)
+        # step control from the number of corrector iterations
+        if it <= settings.target_iter // 2:
+            s *= 2.0
+        elif it < settings.target_iter:
+            s *= 1.4
+        elif it > settings.target_iter + 1:
+            s *= 0.6
+        s_max = settings.step_max
+        if hasattr(problem, "max_step"):
+            s_max = min(s_max, problem.max_step(u))
+        s = float(np.clip(s, settings.step_min, max(s_max, settings.step_min)))

@@ -1,0 +1,144 @@
+"""continue_nnm: an NNM branch from a linear mode at low energy up to a target energy.
+
+Shooting (shooting.py) + pseudo-arclength continuation (continuation.py) + Floquet analysis
+(floquet.py), collected into a Branch (branch.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .branch import Branch
+from .continuation import ContinuationSettings, pseudo_arclength
+from .errors import NNMInputError
+from .floquet import STABILITY_TOL, detect_events, is_stable
+from .model import Model
+from .shooting import ShootingProblem, discrete_linear_period, modal_system
+
+#: fraction of the linear potential energy carried by the springs at the first point
+START_NONLINEARITY = 1e-5
+
+
+def _check_positive(name, value, integer=False):
+    ok = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.number))
+    if not ok or isinstance(value, bool) or not np.isfinite(value) or value <= 0:
+        raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
+
+
+def start_amplitude(system, k, energy_max, energy_min=None):
+    """Modal amplitude (sqrt(kg) m) of the first point: nearly linear, below energy_max."""
+    w2 = system.omega2[k]
+    if energy_min is not None:
+        return math.sqrt(2.0 * energy_min / w2)
+    b = system.Bq[:, k]
+    c = float(np.sum(np.abs(system.k3) * b ** 4))
+    a_lin = math.sqrt(2.0 * energy_max * 1e-6 / w2)
+    if c <= 0:
+        return a_lin
+    # k3 b^4 a^4 / 4 = START_NONLINEARITY * w^2 a^2 / 2
+    a_nl = math.sqrt(2.0 * START_NONLINEARITY * w2 / c)
+    return min(a_nl, math.sqrt(2.0 * energy_max * 1e-2 / w2))
+
+
+def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_points=500, on_point=None,
+                 stop=None, energy_min=None, symmetric=True, floquet=True, step=None, max_angle=0.35,
+                 max_correction=0.5, max_rel_step=0.4):
+    """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
+
+    Parameters
+    ----------
+    steps_per_period : Newmark steps per period (the error in frequency is O(steps^-2)).
+    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11).
+    max_points : largest number of points kept.
+    on_point : optional callable(branch_snapshot_row: dict) called after each converged point.
+    stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
+    energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
+    symmetric : use half-period shooting (valid for the odd cubic nonlinearity; see shooting.py).
+    floquet : compute Floquet multipliers and stability at every point.
+    step : first step length in units of the scaled unknowns (default: half the starting amplitude).
+    max_angle : largest turn (rad) of the branch tangent between two points.
+
+    Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
+    point computed before a failure is kept.
+    """
+    if not isinstance(model, Model):
+        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
+    _check_positive("energy_max", energy_max)
+    _check_positive("steps_per_period", steps_per_period, integer=True)
+    _check_positive("tol", tol)
+    _check_positive("max_points", max_points, integer=True)
+    if energy_min is not None:
+        _check_positive("energy_min", energy_min)
+        if energy_min >= energy_max:
+            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    if steps_per_period < 8:
+        raise NNMInputError(f"steps_per_period={steps_per_period} is too small; use at least 8 (200 is typical)")
+    k = model.check_mode(mode)
+    system = modal_system(model)
+    problem = ShootingProblem(system, k, steps_per_period, symmetric=symmetric, max_rel_step=max_rel_step)
+    a0 = start_amplitude(system, k, energy_max, energy_min)
+    w = math.sqrt(system.omega2[k])
+    q0 = np.zeros(model.n)
+    q0[k] = a0
+    T0 = discrete_linear_period(w, problem.spp)
+    u0 = problem.pack(q0, np.zeros(model.n), T0)
+    p0 = np.zeros_like(u0)
+    p0[k] = 1.0
+    s0 = 0.5 * a0 if step is None else float(step)
+    settings = ContinuationSettings(step=s0, step_min=1e-8 * a0, step_max=np.inf, max_angle=max_angle,
+                                    max_correction=max_correction)
+
+    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], floquet=[], stable=[], iterations=[])
+    status, message = "failed", ""
+    gen = pseudo_arclength(problem, u0, p0, settings, tol)
+    E_start = None
+    try:
+        while True:
+            if stop is not None and stop.is_set():
+                status, message = "cancelled", f"cancelled after {len(rows['energy'])} points"
+                break
+            try:
+                pt = next(gen)
+            except StopIteration as fin:
+                status, message = "failed", str(fin.value or "continuation stopped")
+                break
+            qz, vz, T = problem.unpack(pt.u)
+            x0 = system.to_physical(qz)
+            v0 = system.to_physical(vz)
+            E = float(model.energy(x0, v0))
+            if floquet:
+                mu = problem.floquet_multipliers()
+                stable = is_stable(mu, STABILITY_TOL)
+            else:
+                mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
+            for key, val in (("energy", E), ("frequency_hz", 1.0 / T), ("period", T), ("x0", x0), ("v0", v0),
+                             ("floquet", mu), ("stable", stable), ("iterations", pt.iterations)):
+                rows[key].append(val)
+            if on_point is not None:
+                on_point({key: val[-1] for key, val in rows.items()})
+            E_start = E if E_start is None else E_start
+            if E >= energy_max:
+                status, message = "done", f"reached energy_max = {energy_max:g} J"
+                break
+            if len(rows["energy"]) >= max_points:
+                status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
+                break
+            if len(rows["energy"]) > 3 and E < 0.5 * E_start:
+                status, message = "done", "the branch returned to low energy"
+                break
+    finally:
+        gen.close()
+    n = model.n
+    N = len(rows["energy"])
+    fl = np.array(rows["floquet"]).reshape(N, 2 * n) if N else np.zeros((0, 2 * n), complex)
+    st = np.array(rows["stable"], dtype=bool)
+    E = np.array(rows["energy"])
+    f = np.array(rows["frequency_hz"])
+    branch = Branch(model, mode, E, f, np.array(rows["period"]), np.array(rows["x0"]).reshape(N, n),
+                    np.array(rows["v0"]).reshape(N, n), fl, st,
+                    detect_events(E, f, fl, st) if floquet else detect_events(E, f, fl, np.ones(N, bool)),
+                    status, message,
+                    dict(method="shooting", steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
+                         energy_max=energy_max, k3_factor=1.0))
+    return branch

@@ -1,0 +1,171 @@
+r"""Shooting formulation of the NNM problem (seed paper, section 3.1 and 3.3).
+
+Unknowns (scaled, dimension 2n + 1), in mass-normalised modal coordinates q (x = Phi q):
+
+    u = [q0 ; v0 / w_r ; T / T_r]
+
+with w_r = 2 pi / T_r the linear angular frequency of the continued mode.
+
+Shooting function (eq. 4).  Full period:  H = [q(T) - q0 ; (v(T) - v0) / w_r].
+Half period (default, ``symmetric=True``): cubic springs make the equations odd
+(f(-x) = -f(x)), so the orbits that continue a linear mode satisfy z(t + T/2) = -z(t); they are
+found by  H = [q(T/2) + q0 ; (v(T/2) + v0) / w_r]  at half the cost, and the full monodromy is
+the square of the half-period map (z -> -z commutes with the flow).  Every solution of the
+half-period problem is an exact periodic orbit of period T.
+
+Phase condition (eq. 6):  h(u) = <q_ref, v0> / w_r = <x_ref, M xdot(0)> / w_r = 0,  where q_ref is
+the displacement of the previous converged point: t = 0 is an extremum of the motion projected
+on the previous shape (for synchronous motions: the instant of zero velocity).  The trivial orbit
+u = 0 is excluded by starting at finite amplitude and by the arclength condition.
+
+Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .newmark import sweep_record, sweep_sensitivity, sweep_state
+
+
+class ModalSystem:
+    """A Model in mass-normalised modal coordinates:  q'' + Omega^2 q + Bq^T k3 (Bq q)^3 = 0."""
+
+    def __init__(self, model):
+        lam, Phi = model._eig
+        self.model = model
+        self.n = model.n
+        self.omega2 = np.ascontiguousarray(lam, dtype=float)
+        self.Phi = np.ascontiguousarray(Phi)
+        MPhi = model._M @ Phi
+        self.PhiT_M = np.ascontiguousarray(np.asarray(MPhi).T)  # q = Phi^T M x
+        self.Bq = np.ascontiguousarray(model.spring_matrix @ Phi)
+        self.k3 = np.ascontiguousarray(model.k3, dtype=float)
+
+    def to_modal(self, x):
+        """Modal coordinates of x: (n,) -> (n,), or (k, n) -> (k, n)."""
+        return np.asarray(x) @ self.PhiT_M.T
+
+    def to_physical(self, q):
+        return np.asarray(q) @ self.Phi.T
+
+    def orbit(self, q0, v0, duration, nsteps):
+        """States at nsteps + 1 equally spaced times over ``duration`` (s): (Q, V, ok)."""
+        return sweep_record(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float),
+                            duration / nsteps, int(nsteps), self.omega2, self.Bq, self.k3)
+
+
+def modal_system(model):
+    """The (cached) ModalSystem of a model."""
+    ms = model.__dict__.get("_modal_system")
+    if ms is None:
+        ms = ModalSystem(model)
+        model.__dict__["_modal_system"] = ms
+    return ms
+
+
+def discrete_linear_period(omega, nsteps_per_period):
+    """Period T (s) whose Newmark discretisation with N steps closes exactly for frequency omega (rad/s).
+
+    Average-acceleration Newmark rotates by 2 atan(omega h / 2) per step, so N steps close
+    when omega T / (2N) = tan(pi / N).
+    """
+    N = nsteps_per_period
+    return 2.0 * N / omega * np.tan(np.pi / N)
+
+
+class ShootingProblem:
+    """Shooting function + phase condition of one NNM branch, for ``continuation.pseudo_arclength``."""
+
+    def __init__(self, system, mode_index, steps_per_period=200, symmetric=True, max_rel_step=0.4):
+        if steps_per_period < 8:
+            raise ValueError("steps_per_period must be at least 8")
+        if symmetric and steps_per_period % 2:
+            steps_per_period += 1
+        self.sys = system
+        self.n = system.n
+        self.k = mode_index
+        self.spp = int(steps_per_period)
+        self.symmetric = bool(symmetric)
+        self.nsteps = self.spp // 2 if self.symmetric else self.spp
+        self.frac = 0.5 if self.symmetric else 1.0
+        self.w_r = float(np.sqrt(system.omega2[mode_index]))
+        self.T_r = 2 * np.pi / self.w_r
+        self.q_ref = np.zeros(self.n)
+        self.q_ref[mode_index] = 1.0
+        self.max_rel_step = max_rel_step
+        self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
+        self.accepted_map = None  # ... at the last accepted point
+
+    # --------------------------------------------------------------- packing
+    def pack(self, q0, v0, T):
+        return np.concatenate([q0, v0 / self.w_r, [T / self.T_r]])
+
+    def unpack(self, u):
+        n = self.n
+        return u[:n], u[n:2 * n] * self.w_r, u[2 * n] * self.T_r
+
+    def _h(self, T):
+        return self.frac * T / self.nsteps
+
+    # --------------------------------------------------------------- problem protocol
+    def residual(self, u):
+        q0, v0, T = self.unpack(u)
+        if not T > 0:
+            return np.full(2 * self.n + 1, np.nan)
+        q, v, ok = sweep_state(q0, v0, self._h(T), self.nsteps, self.sys.omega2, self.sys.Bq, self.sys.k3)
+        if not ok:
+            return np.full(2 * self.n + 1, np.nan)
+        return self._assemble(q, v, q0, v0)
+
+    def _assemble(self, q, v, q0, v0):
+        sgn = 1.0 if self.symmetric else -1.0
+        return np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self.q_ref @ v0 / self.w_r]])
+
+    def jacobian(self, u):
+        n, w = self.n, self.w_r
+        q0, v0, T = self.unpack(u)
+        if not T > 0:
+            return np.full(2 * n + 1, np.nan), np.eye(2 * n + 1)
+        h = self._h(T)
+        q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, self.sys.omega2,
+                                                         self.sys.Bq, self.sys.k3)
+        if not ok:
+            return np.full(2 * n + 1, np.nan), np.eye(2 * n + 1)
+        r = self._assemble(q, v, q0, v0)
+        self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0; v0]
+        dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
+        sgn = 1.0 if self.symmetric else -1.0
+        J = np.zeros((2 * n + 1, 2 * n + 1))
+        J[:n, :n] = Sq[:, :n]
+        J[:n, n:2 * n] = Sq[:, n:] * w
+        J[n:2 * n, :n] = Sv[:, :n] / w
+        J[n:2 * n, n:2 * n] = Sv[:, n:]
+        J[:n, 2 * n] = sq_h * dh_du
+        J[n:2 * n, 2 * n] = sv_h * dh_du / w
+        J[np.arange(2 * n), np.arange(2 * n)] += sgn
+        J[2 * n, n:2 * n] = self.q_ref
+        return r, J
+
+    def error(self, u, r):
+        """Relative periodicity error (eq. 11) in the scaled state [q; v / w_r]."""
+        return float(np.linalg.norm(r[:2 * self.n]) / max(np.linalg.norm(u[:2 * self.n]), 1e-300))
+
+    def accept(self, u, J):
+        q0 = u[:self.n]
+        self.q_ref = q0 / np.linalg.norm(q0)
+        self.accepted_map = self.half_map
+
+    def max_step(self, u):
+        return self.max_rel_step * np.linalg.norm(u[:2 * self.n])
+
+    # --------------------------------------------------------------- results
+    def monodromy(self):
+        """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
+        Mh = self.accepted_map
+        return Mh @ Mh if self.symmetric else Mh
+
+    def floquet_multipliers(self):
+        """Eigenvalues of the monodromy of the last accepted point."""
+        import scipy.linalg as sla
+        lam = sla.eigvals(self.accepted_map, check_finite=False)
+        return lam ** 2 if self.symmetric else lam
