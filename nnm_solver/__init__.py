@@ -13,3 +13,8 @@ from .io import load_extra, load_model, save_model
 __version__ = "0.1.0"
 from .branch import Branch, mac
 from .nnm_continuation import continue_nnm
+from .jobs import Job, start_branch
+from .io import load_branches, save_branch
+from .floquet import STABILITY_TOL
+from .matio import load_mat_model
+from .plotting import plot_fep

@@ -28,12 +28,11 @@ class Branch:
         self.period = np.asarray(period, dtype=float).reshape(N)
         self.x0 = np.asarray(x0, dtype=float).reshape(N, model.n)
         self.v0 = np.asarray(v0, dtype=float).reshape(N, model.n)
-        self.floquet = (np.full((N, 0), np.nan, dtype=complex) if floquet is None
-                        else np.asarray(floquet, dtype=complex).reshape(N, -1))
+        self.floquet = (np.full((N, 2 * model.n), np.nan, dtype=complex) if floquet is None
+                        else np.asarray(floquet, dtype=complex).reshape(N, 2 * model.n))
         self.stable = (np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N))
         if events is None:
-            events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable) \
-                if self.floquet.shape[1] else []
+            events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         self.events = list(events)
         self.status = str(status)
         self.message = str(message)

@@ -246,3 +246,101 @@ def load_extra(path, name):
         if "extra" not in f or name not in f["extra"]:
             return None
         return _read_group_tree(f["extra"][name])
+
+
+# ---------------------------------------------------------------------- branches
+def _branch_group_name(f, branch):
+    g = f.require_group("branches")
+    base = branch.name or f"mode{branch.mode}"
+    name, k = base, 2
+    while name in g:
+        name, k = f"{base}_{k}", k + 1
+    return name
+
+
+def save_branch(path, branch, name=None):
+    """Append ``branch`` to the nnm file at ``path`` (created with the branch's model if absent).
+
+    Everything already in the file is kept; the write is atomic. Returns the group name used
+    (under /branches).
+    """
+    from .branch import Branch
+    import json
+
+    if not isinstance(branch, Branch):
+        raise NNMInputError(f"save_branch needs an nnm_solver.Branch, got {type(branch).__name__}")
+    path = Path(path)
+    if path.exists():
+        with open_nnm(path) as f:
+            n_file = int(f["model"].attrs["n_dof"]) if "model" in f else None
+        if n_file is not None and n_file != branch.model.n:
+            raise NNMInputError(f"{path} holds a model with {n_file} DOFs but the branch has {branch.model.n}; "
+                                f"save it to another file")
+    with atomic_h5(path, copy_existing=True) as f:
+        if "model" not in f:
+            write_model_group(f, branch.model)
+        if name is not None:
+            branch = branch.subset(slice(None))
+            branch.name = str(name)
+        gname = _branch_group_name(f, branch)
+        g = f["branches"].create_group(gname)
+        g.attrs["created_order"] = len(f["branches"]) - 1
+        g.attrs["mode"] = branch.mode
+        g.attrs["status"] = branch.status
+        g.attrs["message"] = branch.message
+        g.attrs["name"] = branch.name or gname
+        g.attrs["settings_json"] = json.dumps(_jsonable(branch.settings))
+        g.attrs["events_json"] = json.dumps(_jsonable(branch.events))
+        for key in ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable"):
+            data = getattr(branch, key)
+            g.create_dataset(key, data=data, compression="gzip" if data.size > 64 else None)
+        g.create_dataset("k3", data=branch.model.k3)
+    return gname
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
+def load_branches(path, model=None):
+    """All branches stored in the nnm file at ``path`` (list of Branch, in file order).
+
+    model : the file's model if already loaded (saves reading it again).
+    """
+    from .branch import Branch
+    import json
+
+    with open_nnm(path) as f:
+        if model is None:
+            model = read_model_group(f, path)
+        out = []
+        if "branches" not in f:
+            return out
+        for gname in sorted(f["branches"], key=lambda s: f["branches"][s].attrs.get("created_order", 0)):
+            g = f["branches"][gname]
+            try:
+                cols = {k: g[k][()] for k in ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")}
+                k3 = g["k3"][()] if "k3" in g else model.k3
+                settings = json.loads(g.attrs.get("settings_json", "{}"))
+                events = json.loads(g.attrs.get("events_json", "[]"))
+            except (KeyError, OSError, ValueError) as exc:
+                raise NNMFileError(f"{path}: branch {gname} is incomplete or damaged ({exc})") from None
+            m = model
+            if len(k3) == len(model.springs) and not np.array_equal(k3, model.k3):
+                m = model.with_springs([CubicSpring(dof=s.dof, other=s.other, k3=float(k))
+                                        for s, k in zip(model.springs, k3)])
+            try:
+                out.append(Branch(m, int(g.attrs.get("mode", 0)), events=events,
+                                  status=str(g.attrs.get("status", "")), message=str(g.attrs.get("message", "")),
+                                  settings=settings, name=str(g.attrs.get("name", gname)), **cols))
+            except ValueError as exc:
+                raise NNMFileError(f"{path}: branch {gname} has inconsistent shapes ({exc})") from None
+        return out
