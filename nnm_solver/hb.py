@@ -1,0 +1,193 @@
+r"""NNM branches by harmonic balance (HB): a second method, independent of shooting/Newmark.
+
+Model (SI units): M x'' + K x + B^T [k3 * (B x)^3] = 0, x (m), k3 (N/m^3), d = B x the spring
+deformations (m).  A periodic orbit of angular frequency omega (rad/s, period T = 2 pi / omega s)
+is written as a truncated Fourier series in mass-normalised modal coordinates (x = Phi q):
+
+    x(t) = Phi sum_j A[j] c_j(omega t),   c_j = cos(h_j theta) [or sin(h_j theta)],
+
+and the equations of motion are balanced harmonic by harmonic (Galerkin):
+
+    (Omega^2 - h_j^2 omega^2) A[j] + F[j](A) = 0,   F = P [k3 (E A Bq^T)^3] Bq   (AFT)
+
+E / P: sampling of the basis at N equispaced instants / its projector, Bq = B Phi.  The
+nonlinear forces are evaluated in the time domain on the n_s spring deformations only; the
+Jacobian is analytic (chain rule through E and P).  Details and the Jacobian: ``hb_aft.py``.
+
+Basis (``basis=``):
+  * ``"odd"`` (default): cosines of the odd harmonics h = 1, 3, ..., <= ``harmonics``.  The
+    NNMs that continue a linear mode of a model with odd (cubic) springs are symmetric,
+    x(-t) = x(t) and x(t + T/2) = -x(t), so this basis is exact for them; t = 0 is an instant of
+    zero velocity (v0 = 0) and no phase condition is needed.
+  * ``"full"``: mean + cosines and sines of h = 1..``harmonics`` for general periodic orbits, with
+    the phase condition <q_ref, q'(0)> = 0 (q_ref: shape of the previous point), as in shooting.
+
+Unknowns u = [A (sqrt(kg) m) ; omega / w_r]; no amplitude normalisation: the pseudo-arclength
+engine (continuation.py) adds the arclength row.  Convergence: ||R|| / (w_r^2 ||A||) < tol.
+HB converges exponentially in the number of harmonics for these analytic orbits.
+
+Each point's energy (J) is ``model.energy(x(0), v(0))``; Floquet multipliers are not computed
+(NaN) and ``stable`` is all True: stability needs shooting (``continue_nnm``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .branch import Branch
+from .continuation import ContinuationSettings, pseudo_arclength
+from .errors import NNMInputError
+from .floquet import detect_events
+from .hb_aft import BASES, HBBasis, HBProblem
+from .model import Model
+from .nnm_continuation import _check_positive, start_amplitude
+from .shooting import modal_system
+
+__all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion"]
+
+
+def _basis(model, harmonics, samples, basis):
+    if basis not in BASES:
+        raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
+    _check_positive("harmonics", harmonics, integer=True)
+    if samples is not None:
+        _check_positive("samples", samples, integer=True)
+        if samples < 2 * harmonics + 1:
+            raise NNMInputError(f"samples={samples} is too few for {harmonics} harmonics; use at least "
+                                f"{2 * harmonics + 1} (more than {4 * harmonics} avoids aliasing of the cubic)")
+    return HBBasis(harmonics, basis, samples)
+
+
+def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8, max_points=500, on_point=None,
+                    stop=None, energy_min=None, basis="odd", step=None, max_angle=0.35, max_correction=0.5,
+                    max_rel_step=0.4):
+    """NNM branch of linear mode ``mode`` (1-based) by harmonic balance, from low energy to ``energy_max`` (J).
+
+    Parameters
+    ----------
+    harmonics : highest harmonic order kept (``basis="odd"``: orders 1, 3, ..., <= harmonics).
+    samples : time samples per period for AFT (default 4*harmonics + 4: exact for cubic springs).
+    tol : relative residual tolerance of the harmonic-balance equations.
+    basis : ``"odd"`` (cosines of odd harmonics, symmetric NNMs) or ``"full"`` (see module doc).
+    max_points, on_point, stop, energy_min, step, max_angle, max_correction : as ``continue_nnm``.
+
+    Returns a Branch (settings["method"] = "harmonic_balance"); the Fourier coefficients of each
+    point are available from ``hb_coefficients(branch, i)``.
+    """
+    if not isinstance(model, Model):
+        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
+    _check_positive("energy_max", energy_max)
+    _check_positive("tol", tol)
+    _check_positive("max_points", max_points, integer=True)
+    if energy_min is not None:
+        _check_positive("energy_min", energy_min)
+        if energy_min >= energy_max:
+            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    hb = _basis(model, harmonics, samples, basis)
+    k = model.check_mode(mode)
+    system = modal_system(model)
+    problem = HBProblem(system, k, hb, max_rel_step=max_rel_step)
+    a0 = start_amplitude(system, k, energy_max, energy_min)
+    A0 = np.zeros((len(hb), model.n))
+    A0[int(np.flatnonzero((hb.h == 1) & ~hb.sine)[0]), k] = a0
+    u0 = problem.pack(A0, problem.w_r)
+    p0 = np.zeros_like(u0)
+    p0[:-1] = A0.ravel() / a0
+    s0 = 0.5 * a0 if step is None else float(step)
+    settings = ContinuationSettings(step=s0, step_min=1e-8 * a0, step_max=np.inf, max_angle=max_angle,
+                                    max_correction=max_correction)
+
+    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], coefficients=[], iterations=[])
+    status, message = "failed", ""
+    gen = pseudo_arclength(problem, u0, p0, settings, tol)
+    E_start = None
+    try:
+        while True:
+            if stop is not None and stop.is_set():
+                status, message = "cancelled", f"cancelled after {len(rows['energy'])} points"
+                break
+            try:
+                pt = next(gen)
+            except StopIteration as fin:
+                status, message = "failed", str(fin.value or "continuation stopped")
+                break
+            A, w = problem.unpack(pt.u)
+            q0, v0 = problem.initial_state(pt.u)
+            x0, v0 = system.to_physical(q0), system.to_physical(v0)
+            E = float(model.energy(x0, v0))
+            for key, val in (("energy", E), ("frequency_hz", w / (2 * np.pi)), ("period", 2 * np.pi / w),
+                             ("x0", x0), ("v0", v0), ("coefficients", system.to_physical(A)),
+                             ("iterations", pt.iterations)):
+                rows[key].append(val)
+            if on_point is not None:
+                on_point({key: val[-1] for key, val in rows.items()})
+            E_start = E if E_start is None else E_start
+            if E >= energy_max:
+                status, message = "done", f"reached energy_max = {energy_max:g} J"
+                break
+            if len(rows["energy"]) >= max_points:
+                status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
+                break
+            if len(rows["energy"]) > 3 and E < 0.5 * E_start:
+                status, message = "done", "the branch returned to low energy"
+                break
+    finally:
+        gen.close()
+    n, N = model.n, len(rows["energy"])
+    E, f = np.array(rows["energy"]), np.array(rows["frequency_hz"])
+    fl = np.full((N, 2 * n), np.nan, dtype=complex)
+    st = np.ones(N, dtype=bool)
+    branch = Branch(model, mode, E, f, np.array(rows["period"]), np.array(rows["x0"]).reshape(N, n),
+                    np.array(rows["v0"]).reshape(N, n), fl, st, detect_events(E, f, fl, st), status, message,
+                    dict(method="harmonic_balance", harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
+                         tol=tol, energy_max=energy_max, k3_factor=1.0))
+    branch.hb_coefficients = np.array(rows["coefficients"]).reshape(N, len(hb), n)
+    return branch
+
+
+def _hb_branch_basis(branch):
+    s = branch.settings
+    if s.get("method") != "harmonic_balance":
+        raise NNMInputError(f"the branch was computed by {s.get('method', 'an unknown method')!r}, "
+                            f"not by harmonic balance (nnm_solver.hb.continue_nnm_hb)")
+    return HBBasis(int(s["harmonics"]), s.get("basis", "odd"), s.get("samples"))
+
+
+def hb_coefficients(branch, i):
+    """Fourier coefficients of point i of an HB branch: (orders (N_b,), sine (N_b,) bool, X (N_b, n) m).
+
+    x(t) = sum_j X[j] * (sin if sine[j] else cos)(orders[j] * 2 pi t / period).  For a branch
+    loaded from a file (the coefficients are not stored) they are recomputed: projection of the
+    time-integrated orbit, then Newton on the HB equations at the branch's frequency.
+    """
+    basis = _hb_branch_basis(branch)
+    i = branch._check_index(i)
+    X = getattr(branch, "hb_coefficients", None)
+    if X is not None and len(X) == len(branch):
+        return basis.h.copy(), basis.sine.copy(), X[i].copy()
+    system = modal_system(branch.model)
+    problem = HBProblem(system, branch.mode - 1, basis)
+    t, x = branch.motion(i, samples=basis.samples)
+    A = basis.P @ system.to_modal(x)
+    problem.q_ref = system.to_modal(branch.x0[i]) / max(np.linalg.norm(branch.x0[i]), 1e-300)
+    u = problem.pack(A, 2 * np.pi / branch.period[i])
+    for _ in range(30):
+        r, J = problem.jacobian(u)
+        if problem.error(u, r) < 1e-12:
+            break
+        u[:-1] -= np.linalg.lstsq(J[:, :-1], r, rcond=None)[0]
+    return basis.h.copy(), basis.sine.copy(), system.to_physical(problem.unpack(u)[0])
+
+
+def hb_motion(branch, i, samples=256):
+    """Orbit of point i of an HB branch from its Fourier series: (t (samples,) s, x, v (samples, n) m, m/s)."""
+    h, sine, X = hb_coefficients(branch, i)
+    samples = int(samples)
+    if samples < 2:
+        raise NNMInputError("samples must be at least 2")
+    basis = _hb_branch_basis(branch)
+    T = branch.period[i]
+    t = np.arange(samples) * T / samples
+    theta = 2 * np.pi * t / T
+    return t, basis.functions(theta) @ X, (2 * np.pi / T) * (basis.derivatives(theta) @ X)

@@ -1,0 +1,146 @@
+r"""Harmonic-balance residual and analytic Jacobian by AFT (alternating frequency/time).
+
+Used by ``hb.py`` (see its docstring for the user-level description).  In mass-normalised
+modal coordinates x = Phi q (Phi^T M Phi = I, Phi^T K Phi = Omega^2) the model reads
+
+    q'' + Omega^2 q + Bq^T [k3 * (Bq q)^3] = 0,         Bq = B Phi   (n_s, n),
+
+with d = Bq q (m) the n_s spring deformations.  Ansatz, with theta = omega t (omega in rad/s):
+
+    q(t) = sum_j A[j] c_j(theta),     c_j = cos(h_j theta) or sin(h_j theta),   A: (N_b, n).
+
+Because c_j'' = -(h_j omega)^2 c_j, the Galerkin (harmonic-balance) equations are
+
+    R[j] = (Omega^2 - h_j^2 omega^2) A[j] + F[j] = 0          (N/sqrt(kg), per basis function j)
+    F    = P g(E A Bq^T) Bq,        g(d) = k3 d^3 per spring   (AFT)
+
+where E[k, j] = c_j(theta_k) at N equispaced samples theta_k = 2 pi k / N and P is the
+Galerkin projector (rows (2/N) c_j(theta_k), (1/N) for the constant), so that P E = I.  The
+cubic of a series of order h_max has order 3 h_max, so the projection is exact (no aliasing)
+when N > 4 h_max.  Only the n_s spring deformations are sampled in time.
+
+Analytic Jacobian (chain rule through E and P):
+    dF[j, i] / dA[l, m] = sum_s Bq[s, i] C_s[j, l] Bq[s, m],   C_s = P diag(3 k3_s d_s(theta_k)^2) E
+    dR[j] / domega      = -2 h_j^2 omega A[j].
+
+Bases: ``"odd"`` = cos(h theta), h = 1, 3, 5, ... <= h_max.  The symmetric NNMs of odd (cubic)
+nonlinearities satisfy q(-t) = q(t) and q(t + T/2) = -q(t), so this basis holds them exactly and
+fixes the time origin at an instant of zero velocity: no phase condition is needed.
+``"full"`` = 1, cos(h theta), sin(h theta), h = 1..h_max: general periodic orbits; then the phase
+condition <q_ref, q'(0)> / omega = sum_j h_j <q_ref, A[j]> (sine terms) = 0, with q_ref the
+displacement of the previous point, makes t = 0 an extremum of the motion along q_ref (as in
+shooting).  Its rows are then redundant by one (energy balance), which the least-squares
+corrector of the continuation tolerates.
+
+Unknowns (scaled): u = [A.ravel() (sqrt(kg) m) ; omega / w_r] with w_r the linear angular
+frequency of the continued mode; residuals are divided by w_r^2 (units of A).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+BASES = ("odd", "full")
+
+
+class HBBasis:
+    """Harmonic basis and its time sampling: orders h (N_b,), sine (N_b,) bool, E (N, N_b), P (N_b, N)."""
+
+    def __init__(self, harmonics, kind="odd", samples=None):
+        H = int(harmonics)
+        if kind == "odd":
+            self.h = np.arange(1, H + 1, 2)
+            self.sine = np.zeros(len(self.h), dtype=bool)
+        else:
+            self.h = np.concatenate([[0], np.repeat(np.arange(1, H + 1), 2)])
+            self.sine = np.concatenate([[False], np.tile([False, True], H)])
+        self.kind = kind
+        self.harmonics = H
+        self.samples = int(samples) if samples is not None else 4 * H + 4
+        theta = 2.0 * np.pi * np.arange(self.samples) / self.samples
+        self.E = self.functions(theta)
+        w = np.where(self.h == 0, 1.0, 2.0) / self.samples
+        self.P = self.E.T * w[:, None]
+
+    def __len__(self):
+        return len(self.h)
+
+    def functions(self, theta):
+        """c_j(theta) (len(theta), N_b)."""
+        ht = np.outer(np.asarray(theta, dtype=float), self.h)
+        return np.where(self.sine, np.sin(ht), np.cos(ht))
+
+    def derivatives(self, theta):
+        """d c_j / d theta (len(theta), N_b)."""
+        ht = np.outer(np.asarray(theta, dtype=float), self.h)
+        return np.where(self.sine, np.cos(ht), -np.sin(ht)) * self.h
+
+
+class HBProblem:
+    """Harmonic-balance equations of one NNM branch, for ``continuation.pseudo_arclength``."""
+
+    def __init__(self, system, mode_index, basis, max_rel_step=0.4):
+        self.sys = system
+        self.n = system.n
+        self.basis = basis
+        self.nb = len(basis)
+        self.w_r = float(np.sqrt(system.omega2[mode_index]))
+        self.h2 = (basis.h.astype(float) ** 2)[:, None]
+        self.phase = basis.kind == "full"
+        self.q_ref = np.zeros(self.n)
+        self.q_ref[mode_index] = 1.0
+        self.max_rel_step = max_rel_step
+
+    # --------------------------------------------------------------- packing
+    def pack(self, A, omega):
+        return np.concatenate([np.asarray(A, dtype=float).ravel(), [omega / self.w_r]])
+
+    def unpack(self, u):
+        return u[:-1].reshape(self.nb, self.n), u[-1] * self.w_r
+
+    def initial_state(self, u):
+        """Modal displacement and velocity at t = 0: (q0, v0)."""
+        A, w = self.unpack(u)
+        return self.basis.functions([0.0])[0] @ A, w * (self.basis.derivatives([0.0])[0] @ A)
+
+    # --------------------------------------------------------------- problem protocol
+    def _parts(self, u):
+        A, w = self.unpack(u)
+        s = self.sys
+        d = self.basis.E @ (A @ s.Bq.T)                       # (N, n_s) spring deformations
+        F = self.basis.P @ ((s.k3 * d ** 3) @ s.Bq)           # (N_b, n) nonlinear force coefficients
+        R = (s.omega2[None, :] - self.h2 * w ** 2) * A + F
+        r = R.ravel() / self.w_r ** 2
+        if self.phase:
+            r = np.concatenate([r, [(self.basis.h * self.basis.sine) @ A @ self.q_ref]])
+        return A, w, d, r
+
+    def residual(self, u):
+        return self._parts(u)[3]
+
+    def jacobian(self, u):
+        A, w, d, r = self._parts(u)
+        s, bs, nb, n = self.sys, self.basis, self.nb, self.n
+        C = np.einsum("jk,ks,kl->sjl", bs.P, 3.0 * s.k3 * d ** 2, bs.E)
+        J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
+        J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w ** 2).ravel()
+        J /= self.w_r ** 2
+        dw = (-2.0 * self.h2 * w * A).ravel() / self.w_r        # d r / d(omega / w_r)
+        J = np.hstack([J, dw[:, None]])
+        if self.phase:
+            row = np.zeros(nb * n + 1)
+            row[:-1] = np.outer(bs.h * bs.sine, self.q_ref).ravel()
+            J = np.vstack([J, row])
+        return r, J
+
+    def error(self, u, r):
+        """Relative residual ||r|| / ||A|| (r: R / w_r^2 and the phase row, both in units of A)."""
+        return float(np.linalg.norm(r) / max(np.linalg.norm(u[:-1]), 1e-300))
+
+    def accept(self, u, J):
+        q0 = self.initial_state(u)[0]
+        nrm = np.linalg.norm(q0)
+        if nrm > 0:
+            self.q_ref = q0 / nrm
+
+    def max_step(self, u):
+        return self.max_rel_step * np.linalg.norm(u[:-1])
