@@ -75,7 +75,7 @@ class Branch:
         def lerp(a):
             return (1 - w) * a[j] + w * a[k]
 
-        x0, v0 = lerp(self.x0), lerp(self.v0)
+        x0, v0 = _match_energy(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
         near = j if w < 0.5 else k
         return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
@@ -163,6 +163,27 @@ class Branch:
         return Branch(self.model.scaled(factor), self.mode, self.energy / factor, self.frequency_hz,
                       self.period, self.x0 * r, self.v0 * r, self.floquet, self.stable, events, self.status,
                       self.message, settings, self.name)
+
+
+def _match_energy(model, x, v, energy):
+    """Scale (x, v) by c > 0 so that its energy is ``energy``: E2 c^2 + E4 c^4 = energy."""
+    e_tot = model.energy(x, v)
+    d = model.spring_matrix @ x
+    e4 = float(np.sum(0.25 * model.k3 * d ** 4))
+    e2 = e_tot - e4
+    if e2 <= 0 or energy <= 0:
+        return x, v
+    if abs(e4) < 1e-14 * e2:
+        c2 = energy / e2
+    else:
+        disc = e2 * e2 + 4 * e4 * energy
+        if disc < 0:
+            return x, v
+        c2 = (-e2 + np.sqrt(disc)) / (2 * e4)
+    if not c2 > 0:
+        return x, v
+    c = np.sqrt(c2)
+    return c * x, c * v
 
 
 def mac_vector(x, shapes):

@@ -101,7 +101,11 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
             try:
                 pt = next(gen)
             except StopIteration as fin:
-                status, message = "failed", str(fin.value or "continuation stopped")
+                status = "failed"
+                where = (f"after point {len(rows['energy'])} (E = {rows['energy'][-1]:.4g} J, "
+                         f"f = {rows['frequency_hz'][-1]:.5g} Hz)" if rows["energy"] else "at the start")
+                message = (f"no convergence {where}: {fin.value or 'continuation stopped'}; the points so far are "
+                           f"kept (try a larger steps_per_period or tol, or the branch ends here)")
                 break
             qz, vz, T = problem.unpack(pt.u)
             x0 = system.to_physical(qz)

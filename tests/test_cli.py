@@ -1,0 +1,87 @@
+"""nnm-solve: listing modes, computing and saving a branch, Ctrl-C, and one-line errors."""
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import scipy.io
+
+import nnm_solver as nnm
+
+from conftest import two_dof_model
+
+
+def run(*args, timeout=120):
+    return subprocess.run([sys.executable, "-m", "nnm_solver.cli", *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_list_modes(tmp_path):
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]), mode_labels=["in phase", "out"]),
+                   extra={"reference": {"table2_hz": np.array([0.16, 0.28])}})
+    r = run(p, "--list-modes")
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert "reference" in lines[0]
+    assert lines[1].split()[:3] == ["1", "0.1592", "0.1600"] and "in phase" in lines[1]
+    assert lines[2].split()[1] == "0.2757"
+
+
+def test_solve_saves_branch_and_plot(tmp_path):
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, two_dof_model())
+    out = tmp_path / "out.h5"
+    png = tmp_path / "fep.png"
+    r = run(p, "--mode", 1, "--energy-max", 10, "--out", out, "--plot", png)
+    assert r.returncode == 0, r.stderr
+    assert "reached energy_max" in r.stdout
+    b = nnm.load_branches(out)
+    assert len(b) == 1 and b[0].energy[-1] >= 10
+    assert png.stat().st_size > 10_000
+    r = run(p, "--mode", 2, "--energy-max", 1)       # default: appended to the input file
+    assert r.returncode == 0, r.stderr
+    assert [x.mode for x in nnm.load_branches(p)] == [2]
+
+
+def test_mat_input(tmp_path):
+    p = tmp_path / "m.mat"
+    scipy.io.savemat(p, {"M": np.eye(2), "K": np.array([[2.0, -1], [-1, 2]]), "springs": np.array([[1, 0, 0.5]])})
+    r = run(p, "--mode", 1, "--energy-max", 1)
+    assert r.returncode == 0, r.stderr
+    assert len(nnm.load_branches(tmp_path / "m.h5")) == 1
+
+
+def test_ctrl_c_keeps_points(tmp_path):
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, two_dof_model())
+    proc = subprocess.Popen([sys.executable, "-m", "nnm_solver.cli", str(p), "--mode", "1", "--energy-max", "1e12",
+                             "--max-points", "100000", "--steps-per-period", "2000"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    b = nnm.load_branches(p)
+    assert len(b) == 1 and b[0].status == "cancelled" and len(b[0]) >= 1
+
+
+def test_errors_are_one_line(tmp_path):
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, two_dof_model())
+    junk = tmp_path / "junk.h5"
+    junk.write_text("no")
+    cases = [
+        ((tmp_path / "missing.h5", "--list-modes"), "no such file"),
+        ((junk, "--list-modes"), "not a readable HDF5"),
+        ((p, "--mode", 3, "--energy-max", 1), "out of range"),
+        ((p, "--mode", 1, "--energy-max", -1), "energy_max"),
+        ((p, "--mode", 1), "--energy-max"),
+    ]
+    for args, fragment in cases:
+        r = run(*args)
+        assert r.returncode == 2, (args, r.stdout, r.stderr)
+        assert fragment in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1

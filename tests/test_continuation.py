@@ -1,0 +1,134 @@
+"""Pseudo-arclength continuation on the 2-DOF benchmark: tongue, stability, scaling law, failures."""
+import threading
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_solver.shooting import ShootingProblem, modal_system
+
+from conftest import duffing_model, two_dof_model
+
+
+def test_low_energy_is_the_linear_mode(two_dof_nnm1):
+    b = two_dof_nnm1
+    assert b.frequency_hz[0] == pytest.approx(1 / (2 * np.pi), rel=1e-4)
+    assert b.mac_to_linear(0)[0] > 0.9999
+    # conservative system: multipliers on the unit circle at low energy, the trivial pair at +1
+    for i in range(5):
+        mu = b.floquet[i]
+        assert np.allclose(np.abs(mu), 1.0, atol=1e-3)
+        assert np.sum(np.abs(mu - 1) < 1e-2) == 2
+        assert b.stable[i]
+
+
+def test_backbone_hardens_monotonically_before_the_tongue(two_dof_nnm1):
+    b = two_dof_nnm1
+    before = b.energy < 100
+    assert np.all(np.diff(b.energy[before]) > 0)
+    assert np.all(np.diff(b.frequency_hz[before]) > 0)
+
+
+def test_three_to_one_tongue_is_traversed(two_dof_nnm1):
+    """Energy goes up, down the tongue to its tip, up again, and the branch carries on beyond it."""
+    b = two_dof_nnm1
+    folds = [e for e in b.events if e["kind"] == "fold"]
+    assert len(folds) >= 2
+    top, tip = folds[0], folds[1]
+    assert top["detail"] == "energy maximum" and tip["detail"] == "energy minimum"
+    assert tip["energy"] < 0.2 * top["energy"]          # a long excursion down the tongue
+    assert b.energy[-1] > top["energy"]                 # and beyond it
+    # at the tip the orbit is dominated by the third harmonic (NNM2 at three times the frequency)
+    h = b.harmonics(tip["index"], 5)
+    assert h[3, 0] > 5 * h[1, 0]
+    assert h[3].sum() > 0.8 * h[1:].sum()
+    # the tongue sits where 3 x (its frequency) meets NNM2's frequency at that energy
+    nnm2 = nnm.continue_nnm(b.model, mode=2, energy_max=tip["energy"] * 1.5)
+    f2 = np.interp(tip["energy"], nnm2.energy, nnm2.frequency_hz)
+    assert 3 * tip["frequency_hz"] == pytest.approx(f2, rel=0.05)
+
+
+def test_energy_conserved_along_returned_orbits(two_dof_nnm1):
+    b = two_dof_nnm1
+    for i in (0, 20, len(b) // 2, len(b) - 1):
+        t, x = b.motion(i, samples=200)
+        v = b.velocity(i, samples=200)
+        E = b.model.energy(x, v)
+        assert np.ptp(E) / b.energy[i] < 2e-3
+        assert E[0] == pytest.approx(b.energy[i], rel=1e-12)
+        # and the orbit closes: periodicity
+        tt, xx = b.motion(i, samples=200)
+        assert np.allclose(x[0], xx[0])
+
+
+def test_scaled_branch_equals_recomputation():
+    m = two_dof_model(0.5)
+    b = nnm.continue_nnm(m, mode=1, energy_max=20.0)
+    s = b.scaled(4.0)
+    r = nnm.continue_nnm(m.scaled(4.0), mode=1, energy_max=5.0)
+    assert np.allclose(s.energy, b.energy / 4.0)
+    f_interp = np.interp(np.log(r.energy), np.log(s.energy), s.frequency_hz)
+    inside = (r.energy > s.energy[0]) & (r.energy < s.energy[-1])
+    assert inside.sum() > 5
+    assert np.allclose(r.frequency_hz[inside], f_interp[inside], rtol=1e-3)
+    # every scaled orbit is a periodic orbit of the scaled model, to the continuation tolerance
+    ms = modal_system(s.model)
+    prob = ShootingProblem(ms, 0, s.settings["steps_per_period"])
+    for i in range(0, len(s), 5):
+        u = prob.pack(ms.to_modal(s.x0[i]), ms.to_modal(s.v0[i]), s.period[i])
+        assert prob.error(u, prob.residual(u)) < 1e-6
+        assert s.model.energy(s.x0[i], s.v0[i]) == pytest.approx(s.energy[i], rel=1e-10)
+
+
+def test_cancelled_job_keeps_its_points():
+    m = two_dof_model()
+    job = nnm.start_branch(m, 1, 1e8, max_points=100000)
+    while len(job.points()) < 5:
+        assert not job.done, job.error
+        threading.Event().wait(0.02)
+    job.cancel()
+    b = job.result(timeout=30)
+    assert job.done and job.error is None
+    assert b.status == "cancelled" and len(b) >= 5
+    assert np.all(np.isfinite(b.energy))
+
+
+def test_job_reports_solver_errors_without_raising_in_thread():
+    def boom(*args, **kwargs):
+        raise RuntimeError("solver exploded")
+    m = two_dof_model()
+    job = nnm.Job(m, 1, 1.0, {}, runner=boom)
+    job._thread.start()
+    with pytest.raises(RuntimeError, match="exploded"):
+        job.result(timeout=10)
+    assert job.done and isinstance(job.error, RuntimeError)
+
+
+def test_branch_that_stops_converging_keeps_its_points():
+    # softening Duffing: no periodic orbit above the separatrix energy 1/(4|k|) = 0.25 J
+    b = nnm.continue_nnm(duffing_model(-1.0), mode=1, energy_max=1.0, max_points=300)
+    assert b.status == "failed"
+    assert "kept" in b.message
+    assert len(b) > 10
+    assert b.energy.max() < 0.25 + 1e-9 and b.energy.max() > 0.24
+    assert b.frequency_hz[-1] < 0.2 * b.frequency_hz[0]     # the period grows towards the separatrix
+
+
+def test_at_energy_and_interpolate(two_dof_nnm1):
+    b = two_dof_nnm1
+    p = b.at_energy(1.0)
+    assert len(p) == 1
+    assert p.energy[0] == pytest.approx(1.0, rel=2e-2)
+    j = np.searchsorted(b.energy, 1.0)
+    assert b.frequency_hz[j - 1] <= p.frequency_hz[0] <= b.frequency_hz[j]
+    with pytest.raises(nnm.NNMInputError):
+        b.at_energy(1e9)
+    q = b.interpolate(3.0)
+    assert np.allclose(q.x0[0], b.x0[3])
+
+
+def test_stop_event_stops_continue_nnm():
+    ev = threading.Event()
+    ev.set()
+    b = nnm.continue_nnm(two_dof_model(), mode=1, energy_max=10.0, stop=ev)
+    assert b.status == "cancelled" and len(b) == 0

@@ -1,0 +1,148 @@
+"""HDF5 files: round trips, appending keeps everything, atomic writes, and one-line errors for bad files."""
+import os
+
+import h5py
+import numpy as np
+import pytest
+import scipy.io
+import scipy.sparse as sp
+
+import nnm_solver as nnm
+from nnm_solver import NNMFileError, NNMInputError
+
+from conftest import two_dof_model
+
+
+def _mesh():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    F = np.array([[0, 1, 2]])
+    D = np.zeros((9, 2))
+    D[2, 0] = D[5, 1] = 1.0
+    return nnm.DisplayMesh(V, F, D, part_ids=[0], part_names=["plate"])
+
+
+def test_model_round_trip(tmp_path):
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]),
+                  [nnm.CubicSpring(dof=0, k3=0.5), nnm.CubicSpring(dof=0, other=1, k3=-2.0)],
+                  dof_labels=["a", "b"], mode_labels=["in phase", "out of phase"], mesh=_mesh(),
+                  name="two", info={"source": "test", "version": 3})
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, m, extra={"reference": {"table2_hz": np.arange(3.0), "source": "paper"}})
+    r = nnm.load_model(p)
+    assert np.array_equal(r.M, m.M) and np.array_equal(r.K, m.K)
+    assert r.springs == m.springs
+    assert r.dof_labels == ["a", "b"] and r.mode_labels == ["in phase", "out of phase"]
+    assert r.name == "two" and r.info["version"] == 3
+    assert np.allclose(r.mesh.displacements(np.array([1.0, 2.0])), [[0, 0, 1], [0, 0, 2], [0, 0, 0]])
+    ref = nnm.load_extra(p, "reference")
+    assert np.array_equal(ref["table2_hz"], np.arange(3.0)) and ref["source"] == "paper"
+
+
+def test_sparse_matrices_round_trip(tmp_path):
+    M = sp.identity(3, format="csr")
+    K = sp.diags([2.0, 3.0, 4.0]).tocsr()
+    p = tmp_path / "s.h5"
+    nnm.save_model(p, nnm.Model(M, K))
+    r = nnm.load_model(p)
+    assert sp.issparse(r.K) and np.allclose(r.K.toarray(), K.toarray())
+
+
+def test_branch_round_trip_and_append_keeps_everything(tmp_path, two_dof_nnm1):
+    p = tmp_path / "b.h5"
+    nnm.save_model(p, two_dof_nnm1.model)
+    n1 = nnm.save_branch(p, two_dof_nnm1)
+    n2 = nnm.save_branch(p, two_dof_nnm1.scaled(2.0))
+    assert n1 != n2
+    bs = nnm.load_branches(p)
+    assert len(bs) == 2
+    a = bs[0]
+    for key in ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable"):
+        assert np.array_equal(getattr(a, key), getattr(two_dof_nnm1, key))
+    assert a.events == two_dof_nnm1.events
+    assert a.status == two_dof_nnm1.status and a.mode == 1
+    assert bs[1].model.k3[0] == pytest.approx(1.0)     # the scaled branch keeps its own k3
+    # the loaded branch is usable
+    t, x = a.motion(3, samples=64)
+    assert x.shape == (64, 2)
+
+
+def test_save_branch_creates_file_with_model(tmp_path, two_dof_nnm1):
+    p = tmp_path / "new.h5"
+    nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 5)))
+    assert nnm.load_model(p).n == 2
+    assert len(nnm.load_branches(p)[0]) == 5
+
+
+def test_interrupted_write_leaves_file_intact(tmp_path, two_dof_nnm1, monkeypatch):
+    p = tmp_path / "b.h5"
+    nnm.save_branch(p, two_dof_nnm1)
+    before = p.read_bytes()
+
+    def fail(*args, **kwargs):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(nnm.io, "_jsonable", fail)   # dies in the middle of writing the new group
+    with pytest.raises(KeyboardInterrupt):
+        nnm.save_branch(p, two_dof_nnm1)
+    assert p.read_bytes() == before
+    assert [f for f in os.listdir(tmp_path) if f.endswith(".tmp")] == []
+    assert len(nnm.load_branches(p)) == 1
+
+
+def test_branch_of_other_model_is_refused(tmp_path, two_dof_nnm1):
+    p = tmp_path / "one.h5"
+    nnm.save_model(p, nnm.Model(np.eye(1), np.eye(1)))
+    with pytest.raises(NNMInputError, match="1 DOFs but the branch has 2"):
+        nnm.save_branch(p, two_dof_nnm1)
+
+
+def test_bad_files(tmp_path):
+    with pytest.raises(NNMFileError, match="no such file"):
+        nnm.load_model(tmp_path / "missing.h5")
+    junk = tmp_path / "junk.h5"
+    junk.write_bytes(b"this is not hdf5")
+    with pytest.raises(NNMFileError, match="not a readable HDF5 file"):
+        nnm.load_model(junk)
+    other = tmp_path / "other.h5"
+    with h5py.File(other, "w") as f:
+        f["x"] = 1
+    with pytest.raises(NNMFileError, match="not an nnm file"):
+        nnm.load_model(other)
+    good = tmp_path / "good.h5"
+    nnm.save_model(good, two_dof_model())
+    with h5py.File(good, "r+") as f:
+        del f["model/K"]
+    with pytest.raises(NNMFileError, match="missing dataset /model/K"):
+        nnm.load_model(good)
+    nnm.save_model(good, two_dof_model())
+    with h5py.File(good, "r+") as f:
+        del f["model/K"]
+        f["model/K"] = np.eye(3)
+    with pytest.raises(NNMFileError, match="shape"):
+        nnm.load_model(good)
+    nnm.save_model(good, two_dof_model())
+    with h5py.File(good, "r+") as f:
+        f["model/springs/dof"][0] = 7
+    with pytest.raises(NNMFileError, match="dof=7 is not a DOF"):
+        nnm.load_model(good)
+    truncated = tmp_path / "trunc.h5"
+    truncated.write_bytes(good.read_bytes()[:800])
+    with pytest.raises(NNMFileError):
+        nnm.load_model(truncated)
+
+
+def test_mat_import(tmp_path):
+    p = tmp_path / "m.mat"
+    scipy.io.savemat(p, {"M": np.eye(2), "K": np.array([[2.0, -1], [-1, 2]]),
+                         "springs": np.array([[1, 0, 0.5], [1, 2, -3.0]])})
+    m = nnm.load_mat_model(p)
+    assert m.springs == [nnm.CubicSpring(dof=0, k3=0.5), nnm.CubicSpring(dof=0, other=1, k3=-3.0)]
+    scipy.io.savemat(p, {"M": np.eye(2)})
+    with pytest.raises(NNMFileError, match="no variable 'K'"):
+        nnm.load_mat_model(p)
+    scipy.io.savemat(p, {"M": np.eye(2), "K": np.eye(2), "springs": np.array([[3, 0, 1.0]])})
+    with pytest.raises(NNMFileError, match="not a DOF"):
+        nnm.load_mat_model(p)
+    bad = tmp_path / "bad.mat"
+    bad.write_bytes(b"garbage")
+    with pytest.raises(NNMFileError, match="not a readable MATLAB"):
+        nnm.load_mat_model(bad)
