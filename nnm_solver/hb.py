@@ -26,8 +26,9 @@ Unknowns u = [A (sqrt(kg) m) ; omega / w_r]; no amplitude normalisation: the pse
 engine (continuation.py) adds the arclength row.  Convergence: ||R|| / (w_r^2 ||A||) < tol.
 HB converges exponentially in the number of harmonics for these analytic orbits.
 
-Each point's energy (J) is ``model.energy(x(0), v(0))``; Floquet multipliers are not computed
-(NaN) and ``stable`` is all True: stability needs shooting (``continue_nnm``).
+Each point's energy (J) is ``model.energy(x(0), v(0))``.  Floquet multipliers come from Hill's
+method (``hb_hill.py``: the quadratic eigenproblem of the perturbations in the full basis of the
+same highest harmonic), stability flags and events as for shooting (``floquet.py``).
 """
 from __future__ import annotations
 
@@ -38,13 +39,17 @@ import numpy as np
 from .branch import Branch
 from .continuation import ContinuationSettings, pseudo_arclength
 from .errors import NNMInputError
-from .floquet import detect_events
+from .floquet import STABILITY_TOL, detect_events, is_stable
 from .hb_aft import BASES, HBBasis, HBProblem
+from .hb_hill import hill_multipliers
 from .model import Model
 from .nnm_continuation import _check_positive, start_amplitude
 from .shooting import modal_system
 
 __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion"]
+
+#: largest Hill matrix (rows) for which floquet=None computes the multipliers
+HILL_AUTO_SIZE = 1000
 
 
 def _basis(model, harmonics, samples, basis):
@@ -61,7 +66,7 @@ def _basis(model, harmonics, samples, basis):
 
 def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8, max_points=500, on_point=None,
                     stop=None, energy_min=None, basis="odd", step=None, max_angle=0.35, max_correction=0.5,
-                    max_rel_step=0.4):
+                    max_rel_step=0.4, floquet=None):
     """NNM branch of linear mode ``mode`` (1-based) by harmonic balance, from low energy to ``energy_max`` (J).
 
     Parameters
@@ -71,6 +76,8 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     tol : relative residual tolerance of the harmonic-balance equations.
     basis : ``"odd"`` (cosines of odd harmonics, symmetric NNMs) or ``"full"`` (see module doc).
     max_points, on_point, stop, energy_min, step, max_angle, max_correction : as ``continue_nnm``.
+    floquet : Floquet multipliers by Hill's method (True), not (False: NaN, all stable), or when the
+        Hill matrix 2 n (2 harmonics + 1) has at most HILL_AUTO_SIZE rows (None); cost O(size^3) a point.
 
     Returns a Branch (settings["method"] = "harmonic_balance"); the Fourier coefficients of each
     point are available from ``hb_coefficients(branch, i)``.
@@ -98,7 +105,10 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     settings = ContinuationSettings(step=s0, step_min=1e-8 * a0, step_max=np.inf, max_angle=max_angle,
                                     max_correction=max_correction)
 
-    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], coefficients=[], iterations=[])
+    if floquet is None:
+        floquet = 2 * model.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
+    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], floquet=[], stable=[], coefficients=[],
+                iterations=[])
     status, message = "failed", ""
     gen = pseudo_arclength(problem, u0, p0, settings, tol)
     E_start = None
@@ -116,8 +126,14 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
             q0, v0 = problem.initial_state(pt.u)
             x0, v0 = system.to_physical(q0), system.to_physical(v0)
             E = float(model.energy(x0, v0))
+            if floquet:
+                mu = hill_multipliers(problem, pt.u)
+                stable = is_stable(mu, STABILITY_TOL)
+            else:
+                mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
             for key, val in (("energy", E), ("frequency_hz", w / (2 * np.pi)), ("period", 2 * np.pi / w),
-                             ("x0", x0), ("v0", v0), ("coefficients", system.to_physical(A)),
+                             ("x0", x0), ("v0", v0), ("floquet", mu), ("stable", stable),
+                             ("coefficients", system.to_physical(A)),
                              ("iterations", pt.iterations)):
                 rows[key].append(val)
             if on_point is not None:
@@ -136,12 +152,12 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
         gen.close()
     n, N = model.n, len(rows["energy"])
     E, f = np.array(rows["energy"]), np.array(rows["frequency_hz"])
-    fl = np.full((N, 2 * n), np.nan, dtype=complex)
-    st = np.ones(N, dtype=bool)
+    fl = np.array(rows["floquet"], dtype=complex).reshape(N, 2 * n)
+    st = np.array(rows["stable"], dtype=bool)
     branch = Branch(model, mode, E, f, np.array(rows["period"]), np.array(rows["x0"]).reshape(N, n),
                     np.array(rows["v0"]).reshape(N, n), fl, st, detect_events(E, f, fl, st), status, message,
                     dict(method="harmonic_balance", harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
-                         tol=tol, energy_max=energy_max, k3_factor=1.0))
+                         tol=tol, energy_max=energy_max, k3_factor=1.0, floquet=bool(floquet)))
     branch.hb_coefficients = np.array(rows["coefficients"]).reshape(N, len(hb), n)
     return branch
 

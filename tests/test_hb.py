@@ -28,14 +28,20 @@ def two_dof():
 
 @pytest.fixture(scope="module")
 def nnm1_hb():
-    return continue_nnm_hb(two_dof(), 1, 1e4, harmonics=21, tol=1e-10, max_points=1000)
+    """NNM1 of the 2-DOF benchmark by HB (with Hill's multipliers) up to 1e4 J, through the 3:1 tongue."""
+    return continue_nnm_hb(two_dof(), 1, 1e4, harmonics=11, tol=1e-10, max_points=1000, floquet=True)
+
+
+@pytest.fixture(scope="module")
+def nnm1_shooting():
+    return nnm.continue_nnm(two_dof(), 1, 1e4, steps_per_period=400, tol=1e-8)
 
 
 def test_duffing_exponential_convergence_in_harmonics():
     """Odd-harmonic HB vs the exact elliptic period up to E = 2 J (k A^2 up to ~1.6)."""
     errors = {}
     for H in (3, 7, 11, 17):
-        b = continue_nnm_hb(duffing(), 1, 2.0, harmonics=H, tol=1e-12)
+        b = continue_nnm_hb(duffing(), 1, 2.0, harmonics=H, tol=1e-12, floquet=False)
         assert b.status == "done" and b.energy[-1] >= 2.0
         assert b.settings["method"] == "harmonic_balance"
         assert np.all(b.v0 == 0.0)  # cosine basis: t = 0 at zero velocity, x0 = amplitude
@@ -49,6 +55,7 @@ def test_duffing_exponential_convergence_in_harmonics():
 def test_duffing_full_basis_and_softening(k):
     E_max = 0.3 if k < 0 else 2.0  # softening: stay well below the separatrix (E = 1/(4|k|))
     b = continue_nnm_hb(duffing(k), 1, E_max, harmonics=17, basis="full", tol=1e-12)
+    assert np.all(b.stable) and np.allclose(np.abs(b.floquet), 1.0, atol=1e-6)  # 1 DOF: mu = 1, 1
     assert b.status == "done"
     A = np.hypot(b.x0[:, 0], b.v0[:, 0] / (2 * np.pi * b.frequency_hz))  # v0 ~ 0 by the phase condition
     assert np.max(np.abs(b.v0)) < 1e-10
@@ -76,7 +83,7 @@ def test_jacobian_matches_finite_differences(basis):
 
 def test_energy_constant_along_the_hb_orbit():
     model = two_dof()
-    b = continue_nnm_hb(model, 1, 10.0, harmonics=21, tol=1e-11)
+    b = continue_nnm_hb(model, 1, 10.0, harmonics=21, tol=1e-11, floquet=False)
     for i in (len(b) // 2, len(b) - 1):
         t, x, v = hb_motion(b, i, samples=97)
         E = model.energy(x, v)
@@ -95,7 +102,7 @@ def test_backbones_agree_with_shooting(mode):
     """
     model = two_dof()
     spp = 200
-    hb = continue_nnm_hb(model, mode, 20.0, harmonics=21, tol=1e-11, max_rel_step=0.1)
+    hb = continue_nnm_hb(model, mode, 20.0, harmonics=21, tol=1e-11, max_rel_step=0.1, floquet=False)
     sh = nnm.continue_nnm(model, mode, 10.0, steps_per_period=spp, tol=1e-10)
     assert hb.status == "done" and sh.status == "done"
     assert np.all(np.diff(hb.energy) > 0)
@@ -108,7 +115,8 @@ def test_backbones_agree_with_shooting(mode):
 
 def test_nnm1_follows_the_3_to_1_tongue(nnm1_hb):
     """NNM1 continued to 1e4 J: energy up to a fold ~4.7e3 J, down the tongue to ~286 J (tip, 0.224 Hz),
-    then up again (shooting at 400 steps per period: folds at 4687 J and 285.8 J)."""
+    then up again (shooting at 400 steps per period: folds at 4687 J and 285.8 J; HB with 11 harmonics:
+    4686 J and 284.8 J at 0.22400 Hz)."""
     b = nnm1_hb
     assert b.status == "done", b.message
     folds = [e for e in b.events if e["kind"] == "fold"]
@@ -123,6 +131,34 @@ def test_nnm1_follows_the_3_to_1_tongue(nnm1_hb):
     modal = X @ shapes  # (harmonics, modes) with M = I
     assert abs(modal[h == 3, 1][0]) > 5 * abs(modal[h == 1, 1][0])
     assert abs(modal[h == 3, 1][0]) > abs(modal[h == 1, 0][0])
+
+
+def test_hill_stability_matches_shooting_floquet(nnm1_hb, nnm1_shooting):
+    """Hill's method (HB) vs the monodromy of shooting: the same sequence of stability changes, at
+    overlapping energy intervals, and the same largest multiplier on the unstable backbone."""
+    hb, sh = nnm1_hb, nnm1_shooting
+    assert sh.status == "done"
+    low = hb.energy < 1.0
+    assert np.all(hb.stable[low]) and np.allclose(np.abs(hb.floquet[low]), 1.0, atol=1e-6)
+    bif_hb = [e for e in hb.events if e["kind"] == "bifurcation"]
+    bif_sh = [e for e in sh.events if e["kind"] == "bifurcation"]
+    assert [e["detail"] for e in bif_hb] == [e["detail"] for e in bif_sh]
+    assert len(bif_hb) >= 6  # loss/gain on the backbone, on the tongue, after it
+    for a, b in zip(bif_hb, bif_sh):  # the crossing lies between points index-1 and index on each branch
+        ia, ib = a["index"], b["index"]
+        lo_a, hi_a = sorted(hb.energy[ia - 1:ia + 1])
+        lo_b, hi_b = sorted(sh.energy[ib - 1:ib + 1])
+        assert lo_a <= hi_b * 1.02 and lo_b <= hi_a * 1.02, (a, b)
+    # largest multiplier on the unstable part of the backbone (before the first fold)
+    first_fold_hb = next(e["index"] for e in hb.events if e["kind"] == "fold")
+    first_fold_sh = next(e["index"] for e in sh.events if e["kind"] == "fold")
+    E_hb, mu_hb = hb.energy[:first_fold_hb], np.abs(hb.floquet[:first_fold_hb, 0])
+    sel = (sh.energy[:first_fold_sh] > 80) & (sh.energy[:first_fold_sh] < 2000)
+    assert sel.sum() >= 5
+    mu_interp = CubicSpline(np.log(E_hb), np.log(mu_hb))(np.log(sh.energy[:first_fold_sh][sel]))
+    mu_sh = np.abs(sh.floquet[:first_fold_sh, 0][sel])
+    assert np.all(mu_sh > 1.5)
+    assert np.max(np.abs(np.exp(mu_interp) / mu_sh - 1)) < 1e-2
 
 
 def test_coefficients_recomputed_for_a_loaded_branch(nnm1_hb):
