@@ -175,7 +175,7 @@ def hb_coefficients(branch, i):
 
     x(t) = sum_j X[j] * (sin if sine[j] else cos)(orders[j] * 2 pi t / period).  For a branch
     loaded from a file (the coefficients are not stored) they are recomputed: projection of the
-    time-integrated orbit, then Newton on the HB equations at the branch's frequency.
+    time-integrated orbit, then Gauss-Newton on the HB equations and the point's initial state.
     """
     basis = _hb_branch_basis(branch)
     i = branch._check_index(i)
@@ -184,15 +184,24 @@ def hb_coefficients(branch, i):
         return basis.h.copy(), basis.sine.copy(), X[i].copy()
     system = modal_system(branch.model)
     problem = HBProblem(system, branch.mode - 1, basis)
+    q0, v0 = system.to_modal(branch.x0[i]), system.to_modal(branch.v0[i])
+    problem.q_ref = q0 / max(np.linalg.norm(q0), 1e-300)
     t, x = branch.motion(i, samples=basis.samples)
-    A = basis.P @ system.to_modal(x)
-    problem.q_ref = system.to_modal(branch.x0[i]) / max(np.linalg.norm(branch.x0[i]), 1e-300)
-    u = problem.pack(A, 2 * np.pi / branch.period[i])
-    for _ in range(30):
+    u = problem.pack(basis.P @ system.to_modal(x), 2 * np.pi / branch.period[i])
+    c0, s0 = basis.functions([0.0])[0], basis.derivatives([0.0])[0]
+    tol = float(branch.settings.get("tol", 1e-8))
+    for _ in range(30):  # Gauss-Newton on the HB equations + the initial state (x0, v0) of the point
         r, J = problem.jacobian(u)
-        if problem.error(u, r) < 1e-12:
+        A, w = problem.unpack(u)
+        r0 = np.concatenate([c0 @ A - q0, (w * (s0 @ A) - v0) / problem.w_r])
+        J0 = np.vstack([np.hstack([np.kron(c0, np.eye(problem.n)), np.zeros((problem.n, 1))]),
+                        np.hstack([np.kron(s0, np.eye(problem.n)) * w / problem.w_r, (s0 @ A)[:, None]])])
+        du = np.linalg.lstsq(np.vstack([J, J0]), -np.concatenate([r, r0]), rcond=None)[0]
+        u += du
+        if np.linalg.norm(du) <= 1e-13 * np.linalg.norm(u):
             break
-        u[:-1] -= np.linalg.lstsq(J[:, :-1], r, rcond=None)[0]
+    if not problem.error(u, problem.residual(u)) < 10 * tol:
+        raise RuntimeError(f"the harmonic-balance coefficients of point {i} could not be recomputed")
     return basis.h.copy(), basis.sine.copy(), system.to_physical(problem.unpack(u)[0])
 
 
