@@ -1,0 +1,142 @@
+"""From a periodic orbit x(t) to an animated, coloured mesh (GLB with morph targets).
+
+The orbit over one period T is fitted by a Fourier series
+    x(t) = c_0 + sum_{k=1..H} a_k cos(k w t) + b_k sin(k w t),   w = 2 pi / T,
+so every harmonic the solver found is kept (not only the linear mode shape).  Mapped to
+the mesh, each a_k, b_k becomes a morph target (vertex displacements, m); the animation
+samples the weights  A cos(k w t), A sin(k w t)  (A: display amplification) over one
+display period.  Vertex colours show the peak displacement magnitude over the period.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .glb import build_glb
+
+#: harmonics whose largest vertex amplitude is below this fraction of the largest are dropped
+HARMONIC_CUTOFF = 1e-4
+
+
+def fourier_fit(t, x, period, n_harm=15):
+    """Least-squares Fourier coefficients of samples x (S, n) at times t (S,) s.
+
+    Returns (orders (2H+1,), coeffs (2H+1, n)): rows are c_0, a_1, b_1, a_2, b_2, ...;
+    ``orders`` gives the harmonic number k of each row.  Works whether or not the sample
+    at t = T (a repeat of t = 0) is included.
+    """
+    t = np.asarray(t, dtype=float).reshape(-1)
+    x = np.asarray(x, dtype=float).reshape(len(t), -1)
+    w = 2 * np.pi / float(period)
+    phases = np.mod(t * w, 2 * np.pi)
+    n_unique = len(np.unique(np.round(phases, 9)))
+    H = int(max(1, min(n_harm, (n_unique - 1) // 2)))
+    B, orders = basis(t * w, H)
+    coeffs, *_ = np.linalg.lstsq(B, x, rcond=None)
+    return orders, coeffs
+
+
+def basis(theta, H):
+    """Fourier basis at phase angles theta (rad): (len(theta), 2H+1) and the orders (2H+1,)."""
+    theta = np.asarray(theta, dtype=float).reshape(-1)
+    cols = [np.ones_like(theta)]
+    orders = [0]
+    for k in range(1, H + 1):
+        cols += [np.cos(k * theta), np.sin(k * theta)]
+        orders += [k, k]
+    return np.stack(cols, axis=1), np.array(orders)
+
+
+@dataclass
+class OrbitAnimation:
+    """Mesh motion of one orbit, ready to be turned into GLBs.
+
+    base : (V, 3) m, rest vertices plus the mean displacement c_0 (amplified).
+    shapes : (T, V, 3) m, physical (not amplified) vertex displacement of each kept
+    harmonic row; orders : (T,) harmonic number of each shape; cos_sin : (T,) 0 for cos, 1 for sin.
+    peak : (V,) m, peak displacement magnitude of each vertex over the period.
+    peak_max : m, largest of them; peak_vertex : its index.  period : s (physical).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    mean: np.ndarray
+    shapes: np.ndarray
+    orders: np.ndarray
+    cos_sin: np.ndarray
+    peak: np.ndarray
+    peak_max: float
+    peak_vertex: int
+    period: float
+
+    def weights(self, phase, amplification):
+        """Morph weights (len(phase), T) at orbit phases (fraction of a period, 0..1)."""
+        theta = 2 * np.pi * np.atleast_1d(np.asarray(phase, dtype=float))
+        ang = theta[:, None] * self.orders[None, :]
+        return amplification * np.where(self.cos_sin[None, :] == 0, np.cos(ang), np.sin(ang))
+
+    def displacement(self, phase):
+        """Physical vertex displacements (k, V, 3) m at the given phases (fractions of a period)."""
+        W = self.weights(phase, 1.0)
+        return self.mean[None] + np.tensordot(W, self.shapes, axes=(1, 0))
+
+    def colors(self, cmap="turbo"):
+        """Per-vertex RGB uint8 (V, 3): colour map of peak displacement / largest peak."""
+        import matplotlib
+        scale = self.peak_max if self.peak_max > 0 else 1.0
+        rgba = matplotlib.colormaps[cmap](np.clip(self.peak / scale, 0, 1))
+        return (rgba[:, :3] * 255).astype(np.uint8)
+
+    def glb(self, amplification, display_period=2.0, keyframes=None, playing=True, phase=0.0):
+        """GLB bytes: animated over ``display_period`` s of screen time, or frozen at ``phase``."""
+        base = self.vertices + amplification * self.mean
+        if len(self.shapes) == 0:
+            return build_glb(base, self.faces, self.colors())
+        if not playing:
+            w0 = self.weights(phase, amplification)[0]
+            return build_glb(base, self.faces, self.colors(), targets=self.shapes, default_weights=w0)
+        if keyframes is None:
+            keyframes = int(np.clip(8 * int(self.orders.max()), 48, 240))
+        ph = np.linspace(0.0, 1.0, keyframes + 1)
+        return build_glb(base, self.faces, self.colors(), targets=self.shapes,
+                         times=ph * display_period, weights=self.weights(ph, amplification),
+                         default_weights=self.weights(0.0, amplification)[0])
+
+
+def orbit_animation(vertices, faces, displacements, t, x, period, n_harm=15, check_frames=96):
+    """Build an OrbitAnimation from orbit samples.
+
+    vertices (V, 3) m, faces (F, 3); displacements: callable mapping model coordinates
+    (k, n) to vertex displacements (k, V, 3) m (e.g. DisplayMesh.displacements);
+    t (S,) s and x (S, n) m: the orbit over one period ``period`` s.
+    """
+    orders, coeffs = fourier_fit(t, x, period, n_harm)
+    U = np.asarray(displacements(coeffs), dtype=float)            # (2H+1, V, 3)
+    mean = U[0]
+    shapes, kept_orders, cs = U[1:], orders[1:], np.tile([0, 1], (len(orders) - 1) // 2)
+    if len(shapes):
+        amp = np.sqrt((shapes ** 2).sum(axis=2)).max(axis=1)      # (2H,)
+        by_order = {k: amp[kept_orders == k].max() for k in np.unique(kept_orders)}
+        top = max(by_order.values())
+        keep = np.array([top > 0 and by_order[k] >= HARMONIC_CUTOFF * top for k in kept_orders])
+        shapes, kept_orders, cs = shapes[keep], kept_orders[keep], cs[keep]
+    anim = OrbitAnimation(vertices=np.asarray(vertices, dtype=float), faces=np.asarray(faces),
+                          mean=mean, shapes=shapes, orders=kept_orders, cos_sin=cs,
+                          peak=np.zeros(len(vertices)), peak_max=0.0, peak_vertex=0,
+                          period=float(period))
+    ph = np.arange(check_frames) / check_frames
+    mag = np.sqrt((anim.displacement(ph) ** 2).sum(axis=2))       # (k, V)
+    anim.peak = mag.max(axis=0)
+    anim.peak_vertex = int(np.argmax(anim.peak))
+    anim.peak_max = float(anim.peak[anim.peak_vertex])
+    return anim
+
+
+def format_length(value):
+    """A length in m with a readable unit (nm .. m)."""
+    v = abs(float(value))
+    for unit, f in (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6), ("nm", 1e-9)):
+        if v >= f or unit == "nm":
+            return f"{value / f:.3g} {unit}"
+    return f"{value:.3g} m"

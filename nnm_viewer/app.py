@@ -1,0 +1,156 @@
+"""``nnm-view FILE.h5``: explore the NNMs of a model in the browser.
+
+Loads the model and every branch stored in FILE.h5, serves a viser page (one
+independent session per browser tab), prints the URL and runs until Ctrl-C.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import errno
+import io
+import socket
+import sys
+import threading
+import time
+
+import nnm_solver
+
+from .state import SharedState
+from .worker import one_line
+
+
+class ViewerError(Exception):
+    """A start-up problem reported as one line (bad file, busy port)."""
+
+
+def load(path):
+    """(model, branches) of an nnm file; one-line ViewerError on any problem."""
+    try:
+        model = nnm_solver.load_model(path)
+    except nnm_solver.NNMInputError as exc:
+        raise ViewerError(str(exc)) from None
+    except (OSError, ValueError, KeyError) as exc:
+        raise ViewerError(f"{path}: cannot read the model ({one_line(exc)})") from None
+    loader = getattr(nnm_solver, "load_branches", None)
+    branches = []
+    if loader is not None:
+        try:
+            branches = list(loader(path))
+        except nnm_solver.NNMInputError as exc:
+            raise ViewerError(str(exc)) from None
+        except (OSError, ValueError, KeyError) as exc:
+            raise ViewerError(f"{path}: cannot read the branches ({one_line(exc)})") from None
+    return model, branches
+
+
+def check_port(host, port):
+    """Raise ViewerError if ``port`` cannot be bound on ``host`` (viser would silently take another)."""
+    if not 0 < port < 65536:
+        raise ViewerError(f"port {port} is not a valid TCP port (1..65535)")
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        raise ViewerError(f"cannot resolve host {host!r} ({exc.strerror})") from None
+    family, _, _, _, addr = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind(addr)
+        except OSError as exc:
+            if exc.errno == errno.EADDRINUSE:
+                raise ViewerError(f"port {port} on {host} is already in use; pass another with --port") from None
+            raise ViewerError(f"cannot listen on {host}:{port} ({exc.strerror})") from None
+
+
+class ViewerApp:
+    """The server: shared state plus one Session per connected tab."""
+
+    def __init__(self, model, branches=(), path=None, host="127.0.0.1", port=8080, start_job=None,
+                 verbose=False):
+        import viser
+        from . import scene as sc
+
+        self.shared = SharedState(model, path=path, branches=branches)
+        self.start_job = start_job
+        with contextlib.redirect_stdout(io.StringIO()):   # viser's own banner: we print one line
+            self.server = viser.ViserServer(host=host, port=port, label="nnm-view", verbose=verbose)
+        if self.server.get_port() != port:
+            self.server.stop()
+            raise ViewerError(f"port {port} on {host} is already in use; pass another with --port")
+        self.host, self.port = host, port
+        self.sessions = {}
+        self._lock = threading.Lock()
+        mesh = model.mesh if model.mesh is not None else sc.fallback_mesh(model.n)
+        geom = sc.view_geometry(mesh.vertices)
+        self.server.scene.set_up_direction("+z")
+        cam = self.server.initial_camera
+        cam.position = tuple(geom.camera_position)
+        cam.look_at = tuple(geom.camera_look_at)
+        cam.fov = float(geom.fov_deg) * 3.141592653589793 / 180.0
+        self.geometry = geom
+        self.server.on_client_connect(self._connect)
+        self.server.on_client_disconnect(self._disconnect)
+
+    @property
+    def url(self):
+        host = "localhost" if self.host in ("0.0.0.0", "127.0.0.1", "::") else self.host
+        return f"http://{host}:{self.port}"
+
+    def _connect(self, client):
+        from .controls import Session
+        session = Session(client, self.shared, start_job=self.start_job)
+        with self._lock:
+            self.sessions[client.client_id] = session
+
+    def _disconnect(self, client):
+        with self._lock:
+            session = self.sessions.pop(client.client_id, None)
+        if session is not None:
+            session.close()
+
+    def stop(self):
+        with self._lock:
+            sessions = list(self.sessions.values())
+            self.sessions.clear()
+        for s in sessions:
+            s.close()
+        job = self.shared.job
+        if job is not None:
+            job.cancel()
+        with contextlib.redirect_stdout(io.StringIO()):
+            self.server.stop()
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(prog="nnm-view", description="Explore the nonlinear normal modes of a model "
+                                "in the browser (FEP picking, animated orbits, stiffness scaling).")
+    p.add_argument("file", help="nnm HDF5 file (model, mesh and branches)")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
+    return p.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    try:
+        model, branches = load(args.file)
+        check_port(args.host, args.port)
+        app = ViewerApp(model, branches, path=args.file, host=args.host, port=args.port)
+    except ViewerError as exc:
+        print(f"nnm-view: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"nnm-view: {args.file}: {model.n} DOFs, {len(branches)} branch(es). Open {app.url} "
+          f"in a browser (Ctrl-C to quit)", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        app.stop()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

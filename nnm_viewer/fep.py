@@ -1,0 +1,227 @@
+"""Frequency-energy plot (FEP): the panel image, the clickable copy in the 3D scene, and
+the mapping between an energy and a position along a branch.
+
+Axes follow the literature (seed paper Figs. 8-11): x = energy (J, log scale), y =
+frequency (Hz).  Stable points are filled, unstable points hollow/red.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+STABLE_RGB = (40, 100, 220)
+UNSTABLE_RGB = (225, 70, 40)
+MARKER_RGB = (255, 200, 0)
+#: line colours of successive branches in the panel plot
+BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#17becf", "#7f7f7f", "#bcbd22", "#e377c2"]
+
+
+@dataclass
+class FepSeries:
+    """One branch as drawn: energy (N,) J, frequency (N,) Hz, stable (N,) bool, label."""
+
+    energy: np.ndarray
+    frequency: np.ndarray
+    stable: np.ndarray
+    label: str
+
+    def __len__(self):
+        return len(self.energy)
+
+
+def energy_to_s(energy, target, s_current=0.0):
+    """Fractional index along a branch where its energy equals ``target`` (J).
+
+    Energies need not be monotonic (folds, tongues): among all crossings of the level
+    the one nearest to ``s_current`` wins, so a slider never jumps to a far part of the
+    branch.  Interpolation is linear in log10 energy.  Outside the range: nearest end.
+    """
+    e = np.log10(np.maximum(np.asarray(energy, dtype=float), 1e-300))
+    if len(e) == 0:
+        return 0.0
+    if len(e) == 1:
+        return 0.0
+    y = np.log10(max(float(target), 1e-300))
+    lo, hi = e[:-1], e[1:]
+    inside = (np.minimum(lo, hi) <= y) & (y <= np.maximum(lo, hi))
+    cands = []
+    for i in np.flatnonzero(inside):
+        d = hi[i] - lo[i]
+        cands.append(i + (0.0 if d == 0 else (y - lo[i]) / d))
+    if not cands:
+        # out of range: the nearest point in energy (ties broken by distance in s)
+        dist = np.abs(e - y)
+        best = np.flatnonzero(dist <= dist.min() + 1e-12)
+        return float(best[np.argmin(np.abs(best - s_current))])
+    cands = np.array(cands)
+    return float(cands[np.argmin(np.abs(cands - s_current))])
+
+
+def interp_at(values, s):
+    """Linear interpolation of values (N,) at fractional index s."""
+    values = np.asarray(values, dtype=float)
+    if len(values) == 1:
+        return float(values[0])
+    i = int(np.clip(np.floor(s), 0, len(values) - 2))
+    a = float(s) - i
+    return float((1 - a) * values[i] + a * values[i + 1])
+
+
+def axis_ranges(series):
+    """(log10 E min, log10 E max), (f min, f max) over all non-empty series, padded 5 %."""
+    es = [np.log10(np.maximum(s.energy, 1e-300)) for s in series if len(s)]
+    fs = [np.asarray(s.frequency, dtype=float) for s in series if len(s)]
+    if not es:
+        return (-3.0, 3.0), (0.0, 1.0)
+    e = np.concatenate(es)
+    f = np.concatenate(fs)
+    elo, ehi = float(e.min()), float(e.max())
+    flo, fhi = float(f.min()), float(f.max())
+    if ehi - elo < 1e-9:
+        elo, ehi = elo - 0.5, ehi + 0.5
+    if fhi - flo < 1e-12 * max(abs(fhi), 1.0):
+        pad = max(abs(fhi) * 0.01, 1e-3)
+        flo, fhi = flo - pad, fhi + pad
+    de, df = 0.05 * (ehi - elo), 0.05 * (fhi - flo)
+    return (elo - de, ehi + de), (flo - df, fhi + df)
+
+
+def _hex(rgb):
+    return "#{:02x}{:02x}{:02x}".format(*rgb)
+
+
+class FepRenderer:
+    """Draws the FEP panel image with matplotlib (Agg).
+
+    ``set_series`` draws the branches once and keeps the picture; ``image(selected)`` only
+    restores it and draws the marker of the picked orbit (fast: no full redraw while the
+    user drags a slider).  Axes: x = log10 energy (J), y = frequency (Hz).
+    """
+
+    def __init__(self, size=(520, 380)):
+        from matplotlib.figure import Figure
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        dpi = 100
+        self.fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
+        self.canvas = FigureCanvasAgg(self.fig)
+        self.ax = self.fig.add_axes([0.13, 0.13, 0.84, 0.78])
+        self._background = None
+        (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
+                                     zorder=5, animated=True)
+
+    def set_series(self, series, selected_branch=None, title=None, ghosts=()):
+        """Draw all branches (series: list of FepSeries); ghosts in light grey."""
+        ax = self.ax
+        for artist in list(ax.lines) + list(ax.texts):
+            if artist is not self._star:
+                artist.remove()
+        leg = ax.get_legend()
+        if leg is not None:
+            leg.remove()
+        if any(len(g) for g in ghosts):
+            for g in ghosts:
+                if len(g):
+                    ax.plot(np.log10(g.energy), g.frequency, "-", color="#c8c8c8", lw=1.0, zorder=1)
+            ax.plot([], [], "-", color="#c8c8c8", label="as in the file (k3 x 1)")
+        drawn = False
+        for k, s in enumerate(series):
+            if not len(s):
+                continue
+            drawn = True
+            c = BRANCH_COLORS[k % len(BRANCH_COLORS)]
+            le = np.log10(s.energy)
+            ax.plot(le, s.frequency, "-", color=c, lw=2.2 if k == selected_branch else 1.2, label=s.label,
+                    zorder=2)
+            st = np.asarray(s.stable, dtype=bool)
+            ax.plot(le[st], s.frequency[st], "o", ms=3.5, color=c, zorder=3)
+            if (~st).any():
+                ax.plot(le[~st], s.frequency[~st], "o", ms=4.5, mfc="white", mec=_hex(UNSTABLE_RGB), mew=1.2,
+                        zorder=3)
+        (elo, ehi), (flo, fhi) = axis_ranges(list(series) + list(ghosts))
+        ax.set_xlim(elo, ehi)
+        ax.set_ylim(flo, fhi)
+        ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)
+        if len(ticks) > 8:
+            ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
+        ax.set_xticks(ticks)
+        ax.set_xticklabels([f"1e{int(t)}" for t in ticks], fontsize=8)
+        ax.tick_params(axis="y", labelsize=8)
+        ax.set_xlabel("energy (J)", fontsize=9)
+        ax.set_ylabel("frequency (Hz)", fontsize=9)
+        ax.grid(True, alpha=0.25)
+        if drawn:
+            ax.plot([], [], "o", mfc="white", mec=_hex(UNSTABLE_RGB), label="unstable")
+            ax.legend(fontsize=7, loc="best", framealpha=0.7)
+        else:
+            ax.text(0.5, 0.5, "no branch yet:\ncompute one in the Compute tab", ha="center", va="center",
+                    transform=ax.transAxes, color="grey")
+        ax.set_title(title or "Frequency-energy plot", fontsize=10)
+        self.canvas.draw()
+        self._background = self.canvas.copy_from_bbox(self.fig.bbox)
+
+    def image(self, selected=None):
+        """RGB image (H, W, 3) uint8 with the picked orbit (energy J, frequency Hz) marked."""
+        if self._background is None:
+            self.set_series([])
+        self.canvas.restore_region(self._background)
+        if selected is not None:
+            self._star.set_data([np.log10(max(selected[0], 1e-300))], [selected[1]])
+            self.ax.draw_artist(self._star)
+        return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
+
+
+def render_fep(series, selected=None, selected_branch=None, size=(520, 380), title=None, ghosts=()):
+    """The FEP as an RGB image (H, W, 3) uint8 (one-shot use of FepRenderer).
+
+    selected : (energy J, frequency Hz) of the picked orbit, marked with a star;
+    selected_branch : index of the branch drawn thicker; ghosts : series drawn in light grey.
+    """
+    r = FepRenderer(size)
+    r.set_series(series, selected_branch, title, ghosts)
+    return r.image(selected)
+
+
+@dataclass
+class BoardLayout:
+    """Placement of the in-scene FEP: a rectangle spanned by ``right`` (energy axis) and
+    ``up`` (frequency axis) from ``origin`` (lower-left corner), sizes in m."""
+
+    origin: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    width: float
+    height: float
+    normal: np.ndarray
+
+    def to_world(self, energy, frequency, ranges):
+        """World positions (N, 3) of FEP points (energy J, frequency Hz)."""
+        (elo, ehi), (flo, fhi) = ranges
+        u = (np.log10(np.maximum(np.asarray(energy, dtype=float), 1e-300)) - elo) / (ehi - elo)
+        v = (np.asarray(frequency, dtype=float) - flo) / (fhi - flo)
+        return (self.origin[None] + np.outer(u * self.width, self.right) + np.outer(v * self.height, self.up)
+                + 0.02 * self.height * self.normal[None])
+
+    def point_radius(self):
+        return 0.012 * max(self.width, self.height)
+
+
+def board_layout(bounds_min, bounds_max, view_dir):
+    """Place the FEP board beside a model with bounding box bounds_min/max (m), facing a
+    camera that looks along ``view_dir`` (world, z up), on the camera's right-hand side."""
+    lo, hi = np.asarray(bounds_min, dtype=float), np.asarray(bounds_max, dtype=float)
+    size = float(max(np.max(hi - lo), 1e-9))
+    center = 0.5 * (lo + hi)
+    d = np.asarray(view_dir, dtype=float).copy()
+    d[2] = 0.0
+    if np.linalg.norm(d) < 1e-9:
+        d = np.array([0.0, 1.0, 0.0])
+    d /= np.linalg.norm(d)
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(d, up)
+    right /= np.linalg.norm(right)
+    half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
+    width, height = 0.9 * size, 0.65 * size
+    origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
+    return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-d)

@@ -1,0 +1,161 @@
+"""Information about the picked orbit: numbers (frequency, energy, stability, Floquet
+multipliers, MAC with the linear modes) and the time series / Fourier coefficients of
+chosen DOFs over one period (like the seed paper's Fig. 12)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .animation import format_length
+
+N_HARMONICS = 15
+
+
+@dataclass
+class PointData:
+    """One orbit of a branch, as computed by the solver for the branch's own springs.
+
+    energy J, frequency Hz, period s, stable bool, floquet (2n,) complex, mac (n,),
+    t (S,) s, x (S, n) m over one period, harmonics (N_HARMONICS+1, n) m.
+    """
+
+    energy: float
+    frequency: float
+    period: float
+    stable: bool
+    floquet: np.ndarray
+    mac: np.ndarray
+    t: np.ndarray
+    x: np.ndarray
+    harmonics: np.ndarray
+
+    def scaled(self, ratio):
+        """The same orbit when every k3 is multiplied by ``ratio`` (exact scaling law:
+        displacements / sqrt(ratio), energy / ratio, same frequency and multipliers)."""
+        if abs(ratio - 1.0) < 1e-15:
+            return self
+        r = 1.0 / np.sqrt(ratio)
+        return PointData(self.energy / ratio, self.frequency, self.period, self.stable, self.floquet,
+                         self.mac, self.t, self.x * r, self.harmonics * r)
+
+
+def point_data(branch, s, samples=128):
+    """PointData at fractional index s of ``branch`` (the solver interpolates between points)."""
+    i = int(round(s))
+    if abs(s - i) < 1e-9 or len(branch) == 1:
+        b, j = branch, int(np.clip(i, 0, len(branch) - 1))
+    else:
+        b, j = branch.interpolate(float(s)), 0
+    t, x = b.motion(j, samples=samples)
+    harm = harmonic_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
+    try:
+        mac = np.asarray(b.mac_to_linear(j), dtype=float)
+    except Exception:
+        mac = np.zeros(0)
+    floquet = np.asarray(b.floquet[j]) if getattr(b, "floquet", None) is not None and len(b.floquet) else np.zeros(0)
+    return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
+                     stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
+                     x=np.asarray(x, dtype=float), harmonics=harm)
+
+
+def harmonic_amplitudes(x, n):
+    """Fourier amplitudes (n+1, n_dof) m of samples x (S, n_dof) uniform over one period
+    (endpoint excluded), like Branch.harmonics but without integrating the orbit again."""
+    S = len(x)
+    X = np.fft.rfft(x, axis=0) / S
+    amps = np.abs(X[: n + 1])
+    amps[1:] *= 2.0
+    if amps.shape[0] < n + 1:
+        amps = np.vstack([amps, np.zeros((n + 1 - amps.shape[0], x.shape[1]))])
+    return amps
+
+
+def parse_dofs(text, n, auto):
+    """DOF indices from 'auto' or a comma/space separated list of 0-based indices."""
+    text = (text or "").strip().lower()
+    if text in ("", "auto"):
+        return list(auto)
+    out = []
+    for tok in text.replace(",", " ").split():
+        try:
+            d = int(tok)
+        except ValueError:
+            raise ValueError(f"DOF '{tok}' is not an integer (use 0-based DOF indices or 'auto')") from None
+        if not 0 <= d < n:
+            raise ValueError(f"DOF {d} does not exist (valid: 0..{n - 1})")
+        out.append(d)
+    return out[:6]
+
+
+def auto_dofs(model, x, count=2):
+    """DOFs to plot by default: the spring DOFs moving most, else the DOFs moving most."""
+    amp = np.ptp(np.asarray(x), axis=0)
+    spring_dofs = sorted({s.dof for s in model.springs} | {s.other for s in model.springs if s.other is not None})
+    cands = spring_dofs if spring_dofs else list(range(model.n))
+    cands = sorted(cands, key=lambda d: -amp[d])
+    return cands[:count]
+
+
+def dof_name(model, d):
+    if model.dof_labels is not None:
+        return f"{d} ({model.dof_labels[d]})"
+    return f"DOF {d}"
+
+
+def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
+    """Markdown summary of the orbit (units: J, Hz, s)."""
+    lines = [f"**{where}**" if where else "",
+             f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)",
+             f"- energy **{pd.energy:.4g} J**",
+             f"- k3 factor x{k3_factor:.3g}",
+             f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**"]
+    if pd.floquet.size:
+        mod = np.abs(pd.floquet)
+        order = np.argsort(-mod)[:6]
+        mults = ", ".join(f"{pd.floquet[k].real:+.4f}{pd.floquet[k].imag:+.4f}i" for k in order)
+        lines.append(f"- Floquet multipliers: max |mu| = {mod.max():.6f}; largest: {mults}")
+    if pd.mac.size:
+        order = np.argsort(-pd.mac)[:top]
+        labels = model.mode_labels or []
+        rows = ["", "| mode | f lin (Hz) | MAC |", "|---|---|---|"]
+        for k in order:
+            lab = f" {labels[k]}" if k < len(labels) else ""
+            rows.append(f"| {k + 1}{lab} | {linear_freqs[k]:.4g} | {pd.mac[k]:.3f} |")
+        lines += rows
+    return "\n".join(l for l in lines if l is not None)
+
+
+SERIES_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#8c564b", "#17becf"]
+
+
+def uplot_time_series(pd, model, dofs):
+    """(data, series) for a uPlot chart of x_d(t) over one period, t in units of T."""
+    from viser import uplot
+
+    tt = np.append((pd.t - pd.t[0]) / pd.period, 1.0)
+    data = [tt] + [np.append(pd.x[:, d], pd.x[0, d]) for d in dofs]
+    series = [uplot.Series(label="t/T")] + [
+        uplot.Series(label=f"{dof_name(model, d)} (m)", stroke=SERIES_COLORS[j % len(SERIES_COLORS)], width=1.5,
+                     dash=(6.0, 4.0) if j % 2 else ())
+        for j, d in enumerate(dofs)]
+    return tuple(data), tuple(series)
+
+
+def uplot_harmonics(pd, model, dofs):
+    """(data, series) for a uPlot chart of Fourier amplitudes (m, log scale) vs harmonic k."""
+    from viser import uplot
+
+    K = pd.harmonics.shape[0]
+    top = max(float(pd.harmonics[:, dofs].max()) if dofs else 1.0, 1e-300)
+    data = [np.arange(K, dtype=float)] + [np.maximum(pd.harmonics[:, d], top * 1e-9) for d in dofs]
+    series = [uplot.Series(label="k")] + [
+        uplot.Series(label=f"|c_k| {dof_name(model, d)}", stroke=SERIES_COLORS[j % len(SERIES_COLORS)],
+                     width=1.0, points=uplot.Series_Points(show=True, size=7.0))
+        for j, d in enumerate(dofs)]
+    return tuple(data), tuple(series)
+
+
+def peak_text(peak_max, amplification, auto):
+    return (f"peak displacement **{format_length(peak_max)}**, shown x{amplification:.3g}"
+            + (" (auto)" if auto else ""))

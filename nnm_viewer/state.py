@@ -1,0 +1,176 @@
+"""State shared by all browser tabs: the model, its branches, the running job.
+
+Each tab (a ``Session``) has its own selection and view settings; the branches and the
+background computation are shared, so points computed from one tab appear in all.
+Everything here is plain Python, usable and testable without a browser.
+"""
+from __future__ import annotations
+
+import itertools
+import threading
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import nnm_solver
+
+from .fep import FepSeries
+
+_uids = itertools.count(1)
+
+
+@dataclass
+class BranchEntry:
+    """A branch known to the viewer.
+
+    branch : nnm_solver Branch (for a running job: the latest snapshot).
+    k3_factor : the branch's k3 relative to the file's model (1 for branches in the file).
+    source : "file", "running", "stopped", "computed" or "failed".  saved : stored in the file.
+    """
+
+    branch: object
+    label: str
+    k3_factor: float = 1.0
+    source: str = "file"
+    saved: bool = True
+    status: str = ""
+    uid: int = field(default_factory=lambda: next(_uids))
+
+    def __len__(self):
+        return 0 if self.branch is None else len(self.branch)
+
+    @property
+    def mode(self):
+        return getattr(self.branch, "mode", None)
+
+    def series(self, factor=1.0, label=None):
+        """FEP arrays when every k3 is ``factor`` x the file's: exact scaling law
+        (frequency unchanged, energy / ratio), ratio = factor / k3_factor."""
+        ratio = factor / self.k3_factor
+        b = self.branch
+        if b is None or len(b) == 0:
+            z = np.zeros(0)
+            return FepSeries(z, z, np.zeros(0, bool), label or self.label)
+        return FepSeries(np.asarray(b.energy, dtype=float) / ratio, np.asarray(b.frequency_hz, dtype=float),
+                         np.asarray(b.stable, dtype=bool), label or self.label)
+
+
+def branch_label(branch, k3_factor=1.0, source="file"):
+    """Short label such as 'NNM 1' or 'NNM 2 (k3 x 10, computing)'."""
+    mode = getattr(branch, "mode", "?")
+    text = f"NNM {mode}"
+    if abs(k3_factor - 1.0) > 1e-12:
+        text += f" (k3 x {k3_factor:.3g})"
+    if source in ("running", "stopped", "failed"):
+        text += f" [{source}]"
+    elif source == "computed":
+        text += " [new]"
+    return text
+
+
+class SharedState:
+    """Model, branch entries and jobs shared by all sessions (thread-safe).
+
+    Listeners (callables taking a kind string: "branches", "progress", "error") are
+    called after every change, outside the lock.
+    """
+
+    def __init__(self, model, path=None, branches=()):
+        self.model = model
+        self.path = path
+        self.lock = threading.RLock()
+        self.entries: list[BranchEntry] = []
+        self.listeners: list = []
+        self.job = None                 # worker.JobRunner or None
+        self.progress = 0.0
+        self.status = ""
+        self.error = ""
+        freqs, shapes = model.linear_modes()
+        self.linear_freqs = np.asarray(freqs)
+        self.linear_shapes = shapes
+        for b in branches:
+            self.add(b, source="file", saved=True, notify=False)
+
+    # ------------------------------------------------------------------ entries
+    def add(self, branch, k3_factor=1.0, source="file", saved=True, notify=True):
+        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source),
+                            k3_factor=k3_factor, source=source, saved=saved)
+        with self.lock:
+            self.entries.append(entry)
+        if notify:
+            self.notify("branches")
+        return entry
+
+    def update(self, entry, branch=None, source=None, status=None, notify=True):
+        with self.lock:
+            if branch is not None:
+                entry.branch = branch
+            if source is not None:
+                entry.source = source
+            if status is not None:
+                entry.status = status
+            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source)
+        if notify:
+            self.notify("branches")
+
+    def snapshot(self):
+        with self.lock:
+            return list(self.entries)
+
+    def index_of(self, uid):
+        with self.lock:
+            for i, e in enumerate(self.entries):
+                if e.uid == uid:
+                    return i
+        return None
+
+    # ------------------------------------------------------------------ events
+    def subscribe(self, fn):
+        with self.lock:
+            self.listeners.append(fn)
+
+    def unsubscribe(self, fn):
+        with self.lock:
+            if fn in self.listeners:
+                self.listeners.remove(fn)
+
+    def notify(self, kind):
+        with self.lock:
+            listeners = list(self.listeners)
+        for fn in listeners:
+            try:
+                fn(kind)
+            except Exception:  # a broken tab must not break the others
+                pass
+
+    def set_error(self, message):
+        with self.lock:
+            self.error = message
+        self.notify("error")
+
+    def set_progress(self, value, status=None):
+        with self.lock:
+            self.progress = float(value)
+            if status is not None:
+                self.status = status
+        self.notify("progress")
+
+    # ------------------------------------------------------------------ saving
+    def save(self, entry):
+        """Append ``entry``'s branch to the model file (atomic write by the solver).
+
+        A branch computed with scaled springs is mapped back to the file's springs with
+        the exact scaling law before saving, so the file stays consistent.
+        """
+        if self.path is None:
+            raise nnm_solver.NNMInputError("this viewer has no file to save into")
+        if entry.branch is None or len(entry.branch) == 0:
+            raise nnm_solver.NNMInputError("the branch has no points yet; nothing to save")
+        branch = entry.branch
+        if abs(entry.k3_factor - 1.0) > 1e-12:
+            branch = branch.scaled(1.0 / entry.k3_factor)
+        nnm_solver.save_branch(self.path, branch)
+        with self.lock:
+            entry.saved = True
+        self.notify("branches")
+        return branch

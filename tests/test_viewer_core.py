@@ -1,0 +1,137 @@
+"""Viewer building blocks without a server: GLB writer, orbit animation, FEP mapping/image, info."""
+import io
+import struct
+
+import numpy as np
+import pytest
+
+from nnm_viewer.animation import format_length, fourier_fit, orbit_animation
+from nnm_viewer.fep import (FepSeries, axis_ranges, board_layout, energy_to_s, interp_at, render_fep)
+from nnm_viewer.glb import build_glb, read_glb_json
+from nnm_viewer.info import harmonic_amplitudes, parse_dofs
+from nnm_viewer.scene import fallback_mesh, view_geometry
+
+
+def _tetra():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    return V, F
+
+
+def test_glb_structure_morph_targets_and_animation():
+    V, F = _tetra()
+    targets = np.random.default_rng(0).normal(size=(3, 4, 3))
+    times = np.linspace(0, 2, 9)
+    W = np.random.default_rng(1).normal(size=(9, 3))
+    glb = build_glb(V, F, colors=np.full((4, 3), 100, np.uint8), targets=targets, times=times, weights=W)
+    assert glb[:4] == b"glTF" and struct.unpack_from("<I", glb, 8)[0] == len(glb)
+    assert len(glb) % 4 == 0
+    js = read_glb_json(glb)
+    prim = js["meshes"][0]["primitives"][0]
+    assert set(prim["attributes"]) == {"POSITION", "COLOR_0"}      # no NORMAL: flat shading follows morphs
+    assert len(prim["targets"]) == 3 and len(js["meshes"][0]["weights"]) == 3
+    for t in prim["targets"]:
+        acc = js["accessors"][t["POSITION"]]
+        assert acc["count"] == 4 and "min" in acc and "max" in acc   # required by glTF for POSITION
+    anim = js["animations"][0]
+    assert anim["channels"][0]["target"]["path"] == "weights"
+    sampler = anim["samplers"][0]
+    assert js["accessors"][sampler["input"]]["max"] == [2.0]
+    assert js["accessors"][sampler["output"]]["count"] == 9 * 3
+
+
+def test_glb_loads_in_trimesh():
+    trimesh = pytest.importorskip("trimesh")
+    V, F = _tetra()
+    glb = build_glb(V, F, targets=np.ones((1, 4, 3)) * 0.1, times=[0, 1], weights=[[0], [1]])
+    scene = trimesh.load(io.BytesIO(glb), file_type="glb")
+    mesh = list(scene.geometry.values())[0]
+    assert mesh.vertices.shape == (4, 3) and mesh.faces.shape == (4, 3)
+
+
+def test_fourier_fit_recovers_harmonics_with_or_without_endpoint():
+    T = 0.7
+    for endpoint in (False, True):
+        t = np.linspace(0, T, 64, endpoint=endpoint)
+        w = 2 * np.pi / T
+        x = np.stack([0.1 + 2 * np.cos(w * t) + 0.3 * np.sin(3 * w * t), -np.cos(w * t)], axis=1)
+        orders, c = fourier_fit(t, x, T, n_harm=15)
+        assert orders[0] == 0 and orders[1] == orders[2] == 1
+        assert c[0] == pytest.approx([0.1, 0.0], abs=1e-10)
+        assert c[1] == pytest.approx([2.0, -1.0], abs=1e-10)         # a_1
+        assert c[6] == pytest.approx([0.3, 0.0], abs=1e-10)          # b_3
+
+
+def test_orbit_animation_peak_colors_and_harmonic_pruning():
+    mesh = fallback_mesh(2)
+    T = 2.0
+    t = np.arange(128) * T / 128
+    w = 2 * np.pi / T
+    x = np.stack([0.5 * np.cos(w * t) + 0.05 * np.cos(3 * w * t), 0.2 * np.cos(w * t)], axis=1)
+    anim = orbit_animation(mesh.vertices, mesh.faces, mesh.displacements, t, x, T)
+    assert set(anim.orders.tolist()) == {1, 3}                        # even harmonics dropped
+    assert anim.peak_max == pytest.approx(0.55, rel=1e-3)             # true peak, m
+    assert anim.peak[anim.peak_vertex] == anim.peak_max
+    assert anim.peak[:8] == pytest.approx(np.full(8, 0.55), rel=1e-3)
+    # the morph weights reproduce the motion at any phase
+    d = anim.displacement([0.25])[0]
+    xs = np.array([0.5 * np.cos(np.pi / 2) + 0.05 * np.cos(3 * np.pi / 2), 0.2 * np.cos(np.pi / 2)])
+    assert d[:, 2] == pytest.approx(mesh.displacements(xs)[:, 2], abs=1e-9)
+    colors = anim.colors()
+    assert colors.shape == (len(mesh.vertices), 3) and colors.dtype == np.uint8
+    assert not np.array_equal(colors[0], colors[8])                   # box 1 moves more than box 2
+    js = read_glb_json(anim.glb(10.0, display_period=2.0))
+    assert len(js["meshes"][0]["primitives"][0]["targets"]) == len(anim.orders)
+    assert "animations" in js
+    assert "animations" not in read_glb_json(anim.glb(10.0, playing=False, phase=0.3))
+
+
+def test_energy_to_s_monotonic_fold_and_out_of_range():
+    E = np.array([1e-3, 1e-2, 1e-1, 1.0])
+    assert energy_to_s(E, 1e-2) == pytest.approx(1.0)
+    assert energy_to_s(E, 10 ** -1.5) == pytest.approx(1.5)
+    assert energy_to_s(E, 1e3) == 3.0 and energy_to_s(E, 1e-9) == 0.0
+    # a fold (tongue): energy up, down, up -- the crossing nearest to the current point wins
+    F = np.array([1.0, 10.0, 100.0, 10.0, 1.0, 10.0, 100.0, 1000.0])
+    assert energy_to_s(F, 10.0, s_current=0.5) == pytest.approx(1.0)
+    assert energy_to_s(F, 10.0, s_current=3.2) == pytest.approx(3.0)
+    assert energy_to_s(F, 10.0, s_current=5.5) == pytest.approx(5.0)
+    assert energy_to_s([5.0], 1.0) == 0.0
+    assert interp_at([0.0, 2.0, 4.0], 1.25) == pytest.approx(2.5)
+
+
+def test_fep_image_and_ranges():
+    a = FepSeries(np.logspace(-3, 1, 10), np.linspace(1.0, 1.2, 10), np.array([True] * 7 + [False] * 3), "NNM 1")
+    empty = FepSeries(np.zeros(0), np.zeros(0), np.zeros(0, bool), "empty")
+    (elo, ehi), (flo, fhi) = axis_ranges([a, empty])
+    assert elo < -3 < 1 < ehi and flo < 1.0 < 1.2 < fhi
+    img = render_fep([a, empty], selected=(0.1, 1.1), selected_branch=0, size=(300, 200))
+    assert img.shape == (200, 300, 3) and img.dtype == np.uint8
+    assert img.std() > 10
+    assert render_fep([], size=(300, 200)).shape == (200, 300, 3)    # no branch: a hint, no crash
+
+
+def test_board_layout_maps_corners_and_faces_camera():
+    geom = view_geometry(np.array([[0, 0, 0], [10, 4, 2]], float))
+    b = geom.board
+    ranges = ((-2.0, 2.0), (1.0, 3.0))
+    p = b.to_world([1e-2, 1e2], [1.0, 3.0], ranges)
+    lift = 0.02 * b.height * b.normal
+    assert p[0] == pytest.approx(b.origin + lift)
+    assert p[1] == pytest.approx(b.origin + b.width * b.right + b.height * b.up + lift)
+    to_cam = geom.camera_position - (b.origin + 0.5 * b.width * b.right)
+    assert np.dot(to_cam, b.normal) > 0                                # the board faces the camera
+
+
+def test_info_helpers():
+    assert parse_dofs("auto", 5, [3, 1]) == [3, 1]
+    assert parse_dofs("0, 4", 5, []) == [0, 4]
+    with pytest.raises(ValueError, match="does not exist"):
+        parse_dofs("7", 5, [])
+    with pytest.raises(ValueError, match="not an integer"):
+        parse_dofs("a", 5, [])
+    t = np.arange(64) / 64
+    x = np.stack([np.cos(2 * np.pi * t) + 0.1 * np.cos(6 * np.pi * t)], axis=1)
+    h = harmonic_amplitudes(x, 15)
+    assert h.shape == (16, 1) and h[1, 0] == pytest.approx(1.0) and h[3, 0] == pytest.approx(0.1)
+    assert format_length(0.0123) == "12.3 mm" and format_length(2.0) == "2 m"

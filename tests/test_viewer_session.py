@@ -1,0 +1,271 @@
+"""App logic in-process: a Session on a real viser server (no browser), driven by setting
+handle values like a user would; background jobs streamed into the shared state."""
+import time
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_viewer.controls import Session
+from nnm_viewer.demo import two_box_model, write_demo_file
+from nnm_viewer.glb import read_glb_json
+from nnm_viewer.state import SharedState
+
+viser = pytest.importorskip("viser")
+
+
+@pytest.fixture(scope="module")
+def demo_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("viewer") / "two.h5"
+    write_demo_file(path, energy_max=10.0)
+    return path
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield s
+    s.stop()
+
+
+def make_session(server, path, start_job=None):
+    model = nnm.load_model(path)
+    shared = SharedState(model, path=path, branches=nnm.load_branches(path))
+    return Session(server, shared, sync=True, start_job=start_job), shared
+
+
+def wait_for(cond, timeout=10.0):
+    t0 = time.time()
+    while not cond():
+        if time.time() - t0 > timeout:
+            raise AssertionError("timed out")
+        time.sleep(0.01)
+
+
+class FakeJob:
+    """A job with the solver's Job contract whose points are released by the test."""
+
+    def __init__(self, branch, error=None):
+        self.branch, self.n, self.error_after = branch, 0, error
+        self.done, self.error, self.cancelled = False, None, False
+
+    @property
+    def progress(self):
+        return self.n / len(self.branch)
+
+    def release(self, k):
+        self.n = min(self.n + k, len(self.branch))
+
+    def points(self):
+        return self.branch.subset(slice(0, self.n))
+
+    def cancel(self):
+        self.cancelled = True
+        self.done = True
+
+    def fail(self):
+        self.error = self.error_after
+        self.done = True
+
+    def result(self, timeout=None):
+        if self.error is not None:
+            raise self.error
+        return self.points()
+
+
+def test_initial_state_selection_and_animation(server, demo_file):
+    s, shared = make_session(server, demo_file)
+    assert len(shared.entries) == 2
+    assert s.sel_uid == shared.entries[0].uid and s.s == 0.0
+    assert s.h_branch.value.startswith("1: NNM 1")
+    assert "branch 1, point 0.00" in s.h_sel.content
+    js = read_glb_json(s.last_glb)
+    assert "animations" in js and js["meshes"][0]["primitives"][0]["targets"]
+    assert "peak displacement" in s.h_peak.content
+    assert "Hz" in s.h_info.content and "MAC" in s.h_info.content
+    assert len(s._board_handles) == 2                     # one clickable batch per branch
+    s.close()
+
+
+def test_pick_energy_and_along_sliders(server, demo_file):
+    s, shared = make_session(server, demo_file)
+    b2 = shared.entries[1]
+    s.pick(b2.uid, 5)                                      # click on point 5 of branch 2 in the scene
+    assert s.sel_uid == b2.uid and s.s == 5.0
+    assert s.h_branch.value.startswith("2: NNM 2") and "branch 2, point 5.00" in s.h_sel.content
+    E = b2.branch.energy
+    assert s.h_energy.value == pytest.approx(np.log10(E[5]), abs=0.006)
+    # energy slider: selection moves along the branch, the along slider follows
+    target = 0.5 * (np.log10(E[7]) + np.log10(E[8]))
+    s.h_energy.value = round(target, 2)
+    assert 7.0 <= s.s <= 8.0
+    assert s.h_along.value == pytest.approx(round(s.s, 2))
+    assert s.current_point.energy == pytest.approx(10 ** target, rel=0.1)
+    # along slider: the energy slider follows
+    s.h_along.value = 2.0
+    assert s.s == 2.0 and s.h_energy.value == pytest.approx(np.log10(E[2]), abs=0.006)
+    # branch dropdown
+    s.h_branch.value = s.h_branch.options[0]
+    assert s.sel_uid == shared.entries[0].uid and s.s == 0.0
+    s.close()
+
+
+def test_animation_controls(server, demo_file):
+    s, _ = make_session(server, demo_file)
+    s.pick(s.sel_uid, 10)
+    amp_auto, peak = s.amplification()
+    assert peak > 0 and amp_auto * peak == pytest.approx(0.12 * s.geom.size)
+    s.h_auto.value = False
+    s.h_amp.value = 1.0
+    assert s.amplification()[0] == pytest.approx(10.0)
+    assert "x10" in s.h_peak.content
+    s.h_speed.value = 2.0
+    js = read_glb_json(s.last_glb)
+    t_acc = js["accessors"][js["animations"][0]["samplers"][0]["input"]]
+    assert t_acc["max"][0] == pytest.approx(0.5)           # one cycle in 1/speed s
+    s.h_play.value = False
+    assert s.h_phase.visible and "animations" not in read_glb_json(s.last_glb)
+    s.close()
+
+
+def test_stiffness_slider_uses_exact_scaling_law(server, demo_file):
+    s, shared = make_session(server, demo_file)
+    s.pick(s.sel_uid, 12)
+    pd1 = s.current_point
+    peak1 = s.amplification()[1]
+    s.h_k3.value = 1.0                                     # every k3 x 10
+    pd10 = s.current_point
+    assert pd10.frequency == pytest.approx(pd1.frequency)
+    assert pd10.energy == pytest.approx(pd1.energy / 10)
+    assert np.max(np.abs(pd10.x)) == pytest.approx(np.max(np.abs(pd1.x)) / np.sqrt(10))
+    assert s.amplification()[1] == pytest.approx(peak1 / np.sqrt(10))
+    assert "E = " in s.h_sel.content and not s.h_recompute.disabled
+    # the scaled branch agrees with Branch.scaled of the solver
+    ref = shared.entries[0].branch.scaled(10.0)
+    assert shared.entries[0].series(10.0).energy == pytest.approx(ref.energy)
+    s.close()
+
+
+def test_recompute_confirms_scaling_and_save_keeps_file(server, demo_file, tmp_path):
+    path = tmp_path / "copy.h5"
+    path.write_bytes(demo_file.read_bytes())
+    s, shared = make_session(server, path)
+    s.h_k3.value = 1.0
+    s._cb(s._on_recompute)(None)
+    job = s.last_runner
+    assert job is not None and not s.h_error.visible
+    job.finished.wait(60)
+    new = shared.entries[-1]
+    assert new.k3_factor == pytest.approx(10.0) and new.source == "computed" and not new.saved
+    assert s.sel_uid == new.uid
+    # recomputed frequencies vs the scaled file branch, at the same energies
+    old = shared.entries[0].series(10.0)
+    le_new = np.log10(new.branch.energy)
+    inside = (np.log10(old.energy) > le_new.min()) & (np.log10(old.energy) < le_new.max())
+    f_interp = np.interp(np.log10(old.energy[inside]), le_new, new.branch.frequency_hz)
+    assert inside.sum() >= 3
+    assert f_interp == pytest.approx(old.frequency[inside], rel=2e-3)
+    # save: the branch is mapped back to the file's k3 and appended; the file keeps the rest
+    s._cb(s._on_save)(None)
+    assert new.saved and "saved" in s.h_status.content
+    branches = nnm.load_branches(path)
+    assert len(branches) == 3
+    np.testing.assert_allclose(branches[2].model.k3, nnm.load_model(path).k3)
+    np.testing.assert_allclose(branches[2].energy, new.branch.energy * 10.0)
+    s.close()
+
+
+def test_job_streams_points_stop_keeps_them(server, demo_file):
+    model = nnm.load_model(demo_file)
+    full = nnm.load_branches(demo_file)[0]
+    fake = FakeJob(full)
+    s, shared = make_session(server, demo_file, start_job=lambda m, mode, energy_max, **kw: fake)
+    s.h_mode.value = s.h_mode.options[0]
+    s._cb(s._on_start)(None)
+    runner = shared.job
+    runner.poll = 0.01
+    entry = runner.entry
+    assert entry.source == "running" and len(entry) == 0
+    assert not s.h_stop.disabled and s.h_start.disabled
+    fake.release(4)
+    wait_for(lambda: len(entry) == 4)
+    wait_for(lambda: s.h_branch.value.endswith("(4 pts)"))
+    assert s.sel_uid == entry.uid and s.current_point is not None   # first points shown at once
+    wait_for(lambda: abs(s.h_progress.value - 100 * 4 / len(full)) < 1)
+    fake.release(3)
+    wait_for(lambda: len(entry) == 7)
+    s._cb(s._on_stop)(None)
+    runner.finished.wait(5)
+    assert fake.cancelled and entry.source == "stopped" and len(entry) == 7
+    assert s.h_stop.disabled and not s.h_start.disabled and not s.h_save.disabled
+    assert model.n == 2
+    s.close()
+
+
+def test_solver_error_is_shown_in_page_and_server_keeps_running(server, demo_file):
+    full = nnm.load_branches(demo_file)[0]
+    fake = FakeJob(full, error=RuntimeError("Newton diverged at point 3"))
+    s, shared = make_session(server, demo_file, start_job=lambda m, mode, energy_max, **kw: fake)
+    s._cb(s._on_start)(None)
+    shared.job.poll = 0.01
+    fake.release(3)
+    runner = shared.job
+    wait_for(lambda: len(runner.entry) == 3)
+    fake.fail()
+    runner.finished.wait(5)
+    assert "Newton diverged" in shared.error and "3 points kept" in shared.error
+    assert s.h_error.visible and "Newton diverged" in s.h_error.content
+    assert len(runner.entry) == 3 and runner.entry.source == "failed"
+    s._cb(s._dismiss_error)(None)
+    assert not s.h_error.visible
+    # bad input from the solver (mode out of range): one line in the page, nothing crashes
+    s2, _ = make_session(server, demo_file)
+    s2._cb(lambda _: s2._start(5, 10.0, 1.0))(None)
+    assert s2.h_error.visible and "mode 5" in s2.h_error.content
+    s.h_along.value = 1.0                                 # the session still works
+    assert s.s == 1.0
+    s.close()
+    s2.close()
+
+
+def test_two_tabs_are_independent_but_share_branches(server, demo_file):
+    model = nnm.load_model(demo_file)
+    shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file))
+    a = Session(server, shared, sync=True)
+    b = Session(server, shared, sync=True)
+    a.pick(shared.entries[1].uid, 3)
+    assert b.sel_uid == shared.entries[0].uid and b.s == 0.0
+    shared.add(shared.entries[0].branch.subset(slice(0, 5)), source="computed", saved=False)
+    assert a.h_branch.options == b.h_branch.options and len(a.h_branch.options) == 3
+    assert a.sel_uid == shared.entries[1].uid               # a new branch does not steal the selection
+    a.close()
+    b.close()
+
+
+def test_model_without_mesh_gets_fallback_boxes(server, tmp_path):
+    m = two_box_model()
+    bare = nnm.Model(m.M, m.K, m.springs, name="bare")
+    path = tmp_path / "bare.h5"
+    nnm.save_model(path, bare)
+    nnm.save_branch(path, nnm.continue_nnm(bare, mode=1, energy_max=1.0, max_points=8))
+    s, _ = make_session(server, path)
+    js = read_glb_json(s.last_glb)
+    assert js["accessors"][0]["count"] == 16                # two boxes of 8 vertices
+    s.close()
+
+
+def test_point_tab_charts_and_dof_choice(server, demo_file):
+    s, _ = make_session(server, demo_file)
+    s.pick(s.sel_uid, 15)
+    h_time, n = s._charts["time"]
+    assert n == 1 + 1                                     # t/T + the spring DOF ('auto')
+    assert len(h_time.data[0]) == len(h_time.data[1]) and h_time.data[0][-1] == 1.0
+    s.h_dofs.value = "0, 1"
+    h_time, n = s._charts["time"]
+    h_harm, _ = s._charts["harm"]
+    assert n == 3 and len(h_harm.data) == 3
+    a1 = h_harm.data[1]
+    assert a1[1] == a1.max() and a1[3] > a1[2]              # odd harmonics of the cubic spring
+    s.h_dofs.value = "9"
+    assert s.h_error.visible and "DOF 9 does not exist" in s.h_error.content
+    s.close()
