@@ -32,8 +32,6 @@ same highest harmonic), stability flags and events as for shooting (``floquet.py
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .branch import Branch
@@ -52,7 +50,7 @@ __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion"]
 HILL_AUTO_SIZE = 1000
 
 
-def _basis(model, harmonics, samples, basis):
+def _basis(harmonics, samples, basis):
     if basis not in BASES:
         raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
     _check_positive("harmonics", harmonics, integer=True)
@@ -91,7 +89,7 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
         _check_positive("energy_min", energy_min)
         if energy_min >= energy_max:
             raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
-    hb = _basis(model, harmonics, samples, basis)
+    hb = _basis(harmonics, samples, basis)
     k = model.check_mode(mode)
     system = modal_system(model)
     problem = HBProblem(system, k, hb, max_rel_step=max_rel_step)
