@@ -204,7 +204,7 @@ class BoardLayout:
                 + 0.02 * self.height * self.normal[None])
 
     def point_radius(self):
-        return 0.012 * max(self.width, self.height)
+        return 0.016 * max(self.width, self.height)
 
 
 def board_layout(bounds_min, bounds_max, view_dir):

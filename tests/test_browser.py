@@ -1,0 +1,177 @@
+"""Real-browser test: Debian's Chromium (headless, software WebGL) driven by Playwright opens
+the page served by `nnm-view` on the shipped aircraft (assets/paris.h5), checks the aircraft is
+drawn, moves the energy slider, picks a point of the in-scene FEP, and saves screenshots under
+artifacts/.  Skipped only when /usr/bin/chromium is absent."""
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_viewer.fep import axis_ranges
+from nnm_viewer.scene import fallback_mesh, view_geometry
+from nnm_viewer.state import BranchEntry
+
+CHROMIUM = "/usr/bin/chromium"
+ROOT = Path(__file__).resolve().parents[1]
+ASSET = ROOT / "assets" / "paris.h5"
+ARTIFACTS = ROOT / "artifacts"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync"]
+VIEWPORT = {"width": 1600, "height": 900}
+
+pytestmark = pytest.mark.browser
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def viewer_file(tmp_path):
+    """The shipped aircraft with at least one branch (a short one is computed on a copy if the file
+    has none); the 2-DOF demo if the asset is missing."""
+    if not ASSET.exists():
+        from nnm_viewer.demo import write_demo_file
+        path = tmp_path / "two.h5"
+        write_demo_file(path, energy_max=10.0, max_points=30)
+        return path, "demo"
+    if nnm.load_branches(ASSET):
+        return ASSET, "paris"
+    path = tmp_path / "paris.h5"
+    shutil.copyfile(ASSET, path)
+    model = nnm.load_model(path)
+    branch = nnm.continue_nnm(model, mode=min(10, model.n), energy_max=1e2, max_points=12)
+    nnm.save_branch(path, branch)
+    return path, "paris"
+
+
+def project(points, cam_pos, look_at, fov, box):
+    """Screen pixels (N, 2) of world points for a camera (z up, vertical fov in rad) drawing into box."""
+    f = np.asarray(look_at, float) - cam_pos
+    f /= np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    d = np.asarray(points, float) - cam_pos
+    z = d @ f
+    t = np.tan(fov / 2)
+    aspect = box["width"] / box["height"]
+    nx = (d @ r) / (z * t * aspect)
+    ny = (d @ u) / (z * t)
+    return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
+
+
+def selected_text(page):
+    return page.evaluate("""() => {
+        const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));
+        return p ? p.innerText : '';
+    }""")
+
+
+def test_viewer_in_chromium(tmp_path):
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian chromium is not installed (/usr/bin/chromium); apt-get install chromium")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    t_start = time.time()
+    path, kind = viewer_file(tmp_path)
+    model = nnm.load_model(path)
+    branches = nnm.load_branches(path)
+    mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
+    geom = view_geometry(mesh.vertices)
+    port = free_port()
+    exe = shutil.which("nnm-view")
+    cmd = [exe] if exe else [sys.executable, "-m", "nnm_viewer"]
+    server = subprocess.Popen(cmd + [str(path), "--port", str(port)], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True)
+    ARTIFACTS.mkdir(exist_ok=True)
+    try:
+        line = server.stdout.readline()
+        assert f":{port}" in line, line + server.stderr.read()
+        with sync_api.sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS,
+                                         headless=True)
+            try:
+                page = browser.new_page(viewport=VIEWPORT)
+                page.goto(f"http://127.0.0.1:{port}/")
+                page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=45000)
+                page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=10000)
+                time.sleep(4.0)                                    # software WebGL: let the GLB load
+                box = page.locator("canvas").first.bounding_box()
+
+                # 1) the aircraft is drawn: its projected bounding box is not blank
+                shot = ARTIFACTS / f"browser_{kind}_start.png"
+                page.screenshot(path=str(shot))
+                img = _read_png(shot)
+                sub = mesh.vertices[:: max(1, len(mesh.vertices) // 2000)]
+                xy = project(sub, geom.camera_position, geom.camera_look_at, np.radians(geom.fov_deg), box)
+                x0, y0 = np.clip(xy.min(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
+                x1, y1 = np.clip(xy.max(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
+                region = img[y0:y1 + 1, x0:x1 + 1].astype(float)
+                assert region.size, "the model projects outside the view"
+                non_bg = np.mean(np.abs(region - region[0, 0]).sum(axis=2) > 30)
+                assert non_bg > 0.05, f"the model's screen area is blank ({non_bg:.1%} drawn)"
+                assert len(np.unique(region.reshape(-1, 3) // 8, axis=0)) > 20  # shaded, not one flat colour
+
+                # 2) the energy slider moves the selection
+                before = selected_text(page)
+                assert "point 0.00" in before, before
+                slider = page.get_by_role("slider").first
+                slider.focus()
+                page.keyboard.press("End")
+                page.wait_for_function("(old) => { const p = [...document.querySelectorAll('p')].find("
+                                       "e => e.innerText.includes('Selected:')); return p && p.innerText != old; }",
+                                       arg=before, timeout=20000)
+                after = selected_text(page)
+                n0 = len(branches[0])
+                assert f"point {n0 - 1:.2f}" in after, after
+
+                # 3) pick a point of the in-scene FEP with the mouse
+                entries = [BranchEntry(b, "") for b in branches]
+                series = [e.series(1.0) for e in entries]
+                ranges = axis_ranges(series)
+                target = n0 // 2
+                p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]], ranges)
+                (px, py), = project(p3, geom.camera_position, geom.camera_look_at, np.radians(geom.fov_deg), box)
+                picked = False
+                for dx, dy in [(0, 0), (1, 1), (-1, -1), (2, 0), (0, 2)]:
+                    page.mouse.click(px + dx, py + dy)
+                    try:
+                        page.wait_for_function(
+                            "(want) => [...document.querySelectorAll('p')].some(e => e.innerText.includes(want))",
+                            arg=f"branch 1, point {target:.2f}", timeout=5000)
+                        picked = True
+                        break
+                    except sync_api.TimeoutError:
+                        continue
+                assert picked, f"clicking FEP point {target} at ({px:.0f}, {py:.0f}) did not select it"
+                time.sleep(2.0)
+                page.screenshot(path=str(ARTIFACTS / f"browser_{kind}_picked.png"))
+                text = page.evaluate("document.body.innerText")
+                assert re.search(r"peak displacement \S+ \S*m", text), "no peak displacement shown"
+            finally:
+                browser.close()
+    finally:
+        server.terminate()
+        try:
+            server.wait(10)
+        except subprocess.TimeoutExpired:
+            server.kill()
+    assert time.time() - t_start < 120
+
+
+def _read_png(path):
+    import matplotlib.image as mpimg
+    img = mpimg.imread(path)
+    if img.dtype != np.uint8:
+        img = (img[..., :3] * 255).astype(np.uint8)
+    return img[..., :3]
