@@ -18,3 +18,4 @@ from .io import load_branches, save_branch
 from .floquet import STABILITY_TOL
 from .matio import load_mat_model
 from .plotting import plot_fep
+from . import hb

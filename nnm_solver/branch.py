@@ -105,6 +105,10 @@ class Branch:
         samples = int(samples)
         if samples < 2:
             raise NNMInputError("samples must be at least 2")
+        if self.settings.get("method") == "harmonic_balance":
+            from .hb import hb_motion
+            t, x, _ = hb_motion(self, i, samples)
+            return t, x
         spp = int(self.settings.get("steps_per_period", 200))
         sub = max(1, int(np.ceil(spp / samples)))
         ms = modal_system(self.model)
@@ -118,6 +122,9 @@ class Branch:
     def velocity(self, i, samples=256):
         """Velocities (samples, n) m/s along the orbit of point i, at the times of motion()."""
         i = self._check_index(i)
+        if self.settings.get("method") == "harmonic_balance":
+            from .hb import hb_motion
+            return hb_motion(self, i, samples)[2]
         spp = int(self.settings.get("steps_per_period", 200))
         sub = max(1, int(np.ceil(spp / samples)))
         ms = modal_system(self.model)

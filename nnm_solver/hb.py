@@ -34,14 +34,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .branch import Branch
 from .continuation import ContinuationSettings, pseudo_arclength
 from .errors import NNMInputError
-from .floquet import STABILITY_TOL, detect_events, is_stable
+from .floquet import STABILITY_TOL, is_stable
 from .hb_aft import BASES, HBBasis, HBProblem
 from .hb_hill import hill_multipliers
 from .model import Model
-from .nnm_continuation import _check_positive, start_amplitude
+from .nnm_continuation import _check_positive, collect_branch, start_amplitude
 from .shooting import modal_system
 
 __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion"]
@@ -105,58 +104,23 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
 
     if floquet is None:
         floquet = 2 * model.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
-    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], floquet=[], stable=[], coefficients=[],
-                iterations=[])
-    status, message = "failed", ""
-    gen = pseudo_arclength(problem, u0, p0, settings, tol)
-    E_start = None
-    try:
-        while True:
-            if stop is not None and stop.is_set():
-                status, message = "cancelled", f"cancelled after {len(rows['energy'])} points"
-                break
-            try:
-                pt = next(gen)
-            except StopIteration as fin:
-                status, message = "failed", str(fin.value or "continuation stopped")
-                break
-            A, w = problem.unpack(pt.u)
-            q0, v0 = problem.initial_state(pt.u)
-            x0, v0 = system.to_physical(q0), system.to_physical(v0)
-            E = float(model.energy(x0, v0))
-            if floquet:
-                mu = hill_multipliers(problem, pt.u)
-                stable = is_stable(mu, STABILITY_TOL)
-            else:
-                mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
-            for key, val in (("energy", E), ("frequency_hz", w / (2 * np.pi)), ("period", 2 * np.pi / w),
-                             ("x0", x0), ("v0", v0), ("floquet", mu), ("stable", stable),
-                             ("coefficients", system.to_physical(A)),
-                             ("iterations", pt.iterations)):
-                rows[key].append(val)
-            if on_point is not None:
-                on_point({key: val[-1] for key, val in rows.items()})
-            E_start = E if E_start is None else E_start
-            if E >= energy_max:
-                status, message = "done", f"reached energy_max = {energy_max:g} J"
-                break
-            if len(rows["energy"]) >= max_points:
-                status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
-                break
-            if len(rows["energy"]) > 3 and E < 0.5 * E_start:
-                status, message = "done", "the branch returned to low energy"
-                break
-    finally:
-        gen.close()
-    n, N = model.n, len(rows["energy"])
-    E, f = np.array(rows["energy"]), np.array(rows["frequency_hz"])
-    fl = np.array(rows["floquet"], dtype=complex).reshape(N, 2 * n)
-    st = np.array(rows["stable"], dtype=bool)
-    branch = Branch(model, mode, E, f, np.array(rows["period"]), np.array(rows["x0"]).reshape(N, n),
-                    np.array(rows["v0"]).reshape(N, n), fl, st, detect_events(E, f, fl, st), status, message,
-                    dict(method="harmonic_balance", harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
-                         tol=tol, energy_max=energy_max, k3_factor=1.0, floquet=bool(floquet)))
-    branch.hb_coefficients = np.array(rows["coefficients"]).reshape(N, len(hb), n)
+    def record(pt):
+        A, w = problem.unpack(pt.u)
+        q0, v0 = problem.initial_state(pt.u)
+        x0, v0 = system.to_physical(q0), system.to_physical(v0)
+        if floquet:
+            mu = hill_multipliers(problem, pt.u)
+            stable = is_stable(mu, STABILITY_TOL)
+        else:
+            mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
+        return dict(energy=float(model.energy(x0, v0)), frequency_hz=w / (2 * np.pi), period=2 * np.pi / w,
+                    x0=x0, v0=v0, floquet=mu, stable=stable, coefficients=system.to_physical(A))
+
+    branch, rows = collect_branch(
+        model, mode, pseudo_arclength(problem, u0, p0, settings, tol), record, energy_max, max_points, on_point,
+        stop, dict(method="harmonic_balance", harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
+                   tol=tol, energy_max=energy_max, k3_factor=1.0, floquet=bool(floquet)))
+    branch.hb_coefficients = np.array(rows.get("coefficients", []), dtype=float).reshape(len(branch), len(hb), model.n)
     return branch
 
 
@@ -184,8 +148,9 @@ def hb_coefficients(branch, i):
     problem = HBProblem(system, branch.mode - 1, basis)
     q0, v0 = system.to_modal(branch.x0[i]), system.to_modal(branch.v0[i])
     problem.q_ref = q0 / max(np.linalg.norm(q0), 1e-300)
-    t, x = branch.motion(i, samples=basis.samples)
-    u = problem.pack(basis.P @ system.to_modal(x), 2 * np.pi / branch.period[i])
+    sub = 16  # Newmark at 16 steps per sample: a close first guess, refined below
+    Q, _, _ = system.orbit(q0, v0, branch.period[i], basis.samples * sub)
+    u = problem.pack(basis.P @ Q[:-1:sub], 2 * np.pi / branch.period[i])
     c0, s0 = basis.functions([0.0])[0], basis.derivatives([0.0])[0]
     tol = float(branch.settings.get("tol", 1e-8))
     for _ in range(30):  # Gauss-Newton on the HB equations + the initial state (x0, v0) of the point

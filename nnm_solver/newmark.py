@@ -17,12 +17,13 @@ Since S is diagonal, the implicit step reduces to the n_s spring deformations on
 
 solved by Newton to round-off, then q_{k+1} = S^{-1}(r - Bq^T g(d)).  One step costs O(n n_s).
 
-Sensitivity (seed eq. 13-14, discretised): differentiating the step gives, for every column of
-dq_k/dz0, the same diagonal-plus-rank-n_s linear system with the converged Newton matrix
-(I + G D), D = diag(g'(d)).  It is propagated in the same sweep, so the monodromy is the exact
-derivative of the discrete map (no finite differences); its cost is O(n * m * n_s) per step for
-m columns.  The derivative with respect to the step h is carried as one extra column, which gives
-the exact dH/dT of the discrete shooting function.
+Sensitivity (seed eq. 13-14, discretised): differentiating the step gives the same
+diagonal-plus-rank-n_s linear system with the converged Newton matrix (I + G D), D = diag(g'(d)).
+The sweep records D_k at every step; the monodromy is then assembled exactly from the per-mode
+linear Newmark map and a recursion on the n_s spring deformations only (see _monodromy), so it is
+the exact derivative of the discrete map (no finite differences) without pushing 2n columns through
+every step.  The derivative with respect to the step h is carried as one extra column during the
+sweep, which gives the exact dH/dT of the discrete shooting function.
 
 The kernels are compiled with numba when it is installed (same source runs in plain Python).
 """
@@ -126,24 +127,117 @@ def sweep_record(q0, v0, h, nsteps, omega2, Bq, k3):
 
 
 @_jit
+def _linear_map(omega2, h):
+    """Per-mode linear Newmark transition z_{k+1} = A z_k + e (b^T s_k), z = (dq, dv).
+
+    Returns the four entries of A (n,) each and the two entries of e (n,) each.
+    """
+    c1 = 4.0 / h ** 2
+    c2 = 4.0 / h
+    S = c1 + omega2
+    alpha = (c1 - omega2) / S
+    beta = c2 / S
+    gam = 1.0 / S
+    a11 = alpha
+    a12 = beta
+    a21 = -(0.5 * h) * omega2 * (1.0 + alpha)
+    a22 = 1.0 - (0.5 * h) * omega2 * beta
+    e1 = -gam
+    e2 = 0.5 * h * (omega2 * gam - 1.0)
+    return a11, a12, a21, a22, e1, e2
+
+
+@_jit
+def _monodromy(omega2, Bq, h, nsteps, Dseq):
+    """Exact derivative of the discrete flow map d[q_N; v_N]/d[q0; v0] (2n, 2n), low-rank form.
+
+    The linearised step is, per mode i, z_{k+1} = A_i z_k + e_i b_i^T (w_k + w_{k+1}) with
+    w_k = D_k Bq dq_k the spring-force perturbations (n_s each).  Only the n_s-dimensional
+    deformations are propagated step by step (a discrete Volterra recursion through the impulse
+    responses H(m) = Bq diag((A^m e)_q) Bq^T); the final state is then the block-diagonal linear
+    map A^N plus one (n x N n_s) @ (N n_s x 2n) product.  Cost O(N^2 n_s^2 n + N n_s n^2) instead of
+    O(N n^2 n_s) for propagating all 2n columns through every step.
+    """
+    n = omega2.shape[0]
+    ns = Bq.shape[0]
+    N = nsteps
+    a11, a12, a21, a22, e1, e2 = _linear_map(omega2, h)
+    # powers of A (per mode): P[k] = A^k, k = 0..N, and Ae[m] = A^m e, m = 0..N-1
+    p11 = np.empty((N + 1, n))
+    p12 = np.empty((N + 1, n))
+    p21 = np.empty((N + 1, n))
+    p22 = np.empty((N + 1, n))
+    p11[0] = 1.0
+    p12[0] = 0.0
+    p21[0] = 0.0
+    p22[0] = 1.0
+    for k in range(N):
+        p11[k + 1] = a11 * p11[k] + a12 * p21[k]
+        p12[k + 1] = a11 * p12[k] + a12 * p22[k]
+        p21[k + 1] = a21 * p11[k] + a22 * p21[k]
+        p22[k + 1] = a21 * p12[k] + a22 * p22[k]
+    ge1 = np.empty((N, n))
+    ge2 = np.empty((N, n))
+    for m in range(N):
+        ge1[m] = p11[m] * e1 + p12[m] * e2
+        ge2[m] = p21[m] * e1 + p22[m] * e2
+    Sq = np.zeros((n, 2 * n))
+    Sv = np.zeros((n, 2 * n))
+    for i in range(n):
+        Sq[i, i] = p11[N, i]
+        Sq[i, n + i] = p12[N, i]
+        Sv[i, i] = p21[N, i]
+        Sv[i, n + i] = p22[N, i]
+    if ns == 0:
+        return Sq, Sv
+    # impulse responses of the deformations: H[m] = Bq diag(ge1[m]) Bq^T
+    H = np.empty((N, ns, ns))
+    for m in range(N):
+        H[m] = (Bq * ge1[m][None, :]) @ Bq.T
+    # w_k = D_k dd_k, dd_k = Bq dq_k, for every column of [dq0, dv0]
+    W = np.zeros((N + 1, ns, 2 * n))
+    W[0, :, :n] = Bq * Dseq[0][:, None]
+    eye = np.eye(ns)
+    for k in range(1, N + 1):
+        acc = np.empty((ns, 2 * n))
+        acc[:, :n] = Bq * p11[k][None, :]
+        acc[:, n:] = Bq * p12[k][None, :]
+        acc += H[k - 1] @ W[0]
+        for j in range(1, k):
+            acc += (H[k - j] + H[k - j - 1]) @ W[j] if k - j < N else H[k - j - 1] @ W[j]
+        Mk = eye - H[0] * Dseq[k][None, :]
+        dd = np.linalg.solve(Mk, acc)
+        W[k] = dd * Dseq[k][:, None]
+    # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1})
+    U1 = np.empty((n, N * ns))
+    U2 = np.empty((n, N * ns))
+    Sst = np.empty((N * ns, 2 * n))
+    for j in range(N):
+        m = N - 1 - j
+        for s in range(ns):
+            U1[:, j * ns + s] = ge1[m] * Bq[s]
+            U2[:, j * ns + s] = ge2[m] * Bq[s]
+            Sst[j * ns + s] = W[j, s] + W[j + 1, s]
+    Sq += U1 @ Sst
+    Sv += U2 @ Sst
+    return Sq, Sv
+
+
+@_jit
 def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3):
     """Integrate with the sensitivity of the final state.
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n), Sv = dv_N/d[q0; v0],
-    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).
+    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  The state pass records the spring tangents
+    D_k = 3 k3 d_k^2 and carries the single d/dh column; the 2n columns come from _monodromy.
     """
     n = q0.shape[0]
     ns = Bq.shape[0]
     S, G, d, a = _start(q0, omega2, Bq, k3, h)
     q = q0.copy()
     v = v0.copy()
-    Sq = np.zeros((n, 2 * n))
-    Sv = np.zeros((n, 2 * n))
-    for i in range(n):
-        Sq[i, i] = 1.0
-        Sv[i, n + i] = 1.0
-    Dk = 3.0 * k3 * d ** 2
-    Sa = -omega2[:, None] * Sq - Bq.T @ (Dk[:, None] * (Bq @ Sq))
+    Dseq = np.empty((nsteps + 1, ns))
+    Dseq[0] = 3.0 * k3 * d ** 2
     sq_h = np.zeros(n)
     sv_h = np.zeros(n)
     sa_h = np.zeros(n)
@@ -152,34 +246,25 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3):
     c1p = -8.0 / h ** 3
     c2p = -4.0 / h ** 2
     invS = 1.0 / S
-    for _ in range(nsteps):
+    for k in range(nsteps):
         q1, v1, a1, d1, J, ok = _step(q, v, a, d, h, omega2, Bq, k3, G, S)
         if not ok:
-            return q1, v1, Sq, Sv, sq_h, sv_h, False
+            return q1, v1, np.zeros((n, 2 * n)), np.zeros((n, 2 * n)), sq_h, sv_h, False
         D1 = 3.0 * k3 * d1 ** 2
-        # columns d/dz0
-        Y = (c1 * Sq + c2 * Sv + Sa) * invS[:, None]
-        # column d/dh (the step size also enters through c1, c2 and (N2))
+        Dseq[k + 1] = D1
+        # the step size enters through c1, c2 and (N2)
         yh = (c1 * sq_h + c2 * sv_h + sa_h + c1p * (q - q1) + c2p * v) * invS
         if ns > 0:
-            W = np.linalg.solve(J, Bq @ Y)
             wh = np.linalg.solve(J, Bq @ yh)
-            F = Bq.T @ (D1[:, None] * W)
             fh = Bq.T @ (D1 * wh)
-            Sq1 = Y - F * invS[:, None]
             sq1_h = yh - fh * invS
-            Sa1 = -omega2[:, None] * Sq1 - F
             sa1_h = -omega2 * sq1_h - fh
         else:
-            Sq1 = Y
             sq1_h = yh
-            Sa1 = -omega2[:, None] * Sq1
             sa1_h = -omega2 * sq1_h
-        Sv = Sv + (0.5 * h) * (Sa + Sa1)
         sv_h = sv_h + 0.5 * h * (sa_h + sa1_h) + 0.5 * (a + a1)
-        Sq = Sq1
-        Sa = Sa1
         sq_h = sq1_h
         sa_h = sa1_h
         q, v, a, d = q1, v1, a1, d1
+    Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq)
     return q, v, Sq, Sv, sq_h, sv_h, True

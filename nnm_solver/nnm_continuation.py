@@ -89,60 +89,81 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
     settings = ContinuationSettings(step=s0, step_min=1e-8 * a0, step_max=np.inf, max_angle=max_angle,
                                     max_correction=max_correction)
 
-    rows = dict(energy=[], frequency_hz=[], period=[], x0=[], v0=[], floquet=[], stable=[], iterations=[])
+    def record(pt):
+        qz, vz, T = problem.unpack(pt.u)
+        x0, v0 = system.to_physical(qz), system.to_physical(vz)
+        if floquet:
+            mu = problem.floquet_multipliers()
+            stable = is_stable(mu, STABILITY_TOL)
+        else:
+            mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
+        return dict(energy=float(model.energy(x0, v0)), frequency_hz=1.0 / T, period=T, x0=x0, v0=v0,
+                    floquet=mu, stable=stable)
+
+    branch, _ = collect_branch(model, mode, pseudo_arclength(problem, u0, p0, settings, tol), record,
+                               energy_max, max_points, on_point, stop,
+                               dict(method="shooting", steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
+                                    energy_max=energy_max, k3_factor=1.0, floquet=bool(floquet)))
+    return branch
+
+
+BRANCH_COLUMNS = ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")
+
+
+def collect_branch(model, mode, points, record, energy_max, max_points, on_point, stop, settings):
+    """Run a continuation generator and collect its points into a Branch (shared by all methods).
+
+    points : generator of ContinuationPoint (continuation.pseudo_arclength).
+    record(point) -> dict with at least BRANCH_COLUMNS (plus any extra per-point columns).
+    Stops at energy_max, max_points, when ``stop`` is set, when the branch returns to low energy,
+    or when the generator gives up (status 'failed'; the points so far are kept).
+    Returns (branch, rows): rows maps every recorded key to its list of values.
+    """
+    rows = {}
     status, message = "failed", ""
-    gen = pseudo_arclength(problem, u0, p0, settings, tol)
     E_start = None
     try:
         while True:
+            N = len(rows.get("energy", ()))
             if stop is not None and stop.is_set():
-                status, message = "cancelled", f"cancelled after {len(rows['energy'])} points"
+                status, message = "cancelled", f"cancelled after {N} points"
                 break
             try:
-                pt = next(gen)
+                pt = next(points)
             except StopIteration as fin:
                 status = "failed"
-                where = (f"after point {len(rows['energy'])} (E = {rows['energy'][-1]:.4g} J, "
-                         f"f = {rows['frequency_hz'][-1]:.5g} Hz)" if rows["energy"] else "at the start")
+                where = (f"after point {N} (E = {rows['energy'][-1]:.4g} J, "
+                         f"f = {rows['frequency_hz'][-1]:.5g} Hz)" if N else "at the start")
                 message = (f"no convergence {where}: {fin.value or 'continuation stopped'}; the points so far are "
                            f"kept (try a larger steps_per_period or tol, or the branch ends here)")
                 break
-            qz, vz, T = problem.unpack(pt.u)
-            x0 = system.to_physical(qz)
-            v0 = system.to_physical(vz)
-            E = float(model.energy(x0, v0))
-            if floquet:
-                mu = problem.floquet_multipliers()
-                stable = is_stable(mu, STABILITY_TOL)
-            else:
-                mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
-            for key, val in (("energy", E), ("frequency_hz", 1.0 / T), ("period", T), ("x0", x0), ("v0", v0),
-                             ("floquet", mu), ("stable", stable), ("iterations", pt.iterations)):
-                rows[key].append(val)
+            row = record(pt)
+            row["iterations"] = pt.iterations
+            for key, val in row.items():
+                rows.setdefault(key, []).append(val)
             if on_point is not None:
-                on_point({key: val[-1] for key, val in rows.items()})
+                on_point(row)
+            E = row["energy"]
             E_start = E if E_start is None else E_start
             if E >= energy_max:
                 status, message = "done", f"reached energy_max = {energy_max:g} J"
                 break
-            if len(rows["energy"]) >= max_points:
+            if N + 1 >= max_points:
                 status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
                 break
-            if len(rows["energy"]) > 3 and E < 0.5 * E_start:
+            if N + 1 > 3 and E < 0.5 * E_start:
                 status, message = "done", "the branch returned to low energy"
                 break
     finally:
-        gen.close()
+        points.close()
     n = model.n
-    N = len(rows["energy"])
-    fl = np.array(rows["floquet"]).reshape(N, 2 * n) if N else np.zeros((0, 2 * n), complex)
-    st = np.array(rows["stable"], dtype=bool)
-    E = np.array(rows["energy"])
-    f = np.array(rows["frequency_hz"])
-    branch = Branch(model, mode, E, f, np.array(rows["period"]), np.array(rows["x0"]).reshape(N, n),
-                    np.array(rows["v0"]).reshape(N, n), fl, st,
-                    detect_events(E, f, fl, st) if floquet else detect_events(E, f, fl, np.ones(N, bool)),
-                    status, message,
-                    dict(method="shooting", steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
-                         energy_max=energy_max, k3_factor=1.0))
-    return branch
+    N = len(rows.get("energy", ()))
+    E = np.array(rows.get("energy", []), dtype=float)
+    f = np.array(rows.get("frequency_hz", []), dtype=float)
+    fl = np.array(rows.get("floquet", []), dtype=complex).reshape(N, 2 * n)
+    st = np.array(rows.get("stable", []), dtype=bool)
+    branch = Branch(model, mode, E, f, np.array(rows.get("period", []), dtype=float),
+                    np.array(rows.get("x0", []), dtype=float).reshape(N, n),
+                    np.array(rows.get("v0", []), dtype=float).reshape(N, n), fl, st,
+                    detect_events(E, f, fl, st), status, message, settings)
+    return branch, rows
