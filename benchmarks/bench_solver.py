@@ -23,7 +23,12 @@ ru_maxrss), the ratio (b)/(a), and the agreement of the two frequency-energy cur
 Cases:
 
 * ``2dof``: M = I, K = [[2, -1], [-1, 2]], grounded cubic spring k3 = 0.5 on DOF 0,
-  NNM1 up to ``--energy-2dof`` J (complete FEP with the 3:1 tongue for the solver).
+  NNM1 up to ``--energy-2dof`` J (default 1e4: the complete FEP with the 3:1 tongue, whose
+  top is at ~4.7e3 J and tip at ~286 J).  The baseline's step is capped at
+  ``--dense-step-max`` (default 2 in (z0, T) units): with the textbook unbounded step
+  doubling it jumps over the tongue.  With its single-velocity phase condition v0[0] = 0
+  the baseline then goes around the tongue more than once (phase-shifted copies of the
+  same orbits) before it reaches the energy limit; all its points are timed.
 * ``paris``: ``assets/paris.h5`` mode 20.  The solver runs until the frequency has moved by
   5 % from its linear value (or ``--energy-paris``); the dense baseline only runs
   ``--paris-points`` points (its cost per point is what matters) -- time per point
@@ -87,10 +92,11 @@ def run_baseline(name, model, mode, args, max_points=None):
     energy_max = args.energy_2dof if name == "2dof" else args.energy_paris
     if max_points is None:
         max_points = args.max_points if name == "2dof" else args.paris_points
+    step_max = args.dense_step_max if name == "2dof" and args.dense_step_max > 0 else None
     t0 = time.perf_counter()
     r = dense_baseline.dense_continue(dense(model.M), dense(model.K), springs_of(model), mode,
                                       energy_max=energy_max, steps_per_period=args.steps, tol=args.tol,
-                                      max_points=max_points)
+                                      max_points=max_points, step_max=step_max)
     total = time.perf_counter() - t0
     return dict(energy=r["energy"], frequency_hz=r["frequency_hz"], period=r["period"],
                 x0=r["x0"], v0=r["v0"], seconds_per_point=r["seconds_per_point"], total=total,
@@ -145,8 +151,9 @@ def frequency_agreement(a, b):
     """Max relative difference of a's frequencies vs b's curve at a's energies.
 
     b's curve is split into runs where its energy is monotone; on each run f is interpolated
-    in log energy (PCHIP, linear for two points); where several runs cover an energy (a fold
-    or a tongue), the closest value is used.
+    in log energy (PCHIP, linear for two points), and extrapolated by at most 2 % in energy
+    beyond a run's ends (a point of ``a`` right at a fold may lie just outside ``b``'s samples);
+    where several runs cover an energy (a fold or a tongue), the closest value is used.
     """
     from scipy.interpolate import PchipInterpolator
     Eb, fb = np.log(b["energy"]), b["frequency_hz"]
@@ -167,7 +174,8 @@ def frequency_agreement(a, b):
         interps.append((x[0], x[-1], PchipInterpolator(x, y)))
     diffs = []
     for E, f in zip(np.log(a["energy"]), a["frequency_hz"]):
-        cand = [abs(float(p(E)) / f - 1.0) for lo, hi, p in interps if lo <= E <= hi]
+        margin = np.log(1.02)
+        cand = [abs(float(p(E)) / f - 1.0) for lo, hi, p in interps if lo - margin <= E <= hi + margin]
         if cand:
             diffs.append(min(cand))
     return (max(diffs) if diffs else float("nan")), len(diffs)
@@ -197,8 +205,7 @@ def memory_worker(args):
     tracemalloc.start()
     if args.worker == "dense":
         # the corrector of every point allocates the same arrays: a short run shows the peak
-        run_baseline(args.case, model, mode, args,
-                     max_points=args.max_points if args.case == "2dof" else args.memory_points)
+        run_baseline(args.case, model, mode, args, max_points=args.memory_points)
     else:
         run_solver(args.case, model, mode, args)
     _, peak = tracemalloc.get_traced_memory()
@@ -212,6 +219,7 @@ def measure_memory(method, case, args):
            "--tol", str(args.tol), "--energy-2dof", str(args.energy_2dof), "--energy-paris",
            str(args.energy_paris), "--paris-file", args.paris_file, "--paris-mode", str(args.paris_mode),
            "--max-points", str(args.max_points), "--memory-points", str(args.memory_points),
+           "--dense-step-max", str(args.dense_step_max),
            "--freq-change", str(args.freq_change)]
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=str(ROOT))
     if out.returncode != 0:
@@ -236,6 +244,10 @@ def bench_case(case, args):
     res["dense"] = run_baseline(case, model, mode, args)
     print(f"dense baseline done: {len(res['dense']['energy'])} points in {res['dense']['total']:.2f} s",
           flush=True)
+    if args.save:
+        np.savez(f"{args.save}_{case}.npz", **{f"{m}_{k}": res[m][k] for m in res
+                                               for k in ("energy", "frequency_hz", "period", "x0", "v0",
+                                                         "seconds_per_point")})
     mem = {m: (measure_memory(m, case, args) if args.memory else {}) for m in ("dense", "solver")}
 
     rows = []
@@ -265,6 +277,16 @@ def bench_case(case, args):
     ev = res["solver"].get("events", [])
     if ev:
         print("solver events: " + "; ".join(ev[:6]) + (" ..." if len(ev) > 6 else ""))
+    for m, title in (("dense", "(a)"), ("solver", "(b)")):
+        E = res[m]["energy"]
+        d = np.diff(E)
+        idx = np.where(d[1:] * d[:-1] < 0)[0] + 1
+        if len(idx):
+            print(f"energy folds {title}: " + ", ".join(
+                f"{'max' if d[i - 1] > 0 else 'min'} {E[i]:.4g} J @ {res[m]['frequency_hz'][i]:.5g} Hz"
+                for i in idx[:8]) + (" ..." if len(idx) > 8 else ""))
+        else:
+            print(f"energy folds {title}: none")
     Eb, fb = res["solver"]["energy"], res["solver"]["frequency_hz"]
     if len(Eb):
         print(f"solver branch: E {Eb.min():.4g}..{Eb.max():.4g} J, f {fb.min():.6g}..{fb.max():.6g} Hz; "
@@ -290,7 +312,11 @@ def main(argv=None):
     ap.add_argument("--case", choices=["2dof", "paris", "all"], default="all")
     ap.add_argument("--steps", type=int, default=200, help="Newmark steps per period (both methods)")
     ap.add_argument("--tol", type=float, default=1e-6, help="corrector tolerance ||H||/||z0|| (both)")
-    ap.add_argument("--energy-2dof", type=float, default=1000.0, help="energy_max of the 2-DOF case (J)")
+    ap.add_argument("--energy-2dof", type=float, default=1e4,
+                    help="energy_max of the 2-DOF case (J); the 3:1 tongue tops at ~4.7e3 J")
+    ap.add_argument("--dense-step-max", type=float, default=2.0,
+                    help="2-DOF case: cap on the baseline's arclength step in (z0, T); with the textbook "
+                         "unbounded doubling (use 0 for none) it jumps over the 3:1 tongue")
     ap.add_argument("--energy-paris", type=float, default=1e6,
                     help="energy_max of the paris case (J); the solver also stops at --freq-change")
     ap.add_argument("--freq-change", type=float, default=0.05,
@@ -298,9 +324,10 @@ def main(argv=None):
     ap.add_argument("--paris-file", default=str(ROOT / "assets" / "paris.h5"))
     ap.add_argument("--paris-mode", type=int, default=20)
     ap.add_argument("--paris-points", type=int, default=3, help="points of the dense baseline on paris")
-    ap.add_argument("--memory-points", type=int, default=1,
-                    help="points of the dense baseline's paris memory run (peak is per point)")
+    ap.add_argument("--memory-points", type=int, default=2,
+                    help="points of the dense baseline's memory runs (its peak is the same at every point)")
     ap.add_argument("--max-points", type=int, default=500)
+    ap.add_argument("--save", default="", help="save both branches to <SAVE>_<case>.npz")
     ap.add_argument("--no-memory", dest="memory", action="store_false", help="skip the memory subprocesses")
     ap.add_argument("--worker", choices=["dense", "solver"], help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
