@@ -88,8 +88,13 @@ def test_monodromy_matches_finite_differences_2dof():
     assert np.max(np.abs(r["dzdT"] - D[:, 4])) < 1e-7 * scale
 
 
-def test_monodromy_of_converged_point_is_symplectic_and_has_trivial_multipliers():
-    r = db.dense_continue(M2, K2, SPRINGS2, mode=1, energy_max=3.0)
+@pytest.fixture(scope="module")
+def nnm1_2dof():
+    return db.dense_continue(M2, K2, SPRINGS2, mode=1, energy_max=3.0, tol=1e-9)
+
+
+def test_monodromy_of_converged_point_is_symplectic_and_has_trivial_multipliers(nnm1_2dof):
+    r = nnm1_2dof
     assert r["stop_reason"] == "energy_max"
     assert r["energy"][-1] >= 3.0
     for mu in r["floquet"]:
@@ -103,8 +108,8 @@ def test_monodromy_of_converged_point_is_symplectic_and_has_trivial_multipliers(
     assert np.all(np.diff(r["energy"]) > 0)
 
 
-def test_discrete_orbit_conserves_energy_and_is_periodic():
-    r = db.dense_continue(M2, K2, SPRINGS2, mode=1, energy_max=3.0, tol=1e-9)
+def test_discrete_orbit_conserves_energy_and_is_periodic(nnm1_2dof):
+    r = nnm1_2dof
     B, k3 = db.spring_arrays(SPRINGS2, 2)
     z0 = np.concatenate([r["x0"][-1], r["v0"][-1]])
     T = r["period"][-1]
@@ -132,7 +137,7 @@ def test_relative_spring_and_higher_mode():
     M = np.diag([1.0, 2.0, 1.5])
     K = np.array([[3.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
     springs = [(2, 1, 2.0)]
-    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.5, max_points=30)
+    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.2, max_points=12, energy_start=2e-3)
     lam = np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)
     assert r["frequency_hz"][0] == pytest.approx(np.sqrt(lam[1]) / (2 * np.pi), rel=3e-4)
     B, k3 = db.spring_arrays(springs, 3)
