@@ -137,7 +137,7 @@ def test_relative_spring_and_higher_mode():
     M = np.diag([1.0, 2.0, 1.5])
     K = np.array([[3.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
     springs = [(2, 1, 2.0)]
-    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.2, max_points=12, energy_start=2e-3)
+    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.2, max_points=12)
     lam = np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)
     assert r["frequency_hz"][0] == pytest.approx(np.sqrt(lam[1]) / (2 * np.pi), rel=3e-4)
     B, k3 = db.spring_arrays(springs, 3)
