@@ -1,0 +1,70 @@
+"""The examples' fast modes run end to end and show what they demonstrate."""
+import importlib.util
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_solver import analysis
+
+ROOT = Path(__file__).resolve().parents[1]
+PARIS = ROOT / "assets" / "paris.h5"
+
+
+def load_example(name):
+    spec = importlib.util.spec_from_file_location(f"example_{name}", ROOT / "examples" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_two_dof_tongues_fast(tmp_path):
+    ex = load_example("two_dof_tongues")
+    h5 = tmp_path / "two_dof.h5"
+    summary = tmp_path / "summary.json"
+    assert ex.main(["--fast", "--out-dir", str(tmp_path), "--assets", str(h5), "--summary", str(summary)]) == 0
+    s = json.loads(summary.read_text())
+    t31 = [t for t in s["tongues"]["nnm1"] if t["label"] == "3:1"]
+    assert len(t31) == 1 and t31[0]["complete"]            # traversed: in, down to the tip, and out again
+    assert t31[0]["tip_energy"] == pytest.approx(286, rel=0.05)
+    assert t31[0]["entry_energy"] > 10 * t31[0]["tip_energy"]
+    assert s["picks"]["a"]["fraction3"] < 0.15 < 0.5 < s["picks"]["c"]["fraction3"]
+    assert s["picks"]["c"]["description"].startswith("3:1 internal resonance")
+    # the harmonic-balance branch shows the 5:1 tongue too
+    assert "5:1" in [t["label"] for t in s["tongues"]["nnm1_hb"]]
+    # the file opens with its mesh and three branches; the tongue's far end is dominated by harmonic 3
+    model = nnm.load_model(h5)
+    assert model.mesh is not None and model.mesh.displacement_map.shape[1] == 2
+    branches = nnm.load_branches(h5, model)
+    assert [b.name for b in branches][:2] == ["NNM1", "NNM2"] and len(branches) == 3
+    b1 = branches[0]
+    k, frac, *_ = analysis.dominant_harmonic(b1, t31[0]["tip"])
+    assert k == 3 and frac > 0.5
+    assert analysis.dominant_harmonic(b1, t31[0]["start"])[0] == 1
+    # the mesh moves each mass with its DOF along x, and the walls stay
+    u = model.mesh.displacements(np.array([1.0, 0.0]))
+    assert np.allclose(u[:, 1:], 0) and u[:, 0].max() == pytest.approx(1.0) and u[:, 0].min() == 0.0
+    for png in tmp_path.glob("*.png"):
+        assert png.stat().st_size < 150_000, png
+    assert h5.stat().st_size < 2_000_000
+
+
+@pytest.mark.slow
+def test_paris_fast(tmp_path):
+    if not PARIS.exists():
+        pytest.skip("assets/paris.h5 is not there (built by examples/build_paris.py)")
+    ex = load_example("paris_fep")
+    summary = tmp_path / "summary.json"
+    out = tmp_path / "paris_branches.h5"
+    assert ex.main(["--fast", "--out-dir", str(tmp_path), "--save-to", str(out), "--summary", str(summary)]) == 0
+    s = json.loads(summary.read_text())["modes"]
+    m13, m20 = s["13"], s["20"]
+    f13 = np.array([m13["linear_hz"], m13["f_high"]])
+    assert abs(m13["min_f_pct"]) < 0.5 and abs(m13["drop_pct"]) < 0.5    # tail bending: unaffected
+    assert m20["drop_pct"] > 1.0                                         # anti-symmetric wing torsion softens
+    assert m20["energy_max"] >= 0.9 * m13["energy_max"] or m20["drop_pct"] > 3
+    assert len(nnm.load_branches(out)) == 2
+    assert f13[0] > 0
