@@ -6,3 +6,14 @@ clickable FEP), ``fep`` (FEP image and energy mapping), ``animation``/``glb`` (o
 GLB with morph targets), ``info`` (point information), ``state``/``worker`` (shared
 branches, background jobs).
 """
+
+import os as _os
+import sys as _sys
+
+# The viewer works on small dense problems (a few hundred DOFs) in an interactive server: BLAS
+# thread pools only make them slower (measured: 548-DOF eigenproblem 0.1 s with one thread,
+# 2-6 s with two on a busy machine).  Only effective when numpy is not imported yet, i.e. when
+# the viewer is the program (nnm-view); an explicit setting by the user wins.
+if "numpy" not in _sys.modules:
+    for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        _os.environ.setdefault(_var, "1")

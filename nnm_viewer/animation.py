@@ -33,7 +33,7 @@ def fourier_fit(t, x, period, n_harm=15):
     n_unique = len(np.unique(np.round(phases, 9)))
     H = int(max(1, min(n_harm, (n_unique - 1) // 2)))
     B, orders = basis(t * w, H)
-    coeffs, *_ = np.linalg.lstsq(B, x, rcond=None)
+    coeffs = np.linalg.pinv(B) @ x          # B is small (S x 2H+1): cheaper than lstsq with many DOFs
     return orders, coeffs
 
 
@@ -131,6 +131,20 @@ def orbit_animation(vertices, faces, displacements, t, x, period, n_harm=15, che
     anim.peak_vertex = int(np.argmax(anim.peak))
     anim.peak_max = float(anim.peak[anim.peak_vertex])
     return anim
+
+
+class MeshMapper:
+    """Vertex displacements from model coordinates, with the map kept as float32 (n, 3V):
+    one fast product per call (DisplayMesh.displacements converts the map at every call)."""
+
+    def __init__(self, mesh):
+        self.nv = len(mesh.vertices)
+        self.Dt = np.ascontiguousarray(np.asarray(mesh.displacement_map, dtype=np.float32).T)
+
+    def __call__(self, x):
+        x = np.asarray(x, dtype=np.float32)
+        u = (x @ self.Dt).astype(float)
+        return u.reshape(x.shape[:-1] + (self.nv, 3))
 
 
 def format_length(value):

@@ -9,6 +9,7 @@ import argparse
 import contextlib
 import errno
 import io
+import logging
 import socket
 import sys
 import threading
@@ -18,6 +19,8 @@ import nnm_solver
 
 from .state import SharedState
 from .worker import one_line
+
+log = logging.getLogger("nnm_viewer")
 
 
 class ViewerError(Exception):
@@ -99,7 +102,9 @@ class ViewerApp:
 
     def _connect(self, client):
         from .controls import Session
+        t0 = time.perf_counter()
         session = Session(client, self.shared, start_job=self.start_job)
+        log.info("tab %d connected: session built in %.3f s", client.client_id, time.perf_counter() - t0)
         with self._lock:
             self.sessions[client.client_id] = session
 
@@ -128,11 +133,14 @@ def parse_args(argv=None):
     p.add_argument("file", help="nnm HDF5 file (model, mesh and branches)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
+    p.add_argument("-v", "--verbose", action="store_true", help="log timings to stderr")
     return p.parse_args(argv)
 
 
 def main(argv=None):
     args = parse_args(argv)
+    if args.verbose:
+        logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s", stream=sys.stderr)
     try:
         model, branches = load(args.file)
         check_port(args.host, args.port)

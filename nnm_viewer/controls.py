@@ -7,6 +7,7 @@ With ``sync=True`` (tests) every request is drawn at once in the caller's thread
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 
@@ -18,6 +19,8 @@ from .animation import format_length, orbit_animation
 from .fep import FepRenderer, axis_ranges, energy_to_s, interp_at
 from .info import auto_dofs, info_markdown, parse_dofs, peak_text, point_data, uplot_harmonics, uplot_time_series
 from .worker import JobRunner, one_line
+
+log = logging.getLogger("nnm_viewer")
 
 #: auto amplification: the peak displacement is shown as this fraction of the model size
 AUTO_PEAK_FRACTION = 0.12
@@ -38,7 +41,7 @@ class Session:
         self.scene = api.scene
         self.shared = shared
         self.model = shared.model
-        self.mesh = self.model.mesh if self.model.mesh is not None else sc.fallback_mesh(self.model.n)
+        self.mesh = shared.mesh
         self.geom = sc.view_geometry(self.mesh.vertices)
         self.sync = sync
         self.start_job = start_job
@@ -422,6 +425,11 @@ class Session:
         return f"{i + 1}: {e.label} ({len(e)} pts)"
 
     def _draw(self, kinds):
+        t0 = time.perf_counter()
+        self._draw_all(kinds)
+        log.info("drew %s in %.3f s", ",".join(sorted(kinds)), time.perf_counter() - t0)
+
+    def _draw_all(self, kinds):
         if "branches" in kinds:
             self._draw_branch_list()
             self._draw_board()
@@ -483,7 +491,7 @@ class Session:
             self.scene.remove_by_name("/fep")
             self._board_handles = {}
             return
-        sc.draw_board_frame(self.scene, board, ranges)
+        sc.draw_board_frame(self.scene, board, ranges, series)
         live = set()
         for e, ser in zip(entries, series):
             uid = e.uid
@@ -582,7 +590,7 @@ class Session:
             self._point_cache[key] = pd
         anim = self._anim_cache.get(key)
         if anim is None:
-            anim = orbit_animation(self.mesh.vertices, self.mesh.faces, self.mesh.displacements,
+            anim = orbit_animation(self.mesh.vertices, self.mesh.faces, self.shared.mapper,
                                    pd.t, pd.x, pd.period)
             if len(self._anim_cache) > 32:
                 self._anim_cache.clear()
@@ -618,7 +626,7 @@ class Session:
                 self._set(self.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
             self._set(self.h_peak, content=peak_text(peak, amp, self.auto_amp)
                       + f"  \nreal period {anim.period:.4g} s, shown in {1.0 / max(self.speed, 1e-3):.3g} s")
-        self.scene.add_glb("/model", glb)
+        self.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
         self.last_glb = glb
         self.anim_ready_time = time.perf_counter()
 

@@ -222,6 +222,6 @@ def board_layout(bounds_min, bounds_max, view_dir):
     right = np.cross(d, up)
     right /= np.linalg.norm(right)
     half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
-    width, height = 0.9 * size, 0.65 * size
+    width, height = 1.0 * size, 0.7 * size
     origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
     return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-d)

@@ -60,7 +60,7 @@ def view_geometry(vertices):
     board_center = board.origin + 0.5 * board.width * board.right + 0.5 * board.height * board.up
     look_at = 0.5 * (center + board_center)
     span = np.linalg.norm(board_center - center) + 0.75 * size
-    dist = 1.05 * span / np.tan(np.radians(CAMERA_FOV_DEG) / 2)
+    dist = 0.9 * span / np.tan(np.radians(CAMERA_FOV_DEG) / 2)
     return ViewGeometry(center=center, size=size, board=board, camera_position=look_at + d * dist,
                         camera_look_at=look_at)
 
@@ -83,34 +83,82 @@ def sphere_mesh():
     return _SPHERE
 
 
-def draw_board_frame(scene, board, ranges, name="/fep"):
-    """The FEP board: a light backdrop, axes and a few tick labels (not clickable)."""
-    o, r, u, n = board.origin, board.right, board.up, board.normal
-    W, H = board.width, board.height
-    quad = np.array([o - 0.05 * W * r - 0.08 * H * u, o + 1.03 * W * r - 0.08 * H * u,
-                     o + 1.03 * W * r + 1.05 * H * u, o - 0.05 * W * r + 1.05 * H * u]) - 0.01 * H * n
-    scene.add_mesh_simple(f"{name}/backdrop", vertices=quad, faces=np.array([[0, 1, 2], [0, 2, 3]]),
-                          color=(245, 245, 240), side="double", opacity=0.85, cast_shadow=False,
-                          receive_shadow=False)
-    axes = np.array([[o, o + W * r], [o, o + H * u]])
-    scene.add_line_segments(f"{name}/axes", points=axes, colors=(60, 60, 60), thickness=2.0,
-                            thickness_units="screen")
+#: margins of the board picture around the plotting area, in fractions of its width/height
+_ML, _MR, _MB, _MT = 0.14, 0.04, 0.17, 0.11
+
+
+def render_board(board, ranges, series=(), width_px=900):
+    """The board picture (RGB uint8): axes, ticks, labels and thin branch lines; the plotting
+    area maps exactly onto the rectangle of ``board`` so that the spheres sit on the curves."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from .fep import BRANCH_COLORS
+
+    wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
+    dpi = 100
+    fig = Figure(figsize=(width_px / dpi, width_px * hq / wq / dpi), dpi=dpi, facecolor="#f7f7f4")
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes([_ML / (1 + _ML + _MR), _MB / (1 + _MB + _MT), 1 / (1 + _ML + _MR), 1 / (1 + _MB + _MT)])
+    ax.set_facecolor("#ffffff")
     (elo, ehi), (flo, fhi) = ranges
-    labels = []
-    for e in range(int(np.ceil(elo)), int(np.floor(ehi)) + 1):
-        p = o + (e - elo) / (ehi - elo) * W * r - 0.05 * H * u
-        labels.append((f"1e{e}", p))
-    for k in range(3):
-        f = flo + (k + 0.5) / 3 * (fhi - flo)
-        p = o + (f - flo) / (fhi - flo) * H * u - 0.02 * W * r
-        labels.append((f"{f:.4g}", p))
-    labels.append(("energy (J)", o + 0.5 * W * r - 0.1 * H * u))
-    labels.append(("frequency (Hz)", o + 1.03 * H * u))
-    # Remove stale labels first: the number of ticks changes with the range.
-    for k in range(len(labels), 40):
-        scene.remove_by_name(f"{name}/label{k}")
-    for k, (text, p) in enumerate(labels[:40]):
-        scene.add_label(f"{name}/label{k}", text=text, position=tuple(p), font_screen_scale=0.7)
+    for k, ser in enumerate(series):
+        if len(ser):
+            ax.plot(np.log10(ser.energy), ser.frequency, "-", lw=1.0, color=BRANCH_COLORS[k % len(BRANCH_COLORS)],
+                    alpha=0.6)
+    ax.set_xlim(elo, ehi)
+    ax.set_ylim(flo, fhi)
+    ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)
+    if len(ticks) > 8:
+        ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([f"1e{int(t)}" for t in ticks])
+    ax.tick_params(labelsize=13)
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("energy (J)", fontsize=14)
+    ax.set_ylabel("frequency (Hz)", fontsize=14)
+    ax.set_title("FEP: click a point", fontsize=15)
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
+def board_rotation(board):
+    """Quaternion wxyz turning viser's image frame (x right, y down, seen from -z) onto the board."""
+    import viser.transforms as vtf
+
+    R = np.stack([board.right, -board.up, -board.normal], axis=1)
+    return vtf.SO3.from_matrix(R).wxyz
+
+
+_BOARD_CACHE: dict = {}
+
+
+def cached_board(board, ranges, series):
+    """render_board with a small cache (the same picture is drawn for every tab)."""
+    import hashlib
+    h = hashlib.sha1(repr((ranges, board.width, board.height)).encode())
+    for ser in series:
+        h.update(np.asarray(ser.energy, dtype=float).tobytes())
+        h.update(np.asarray(ser.frequency, dtype=float).tobytes())
+    key = h.hexdigest()
+    img = _BOARD_CACHE.get(key)
+    if img is None:
+        img = render_board(board, ranges, series)
+        if len(_BOARD_CACHE) > 8:
+            _BOARD_CACHE.clear()
+        _BOARD_CACHE[key] = img
+    return img
+
+
+def draw_board_frame(scene, board, ranges, series=(), name="/fep"):
+    """The FEP board picture (axes, ticks, labels, curves) as one textured quad, not clickable."""
+    img = cached_board(board, ranges, series)
+    wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
+    center = (board.origin + board.right * board.width * (1 + _MR - _ML) / 2
+              + board.up * board.height * (1 + _MT - _MB) / 2 - 0.01 * board.height * board.normal)
+    return scene.add_image(f"{name}/backdrop", img, render_width=wq, render_height=hq, format="png",
+                           cast_shadow=False, receive_shadow=False, wxyz=board_rotation(board),
+                           position=tuple(center))
 
 
 def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep"):

@@ -71,7 +71,8 @@ def branch_label(branch, k3_factor=1.0, source="file"):
 class SharedState:
     """Model, branch entries and jobs shared by all sessions (thread-safe).
 
-    Listeners (callables taking a kind string: "branches", "progress", "error") are
+    ``mesh`` is the model's display mesh (boxes per DOF if it has none), ``mapper`` its
+    displacement map ready for fast products.  Listeners (callables taking a kind string: "branches", "progress", "error") are
     called after every change, outside the lock.
     """
 
@@ -85,6 +86,10 @@ class SharedState:
         self.progress = 0.0
         self.status = ""
         self.error = ""
+        from .animation import MeshMapper
+        from .scene import fallback_mesh
+        self.mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
+        self.mapper = MeshMapper(self.mesh)
         freqs, shapes = model.linear_modes()
         self.linear_freqs = np.asarray(freqs)
         self.linear_shapes = shapes

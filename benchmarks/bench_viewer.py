@@ -1,0 +1,199 @@
+"""Viewer latency benchmark: start -> first rendered frame, pick -> animation.
+
+    python benchmarks/bench_viewer.py [FILE.h5] [--starts 3] [--picks 5]
+
+FILE defaults to assets/paris.h5 (the 2-DOF demo, computed on the fly, if it is missing).
+Measured (medians):
+  * in-process: pick -> GLB ready (orbit integrated by the solver, Fourier fit, morph-target
+    GLB built and handed to viser), with its parts, and the GLB size;
+  * in Debian's Chromium (headless, software WebGL, Playwright), with `nnm-view` as a
+    subprocess: start of the command -> first frame showing the model (screenshots polled),
+    and mouse click on an in-scene FEP point -> page updated with the new orbit (the GLB is
+    sent before the text, on the same ordered websocket).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))
+
+import nnm_solver as nnm  # noqa: E402
+from nnm_viewer.animation import MeshMapper, orbit_animation  # noqa: E402
+from nnm_viewer.fep import axis_ranges  # noqa: E402
+from nnm_viewer.info import point_data  # noqa: E402
+from nnm_viewer.scene import fallback_mesh, view_geometry  # noqa: E402
+from nnm_viewer.state import BranchEntry  # noqa: E402
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync"]
+VIEWPORT = {"width": 1600, "height": 900}
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def project(points, geom, box):
+    cam, look = geom.camera_position, geom.camera_look_at
+    f = look - cam
+    f = f / np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    d = np.asarray(points, float) - cam
+    z = d @ f
+    t = np.tan(np.radians(geom.fov_deg) / 2)
+    nx = (d @ r) / (z * t * box["width"] / box["height"])
+    ny = (d @ u) / (z * t)
+    return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
+
+
+def in_process(model, branch, mesh, picks):
+    """Median seconds of the pick -> GLB path, by part."""
+    rows = {"point_data (solver orbit)": [], "Fourier fit + morph targets": [], "GLB build": [], "total": []}
+    size = 0
+    N = len(branch)
+    mapper = MeshMapper(mesh)
+    for k in range(picks):
+        s = (k + 0.5) * (N - 1) / picks
+        t0 = time.perf_counter()
+        pd = point_data(branch, s)
+        t1 = time.perf_counter()
+        anim = orbit_animation(mesh.vertices, mesh.faces, mapper, pd.t, pd.x, pd.period)
+        t2 = time.perf_counter()
+        glb = anim.glb(1.0)
+        t3 = time.perf_counter()
+        size = len(glb)
+        rows["point_data (solver orbit)"].append(t1 - t0)
+        rows["Fourier fit + morph targets"].append(t2 - t1)
+        rows["GLB build"].append(t3 - t2)
+        rows["total"].append(t3 - t0)
+    return {k: statistics.median(v) for k, v in rows.items()}, size
+
+
+def blank_fraction(png_bytes, region):
+    import io
+    import matplotlib.image as mpimg
+    img = mpimg.imread(io.BytesIO(png_bytes), format="png")[..., :3]
+    x0, y0, x1, y1 = region
+    sub = img[y0:y1, x0:x1]
+    return float(np.mean(np.abs(sub - sub[0, 0]).sum(axis=2) > 30 / 255))
+
+
+def in_browser(path, model, branches, mesh, starts, picks):
+    from playwright.sync_api import sync_playwright, TimeoutError as PWTimeout
+
+    geom = view_geometry(mesh.vertices)
+    exe = shutil.which("nnm-view")
+    cmd = [exe] if exe else [sys.executable, "-m", "nnm_viewer"]
+    series = [BranchEntry(b, "").series(1.0) for b in branches]
+    ranges = axis_ranges(series)
+    first_frames, pick_times = [], []
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            for run in range(starts):
+                port = free_port()
+                page = browser.new_page(viewport=VIEWPORT)
+                t0 = time.perf_counter()
+                proc = subprocess.Popen(cmd + [str(path), "--port", str(port)], stdout=subprocess.PIPE,
+                                        stderr=subprocess.PIPE, text=True)
+                try:
+                    proc.stdout.readline()
+                    page.goto(f"http://127.0.0.1:{port}/")
+                    page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=60000)
+                    box = page.locator("canvas").first.bounding_box()
+                    xy = project(mesh.vertices[:: max(1, len(mesh.vertices) // 2000)], geom, box)
+                    lo = np.clip(xy.min(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
+                    hi = np.clip(xy.max(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
+                    while True:
+                        if blank_fraction(page.screenshot(), (lo[0], lo[1], hi[0] + 1, hi[1] + 1)) > 0.05:
+                            break
+                        if time.perf_counter() - t0 > 120:
+                            raise RuntimeError("the model never appeared")
+                    first_frames.append(time.perf_counter() - t0)
+                    if run == 0:
+                        page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=60000)
+                        time.sleep(2.0)
+                        box = page.locator("canvas").first.bounding_box()   # after the panels docked
+                        N = len(series[0])
+                        for k in range(picks):
+                            target = int(round((k + 1) * (N - 1) / (picks + 1)))
+                            p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]],
+                                                     ranges)
+                            (px, py), = project(p3, geom, box)
+                            t1 = time.perf_counter()
+                            page.mouse.click(px, py)
+                            try:
+                                page.wait_for_function(
+                                    "(w) => [...document.querySelectorAll('p')].some(e => e.innerText.includes(w))",
+                                    arg=f"branch 1, point {target:.2f}", timeout=30000)
+                                pick_times.append(time.perf_counter() - t1)
+                            except PWTimeout:
+                                print(f"  pick of point {target} missed", file=sys.stderr)
+                finally:
+                    page.close()
+                    proc.terminate()
+                    proc.wait(10)
+        finally:
+            browser.close()
+    med = (lambda v: statistics.median(v) if v else float("nan"))
+    return med(first_frames), len(first_frames), med(pick_times), len(pick_times)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("file", nargs="?", default=str(ROOT / "assets" / "paris.h5"))
+    ap.add_argument("--starts", type=int, default=3)
+    ap.add_argument("--picks", type=int, default=5)
+    args = ap.parse_args()
+    path = Path(args.file)
+    tmp = None
+    if not path.exists():
+        from nnm_viewer.demo import write_demo_file
+        tmp = tempfile.mkdtemp()
+        path = Path(tmp) / "two.h5"
+        print(f"{args.file} missing: using the 2-DOF demo")
+        write_demo_file(path, energy_max=10.0)
+    model = nnm.load_model(path)
+    branches = nnm.load_branches(path)
+    if not branches:
+        sys.exit(f"{path} has no branch: compute one first (nnm-solve {path} --mode N --energy-max E)")
+    mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
+    print(f"model {model.name or path.name}: {model.n} DOFs, mesh {len(mesh.vertices)} vertices / "
+          f"{len(mesh.faces)} faces, branch 1: {len(branches[0])} points")
+    parts, size = in_process(model, branches[0], mesh, args.picks)
+    rows = [(f"pick -> GLB ready, in-process: {k}", v, args.picks) for k, v in parts.items()]
+    if os.path.exists(CHROMIUM):
+        ff, nff, pk, npk = in_browser(path, model, branches, mesh, args.starts, args.picks)
+        rows += [("start -> first rendered frame (Chromium)", ff, nff),
+                 ("pick (click) -> page updated (Chromium)", pk, npk)]
+    else:
+        print("no /usr/bin/chromium: browser timings skipped")
+    print(f"\nGLB size: {size / 1e6:.2f} MB")
+    print(f"{'measure':58s} {'median (s)':>10s} {'n':>3s}")
+    for name, v, n in rows:
+        print(f"{name:58s} {v:10.3f} {n:3d}")
+    if tmp:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
