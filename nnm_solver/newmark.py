@@ -194,17 +194,26 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
     H = np.empty((N, ns, ns))
     for m in range(N):
         H[m] = (Bq * ge1[m][None, :]) @ Bq.T
+    # kernel of w_j in dd_k: H(k-1) for j = 0, Kc(k-j) = H(k-j) + H(k-j-1) for 0 < j < k, H(0) for j = k
+    Kc = np.zeros((N, ns, ns))
+    for m in range(1, N):
+        Kc[m] = H[m] + H[m - 1]
     # w_k = D_k dd_k, dd_k = Bq dq_k, for every column of [dq0, dv0]
     W = np.zeros((N + 1, ns, 2 * n))
     W[0, :, :n] = Bq * Dseq[0][:, None]
     eye = np.eye(ns)
+    acc = np.empty((ns, 2 * n))
     for k in range(1, N + 1):
-        acc = np.empty((ns, 2 * n))
         acc[:, :n] = Bq * p11[k][None, :]
         acc[:, n:] = Bq * p12[k][None, :]
-        acc += H[k - 1] @ W[0]
-        for j in range(1, k):
-            acc += (H[k - j] + H[k - j - 1]) @ W[j] if k - j < N else H[k - j - 1] @ W[j]
+        for j in range(k):
+            Kj = H[k - 1] if j == 0 else Kc[k - j]
+            for a in range(ns):
+                for b in range(ns):
+                    c_ab = Kj[a, b]
+                    if c_ab != 0.0:
+                        for c in range(2 * n):
+                            acc[a, c] += c_ab * W[j, b, c]
         Mk = eye - H[0] * Dseq[k][None, :]
         dd = np.linalg.solve(Mk, acc)
         W[k] = dd * Dseq[k][:, None]
