@@ -41,7 +41,8 @@ class ContinuationSettings:
     max_angle: float = 0.35      # rad, largest turn of the tangent between two points
     max_correction: float = 0.5  # largest corrector displacement, relative to the step
     max_failures: int = 12       # consecutive halvings before giving up
-    refresh_ratio: float = 0.3   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
+    refresh_ratio: float = 0.5   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
+    reuse_jacobian: bool = False  # start the corrector with the previous point's Jacobian (chord)
 
 
 @dataclass
@@ -86,11 +87,12 @@ def correct(problem, u_pred, p, settings, tol, J=None):
     Returns (u, J, iterations, error).  J is the Jacobian at the converged point.
     """
     u = u_pred.copy()
-    factor = None
+    # start from the previous point's Jacobian when given (chord Newton): one sweep less per point
+    factor = LeastSquares(np.vstack([J, p[None, :]])) if (J is not None and settings.reuse_jacobian) else None
     last_norm = None
     for it in range(settings.max_iter + 1):
         fresh = False
-        if factor is None or J is None:
+        if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(np.vstack([J, p[None, :]]))
