@@ -81,7 +81,7 @@ class OrbitAnimation:
         W = self.weights(phase, 1.0)
         return self.mean[None] + np.tensordot(W, self.shapes, axes=(1, 0))
 
-    def colors(self, cmap="turbo"):
+    def colors(self, cmap="jet"):
         """Per-vertex RGB uint8 (V, 3): colour map of peak displacement / largest peak."""
         import matplotlib
         scale = self.peak_max if self.peak_max > 0 else 1.0

@@ -56,6 +56,7 @@ class Session:
         self.amp_log = 0.0           # log10 of the manual amplification
         self.speed = 0.5             # displayed cycles per second
         self.show_board = True
+        self.zoom = False            # FEP axes fitted to the selected branch only
         self.dofs_text = "auto"
         self.message = ""            # last status line for this tab
         # ---- drawing machinery
@@ -115,6 +116,7 @@ class Session:
             self.h_speed = gui.add_slider("Speed (cycles/s)", min=0.05, max=3.0, step=0.05, initial_value=0.5)
             self.h_peak = gui.add_markdown("")
             self.h_board = gui.add_checkbox("Show FEP in scene", initial_value=True)
+            self.h_zoom = gui.add_checkbox("FEP: zoom on selected branch", initial_value=False)
         with gui.add_folder("Nonlinear stiffness"):
             self.h_k3 = gui.add_slider("k3 factor log10", min=-2.0, max=2.0, step=0.05, initial_value=0.0,
                                        marks=((-2, "0.01x"), (-1, "0.1x"), (0, "1x"), (1, "10x"), (2, "100x")))
@@ -163,6 +165,7 @@ class Session:
         self.h_amp.on_update(self._cb(self._on_amp))
         self.h_speed.on_update(self._cb(self._on_speed))
         self.h_board.on_update(self._cb(self._on_board))
+        self.h_zoom.on_update(self._cb(self._on_zoom))
         self.h_k3.on_update(self._cb(self._on_k3))
         self.h_recompute.on_click(self._cb(self._on_recompute))
         self.h_dofs.on_update(self._cb(self._on_dofs))
@@ -298,6 +301,11 @@ class Session:
     def _on_board(self, _):
         with self.lock:
             self.show_board = bool(self.h_board.value)
+        self.request("branches")
+
+    def _on_zoom(self, _):
+        with self.lock:
+            self.zoom = bool(self.h_zoom.value)
         self.request("branches")
 
     def _on_k3(self, _):
@@ -482,9 +490,17 @@ class Session:
         entries = self.shared.snapshot()
         return entries, [e.series(self.factor) for e in entries]
 
+    def _view_ranges(self, entries, series):
+        """FEP axis ranges: all branches, or the selected one when zoomed."""
+        if self.zoom:
+            sel = [s for e, s in zip(entries, series) if e.uid == self.sel_uid and len(s)]
+            if sel:
+                return axis_ranges(sel)
+        return axis_ranges(series)
+
     def _draw_board(self):
         entries, series = self._series()
-        ranges = axis_ranges(series)
+        ranges = self._view_ranges(entries, series)
         self._ranges = ranges
         board = self.geom.board
         if not self.show_board:
@@ -495,6 +511,8 @@ class Session:
         live = set()
         for e, ser in zip(entries, series):
             uid = e.uid
+            if self.zoom and uid != self.sel_uid:            # zoomed: only the selected branch
+                ser = ser.__class__(ser.energy[:0], ser.frequency[:0], ser.stable[:0], ser.label)
             live.add(uid)
             h = sc.draw_board_points(self.scene, board, ranges, ser, uid,
                                      on_click=self._click_handler(uid), emphasized=(uid == self.sel_uid))
@@ -527,7 +545,8 @@ class Session:
         if abs(self.factor_log) > 1e-9:
             ghost = [e.series(e.k3_factor) for e in entries]
         self._fep.set_series(series, self.shared.index_of(self.sel_uid), ghosts=ghost,
-                             title=f"Frequency-energy plot (k3 x {self.factor:.3g})")
+                             title=f"Frequency-energy plot (k3 x {self.factor:.3g})",
+                             ranges=self._view_ranges(entries, series) if self.zoom else None)
 
     def _draw_fep(self):
         sel = self.selected_point_fep()

@@ -111,8 +111,9 @@ class FepRenderer:
         (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
                                      zorder=5, animated=True)
 
-    def set_series(self, series, selected_branch=None, title=None, ghosts=()):
-        """Draw all branches (series: list of FepSeries); ghosts in light grey."""
+    def set_series(self, series, selected_branch=None, title=None, ghosts=(), ranges=None):
+        """Draw all branches (series: list of FepSeries); ghosts in light grey; ranges: axis
+        ranges ((log10 E lo, hi), (f lo, hi)), default: fitted to everything drawn."""
         ax = self.ax
         for artist in list(ax.lines) + list(ax.texts):
             if artist is not self._star:
@@ -139,7 +140,7 @@ class FepRenderer:
             if (~st).any():
                 ax.plot(le[~st], s.frequency[~st], "o", ms=4.5, mfc="white", mec=_hex(UNSTABLE_RGB), mew=1.2,
                         zorder=3)
-        (elo, ehi), (flo, fhi) = axis_ranges(list(series) + list(ghosts))
+        (elo, ehi), (flo, fhi) = ranges or axis_ranges(list(series) + list(ghosts))
         ax.set_xlim(elo, ehi)
         ax.set_ylim(flo, fhi)
         ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)

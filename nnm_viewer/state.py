@@ -56,9 +56,11 @@ class BranchEntry:
 
 
 def branch_label(branch, k3_factor=1.0, source="file"):
-    """Short label such as 'NNM 1' or 'NNM 2 (k3 x 10, computing)'."""
+    """Short label such as 'NNM 1', the branch's name, or 'NNM 2 (k3 x 10) [running]'."""
     mode = getattr(branch, "mode", "?")
-    text = f"NNM {mode}"
+    name = str(getattr(branch, "name", "") or "")
+    text = name if name and name.replace(" ", "").lower() not in (f"nnm{mode}", f"mode{mode}") \
+        else f"NNM {mode}"
     if abs(k3_factor - 1.0) > 1e-12:
         text += f" (k3 x {k3_factor:.3g})"
     if source in ("running", "stopped", "failed"):

@@ -269,3 +269,15 @@ def test_point_tab_charts_and_dof_choice(server, demo_file):
     s.h_dofs.value = "9"
     assert s.h_error.visible and "DOF 9 does not exist" in s.h_error.content
     s.close()
+
+
+def test_zoom_fits_the_selected_branch(server, demo_file):
+    s, shared = make_session(server, demo_file)
+    full = s._view_ranges(*s._series())
+    s.pick(shared.entries[1].uid, 2)
+    s.h_zoom.value = True
+    zoomed = s._view_ranges(*s._series())
+    f2 = shared.entries[1].branch.frequency_hz
+    assert zoomed[1][0] > full[1][0] and zoomed[1][0] < f2.min()  # frequency axis fitted to NNM 2
+    assert s._board_handles[shared.entries[0].uid] is None          # other branches hidden on the board
+    s.close()
