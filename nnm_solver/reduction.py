@@ -6,6 +6,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import NNMInputError
+from .fem.ordering import SparseSolver
 
 
 def _sym_sparse(name, A, n=None):
@@ -24,7 +25,7 @@ def _sym_sparse(name, A, n=None):
     return A.tocsc().astype(float)
 
 
-def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0):
+def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0, xyz=None):
     """Craig-Bampton reduction  x = R [x_b; q].
 
     M, K : (n, n) dense or sparse mass (kg) and stiffness (N/m).
@@ -34,6 +35,8 @@ def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0):
     R (n, n_b + n_modes) dense, and the fixed-interface frequencies in Hz.  The modal
     block of Mr is the identity (mass-orthonormal fixed-interface modes) and the modal
     block of Kr is diag((2 pi fixed_hz)^2).
+    xyz : optional (n/6, 3) node coordinates of an FE model with 6 DOF per node, used
+    for a nested-dissection ordering of the factorisation (much faster on big models).
     """
     K = _sym_sparse("K", K)
     n = K.shape[0]
@@ -50,7 +53,13 @@ def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0):
     Mii = M[internal][:, internal].tocsc()
     Kib = K[internal][:, b].toarray()
     try:
-        lu = spla.splu(Kii)
+        if xyz is not None:
+            xyz = np.asarray(xyz, float)
+            if xyz.shape != (n // 6, 3) or n % 6:
+                raise NNMInputError(f"xyz must have shape (n/6, 3) = ({n // 6}, 3), got {xyz.shape}")
+            lu = _InternalSolver(K, internal, xyz)
+        else:
+            lu = SparseSolver(Kii)
     except RuntimeError:
         raise NNMInputError("K restricted to the internal DOFs is singular: the structure with the retained "
                             "DOFs clamped still has rigid-body motion; retain more DOFs") from None
@@ -78,6 +87,31 @@ def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0):
     Mr = 0.5 * (Mr + Mr.T)
     Kr = 0.5 * (Kr + Kr.T)
     return Mr, Kr, R, np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+
+
+class _InternalSolver:
+    """Solve K_ii y = r with K_ii = K[internal][:, internal], ordered by node nested dissection.
+
+    The retained DOFs are kept in the factorised matrix with a unit diagonal (decoupled),
+    so that the node-based ordering of the whole model can be used.
+    """
+
+    def __init__(self, K, internal, xyz):
+        n = K.shape[0]
+        mask = np.zeros(n, bool)
+        mask[internal] = True
+        D = sp.diags(mask.astype(float))
+        scale = float(abs(K.diagonal()).max())
+        A = D @ K @ D + sp.diags((~mask).astype(float) * scale)
+        self.solver = SparseSolver(A, xyz)
+        self.internal = internal
+        self.n = n
+
+    def solve(self, b):
+        b = np.asarray(b, float)
+        full = np.zeros((self.n,) + b.shape[1:])
+        full[self.internal] = b
+        return self.solver.solve(full)[self.internal]
 
 
 def mac(a, b):

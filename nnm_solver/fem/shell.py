@@ -44,11 +44,14 @@ def quad_frames(X):
     return R, c, xy
 
 
-def shell_matrices(X, E, nu, t, tb=None, rho=0.0, nsm=0.0, drill=1e-2, shear_factor=5.0 / 6.0):
+def shell_matrices(X, E, nu, t, tb=None, rho=0.0, nsm=0.0, drill=1e-2, shear_factor=5.0 / 6.0, ex_scale=1.0):
     """Global stiffness and lumped mass matrices (E, 24, 24) of flat quad shells.
 
     X : (E, 4, 3) node coordinates.  Material arrays broadcast over elements.
     drill : drilling penalty as a fraction of G t.
+    ex_scale : membrane stiffness factor along the local x axis (node 1 -> node 2 edge
+    direction), a simple orthotropy for skins whose panels carry less direct stress
+    one way (the membrane matrix becomes S Dm S, S = diag(sqrt(ex_scale), 1, 1)).
     Mass is lumped: a quarter of (rho t + nsm) * area per node, with rotary inertia
     m_node * (tb^2/12 + area/400) on the three rotations.
     """
@@ -63,7 +66,14 @@ def shell_matrices(X, E, nu, t, tb=None, rho=0.0, nsm=0.0, drill=1e-2, shear_fac
     Dm = (E * t / (1 - nu ** 2))[:, None, None] * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 0]], float)
     Dm = Dm + (E * t * nu / (1 - nu ** 2))[:, None, None] * np.array([[0, 1, 0], [1, 0, 0], [0, 0, 0]], float)
     Dm[:, 2, 2] = G * t
-    Db = Dm * (tb ** 2 / 12 * tb / t)[:, None, None]
+    ex = np.broadcast_to(np.asarray(ex_scale, float), (ne,))
+    if np.any(ex <= 0):
+        raise NNMInputError("ex_scale must be positive")
+    Sx = np.ones((ne, 3))
+    Sx[:, 0] = np.sqrt(ex)
+    Db_iso = Dm.copy()
+    Dm = Dm * Sx[:, :, None] * Sx[:, None, :]
+    Db = Db_iso * (tb ** 2 / 12 * tb / t)[:, None, None]
     ks = shear_factor * G * tb
     k = np.zeros((ne, 24, 24))
     area = np.zeros(ne)
