@@ -38,7 +38,7 @@ from .errors import NNMInputError
 from .shooting import modal_system
 
 __all__ = ["HarmonicContent", "Tongue", "harmonic_coefficients", "dominant_harmonic", "harmonic_fractions",
-           "harmonic_shape", "describe_orbit", "find_tongues", "orbit_shape", "mac_orbits",
+           "harmonic_shape", "orbit_samples", "describe_orbit", "find_tongues", "orbit_shape", "mac_orbits",
            "RESONANCE_FRACTION", "DISTORTION_FRACTION"]
 
 #: a harmonic k > 1 carrying at least this fraction of the amplitude marks an internal resonance
@@ -84,13 +84,26 @@ def harmonic_coefficients(branch, i, n=15, samples=None):
     n = int(n)
     if n < 1:
         raise NNMInputError("n (number of harmonics) must be at least 1")
-    samples = int(samples or max(256, 4 * (n + 1)))
+    samples = int(samples or orbit_samples(branch, n))
     _, x = branch.motion(i, samples)
     X = np.fft.rfft(np.asarray(x, dtype=float), axis=0) / samples
     X[1:] *= 2.0
     if X.shape[0] < n + 1:
         X = np.vstack([X, np.zeros((n + 1 - X.shape[0], X.shape[1]), dtype=complex)])
     return X[: n + 1]
+
+
+def orbit_samples(branch, n=15):
+    """Samples per period used to look at the orbits of a branch.
+
+    Shooting branches: the branch's own steps per period, so that the orbit is integrated with the
+    time step it was computed with (a finer step gives a slightly different, not exactly periodic orbit,
+    which near the escape of softening springs may even diverge); harmonics above samples / 2 are then
+    reported as 0.  Other branches: max(256, 4 (n + 1)).
+    """
+    if branch.settings.get("method", "shooting") == "shooting" and "steps_per_period" in branch.settings:
+        return max(int(branch.settings["steps_per_period"]), 8)
+    return max(256, 4 * (int(n) + 1))
 
 
 def _amplitudes(branch, coeffs, dof):
@@ -132,8 +145,13 @@ def harmonic_fractions(branch, n=15, dof=None, index=None):
     (or for the points ``index``)."""
     _check_branch(branch)
     idx = range(len(branch)) if index is None else list(index)
-    rows = [_content_from_amplitudes(_amplitudes(branch, harmonic_coefficients(branch, int(j), n), dof)).fractions
-            for j in idx]
+    rows = []
+    for j in idx:
+        try:
+            rows.append(_content_from_amplitudes(_amplitudes(branch, harmonic_coefficients(branch, int(j), n),
+                                                             dof)).fractions)
+        except RuntimeError:  # the orbit could not be integrated again: unknown content
+            rows.append(np.full(int(n) + 1, np.nan))
     return np.array(rows).reshape(len(rows), int(n) + 1)
 
 
@@ -293,6 +311,7 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     F = harmonic_fractions(branch, n, dof) if fractions is None else np.asarray(fractions, dtype=float)
     if F.shape[0] != N:
         raise NNMInputError(f"fractions has {F.shape[0]} rows, the branch has {N} points")
+    F = np.nan_to_num(F, nan=0.0)
     sec = F[:, 2:].max(axis=1) if F.shape[1] > 2 else np.zeros(N)
     E = branch.energy
     mins, _ = _local_extrema(E)
@@ -365,7 +384,7 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
 
 
 # ---------------------------------------------------------------------- shapes and MAC
-def orbit_shape(branch, i, kind="peak", samples=128):
+def orbit_shape(branch, i, kind="peak", samples=None):
     """Shape (n_dof,) of the orbit of point i.
 
     kind : "x0" the initial displacement (the paper's convention: at zero velocity for synchronous
@@ -379,7 +398,7 @@ def orbit_shape(branch, i, kind="peak", samples=128):
     if kind == "harmonic1":
         return harmonic_shape(branch, i, 1)
     if kind == "peak":
-        _, x = branch.motion(i, samples)
+        _, x = branch.motion(i, samples or orbit_samples(branch))
         q = modal_system(branch.model).to_modal(np.asarray(x, dtype=float))
         return np.asarray(x[int(np.argmax(np.sum(q * q, axis=1)))], dtype=float)
     raise NNMInputError(f"kind must be 'x0', 'peak' or 'harmonic1', got {kind!r}")

@@ -1,7 +1,9 @@
 """The examples' fast modes run end to end and show what they demonstrate."""
 import importlib.util
 import json
-import shutil
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -56,15 +58,21 @@ def test_two_dof_tongues_fast(tmp_path):
 def test_paris_fast(tmp_path):
     if not PARIS.exists():
         pytest.skip("assets/paris.h5 is not there (built by examples/build_paris.py)")
-    ex = load_example("paris_fep")
     summary = tmp_path / "summary.json"
     out = tmp_path / "paris_branches.h5"
-    assert ex.main(["--fast", "--out-dir", str(tmp_path), "--save-to", str(out), "--summary", str(summary)]) == 0
+    # a separate process, so that the script's one-thread BLAS setting applies (see examples/paris_fep.py)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    run = subprocess.run([sys.executable, str(ROOT / "examples" / "paris_fep.py"), "--fast", "--out-dir",
+                          str(tmp_path), "--save-to", str(out), "--summary", str(summary)],
+                         env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
     s = json.loads(summary.read_text())["modes"]
     m13, m20 = s["13"], s["20"]
-    f13 = np.array([m13["linear_hz"], m13["f_high"]])
-    assert abs(m13["min_f_pct"]) < 0.5 and abs(m13["drop_pct"]) < 0.5    # tail bending: unaffected
-    assert m20["drop_pct"] > 1.0                                         # anti-symmetric wing torsion softens
-    assert m20["energy_max"] >= 0.9 * m13["energy_max"] or m20["drop_pct"] > 3
+    # tail bending: frequency unchanged (< 0.5 %) over the energy range where wing torsion softens
+    assert abs(m13["drop_pct"]) < 0.5 and abs(m13["min_f_pct"]) < 0.5
+    assert m13["energy_max"] >= 0.5 * m20["energy_max"]
+    assert m20["drop_pct"] > 0.5 and m20["min_f_pct"] > 0.5                # anti-symmetric wing torsion softens
+    assert m20["drop_pct"] > 5 * abs(m13["drop_pct"])
     assert len(nnm.load_branches(out)) == 2
-    assert f13[0] > 0
+    for png in tmp_path.glob("*.png"):
+        assert png.stat().st_size < 150_000, png
