@@ -117,6 +117,7 @@ class Session:
             self.h_peak = gui.add_markdown("")
             self.h_board = gui.add_checkbox("Show FEP in scene", initial_value=True)
             self.h_zoom = gui.add_checkbox("FEP: zoom on selected branch", initial_value=False)
+            self.h_reset = gui.add_button("Reset camera")
         with gui.add_folder("Nonlinear stiffness"):
             self.h_k3 = gui.add_slider("k3 factor log10", min=-2.0, max=2.0, step=0.05, initial_value=0.0,
                                        marks=((-2, "0.01x"), (-1, "0.1x"), (0, "1x"), (1, "10x"), (2, "100x")))
@@ -166,6 +167,7 @@ class Session:
         self.h_speed.on_update(self._cb(self._on_speed))
         self.h_board.on_update(self._cb(self._on_board))
         self.h_zoom.on_update(self._cb(self._on_zoom))
+        self.h_reset.on_click(self._cb(self._on_reset_camera))
         self.h_k3.on_update(self._cb(self._on_k3))
         self.h_recompute.on_click(self._cb(self._on_recompute))
         self.h_dofs.on_update(self._cb(self._on_dofs))
@@ -302,6 +304,12 @@ class Session:
         with self.lock:
             self.show_board = bool(self.h_board.value)
         self.request("branches")
+
+    def _on_reset_camera(self, _):
+        cam = getattr(self.api, "camera", None)        # a tab (ClientHandle); tests use the server
+        if cam is not None:
+            cam.position = tuple(self.geom.camera_position)
+            cam.look_at = tuple(self.geom.camera_look_at)
 
     def _on_zoom(self, _):
         with self.lock:
@@ -664,12 +672,12 @@ class Session:
         except ValueError as exc:
             self.show_error(str(exc))
             dofs = auto_dofs(self.model, pd.x)
-        self._chart("time", "Time series over one period", *uplot_time_series(pd, self.model, dofs), log=False,
+        self._chart("time", "Time series over one period (m vs t/T)", *uplot_time_series(pd, self.model, dofs),
                     order=1000.0)
-        self._chart("harm", "Fourier coefficients (harmonic k)", *uplot_harmonics(pd, self.model, dofs), log=True,
-                    order=1001.0)
+        self._chart("harm", "Fourier coefficients: log10 amplitude (m) vs harmonic k",
+                    *uplot_harmonics(pd, self.model, dofs), order=1001.0)
 
-    def _chart(self, key, title, data, series, log, order):
+    def _chart(self, key, title, data, series, order):
         """Create or update a uPlot chart of the Point tab (re-created if the series change)."""
         from viser import uplot
 
@@ -680,10 +688,10 @@ class Session:
             return
         if h is not None:
             h.remove()
-        scales = {"x": uplot.Scale(time=False, auto=True),
-                  "y": uplot.Scale(distr=3, auto=True) if log else uplot.Scale(auto=True)}
+        scales = {"x": uplot.Scale(time=False, auto=True), "y": uplot.Scale(auto=True)}
+        axes = (uplot.Axis(), uplot.Axis(size=64))
         with self.tab_point:
-            h = self.gui.add_uplot(data, series, title=title, scales=scales, aspect=1.6,
+            h = self.gui.add_uplot(data, series, title=title, scales=scales, axes=axes, aspect=1.6,
                                    legend=uplot.Legend(show=True), order=order)
         self._charts[key] = (h, len(series))
 

@@ -143,15 +143,16 @@ def uplot_time_series(pd, model, dofs):
 
 
 def uplot_harmonics(pd, model, dofs):
-    """(data, series) for a uPlot chart of Fourier amplitudes (m, log scale) vs harmonic k."""
+    """(data, series) for a uPlot chart of log10 Fourier amplitudes (m) vs harmonic k
+    (plotted as log10 values: uPlot's own log axis labels small numbers poorly)."""
     from viser import uplot
 
     K = pd.harmonics.shape[0]
     top = max(float(pd.harmonics[:, dofs].max()) if dofs else 1.0, 1e-300)
-    data = [np.arange(K, dtype=float)] + [np.maximum(pd.harmonics[:, d], top * 1e-9) for d in dofs]
+    data = [np.arange(K, dtype=float)] + [np.log10(np.maximum(pd.harmonics[:, d], top * 1e-12)) for d in dofs]
     series = [uplot.Series(label="k")] + [
-        uplot.Series(label=f"|c_k| {dof_name(model, d)}", stroke=SERIES_COLORS[j % len(SERIES_COLORS)],
-                     width=1.0, points=uplot.Series_Points(show=True, size=7.0))
+        uplot.Series(label=f"log10 |c_k| {dof_name(model, d)}", stroke=SERIES_COLORS[j % len(SERIES_COLORS)],
+                     width=1.0, points={"show": True, "size": 7.0})
         for j, d in enumerate(dofs)]
     return tuple(data), tuple(series)
 

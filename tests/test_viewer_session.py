@@ -264,7 +264,7 @@ def test_point_tab_charts_and_dof_choice(server, demo_file):
     h_time, n = s._charts["time"]
     h_harm, _ = s._charts["harm"]
     assert n == 3 and len(h_harm.data) == 3
-    a1 = h_harm.data[1]
+    a1 = h_harm.data[1]                                   # log10 amplitudes of DOF 0
     assert a1[1] == a1.max() and a1[3] > a1[2]              # odd harmonics of the cubic spring
     s.h_dofs.value = "9"
     assert s.h_error.visible and "DOF 9 does not exist" in s.h_error.content
