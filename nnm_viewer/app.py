@@ -94,6 +94,21 @@ class ViewerApp:
         self.geometry = geom
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
+        threading.Thread(target=self._warm_up, name="nnm-view-warm-up", daemon=True).start()
+
+    def _warm_up(self):
+        """Integrate one orbit and import matplotlib before the first tab connects (the solver's
+        compiled kernels and the plotting library then cost nothing at the first pick)."""
+        t0 = time.perf_counter()
+        try:
+            import matplotlib.backends.backend_agg  # noqa: F401
+            from .info import point_data
+            entry = next((e for e in self.shared.snapshot() if len(e)), None)
+            if entry is not None:
+                point_data(entry.branch, 0.0, samples=16)
+        except Exception as exc:   # only a warm-up: the session will report real errors
+            log.info("warm-up failed: %s", one_line(exc))
+        log.info("warm-up done in %.2f s", time.perf_counter() - t0)
 
     @property
     def url(self):
