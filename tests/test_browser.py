@@ -159,6 +159,13 @@ def test_viewer_in_chromium(tmp_path):
                 page.screenshot(path=str(ARTIFACTS / f"browser_{kind}_picked.png"))
                 text = page.evaluate("document.body.innerText")
                 assert re.search(r"peak displacement \S+ \S*m", text), "no peak displacement shown"
+
+                # 4) a second tab is an independent session; the first keeps its selection
+                page2 = browser.new_page(viewport={"width": 1200, "height": 800})
+                page2.goto(f"http://127.0.0.1:{port}/")
+                page2.wait_for_function("document.body.innerText.includes('Selected:')", timeout=90000)
+                assert "point 0.00" in selected_text(page2)
+                assert f"branch 1, point {target:.2f}" in selected_text(page)
             finally:
                 browser.close()
     finally:
