@@ -9,6 +9,8 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
                                               phase-condition reference)
     problem.max_step(u) -> float              optional: largest step from u (e.g. relative to
                                               the amplitude)
+    problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
+                                              (e.g. too large a change of period), or ''
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
@@ -40,7 +42,9 @@ class ContinuationSettings:
     target_iter: int = 4
     max_angle: float = 0.35      # rad, largest turn of the tangent between two points
     max_correction: float = 0.5  # largest corrector displacement, relative to the step
-    max_failures: int = 12       # consecutive halvings before giving up
+    max_failures: int = 16       # consecutive failed steps before giving up
+    jump_after: int = 4          # after this many failures, try one step of jump_factor x the last good step
+    jump_factor: float = 2.5
     refresh_ratio: float = 0.5   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
     reuse_jacobian: bool = False  # start the corrector with the previous point's Jacobian (chord)
 
@@ -140,6 +144,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err)
     failures = 0
+    s_clean = s_before_jump = s
     while True:
         u_pred = u + s * p
         try:
@@ -147,15 +152,31 @@ def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
             dist = np.linalg.norm(u_new - u_pred)
             if dist > settings.max_correction * s:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
+            if hasattr(problem, "check_step"):
+                reason = problem.check_step(u, u_new)
+                if reason:
+                    raise CorrectorFailure(reason)
             p_new = tangent(J_new, p)
             if p_new @ p < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(p_new @ p, -1, 1))):.0f} deg")
         except CorrectorFailure as exc:
             failures += 1
-            s *= 0.5
+            if failures == settings.jump_after:
+                # small steps keep failing: likely a singular point (e.g. a branch point where the
+                # Jacobian loses rank); try once to step over it with a step longer than the last
+                # step that succeeded without trouble
+                s = settings.jump_factor * s_clean
+            elif failures == settings.jump_after + 1:
+                s = s_before_jump * 0.5
+            else:
+                s *= 0.5
+            if failures == settings.jump_after - 1:
+                s_before_jump = s
             if s < settings.step_min or failures > settings.max_failures:
                 return f"continuation stopped: {exc}; step {s:.2e} below the minimum"
             continue
+        if failures == 0:
+            s_clean = s
         failures = 0
         u, J, p = u_new, J_new, p_new
         problem.accept(u, J)

@@ -43,7 +43,7 @@ def start_amplitude(system, k, energy_max, energy_min=None):
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_points=500, on_point=None,
                  stop=None, energy_min=None, symmetric=True, floquet=True, step=None, max_angle=0.35,
-                 max_correction=0.5, max_rel_step=0.4):
+                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
 
     Parameters
@@ -55,9 +55,15 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
     symmetric : use half-period shooting (valid for the odd cubic nonlinearity; see shooting.py).
+    reversible : orbits starting at rest (v0 = 0, default with symmetric) or general orbits with a
+        phase condition (False); see shooting.ShootingProblem.
     floquet : compute Floquet multipliers and stability at every point.
     step : first step length in units of the scaled unknowns (default: half the starting amplitude).
     max_angle : largest turn (rad) of the branch tangent between two points.
+    max_correction : largest corrector displacement, relative to the step length.
+    max_rel_step : largest step relative to the amplitude of the current orbit.
+    max_period_step : largest relative change of the period between two points (keeps the
+        continuation from stepping over the entrance of internal-resonance tongues).
 
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
@@ -76,15 +82,15 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
         raise NNMInputError(f"steps_per_period={steps_per_period} is too small; use at least 8 (200 is typical)")
     k = model.check_mode(mode)
     system = modal_system(model)
-    problem = ShootingProblem(system, k, steps_per_period, symmetric=symmetric, max_rel_step=max_rel_step)
+    problem = ShootingProblem(system, k, steps_per_period, symmetric=symmetric, max_rel_step=max_rel_step,
+                              reversible=reversible, max_rel_period_step=max_period_step)
     a0 = start_amplitude(system, k, energy_max, energy_min)
     w = math.sqrt(system.omega2[k])
     q0 = np.zeros(model.n)
     q0[k] = a0
     T0 = discrete_linear_period(w, problem.spp)
     u0 = problem.pack(q0, np.zeros(model.n), T0)
-    p0 = np.zeros_like(u0)
-    p0[k] = 1.0
+    p0 = problem.pack(q0 / a0, np.zeros(model.n), 0.0)
     s0 = 0.5 * a0 if step is None else float(step)
     settings = ContinuationSettings(step=s0, step_min=1e-8 * a0, step_max=np.inf, max_angle=max_angle,
                                     max_correction=max_correction)
@@ -103,6 +109,7 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
     branch, _ = collect_branch(model, mode, pseudo_arclength(problem, u0, p0, settings, tol), record,
                                energy_max, max_points, on_point, stop,
                                dict(method="shooting", steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
+                                    reversible=problem.reversible,
                                     energy_max=energy_max, k3_factor=1.0, floquet=bool(floquet)))
     return branch
 

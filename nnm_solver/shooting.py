@@ -13,10 +13,12 @@ found by  H = [q(T/2) + q0 ; (v(T/2) + v0) / w_r]  at half the cost, and the ful
 the square of the half-period map (z -> -z commutes with the flow).  Every solution of the
 half-period problem is an exact periodic orbit of period T.
 
-Phase condition (eq. 6):  h(u) = <q_ref, v0> / w_r = <x_ref, M xdot(0)> / w_r = 0,  where q_ref is
-the displacement of the previous converged point: t = 0 is an extremum of the motion projected
-on the previous shape (for synchronous motions: the instant of zero velocity).  The trivial orbit
-u = 0 is excluded by starting at finite amplitude and by the arclength condition.
+Phase condition (eq. 6).  Default (reversible orbits): v0 = 0, i.e. t = 0 is an instant of zero
+velocity, and the unknowns reduce to u = [q0; T / T_r] (see ShootingProblem).  General orbits
+(reversible=False): h(u) = <q_ref, v0> / w_r = <x_ref, M xdot(0)> / w_r = 0, where q_ref is the
+displacement of the previous converged point: t = 0 is an extremum of the motion projected on the
+previous shape.  The trivial orbit u = 0 is excluded by starting at finite amplitude and by the
+arclength condition.
 
 Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
 """
@@ -74,35 +76,54 @@ def discrete_linear_period(omega, nsteps_per_period):
 
 
 class ShootingProblem:
-    """Shooting function + phase condition of one NNM branch, for ``continuation.pseudo_arclength``."""
+    """Shooting function + phase condition of one NNM branch, for ``continuation.pseudo_arclength``.
 
-    def __init__(self, system, mode_index, steps_per_period=200, symmetric=True, max_rel_step=0.4):
+    reversible=True (default with symmetric=True): the orbit starts at rest, v0 = 0, so the
+    unknowns are u = [q0; T / T_r] and the time origin is fixed without a phase condition.  The
+    NNMs of mechanical systems without gyroscopic terms that continue a linear mode are
+    time-reversible (the motion passes through a state of zero velocity, as in the seed paper's
+    shapes "with zero initial velocities"); restricting to them also removes the branch points where
+    non-reversible orbits would cross the family.  reversible=False keeps v0 free with the phase
+    condition of the module docstring.
+    """
+
+    def __init__(self, system, mode_index, steps_per_period=200, symmetric=True, max_rel_step=0.4,
+                 reversible=None, max_rel_period_step=np.inf):
         if steps_per_period < 8:
             raise ValueError("steps_per_period must be at least 8")
         if symmetric and steps_per_period % 2:
             steps_per_period += 1
         self.sys = system
-        self.n = system.n
+        self.n = n = system.n
         self.k = mode_index
         self.spp = int(steps_per_period)
         self.symmetric = bool(symmetric)
+        self.reversible = self.symmetric if reversible is None else bool(reversible)
         self.nsteps = self.spp // 2 if self.symmetric else self.spp
         self.frac = 0.5 if self.symmetric else 1.0
         self.w_r = float(np.sqrt(system.omega2[mode_index]))
         self.T_r = 2 * np.pi / self.w_r
-        self.q_ref = np.zeros(self.n)
+        self.q_ref = np.zeros(n)
         self.q_ref[mode_index] = 1.0
         self.max_rel_step = max_rel_step
+        self.max_rel_period_step = max_rel_period_step
+        # unknowns: entries of y = [q0; v0 / w_r; T / T_r] that are free
+        self.free = np.r_[0:n, 2 * n] if self.reversible else np.arange(2 * n + 1)
+        self.rows = 2 * n if self.reversible else 2 * n + 1   # H (+ phase condition)
         self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
         self.accepted_map = None  # ... at the last accepted point
 
     # --------------------------------------------------------------- packing
     def pack(self, q0, v0, T):
-        return np.concatenate([q0, v0 / self.w_r, [T / self.T_r]])
+        """Unknown vector u from the initial state (modal) and the period (s)."""
+        return np.concatenate([q0, v0 / self.w_r, [T / self.T_r]])[self.free]
 
     def unpack(self, u):
+        """(q0, v0, T) from the unknown vector u."""
         n = self.n
-        return u[:n], u[n:2 * n] * self.w_r, u[2 * n] * self.T_r
+        y = np.zeros(2 * n + 1)
+        y[self.free] = u
+        return y[:n], y[n:2 * n] * self.w_r, y[2 * n] * self.T_r
 
     def _h(self, T):
         return self.frac * T / self.nsteps
@@ -111,26 +132,28 @@ class ShootingProblem:
     def residual(self, u):
         q0, v0, T = self.unpack(u)
         if not T > 0:
-            return np.full(2 * self.n + 1, np.nan)
+            return np.full(self.rows, np.nan)
         q, v, ok = sweep_state(q0, v0, self._h(T), self.nsteps, self.sys.omega2, self.sys.Bq, self.sys.k3)
         if not ok:
-            return np.full(2 * self.n + 1, np.nan)
+            return np.full(self.rows, np.nan)
         return self._assemble(q, v, q0, v0)
 
     def _assemble(self, q, v, q0, v0):
         sgn = 1.0 if self.symmetric else -1.0
-        return np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self.q_ref @ v0 / self.w_r]])
+        r = np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self.q_ref @ v0 / self.w_r]])
+        return r[:self.rows]
 
     def jacobian(self, u):
         n, w = self.n, self.w_r
         q0, v0, T = self.unpack(u)
+        bad = (np.full(self.rows, np.nan), np.eye(self.rows, len(u)))
         if not T > 0:
-            return np.full(2 * n + 1, np.nan), np.eye(2 * n + 1)
+            return bad
         h = self._h(T)
         q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, self.sys.omega2,
                                                          self.sys.Bq, self.sys.k3)
         if not ok:
-            return np.full(2 * n + 1, np.nan), np.eye(2 * n + 1)
+            return bad
         r = self._assemble(q, v, q0, v0)
         self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0; v0]
         dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
@@ -144,19 +167,34 @@ class ShootingProblem:
         J[n:2 * n, 2 * n] = sv_h * dh_du / w
         J[np.arange(2 * n), np.arange(2 * n)] += sgn
         J[2 * n, n:2 * n] = self.q_ref
-        return r, J
+        return r, J[:self.rows][:, self.free]
 
     def error(self, u, r):
         """Relative periodicity error (eq. 11) in the scaled state [q; v / w_r]."""
-        return float(np.linalg.norm(r[:2 * self.n]) / max(np.linalg.norm(u[:2 * self.n]), 1e-300))
+        q0, v0, _ = self.unpack(u)
+        z = np.concatenate([q0, v0 / self.w_r])
+        return float(np.linalg.norm(r[:2 * self.n]) / max(np.linalg.norm(z), 1e-300))
 
     def accept(self, u, J):
-        q0 = u[:self.n]
+        q0 = self.unpack(u)[0]
         self.q_ref = q0 / np.linalg.norm(q0)
         self.accepted_map = self.half_map
 
+    def check_step(self, u_old, u_new):
+        """Refuse steps that change the period by more than max_rel_period_step (relative).
+
+        Internal-resonance tongues branch off where the period is close to a fixed value; bounding
+        the change of period per step keeps the continuation from stepping over their entrance.
+        """
+        T0, T1 = self.unpack(u_old)[2], self.unpack(u_new)[2]
+        change = abs(T1 / T0 - 1)
+        if change > self.max_rel_period_step:
+            return f"the period changed by {100 * change:.2f} % in one step"
+        return ""
+
     def max_step(self, u):
-        return self.max_rel_step * np.linalg.norm(u[:2 * self.n])
+        q0, v0, _ = self.unpack(u)
+        return self.max_rel_step * np.linalg.norm(np.concatenate([q0, v0 / self.w_r]))
 
     # --------------------------------------------------------------- results
     def monodromy(self):

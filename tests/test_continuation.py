@@ -106,7 +106,7 @@ def test_job_reports_solver_errors_without_raising_in_thread():
 
 def test_branch_that_stops_converging_keeps_its_points():
     # softening Duffing: no periodic orbit above the separatrix energy 1/(4|k|) = 0.25 J
-    b = nnm.continue_nnm(duffing_model(-1.0), mode=1, energy_max=1.0, max_points=300)
+    b = nnm.continue_nnm(duffing_model(-1.0), mode=1, energy_max=1.0, max_points=300, max_period_step=0.1)
     assert b.status == "failed"
     assert "kept" in b.message
     assert len(b) > 10
