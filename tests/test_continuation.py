@@ -132,3 +132,24 @@ def test_stop_event_stops_continue_nnm():
     ev.set()
     b = nnm.continue_nnm(two_dof_model(), mode=1, energy_max=10.0, stop=ev)
     assert b.status == "cancelled" and len(b) == 0
+
+
+def test_five_to_one_tongue_at_higher_energy(two_dof):
+    b = nnm.continue_nnm(two_dof, mode=1, energy_max=3e5)
+    folds = [e for e in b.events if e["kind"] == "fold"]
+    maxima = [e for e in folds if e["detail"] == "energy maximum"]
+    top5 = max(maxima, key=lambda e: e["energy"])
+    tip5 = next(e for e in folds if e["index"] > top5["index"] and e["detail"] == "energy minimum")
+    assert top5["energy"] > 5e4 and tip5["energy"] < 0.1 * top5["energy"]
+    h = b.harmonics(tip5["index"], 7)
+    assert np.argmax(h[1:, 0]) + 1 == 5          # the 5th harmonic dominates at the tip
+
+
+def test_general_phase_condition_agrees_with_reversible(two_dof):
+    rev = nnm.continue_nnm(two_dof, mode=1, energy_max=10.0, tol=1e-9)
+    gen = nnm.continue_nnm(two_dof, mode=1, energy_max=10.0, tol=1e-9, reversible=False)
+    assert not gen.settings["reversible"] and rev.settings["reversible"]
+    f = np.interp(np.log(rev.energy), np.log(gen.energy), gen.frequency_hz)
+    inside = (rev.energy > gen.energy[0]) & (rev.energy < gen.energy[-1])
+    assert np.allclose(rev.frequency_hz[inside], f[inside], rtol=2e-4)
+    assert np.all(np.abs(gen.v0) < 1e-3 * np.abs(gen.x0).max())   # it also finds the orbits at rest
