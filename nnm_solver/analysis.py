@@ -269,8 +269,13 @@ class Tongue:
     def indices(self):
         return np.arange(self.start, self.end + 1)
 
-    def middle(self, branch):
-        """Index on the way in (start..tip) whose log-energy is halfway between entry and tip."""
+    def middle(self, branch=None):
+        """Index on the way in (start..tip) where the resonant harmonic carries half of its share at the
+        tip: the orbit has two dominant frequency components (seed paper, Fig. 12 (b)).  Without the
+        fractions (or if ``branch`` is given and they are missing): the point halfway in log-energy."""
+        if self.fractions is not None and self.order < self.fractions.shape[1]:
+            share = self.fractions[: self.tip - self.start + 1, self.order]
+            return int(self.start + np.argmin(np.abs(share - 0.5 * share[-1])))
         E = np.log10(np.maximum(branch.energy[self.start:self.tip + 1], 1e-300))
         target = 0.5 * (E[0] + E[-1])
         return int(self.start + np.argmin(np.abs(E - target)))
