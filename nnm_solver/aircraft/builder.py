@@ -45,37 +45,39 @@ class ParisParams:
     tau_root: float = 0.15
     tau_tip: float = 0.12
     # wing structure
-    wing_skin_t: float = 1.6e-3
+    wing_skin_t: float = 3.30072e-3
     wing_skin_tb: float = 0.012
     wing_web_t: float = 2.5e-3
-    wing_skin_ex: float = 1.0
+    wing_skin_ex: float = 0.31573
     wing_cap_area: float = 2e-4
     wing_rib_area: float = 1.5e-4
     # fuselage structure
     fus_skin_t: float = 1.2e-3
-    fus_rear_skin_t: float = 2.0e-3
+    fus_rear_skin_t: float = 3.0e-3
     fus_skin_tb: float = 0.012
     fus_frame_area: float = 4e-4
     fus_longeron_area: float = 4e-4
     # tail structure
-    tail_skin_t: float = 1.2e-3
-    fin_skin_t: float = 1.2e-3
+    tail_skin_t: float = 2.5e-3
+    fin_skin_t: float = 5.5e-3
     tail_skin_tb: float = 0.010
     tail_cap_area: float = 2e-4
+    tail_tau: float = 0.1294
     # tip tanks and attachments
     tank_length: float = 2.9
     tank_radius: float = 0.225
     tank_gap: float = 0.05
     att_spacing: float = 0.8
     att_kz: float = 1.0e7
+    att_kx: float = 8.0e5
     tank_skin_t: float = 1.5e-3
     # joints and suspensions
     wf_k: float = 5e7
-    wf_rear_k: float = 5e6
+    wf_rear_k: float = 1.9e6
     main_gear_k: tuple = (3e3, 8e3, 6e4)
     nose_gear_k: tuple = (2e3, 3e3, 2e4)
     k_aileron: float = 30.0
-    k_aileron_sym: float = 2e4
+    k_aileron_sym: float = 8.5e3
     k_elevator: float = 60.0
     k_rudder: float = 40.0
     # masses (kg, structure included); the fuselage takes the rest of total_mass
@@ -86,7 +88,7 @@ class ParisParams:
     mass_aileron: float = 9.0
     mass_elevator: float = 14.0
     mass_rudder: float = 9.0
-    mass_tank: float = 25.0
+    mass_tank: float = 40.0
     mass_gear_nose: float = 35.0
     mass_gear_main: float = 55.0
 
@@ -404,7 +406,7 @@ def build_paris(params: ParisParams | None = None, assemble=True) -> Aircraft:
     sf = (z - fin_root_z) / (fin_top_z - fin_root_z)
     fch = 1.8 + (1.1 - 1.8) * sf
     Pf = np.column_stack([8.0 + 1.0 * sf, np.zeros_like(z), z])
-    Fn = b.lifting_surface("fin", "fin", Pf, fch, np.full_like(z, 0.11), np.tile(ey, (len(z), 1)),
+    Fn = b.lifting_surface("fin", "fin", Pf, fch, np.full_like(z, 1.1 * p.tail_tau), np.tile(ey, (len(z), 1)),
                            b.n(4, 2), b.n(6, 2), 2, 0.2, 0.7, b.n(3, 1), p.fin_skin_t, p.tail_skin_tb,
                            p.fin_skin_t * 1.5, p.tail_cap_area, range(0, len(z), max(1, int(round(2 * p.mesh)))),
                            [("rudder", 3, "rudder", "rudder", np.ones(len(z) - 1, bool))], "fin")
@@ -429,7 +431,7 @@ def build_paris(params: ParisParams | None = None, assemble=True) -> Aircraft:
     sh = np.abs(yh) / 1.9
     hch = 1.0 + (0.6 - 1.0) * sh
     Ph = np.column_stack([9.1 + 0.28 * sh, yh, np.full_like(yh, fin_top_z + 0.02)])  # straight hinge
-    H = b.lifting_surface("htail", "htail", Ph, hch, np.full_like(yh, 0.10), np.tile(ez, (len(yh), 1)),
+    H = b.lifting_surface("htail", "htail", Ph, hch, np.full_like(yh, p.tail_tau), np.tile(ez, (len(yh), 1)),
                           b.n(4, 2), b.n(6, 2), 2, 0.2, 0.7, b.n(3, 1), p.tail_skin_t, p.tail_skin_tb,
                           p.tail_skin_t * 1.5, p.tail_cap_area, range(0, len(yh), max(1, int(round(2 * p.mesh)))),
                           [("elevator", 4, "elevator", "elevator", np.ones(len(yh) - 1, bool))], "htail")
@@ -460,7 +462,9 @@ def build_paris(params: ParisParams | None = None, assemble=True) -> Aircraft:
     A_att, I_att, J_att = 1.2e-3, 1.0e-6, 1.0e-8
     G = p.E / (2 * (1 + p.nu))
     # shear-flexible stub: vertical (and fore-aft) stiffness p.att_kz, stiff in rotation
-    kappa = 1.0 / (A_att * G * (1.0 / p.att_kz - L_att ** 3 / (12 * p.E * I_att)) / L_att)
+    def _kappa(k):
+        return 1.0 / (A_att * G * (1.0 / k - L_att ** 3 / (12 * p.E * I_att)) / L_att)
+    kappa = (_kappa(p.att_kz), _kappa(p.att_kx))   # e2 = z (vertical), e3 = x (fore-aft)
     for side, sgn, grp in (("R", 1.0, 5), ("L", -1.0, 6)):
         yc = sgn * (p.semi_span + p.tank_gap + p.tank_radius)
         r = geo.tank_radius(xt, x0, p.tank_length, p.tank_radius)

@@ -82,6 +82,9 @@ def label_modes(ac, Phi):
         s = sym[k]
         stxt = "symmetric" if s > 0.5 else "anti-symmetric" if s < -0.5 else "unsymmetric"
         top = max(e, key=e.get)
+        emp = e.get("fin", 0.0) + e.get("htail", 0.0)
+        if top not in ("fin", "htail") and emp > e[top]:
+            top = "fin" if e.get("fin", 0.0) > e.get("htail", 0.0) else "htail"
         if top == "gear":
             fus = ac.sections["fuselage"]
             t = _rigid_fit(X[fus], U[fus])
@@ -120,7 +123,8 @@ def label_modes(ac, Phi):
         else:
             lab = f"{part} {kind} {counts[key]} ({stxt})"
         labels.append(lab)
-        kinds.append((part, kind, stxt, counts[key], top, e[top], s))
+        tail = e.get("fin", 0.0) + e.get("htail", 0.0)
+        kinds.append((part, kind, stxt, counts[key], top, e[top], s, tail))
     return labels, kinds
 
 

@@ -29,11 +29,11 @@ HINGE_TARGETS = {"rudder": 1.2153, "aileron": 2.1072, "elevator": 2.5157}
 
 #: (parameter, mode class, target Hz); mode class = (part, kind, symmetry or None)
 #: bounds of the primary parameters
-BOUNDS = {"mass_tank": (15.0, 150.0), "wing_skin_ex": (0.02, 1.0), "fin_skin_t": (1e-3, 6.5e-3), "wf_rear_k": (1e4, 3e8),
+BOUNDS = {"mass_tank": (15.0, 150.0), "wing_skin_ex": (0.02, 1.0), "tail_tau": (0.08, 0.16), "wf_rear_k": (1e4, 3e8),
           "wing_skin_t": (1e-3, 3.4e-3)}
 
 PRIMARY = [("wing_skin_ex", ("wing", "bending", "symmetric"), 8.1913),
-           ("fin_skin_t", ("tail", "bending", None), 21.2193),
+           ("tail_tau", ("tail", "bending", None), 21.2193),
            ("wf_rear_k", ("wing", "torsion", "symmetric"), 31.0847),
            ("wing_skin_t", ("wing", "torsion", "anti-symmetric"), 34.9151)]
 
@@ -138,8 +138,8 @@ def tune_hinges(ac, targets=HINGE_TARGETS):
 
 def find_class(kinds, cls):
     part, kind, sym = cls
-    for i, (p, k, s, _, _, _, score) in enumerate(kinds):
-        pp = "tail" if p in ("horizontal tail", "fin") else p
+    for i, (p, k, s, _, _, _, score, tail) in enumerate(kinds):
+        pp = "tail" if p in ("horizontal tail", "fin") or (tail > 0.3 and part == "tail") else p
         ok = sym is None or (score > 0 if sym == "symmetric" else score < 0)
         if pp == part and k == kind and ok:
             return i

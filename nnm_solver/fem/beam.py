@@ -45,7 +45,7 @@ def beam_matrices(x1, x2, orient, E, G, A, Iy, Iz, J, rho, shear_factor=5.0 / 6.
     """Global stiffness and mass matrices (E, 12, 12) of Timoshenko beams.
 
     Arrays broadcast over the E beams.  ``shear_factor`` = 0 gives Euler-Bernoulli
-    beams (no shear deformation).  Mass: consistent (Euler-Bernoulli shape functions)
+    beams (no shear deformation); a pair (k2, k3) sets the shear factors along e2 and e3.  Mass: consistent (Euler-Bernoulli shape functions)
     or lumped (half the mass and polar inertia at each node).
     """
     x1 = np.atleast_2d(np.asarray(x1, float))
@@ -55,11 +55,9 @@ def beam_matrices(x1, x2, orient, E, G, A, Iy, Iz, J, rho, shear_factor=5.0 / 6.
     E, G, A, Iy, Iz, J, rho = (np.broadcast_to(np.asarray(a, float), (ne,)) for a in (E, G, A, Iy, Iz, J, rho))
     if np.any(E <= 0) or np.any(A <= 0) or np.any(Iy <= 0) or np.any(Iz <= 0) or np.any(J <= 0):
         raise NNMInputError("beam E, A, Iy, Iz and J must be positive")
-    if shear_factor > 0:
-        phi_y = 12 * E * Iz / (shear_factor * G * A * L ** 2)  # bending in e1-e2 plane
-        phi_z = 12 * E * Iy / (shear_factor * G * A * L ** 2)  # bending in e1-e3 plane
-    else:
-        phi_y = phi_z = np.zeros(ne)
+    k2, k3 = (shear_factor, shear_factor) if np.ndim(shear_factor) == 0 else shear_factor
+    phi_y = 12 * E * Iz / (k2 * G * A * L ** 2) if k2 > 0 else np.zeros(ne)  # shear along e2
+    phi_z = 12 * E * Iy / (k3 * G * A * L ** 2) if k3 > 0 else np.zeros(ne)  # shear along e3
     k = np.zeros((ne, 12, 12))
     ka = E * A / L
     kt = G * J / L
