@@ -12,7 +12,7 @@ class Branch:
     """NNM branch of a model (columns have one row per converged point).
 
     energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
-    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers, stable (N,)
+    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus first), stable (N,)
     bool, events: list of dicts (kind, index, energy, frequency_hz, detail).
     status: 'done' | 'max_points' | 'cancelled' | 'failed' | 'running'; message: why it stopped.
     settings: dict (steps_per_period, tol, symmetric, method, ...).

@@ -12,7 +12,7 @@ import numpy as np
 from .branch import Branch
 from .continuation import ContinuationSettings, pseudo_arclength
 from .errors import NNMInputError
-from .floquet import STABILITY_TOL, detect_events, is_stable
+from .floquet import STABILITY_TOL, detect_events, is_stable, sort_multipliers
 from .model import Model
 from .shooting import ShootingProblem, discrete_linear_period, modal_system
 
@@ -145,6 +145,7 @@ def collect_branch(model, mode, points, record, energy_max, max_points, on_point
                            f"kept (try a larger steps_per_period or tol, or the branch ends here)")
                 break
             row = record(pt)
+            row["floquet"] = sort_multipliers(row["floquet"])
             row["iterations"] = pt.iterations
             for key, val in row.items():
                 rows.setdefault(key, []).append(val)

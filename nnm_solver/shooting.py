@@ -25,6 +25,7 @@ Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg as sla
 
 from .newmark import sweep_record, sweep_sensitivity, sweep_state
 
@@ -203,7 +204,20 @@ class ShootingProblem:
         return Mh @ Mh if self.symmetric else Mh
 
     def floquet_multipliers(self):
-        """Eigenvalues of the monodromy of the last accepted point."""
-        import scipy.linalg as sla
-        lam = sla.eigvals(self.accepted_map, check_finite=False)
+        """Eigenvalues of the monodromy of the last accepted point.
+
+        Symmetric reversible orbits (the default) need only an n x n eigenproblem.  The discrete
+        half-period map A = dz(T/2)/dz0 starts and ends on the set v = 0, and Newmark's average
+        acceleration scheme (the trapezoidal rule) is time-reversible, so R A R = A^-1 with
+        R = diag(I, -I).  Hence (A + A^-1)/2 = diag(A11, A22): the values c = (lam + 1/lam)/2 of
+        the eigenvalues lam of A are the eigenvalues of A11 = dq(T/2)/dq0, lam = c +- sqrt(c^2 - 1),
+        and the multipliers of the full period are mu = lam^2 (the monodromy is A^2).  Otherwise the
+        full 2n x 2n eigenproblem is solved.
+        """
+        A = self.accepted_map
+        if self.symmetric and self.reversible:
+            c = sla.eigvals(A[:self.n, :self.n], check_finite=False).astype(complex)
+            root = np.sqrt(c * c - 1.0)
+            return np.concatenate([(c + root) ** 2, (c - root) ** 2])
+        lam = sla.eigvals(A, check_finite=False)
         return lam ** 2 if self.symmetric else lam

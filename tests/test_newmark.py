@@ -100,5 +100,10 @@ def test_monodromy_of_converged_orbit_matches_finite_differences(two_dof_nnm1):
         cols.append(np.concatenate([qp - qm, vp - vm]) / (2 * eps))
     assert np.allclose(Mono, np.column_stack(cols), rtol=1e-5, atol=1e-6)
     # and its eigenvalues are the stored multipliers
-    mu = np.sort_complex(np.linalg.eigvals(Mono))
-    assert np.allclose(mu, np.sort_complex(b.floquet[i]), atol=1e-6)
+    # its eigenvalues are the stored multipliers (computed from the reduced n x n problem); the
+    # trivial pair at +1 is a Jordan block, whose computed eigenvalues scatter by ~sqrt(eps ||M||)
+    mu = np.linalg.eigvals(Mono)
+    stored = b.floquet[i]
+    trivial = np.abs(mu - 1) < 1e-2
+    assert trivial.sum() == 2 and (np.abs(stored - 1) < 1e-2).sum() == 2
+    assert np.allclose(np.sort_complex(mu[~trivial]), np.sort_complex(stored[np.abs(stored - 1) >= 1e-2]), atol=1e-6)
