@@ -446,19 +446,28 @@ class Session:
         log.info("drew %s in %.3f s", ",".join(sorted(kinds)), time.perf_counter() - t0)
 
     def _draw_all(self, kinds):
+        """Run the draw steps for ``kinds``; a failing step (e.g. the solver cannot integrate
+        an orbit) is reported in the page and does not stop the others."""
+        def step(fn, *args):
+            try:
+                fn(*args)
+                return True
+            except Exception as exc:
+                self.show_error(one_line(exc))
+                return False
+
         if "branches" in kinds:
-            self._draw_branch_list()
-            self._draw_board()
+            step(self._draw_branch_list)
+            step(self._draw_board)
             kinds |= {"fep", "sliders", "fep_series"}
-        if "point" in kinds:
-            self._compute_point()
+        if "point" in kinds and step(self._compute_point):
             kinds |= {"glb", "info"}
         if "glb" in kinds:            # first: the animation is what the user waits for
-            self._draw_glb()
+            step(self._draw_glb)
         if "fep_series" in kinds:
-            self._draw_fep_series()
+            step(self._draw_fep_series)
         if "fep" in kinds:
-            self._draw_fep()
+            step(self._draw_fep)
         slider_kinds = {k for k in kinds if k.startswith("sliders")}
         if slider_kinds:
             skip = None
@@ -466,13 +475,13 @@ class Session:
                 skip = "energy"
             elif slider_kinds == {"sliders:energy"}:
                 skip = "along"
-            self._draw_sliders(skip)
+            step(self._draw_sliders, skip)
         if "info" in kinds:
-            self._draw_info()
+            step(self._draw_info)
         if "progress" in kinds:
-            self._draw_progress()
+            step(self._draw_progress)
         if "error" in kinds:
-            self._draw_error()
+            step(self._draw_error)
 
     # ---- branch list, board, FEP image
     def _draw_branch_list(self):
@@ -672,7 +681,7 @@ class Session:
         except ValueError as exc:
             self.show_error(str(exc))
             dofs = auto_dofs(self.model, pd.x)
-        self._chart("time", "Time series over one period (m vs t/T)", *uplot_time_series(pd, self.model, dofs),
+        self._chart("time", "Time series over one period (vs t/T)", *uplot_time_series(pd, self.model, dofs),
                     order=1000.0)
         self._chart("harm", "Fourier coefficients: log10 amplitude (m) vs harmonic k",
                     *uplot_harmonics(pd, self.model, dofs), order=1001.0)

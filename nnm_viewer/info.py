@@ -40,8 +40,18 @@ class PointData:
                          self.mac, self.t, self.x * r, self.harmonics * r)
 
 
-def point_data(branch, s, samples=128):
-    """PointData at fractional index s of ``branch`` (the solver interpolates between points)."""
+def orbit_samples(branch):
+    """Samples per period for the viewer: the branch's own Newmark steps per period (the
+    orbit the solver converged), at least 64 and at most 400."""
+    settings = getattr(branch, "settings", None) or {}
+    return int(np.clip(int(settings.get("steps_per_period", 200)), 64, 400))
+
+
+def point_data(branch, s, samples=None):
+    """PointData at fractional index s of ``branch`` (the solver interpolates between points).
+    samples : per period (default: the branch's own time step, see orbit_samples)."""
+    if samples is None:
+        samples = orbit_samples(branch)
     i = int(round(s))
     if abs(s - i) < 1e-9 or len(branch) == 1:
         b, j = branch, int(np.clip(i, 0, len(branch) - 1))
@@ -129,15 +139,26 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
 SERIES_COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#8c564b", "#17becf"]
 
 
+def length_unit(values):
+    """(scale, unit) so that values * scale are of order 1..1000: m, mm, µm or nm."""
+    v = float(np.max(np.abs(values))) if np.size(values) else 0.0
+    for unit, f in (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6)):
+        if v >= f:
+            return 1.0 / f, unit
+    return 1e9, "nm"
+
+
 def uplot_time_series(pd, model, dofs):
-    """(data, series) for a uPlot chart of x_d(t) over one period, t in units of T."""
+    """(data, series) for a uPlot chart of x_d(t) over one period, t in units of T; the
+    displacements in the unit that suits them (uPlot rounds small numbers)."""
     from viser import uplot
 
     tt = np.append((pd.t - pd.t[0]) / pd.period, 1.0)
-    data = [tt] + [np.append(pd.x[:, d], pd.x[0, d]) for d in dofs]
+    scale, unit = length_unit(pd.x[:, dofs]) if dofs else (1.0, "m")
+    data = [tt] + [scale * np.append(pd.x[:, d], pd.x[0, d]) for d in dofs]
     series = [uplot.Series(label="t/T")] + [
-        uplot.Series(label=f"{dof_name(model, d)} (m)", stroke=SERIES_COLORS[j % len(SERIES_COLORS)], width=1.5,
-                     dash=(6.0, 4.0) if j % 2 else ())
+        uplot.Series(label=f"{dof_name(model, d)} ({unit})", stroke=SERIES_COLORS[j % len(SERIES_COLORS)],
+                     width=1.5, dash=(6.0, 4.0) if j % 2 else ())
         for j, d in enumerate(dofs)]
     return tuple(data), tuple(series)
 

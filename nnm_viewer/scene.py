@@ -60,7 +60,7 @@ def view_geometry(vertices):
     board_center = board.origin + 0.5 * board.width * board.right + 0.5 * board.height * board.up
     look_at = 0.5 * (center + board_center)
     span = np.linalg.norm(board_center - center) + 0.75 * size
-    dist = 0.9 * span / np.tan(np.radians(CAMERA_FOV_DEG) / 2)
+    dist = 0.8 * span / np.tan(np.radians(CAMERA_FOV_DEG) / 2)
     return ViewGeometry(center=center, size=size, board=board, camera_position=look_at + d * dist,
                         camera_look_at=look_at)
 

@@ -1,7 +1,7 @@
 """Real-browser test: Debian's Chromium (headless, software WebGL) driven by Playwright opens
 the page served by `nnm-view` on the shipped aircraft (assets/paris.h5), checks the aircraft is
 drawn, moves the energy slider, picks a point of the in-scene FEP, and saves screenshots under
-artifacts/.  Skipped only when /usr/bin/chromium is absent."""
+artifacts/.  Skipped only when /usr/bin/chromium is absent.  (Several tabs: tests/test_viewer_session.py.)"""
 import os
 import re
 import shutil
@@ -21,7 +21,7 @@ from nnm_viewer.state import BranchEntry
 
 CHROMIUM = "/usr/bin/chromium"
 ROOT = Path(__file__).resolve().parents[1]
-ASSET = ROOT / "assets" / "paris.h5"
+ASSET = Path(os.environ.get("NNM_BROWSER_TEST_FILE", ROOT / "assets" / "paris.h5"))  # override: another model
 ARTIFACTS = ROOT / "artifacts"
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
          "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
@@ -71,6 +71,10 @@ def project(points, cam_pos, look_at, fov, box):
     return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
 
 
+def _phase(t0, name):
+    print(f"  [{time.time() - t0:5.1f} s] {name}", flush=True)
+
+
 def selected_text(page):
     return page.evaluate("""() => {
         const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));
@@ -96,7 +100,9 @@ def test_viewer_in_chromium(tmp_path):
                               stderr=subprocess.PIPE, text=True)
     ARTIFACTS.mkdir(exist_ok=True)
     try:
+        _phase(t_start, "model loaded")
         line = server.stdout.readline()
+        _phase(t_start, "server started")
         assert f":{port}" in line, line + server.stderr.read()
         with sync_api.sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS,
@@ -106,23 +112,28 @@ def test_viewer_in_chromium(tmp_path):
                 page.goto(f"http://127.0.0.1:{port}/")
                 page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=90000)
                 page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=10000)
-                time.sleep(4.0)                                    # software WebGL: let the GLB load
+                _phase(t_start, "page populated")
                 box = page.locator("canvas").first.bounding_box()
 
-                # 1) the aircraft is drawn: its projected bounding box is not blank
-                shot = ARTIFACTS / f"browser_{kind}_start.png"
-                page.screenshot(path=str(shot))
-                img = _read_png(shot)
+                # 1) the aircraft is drawn: its projected bounding box is not blank (polled: software
+                #    WebGL needs a few seconds to load and draw the GLB)
                 sub = mesh.vertices[:: max(1, len(mesh.vertices) // 2000)]
                 xy = project(sub, geom.camera_position, geom.camera_look_at, np.radians(geom.fov_deg), box)
                 x0, y0 = np.clip(xy.min(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
                 x1, y1 = np.clip(xy.max(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
-                region = img[y0:y1 + 1, x0:x1 + 1].astype(float)
-                assert region.size, "the model projects outside the view"
-                non_bg = np.mean(np.abs(region - region[0, 0]).sum(axis=2) > 30)
+                shot = ARTIFACTS / f"browser_{kind}_start.png"
+                deadline = time.time() + 45
+                while True:
+                    page.screenshot(path=str(shot))
+                    region = _read_png(shot)[y0:y1 + 1, x0:x1 + 1].astype(float)
+                    assert region.size, "the model projects outside the view"
+                    non_bg = np.mean(np.abs(region - region[0, 0]).sum(axis=2) > 30)
+                    if non_bg > 0.05 or time.time() > deadline:
+                        break
+                    time.sleep(0.5)
                 assert non_bg > 0.05, f"the model's screen area is blank ({non_bg:.1%} drawn)"
                 assert len(np.unique(region.reshape(-1, 3) // 8, axis=0)) > 20  # shaded, not one flat colour
-
+                _phase(t_start, "model drawn")
                 # 2) the energy slider moves the selection
                 before = selected_text(page)
                 assert "point 0.00" in before, before
@@ -136,6 +147,7 @@ def test_viewer_in_chromium(tmp_path):
                 n0 = len(branches[0])
                 assert f"point {n0 - 1:.2f}" in after, after
 
+                _phase(t_start, "energy slider moved the selection")
                 # 3) pick a point of the in-scene FEP with the mouse
                 entries = [BranchEntry(b, "") for b in branches]
                 series = [e.series(1.0) for e in entries]
@@ -160,12 +172,7 @@ def test_viewer_in_chromium(tmp_path):
                 text = page.evaluate("document.body.innerText")
                 assert re.search(r"peak displacement \S+ \S*m", text), "no peak displacement shown"
 
-                # 4) a second tab is an independent session; the first keeps its selection
-                page2 = browser.new_page(viewport={"width": 1200, "height": 800})
-                page2.goto(f"http://127.0.0.1:{port}/")
-                page2.wait_for_function("document.body.innerText.includes('Selected:')", timeout=90000)
-                assert "point 0.00" in selected_text(page2)
-                assert f"branch 1, point {target:.2f}" in selected_text(page)
+                _phase(t_start, "FEP point picked")
             finally:
                 browser.close()
     finally:

@@ -260,6 +260,7 @@ def test_point_tab_charts_and_dof_choice(server, demo_file):
     h_time, n = s._charts["time"]
     assert n == 1 + 1                                     # t/T + the spring DOF ('auto')
     assert len(h_time.data[0]) == len(h_time.data[1]) and h_time.data[0][-1] == 1.0
+    assert 1.0 <= np.max(np.abs(h_time.data[1])) < 1000.0        # shown in m, mm, µm or nm
     s.h_dofs.value = "0, 1"
     h_time, n = s._charts["time"]
     h_harm, _ = s._charts["harm"]
