@@ -79,49 +79,60 @@ def map_modes(model, wanted, overrides):
     return out
 
 
-class DropStop:
-    """Stops the continuation once the frequency fell by more than ``drop`` below the linear value
-    (threading.Event-like object for continue_nnm's ``stop``, fed by its ``on_point``)."""
+class StopRule:
+    """Stops the continuation (threading.Event-like ``stop`` for continue_nnm, fed by its ``on_point``)
+    once the frequency has dropped by more than ``drop`` below the linear value (the NNM then heads for
+    the escape of the softening springs, outside the paper's range), or when the continuation crawls
+    (the last ``window`` points within 1 % of energy and 1e-5 of frequency: it is stuck at a singular
+    point and would only spend time)."""
 
-    def __init__(self, drop):
-        self.drop, self.f0, self.hit = drop, None, False
+    def __init__(self, drop, window=25):
+        self.drop, self.window = drop, window
+        self.E, self.f = [], []
+        self.reason = ""
 
     def on_point(self, row):
-        f = row["frequency_hz"]
-        self.f0 = f if self.f0 is None else self.f0
-        if f < (1 - self.drop) * self.f0:
-            self.hit = True
+        self.E.append(row["energy"])
+        self.f.append(row["frequency_hz"])
+        if self.f[-1] < (1 - self.drop) * self.f[0]:
+            self.reason = f"stopped after a {100 * self.drop:.0f} % frequency drop"
+        elif len(self.E) > self.window:
+            e, f = np.array(self.E[-self.window:]), np.array(self.f[-self.window:])
+            if e.max() < 1.01 * e.min() and f.max() - f.min() < 1e-5 * f.max():
+                self.reason = f"stopped: the continuation crawled for {self.window} points (singular point)"
 
     def is_set(self):
-        return self.hit
+        return bool(self.reason)
 
 
 def run_mode(model, mode, energy_max, spp, tol, max_points, floquet=True, log=print):
-    stop = DropStop(MAX_DROP)
+    stop = StopRule(MAX_DROP)
     t = time.perf_counter()
     b = nnm.continue_nnm(model, mode, energy_max=energy_max, steps_per_period=spp, tol=tol,
                          max_points=max_points, on_point=stop.on_point, stop=stop, floquet=floquet)
     dt = time.perf_counter() - t
-    if stop.hit:
-        b.status, b.message = "done", f"stopped after a {100 * MAX_DROP:.0f} % frequency drop"
+    if stop.reason:
+        b.status, b.message = "done", stop.reason
     log(f"mode {mode}: {len(b)} points, E {b.energy[0]:.3g}..{b.energy.max():.3g} J, "
         f"f {b.frequency_hz[0]:.5g} -> {b.frequency_hz[-1]:.5g} Hz in {dt:.1f} s ({b.message})")
     return b, dt
 
 
-def backbone_points(b, tongues):
-    """Indices of the branch that are not inside a tongue (the backbone)."""
-    inside = np.zeros(len(b), dtype=bool)
+def backbone_points(b, tongues, F):
+    """Indices of the backbone: not inside a tongue, and no harmonic k >= 2 above 10 %."""
+    ok = np.ones(len(b), dtype=bool)
     for t in tongues:
-        if t.kind == "fold":
-            inside[t.start + 1: t.end] = True
-    return np.flatnonzero(~inside)
+        ok[t.start + 1: t.end] = False
+    sec = np.nan_to_num(F[:, 2:].max(axis=1), nan=0.0)
+    ok &= sec < 0.10
+    ok[0] = True
+    return np.flatnonzero(ok)
 
 
 def analyse(b, paper_mode, log=print):
     F = analysis.harmonic_fractions(b, 15)
     tongues = analysis.find_tongues(b, n=15, fractions=F)
-    bb = backbone_points(b, tongues)
+    bb = backbone_points(b, tongues, F)
     lo, hi = int(bb[0]), int(bb[np.argmax(b.energy[bb])])
     f0 = b.frequency_hz[0]
     res = dict(paper_mode=paper_mode, mode=b.mode, label=(b.model.mode_labels or [""] * b.mode)[b.mode - 1],
@@ -131,8 +142,9 @@ def analyse(b, paper_mode, log=print):
                mac_low_high=float(analysis.mac_orbits(b, lo, b, hi)),
                mac_low_high_x0=float(analysis.mac_orbits(b, lo, b, hi, kind="x0")),
                low=lo, high=hi, stable_fraction=float(np.mean(b.stable)), status=b.status, message=b.message,
-               tongues=[dict(label=t.label, kind=t.kind, start=t.start, tip=t.tip, end=t.end,
-                             entry_energy=t.energy_range[1], tip_energy=t.tip_energy,
+               backbone_min_f_pct=float(100 * (1 - b.frequency_hz[bb].min() / f0)),
+               tongues=[dict(label=t.label, kind=t.kind, direction=t.direction, start=t.start, tip=t.tip, end=t.end,
+                             energy_range=list(t.energy_range), tip_energy=t.tip_energy,
                              tip_frequency_hz=t.tip_frequency_hz, tip_fraction=t.tip_fraction,
                              complete=t.complete, closest_mode=t.mode, closest_mode_label=(
                                  (b.model.mode_labels or [""] * t.mode)[t.mode - 1] if t.mode else ""),
@@ -360,7 +372,8 @@ def main(argv=None):
         emax = args.energy_max or SETTINGS[m]["fast_energy_max" if args.fast else "energy_max"]
         if m == 13 and branches and not args.energy_max:
             emax = max(b.energy.max() for b in branches.values())
-        b, dt = run_mode(model, mm, emax, spp, tol, max_points, floquet=not args.fast)
+        b, dt = run_mode(model, mm, emax, spp, tol, 120 if m == 13 else max_points,
+                         floquet=not args.fast)
         b.name = f"mode{mm} (paper mode {m})" if mm != m else f"mode{mm}"
         times[m] = dt
         res, tongues, _ = analyse(b, m)

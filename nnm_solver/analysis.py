@@ -45,6 +45,8 @@ __all__ = ["HarmonicContent", "Tongue", "harmonic_coefficients", "dominant_harmo
 RESONANCE_FRACTION = 0.15
 #: below this, the higher harmonics are not mentioned in a description
 DISTORTION_FRACTION = 0.03
+#: relative energy changes below this are flat when walking along a branch (stalled continuations)
+FLAT = 1e-6
 
 
 class HarmonicContent(NamedTuple):
@@ -235,9 +237,10 @@ class Tongue:
     """An internal-resonance tongue along a branch.
 
     ratio : (p, q), e.g. (3, 1); ``label`` gives "3:1".  order : the harmonic that grows along it.
-    start, tip, end : point indices of the entry fold (energy maximum), of the tip (energy minimum,
-    the far end) and of the first point past the entry energy again (or the last point).
-    energy_range : (tip energy, entry energy) in J.  tip_energy, tip_frequency_hz : at the tip.
+    start, tip, end : point indices of the entry, of the tip (the far end, an energy minimum or
+    maximum) and of the exit (see ``find_tongues``).
+    energy_range : (lowest, highest) energy of the tongue, J: (tip, entry fold) for a tongue towards
+    lower energy, (return fold, tip) for one towards higher energy.  direction : "lower" / "higher".  tip_energy, tip_frequency_hz : at the tip.
     entry_frequency_hz : at the entry.  tip_fraction : fraction of the amplitude carried by the
     resonant harmonic at the tip.  complete : the branch came back above the entry energy.
     kind : "fold" (an excursion between folds) or "content" (high harmonic content without folds,
@@ -257,6 +260,7 @@ class Tongue:
     tip_fraction: float
     complete: bool
     kind: str = "fold"
+    direction: str = "lower"
     mode: int = 0
     mac: float = float("nan")
     fractions: np.ndarray = field(default=None, repr=False)
@@ -302,10 +306,20 @@ def _local_extrema(E):
 def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fractions=None, with_mode=True):
     """Internal-resonance tongues along a branch: a list of Tongue, in the order met along the branch.
 
-    An energy minimum (fold) of the branch is a tongue's tip when, at the tip, a harmonic k >= 2 carries
-    at least ``min_fraction`` of the amplitude, or at least 5 % and twice its share at the entry fold.
-    Runs of points where a harmonic k >= 2 carries at least ``min_fraction`` without such an excursion
-    are reported too (kind "content").  Small fold pairs inside a tongue are part of it.
+    A tongue is an excursion of the branch between folds, with a *tip* where a harmonic k >= 2 carries a
+    large share of the amplitude.  Two orientations occur on a FEP:
+
+    * towards lower energy (tip = energy minimum): the entry is the fold (energy maximum) before the tip,
+      the exit the first point after the tip back above the entry energy;
+    * towards higher energy (tip = energy maximum, typical of softening structures): the exit is the fold
+      (energy minimum) after the tip, the entry the last point before the tip below the exit energy.
+
+    A candidate is accepted when, at its tip, the strongest harmonic k >= 2 carries more than at the
+    entry and the exit, and at least ``min_fraction`` of the amplitude (or at least 5 % and twice its
+    share at the entry and exit).  Overlapping candidates keep the strongest; small fold pairs inside a
+    tongue are part of it.  A branch that ends inside a tongue gives a provisional tip at its last point
+    (``complete`` False).  Runs of points where a harmonic k >= 2 carries at least ``min_fraction``
+    outside all excursions are reported too (kind "content", e.g. a tongue stepped across).
 
     fractions : optional precomputed ``harmonic_fractions(branch, n, dof)`` (N, n+1), to save time.
     """
@@ -319,39 +333,54 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     F = np.nan_to_num(F, nan=0.0)
     sec = F[:, 2:].max(axis=1) if F.shape[1] > 2 else np.zeros(N)
     E = branch.energy
-    mins, _ = _local_extrema(E)
+    mins, maxs = _local_extrema(E)
     if E[-1] < E[-2]:
-        mins.append(N - 1)  # the branch ends on the way into a tongue: its last point is a provisional tip
-    found = []
-    for tip in mins:
+        mins.append(N - 1)  # the branch ends on the way down: its last point is a provisional tip
+    cands = []
+    for tip in mins:   # tongue towards lower energy
         i0 = tip
-        while i0 > 0 and E[i0 - 1] >= E[i0]:
+        while i0 > 0 and E[i0 - 1] >= E[i0] * (1 - FLAT):
             i0 -= 1
         if i0 == tip:
             continue
         i1 = tip
         while i1 < N - 1 and E[i1] < E[i0]:
             i1 += 1
-        complete = bool(E[i1] >= E[i0])
+        cands.append((i0, tip, i1, bool(E[i1] >= E[i0]), (float(E[tip]), float(E[i0])), "lower"))
+    for tip in maxs:   # tongue towards higher energy
+        i1 = tip
+        while i1 < N - 1 and E[i1 + 1] <= E[i1] * (1 + FLAT):
+            i1 += 1
+        i0 = tip
+        while i0 > 0 and E[i0] > E[i1]:
+            i0 -= 1
+        # traversed when, after the return fold, the branch climbs on with the harmonic's share back down
+        # (not when the continuation merely creeps along, stalled inside the tongue)
+        after = np.arange(i1 + 1, N)
+        back = bool(len(after) and np.any((E[after] > E[i1] * 1.01) & (sec[after] < 0.5 * sec[tip])))
+        cands.append((i0, tip, i1, back, (float(E[i1] if back else E[i0]), float(E[tip])), "higher"))
+    found = []
+    for i0, tip, i1, complete, erange, direction in cands:
         near = np.arange(max(i0, tip - 2), min(i1, tip + 2) + 1)
         jpk = int(near[np.argmax(sec[near])])  # strongest higher harmonic at (or next to) the tip
         s_tip = float(sec[jpk])
-        if not (s_tip >= min_fraction or (s_tip >= 0.05 and s_tip >= 2.0 * sec[i0])):
+        s_ends = max(sec[i0], sec[i1] if complete else 0.0)
+        if s_tip <= s_ends or not (s_tip >= min_fraction or (s_tip >= 0.05 and s_tip >= 2.0 * s_ends)):
             continue
         k = int(np.argmax(F[jpk, 2:]) + 2)
         found.append(dict(start=i0, tip=tip, end=i1, complete=complete, order=k, frac=float(F[jpk, k]),
-                          kind="fold"))
-    # drop excursions nested in a larger one (e.g. a small fold pair on a tongue's way out)
-    found.sort(key=lambda d: (d["start"], -d["end"]))
+                          kind="fold", strength=s_tip, erange=erange, direction=direction))
+    # overlapping excursions: keep the strongest (e.g. not a small fold pair on a tongue's way out)
     kept = []
-    for d in found:
-        if kept and d["start"] >= kept[-1]["start"] and d["end"] <= kept[-1]["end"]:
+    for d in sorted(found, key=lambda d: -d["strength"]):
+        if any(d["start"] < e["end"] and e["start"] < d["end"] for e in kept):
             continue
         kept.append(d)
     # high harmonic content outside the excursions
     covered = np.zeros(N, dtype=bool)
     for d in kept:
         covered[d["start"]: d["end"] + 1] = True
+    tongues = list(kept)
     j = 0
     while j < N:
         if sec[j] >= min_fraction and not covered[j]:
@@ -360,7 +389,15 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
                 j += 1
             p = int(a + np.argmax(sec[a: j + 1]))
             k = int(np.argmax(F[p, 2:]) + 2)
-            kept.append(dict(start=a, tip=p, end=j, complete=False, order=k, frac=float(F[p, k]), kind="content"))
+            # a run that leads into (or out of) a tongue of the same order is part of it
+            touching = [d for d in tongues if d["order"] == k and (j + 1 == d["start"] or a - 1 == d["end"])]
+            if touching:
+                d = touching[0]
+                d["start"], d["end"] = min(d["start"], a), max(d["end"], j)
+                j += 1
+                continue
+            kept.append(dict(start=a, tip=p, end=j, complete=False, order=k, frac=float(F[p, k]), kind="content",
+                             erange=(float(E[a: j + 1].min()), float(E[a: j + 1].max())), direction=""))
         j += 1
     kept.sort(key=lambda d: d["start"])
     out = []
@@ -376,11 +413,8 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
                 mode, m = _closest_mode(branch, harmonic_shape(branch, tip, d["order"], n))
             except Exception:  # pragma: no cover
                 pass
-        seg = E[d["start"]: d["end"] + 1]
         out.append(Tongue(ratio=tuple(int(r) for r in ratio), order=d["order"], start=d["start"], tip=tip,
-                          end=d["end"], energy_range=(float(E[tip]) if d["kind"] == "fold" else float(seg.min()),
-                                                      float(E[d["start"]]) if d["kind"] == "fold"
-                                                      else float(seg.max())),
+                          end=d["end"], energy_range=d["erange"], direction=d["direction"],
                           tip_energy=float(E[tip]), tip_frequency_hz=float(branch.frequency_hz[tip]),
                           entry_frequency_hz=float(branch.frequency_hz[d["start"]]), tip_fraction=d["frac"],
                           complete=d["complete"], kind=d["kind"], mode=mode, mac=m,

@@ -142,3 +142,15 @@ def test_two_dof_mac(two_dof_nnm1):
     with pytest.raises(NNMInputError):
         one = nnm.Model(np.eye(1), np.eye(1), [])
         A.mac_orbits(b, 0, nnm.Branch(one, 1, [0.5], [1 / (2 * np.pi)], [2 * np.pi], [[1.0]], [[0.0]]), 0)
+
+
+def test_find_tongues_towards_higher_energy():
+    # softening-structure pattern: the branch climbs into the tongue, turns back at its tip (an energy
+    # maximum), comes down to a fold and climbs again; then it ends on the way down a second tongue
+    #            0  1  2  3  4   5   6   7   8  9  10  11  12   13   14   15   16
+    E = np.array([1, 2, 4, 8, 9, 12, 20, 14, 7, 8, 16, 40, 90, 300, 280, 200, 150.0])
+    sec = np.array([0, 0, .01, .05, .1, .3, .8, .3, .06, .05, .04, .1, .3, .6, .58, .57, .56])
+    t = A.find_tongues(synthetic_branch(E), fractions=synthetic_fractions(sec, k=3), with_mode=False)
+    assert [(x.start, x.tip, x.end, x.direction, x.complete) for x in t] == \
+        [(2, 6, 8, "higher", True), (12, 13, 16, "higher", False)]
+    assert t[0].energy_range == (7.0, 20.0) and t[0].middle() == 5
