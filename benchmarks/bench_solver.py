@@ -30,7 +30,8 @@ Cases:
   the baseline then goes around the tongue more than once (phase-shifted copies of the
   same orbits) before it reaches the energy limit; all its points are timed.
 * ``paris``: ``assets/paris.h5`` mode 20.  The solver runs until the frequency has moved by
-  5 % from its linear value (or ``--energy-paris``); the dense baseline only runs
+  5 % from its first point, or the energy turns back (top of a first tongue), or
+  ``--energy-paris``, whichever comes first; the dense baseline only runs
   ``--paris-points`` points (its cost per point is what matters) -- time per point
   is compared.
 
@@ -105,24 +106,24 @@ def run_baseline(name, model, mode, args, max_points=None):
 
 def run_solver(name, model, mode, args):
     import nnm_solver
-    on_point, stop = None, None
-    if name == "paris":
-        # stop when the frequency has moved by 5 % from the first point (or at energy_paris)
-        stop = threading.Event()
-        f_first = []
-        times = []
+    stop = threading.Event()
+    times, f_first, energies = [], [], []
+    t_begin = time.perf_counter()
 
-        def on_point(row):
-            times.append(time.perf_counter())
-            if not f_first:
-                f_first.append(row["frequency_hz"])
+    def on_point(row):
+        times.append(time.perf_counter())
+        energies.append(row["energy"])
+        if not f_first:
+            f_first.append(row["frequency_hz"])
+        if name == "paris":
+            # stop at a 5 % frequency change from the first point, or at the first energy fold
+            # (top of a tongue), or at energy_paris
             if abs(row["frequency_hz"] / f_first[0] - 1.0) >= args.freq_change:
                 stop.set()
-    else:
-        times = []
-
-        def on_point(row):
-            times.append(time.perf_counter())
+            if len(energies) > 2 and energies[-1] < energies[-2]:
+                stop.set()
+        if times[-1] - t_begin > args.solver_time_limit:
+            stop.set()
 
     t0 = time.perf_counter()
     b = nnm_solver.continue_nnm(model, mode=mode, energy_max=(args.energy_2dof if name == "2dof"
@@ -219,7 +220,7 @@ def measure_memory(method, case, args):
            "--tol", str(args.tol), "--energy-2dof", str(args.energy_2dof), "--energy-paris",
            str(args.energy_paris), "--paris-file", args.paris_file, "--paris-mode", str(args.paris_mode),
            "--max-points", str(args.max_points), "--memory-points", str(args.memory_points),
-           "--dense-step-max", str(args.dense_step_max),
+           "--dense-step-max", str(args.dense_step_max), "--solver-time-limit", str(args.solver_time_limit),
            "--freq-change", str(args.freq_change)]
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=str(ROOT))
     if out.returncode != 0:
@@ -321,6 +322,8 @@ def main(argv=None):
                     help="energy_max of the paris case (J); the solver also stops at --freq-change")
     ap.add_argument("--freq-change", type=float, default=0.05,
                     help="paris: the solver stops once |f/f_first - 1| reaches this")
+    ap.add_argument("--solver-time-limit", type=float, default=600.0,
+                    help="stop the solver's continuation after this many seconds (safety net)")
     ap.add_argument("--paris-file", default=str(ROOT / "assets" / "paris.h5"))
     ap.add_argument("--paris-mode", type=int, default=20)
     ap.add_argument("--paris-points", type=int, default=3, help="points of the dense baseline on paris")
