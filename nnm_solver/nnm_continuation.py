@@ -5,9 +5,11 @@ Shooting (shooting.py) + pseudo-arclength continuation (continuation.py) + Floqu
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .branch import Branch
 from .continuation import ContinuationSettings, pseudo_arclength
@@ -18,6 +20,12 @@ from .shooting import ShootingProblem, discrete_linear_period, modal_system
 
 #: fraction of the linear potential energy carried by the springs at the first point
 START_NONLINEARITY = 1e-5
+
+#: BLAS threads used while a branch is computed.  The dense problems here (n ~ 10..2000) gain
+#: little from threads on an idle machine, and multi-threaded OpenBLAS slows down 5-20x when the
+#: cores are shared (measured: a 548 x 548 eigenvalue problem took 7.6 s with 2 threads and 0.36 s
+#: with 1 on a busy 2-core machine).  None leaves the process setting alone.
+BLAS_THREADS = 1
 
 
 def _check_positive(name, value, integer=False):
@@ -129,41 +137,43 @@ def collect_branch(model, mode, points, record, energy_max, max_points, on_point
     rows = {}
     status, message = "failed", ""
     E_start = None
-    try:
-        while True:
-            N = len(rows.get("energy", ()))
-            if stop is not None and stop.is_set():
-                status, message = "cancelled", f"cancelled after {N} points"
-                break
-            try:
-                pt = next(points)
-            except StopIteration as fin:
-                status = "failed"
-                where = (f"after point {N} (E = {rows['energy'][-1]:.4g} J, "
-                         f"f = {rows['frequency_hz'][-1]:.5g} Hz)" if N else "at the start")
-                message = (f"no convergence {where}: {fin.value or 'continuation stopped'}; the points so far are "
-                           f"kept (try a larger steps_per_period or tol, or the branch ends here)")
-                break
-            row = record(pt)
-            row["floquet"] = sort_multipliers(row["floquet"])
-            row["iterations"] = pt.iterations
-            for key, val in row.items():
-                rows.setdefault(key, []).append(val)
-            if on_point is not None:
-                on_point(row)
-            E = row["energy"]
-            E_start = E if E_start is None else E_start
-            if E >= energy_max:
-                status, message = "done", f"reached energy_max = {energy_max:g} J"
-                break
-            if N + 1 >= max_points:
-                status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
-                break
-            if N + 1 > 3 and E < 0.5 * E_start:
-                status, message = "done", "the branch returned to low energy"
-                break
-    finally:
-        points.close()
+    limits = threadpool_limits(BLAS_THREADS, user_api="blas") if BLAS_THREADS else contextlib.nullcontext()
+    with limits:
+        try:
+            while True:
+                N = len(rows.get("energy", ()))
+                if stop is not None and stop.is_set():
+                    status, message = "cancelled", f"cancelled after {N} points"
+                    break
+                try:
+                    pt = next(points)
+                except StopIteration as fin:
+                    status = "failed"
+                    where = (f"after point {N} (E = {rows['energy'][-1]:.4g} J, "
+                             f"f = {rows['frequency_hz'][-1]:.5g} Hz)" if N else "at the start")
+                    message = (f"no convergence {where}: {fin.value or 'continuation stopped'}; the points so far are "
+                               f"kept (try a larger steps_per_period or tol, or the branch ends here)")
+                    break
+                row = record(pt)
+                row["floquet"] = sort_multipliers(row["floquet"])
+                row["iterations"] = pt.iterations
+                for key, val in row.items():
+                    rows.setdefault(key, []).append(val)
+                if on_point is not None:
+                    on_point(row)
+                E = row["energy"]
+                E_start = E if E_start is None else E_start
+                if E >= energy_max:
+                    status, message = "done", f"reached energy_max = {energy_max:g} J"
+                    break
+                if N + 1 >= max_points:
+                    status, message = "max_points", f"stopped at max_points = {max_points} (energy {E:.4g} J)"
+                    break
+                if N + 1 > 3 and E < 0.5 * E_start:
+                    status, message = "done", "the branch returned to low energy"
+                    break
+        finally:
+            points.close()
     n = model.n
     N = len(rows.get("energy", ()))
     E = np.array(rows.get("energy", []), dtype=float)
