@@ -34,7 +34,7 @@ import nnm_solver as nnm  # noqa: E402
 from nnm_viewer.animation import MeshMapper, orbit_animation  # noqa: E402
 from nnm_viewer.fep import axis_ranges  # noqa: E402
 from nnm_viewer.info import point_data  # noqa: E402
-from nnm_viewer.scene import fallback_mesh, view_geometry  # noqa: E402
+from nnm_viewer.scene import fallback_mesh, project_points as project, view_geometry  # noqa: E402
 from nnm_viewer.state import BranchEntry  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium"
@@ -50,21 +50,6 @@ def free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def project(points, geom, box):
-    cam, look = geom.camera_position, geom.camera_look_at
-    f = look - cam
-    f = f / np.linalg.norm(f)
-    r = np.cross(f, [0.0, 0.0, 1.0])
-    r /= np.linalg.norm(r)
-    u = np.cross(r, f)
-    d = np.asarray(points, float) - cam
-    z = d @ f
-    t = np.tan(np.radians(geom.fov_deg) / 2)
-    nx = (d @ r) / (z * t * box["width"] / box["height"])
-    ny = (d @ u) / (z * t)
-    return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
 
 
 def in_process(model, branch, mesh, picks):

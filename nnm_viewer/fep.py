@@ -208,21 +208,25 @@ class BoardLayout:
         return 0.016 * max(self.width, self.height)
 
 
-def board_layout(bounds_min, bounds_max, view_dir):
-    """Place the FEP board beside a model with bounding box bounds_min/max (m), facing a
-    camera that looks along ``view_dir`` (world, z up), on the camera's right-hand side."""
+def board_layout(bounds_min, bounds_max, view_dir, place="above"):
+    """Place the FEP board next to a model with bounding box bounds_min/max (m), facing a camera
+    that looks along ``view_dir`` (world, z up): above the model (``place="above"``, best for
+    the tall viewport between the two side panels) or on the camera's right-hand side."""
     lo, hi = np.asarray(bounds_min, dtype=float), np.asarray(bounds_max, dtype=float)
     size = float(max(np.max(hi - lo), 1e-9))
     center = 0.5 * (lo + hi)
-    d = np.asarray(view_dir, dtype=float).copy()
-    d[2] = 0.0
-    if np.linalg.norm(d) < 1e-9:
-        d = np.array([0.0, 1.0, 0.0])
-    d /= np.linalg.norm(d)
-    up = np.array([0.0, 0.0, 1.0])
-    right = np.cross(d, up)
+    f = np.asarray(view_dir, dtype=float).copy()
+    if np.linalg.norm(np.cross(f, [0.0, 0.0, 1.0])) < 1e-9:
+        f = np.array([0.0, 1.0, -0.5])
+    f /= np.linalg.norm(f)
+    right = np.cross(f, [0.0, 0.0, 1.0])
     right /= np.linalg.norm(right)
-    half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
+    up = np.cross(right, f)                      # the board faces the camera
     width, height = 1.0 * size, 0.7 * size
-    origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
-    return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-d)
+    if place == "above":
+        half_up = 0.5 * float(np.abs(hi - lo) @ np.abs(up))
+        origin = center + up * (half_up + 0.12 * size) - right * 0.5 * width
+    else:
+        half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
+        origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
+    return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-f)

@@ -49,25 +49,55 @@ class ViewGeometry:
     fov_deg: float = CAMERA_FOV_DEG
 
 
-def view_geometry(vertices):
-    """Camera and FEP-board placement for a mesh with the given vertices (V, 3) m."""
+def view_geometry(vertices, aspect=0.85, fill=0.92):
+    """Camera and FEP-board placement for a mesh with the given vertices (V, 3) m: the camera
+    looks along -CAMERA_DIR, from the nearest distance at which the model's bounding box and the
+    board fit in a viewport of width/height ``aspect`` (``fill``: fraction of the half-height used)."""
     v = np.asarray(vertices, dtype=float)
     lo, hi = v.min(axis=0), v.max(axis=0)
     center = 0.5 * (lo + hi)
     size = float(max(np.max(hi - lo), 1e-9))
     d = CAMERA_DIR / np.linalg.norm(CAMERA_DIR)
-    board = board_layout(lo, hi, -d)
-    board_center = board.origin + 0.5 * board.width * board.right + 0.5 * board.height * board.up
-    look_at = 0.5 * (center + board_center)
-    span = np.linalg.norm(board_center - center) + 0.75 * size
-    dist = 0.8 * span / np.tan(np.radians(CAMERA_FOV_DEG) / 2)
-    return ViewGeometry(center=center, size=size, board=board, camera_position=look_at + d * dist,
+    f = -d
+    board = board_layout(lo, hi, f)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    bc = np.array([board.origin + a * board.width * board.right + b * board.height * board.up
+                   for a in (-_ML, 1 + _MR) for b in (-_MB, 1 + _MT)])
+    pts = np.concatenate([corners, bc])
+    look_at = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    t = fill * np.tan(np.radians(CAMERA_FOV_DEG) / 2)
+    rel = pts - look_at
+    depth = rel @ f
+    dist = float(max(np.max(np.abs(rel @ r) / (t * aspect) - depth), np.max(np.abs(rel @ u) / t - depth)))
+    return ViewGeometry(center=center, size=size, board=board, camera_position=look_at + d * max(dist, 1e-6),
                         camera_look_at=look_at)
 
 
 def static_glb(mesh):
     """GLB of the undeformed mesh in light grey (before any orbit is picked)."""
     return build_glb(mesh.vertices, mesh.faces)
+
+
+def project_points(points, geom, box):
+    """Screen pixels (N, 2) of world points (N, 3) m seen by the initial camera of ``geom``
+    (z up, vertical field of view geom.fov_deg) drawing into the canvas rectangle ``box``
+    (dict x, y, width, height in px, as given by a browser).  Used to click FEP points in
+    browser tests and to frame screenshots."""
+    cam = np.asarray(geom.camera_position, dtype=float)
+    f = np.asarray(geom.camera_look_at, dtype=float) - cam
+    f /= np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    d = np.asarray(points, dtype=float) - cam
+    z = d @ f
+    t = np.tan(np.radians(geom.fov_deg) / 2)
+    nx = (d @ r) / (z * t * box["width"] / box["height"])
+    ny = (d @ u) / (z * t)
+    return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
 
 
 _SPHERE = None
@@ -84,7 +114,7 @@ def sphere_mesh():
 
 
 #: margins of the board picture around the plotting area, in fractions of its width/height
-_ML, _MR, _MB, _MT = 0.14, 0.04, 0.17, 0.11
+_ML, _MR, _MB, _MT = 0.17, 0.04, 0.2, 0.12
 
 
 def render_board(board, ranges, series=(), width_px=900):
@@ -113,11 +143,11 @@ def render_board(board, ranges, series=(), width_px=900):
         ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
     ax.set_xticks(ticks)
     ax.set_xticklabels([f"1e{int(t)}" for t in ticks])
-    ax.tick_params(labelsize=13)
+    ax.tick_params(labelsize=19)
     ax.grid(True, alpha=0.3)
-    ax.set_xlabel("energy (J)", fontsize=14)
-    ax.set_ylabel("frequency (Hz)", fontsize=14)
-    ax.set_title("FEP: click a point", fontsize=15)
+    ax.set_xlabel("energy (J)", fontsize=21)
+    ax.set_ylabel("frequency (Hz)", fontsize=21)
+    ax.set_title("FEP: click a point to animate it", fontsize=22)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
@@ -170,6 +200,9 @@ def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=Fa
     pos = board.to_world(series.energy, series.frequency, ranges)
     colors = np.where(np.asarray(series.stable, dtype=bool)[:, None], STABLE_RGB, UNSTABLE_RGB).astype(np.uint8)
     rad = board.point_radius() * (1.0 if emphasized else 0.7)
+    if len(pos) > 2:   # dense branches: spheres no bigger than ~half the typical spacing
+        gap = float(np.median(np.linalg.norm(np.diff(pos, axis=0), axis=1)))
+        rad = float(np.clip(0.5 * gap, 0.35 * board.point_radius(), rad))
     h = scene.add_batched_meshes_simple(
         f"{name}/b{uid}", vertices=V * rad, faces=F,
         batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (len(pos), 1)), batched_positions=pos,

@@ -16,7 +16,7 @@ import pytest
 
 import nnm_solver as nnm
 from nnm_viewer.fep import axis_ranges
-from nnm_viewer.scene import fallback_mesh, view_geometry
+from nnm_viewer.scene import fallback_mesh, project_points, view_geometry
 from nnm_viewer.state import BranchEntry
 
 CHROMIUM = "/usr/bin/chromium"
@@ -53,22 +53,6 @@ def viewer_file(tmp_path):
     branch = nnm.continue_nnm(model, mode=min(10, model.n), energy_max=1e2, max_points=12)
     nnm.save_branch(path, branch)
     return path, "paris"
-
-
-def project(points, cam_pos, look_at, fov, box):
-    """Screen pixels (N, 2) of world points for a camera (z up, vertical fov in rad) drawing into box."""
-    f = np.asarray(look_at, float) - cam_pos
-    f /= np.linalg.norm(f)
-    r = np.cross(f, [0.0, 0.0, 1.0])
-    r /= np.linalg.norm(r)
-    u = np.cross(r, f)
-    d = np.asarray(points, float) - cam_pos
-    z = d @ f
-    t = np.tan(fov / 2)
-    aspect = box["width"] / box["height"]
-    nx = (d @ r) / (z * t * aspect)
-    ny = (d @ u) / (z * t)
-    return np.stack([box["x"] + (nx + 1) / 2 * box["width"], box["y"] + (1 - ny) / 2 * box["height"]], axis=1)
 
 
 def _phase(t0, name):
@@ -118,7 +102,7 @@ def test_viewer_in_chromium(tmp_path):
                 # 1) the aircraft is drawn: its projected bounding box is not blank (polled: software
                 #    WebGL needs a few seconds to load and draw the GLB)
                 sub = mesh.vertices[:: max(1, len(mesh.vertices) // 2000)]
-                xy = project(sub, geom.camera_position, geom.camera_look_at, np.radians(geom.fov_deg), box)
+                xy = project_points(sub, geom, box)
                 x0, y0 = np.clip(xy.min(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
                 x1, y1 = np.clip(xy.max(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
                 shot = ARTIFACTS / f"browser_{kind}_start.png"
@@ -154,7 +138,7 @@ def test_viewer_in_chromium(tmp_path):
                 ranges = axis_ranges(series)
                 target = n0 // 2
                 p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]], ranges)
-                (px, py), = project(p3, geom.camera_position, geom.camera_look_at, np.radians(geom.fov_deg), box)
+                (px, py), = project_points(p3, geom, box)
                 picked = False
                 for dx, dy in [(0, 0), (1, 1), (-1, -1), (2, 0), (0, 2)]:
                     page.mouse.click(px + dx, py + dy)

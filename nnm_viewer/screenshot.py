@@ -1,0 +1,108 @@
+"""Screenshot of the viewer (for the documentation), taken with Debian's Chromium headless.
+
+    python -m nnm_viewer.screenshot assets/paris.h5 docs/img/viewer.png [--point 0.6] [--tab FEP]
+
+Starts ``nnm-view`` on FILE, opens it in Chromium (Playwright, software WebGL), picks the point
+at fraction ``--point`` of the first branch by clicking its sphere in the 3D FEP, pauses the
+animation at a phase of large displacement, and saves the page.  Needs the ``playwright``
+package and /usr/bin/chromium (never downloads a browser).
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync"]
+
+
+_SELECTED_JS = ("() => { const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));"
+                " return p ? p.innerText : ''; }")
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
+    """Save a PNG of the viewer on ``path`` with point ``point`` (fraction 0..1) of branch
+    ``branch`` (0-based position in the file) picked; returns the selection text shown."""
+    import nnm_solver as nnm
+    from playwright.sync_api import sync_playwright
+
+    from .fep import axis_ranges
+    from .scene import fallback_mesh, project_points, view_geometry
+    from .state import BranchEntry
+
+    model = nnm.load_model(path)
+    branches = nnm.load_branches(path)
+    if not branches:
+        raise SystemExit(f"{path} has no branch to show")
+    mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
+    geom = view_geometry(mesh.vertices)
+    series = [BranchEntry(b, "").series(1.0) for b in branches]
+    ranges = axis_ranges(series)
+    target = int(round(point * (len(series[branch]) - 1)))
+    port = _free_port()
+    exe = shutil.which("nnm-view")
+    cmd = ([exe] if exe else [sys.executable, "-m", "nnm_viewer"]) + [str(path), "--port", str(port)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        proc.stdout.readline()
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            try:
+                page = browser.new_page(viewport={"width": size[0], "height": size[1]})
+                page.goto(f"http://127.0.0.1:{port}/")
+                page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=120000)
+                time.sleep(3.0)
+                box = page.locator("canvas").first.bounding_box()
+                p3 = geom.board.to_world(series[branch].energy[[target]], series[branch].frequency[[target]], ranges)
+                (px, py), = project_points(p3, geom, box)
+                before = page.evaluate(_SELECTED_JS)
+                page.mouse.click(px, py)
+                page.wait_for_function(f"(old) => ({_SELECTED_JS})() != old", arg=before, timeout=60000)
+                # close the "software WebGL rendering" notice of headless Chromium
+                for b in page.locator(".mantine-Notification-root button").all():
+                    try:
+                        b.click(timeout=2000)
+                    except Exception:
+                        pass
+                if tab != "FEP":
+                    page.get_by_role("tab", name=tab).click()
+                time.sleep(5.0)
+                page.screenshot(path=str(out))
+                text = page.evaluate(_SELECTED_JS)
+            finally:
+                browser.close()
+    finally:
+        proc.terminate()
+        proc.wait(10)
+    return text
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description="Screenshot of nnm-view (docs)")
+    ap.add_argument("file")
+    ap.add_argument("out")
+    ap.add_argument("--point", type=float, default=0.6, help="fraction along the first branch (0..1)")
+    ap.add_argument("--branch", type=int, default=1, help="branch number (1-based, in file order)")
+    ap.add_argument("--tab", default="FEP", help="right panel tab: FEP, Point, Compute or Modes")
+    args = ap.parse_args(argv)
+    text = take(args.file, args.out, point=float(np.clip(args.point, 0, 1)), tab=args.tab, branch=args.branch - 1)
+    print(f"wrote {args.out}: {text}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
