@@ -148,7 +148,7 @@ def _linear_map(omega2, h):
 
 
 @_jit
-def _monodromy(omega2, Bq, h, nsteps, Dseq):
+def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
     """Exact derivative of the discrete flow map d[q_N; v_N]/d[q0; v0] (2n, 2n), low-rank form.
 
     The linearised step is, per mode i, z_{k+1} = A_i z_k + e_i b_i^T (w_k + w_{k+1}) with
@@ -156,7 +156,8 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
     deformations are propagated step by step (a discrete Volterra recursion through the impulse
     responses H(m) = Bq diag((A^m e)_q) Bq^T); the final state is then the block-diagonal linear
     map A^N plus one (n x N n_s) @ (N n_s x 2n) product.  Cost O(N^2 n_s^2 n + N n_s n^2) instead of
-    O(N n^2 n_s) for propagating all 2n columns through every step.
+    O(N n^2 n_s) for propagating all 2n columns through every step.  ncols = n gives only the
+    columns of dq0 (enough for reversible orbits that start at rest), ncols = 2n all of them.
     """
     n = omega2.shape[0]
     ns = Bq.shape[0]
@@ -181,13 +182,14 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
     for m in range(N):
         ge1[m] = p11[m] * e1 + p12[m] * e2
         ge2[m] = p21[m] * e1 + p22[m] * e2
-    Sq = np.zeros((n, 2 * n))
-    Sv = np.zeros((n, 2 * n))
+    Sq = np.zeros((n, ncols))
+    Sv = np.zeros((n, ncols))
     for i in range(n):
         Sq[i, i] = p11[N, i]
-        Sq[i, n + i] = p12[N, i]
         Sv[i, i] = p21[N, i]
-        Sv[i, n + i] = p22[N, i]
+        if ncols > n:
+            Sq[i, n + i] = p12[N, i]
+            Sv[i, n + i] = p22[N, i]
     if ns == 0:
         return Sq, Sv
     # impulse responses of the deformations: H[m] = Bq diag(ge1[m]) Bq^T
@@ -199,20 +201,21 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
     for m in range(1, N):
         Kc[m] = H[m] + H[m - 1]
     # w_k = D_k dd_k, dd_k = Bq dq_k, for every column of [dq0, dv0]
-    W = np.zeros((N + 1, ns, 2 * n))
+    W = np.zeros((N + 1, ns, ncols))
     W[0, :, :n] = Bq * Dseq[0][:, None]
     eye = np.eye(ns)
-    acc = np.empty((ns, 2 * n))
+    acc = np.empty((ns, ncols))
     for k in range(1, N + 1):
         acc[:, :n] = Bq * p11[k][None, :]
-        acc[:, n:] = Bq * p12[k][None, :]
+        if ncols > n:
+            acc[:, n:] = Bq * p12[k][None, :]
         for j in range(k):
             Kj = H[k - 1] if j == 0 else Kc[k - j]
             for a in range(ns):
                 for b in range(ns):
                     c_ab = Kj[a, b]
                     if c_ab != 0.0:
-                        for c in range(2 * n):
+                        for c in range(ncols):
                             acc[a, c] += c_ab * W[j, b, c]
         Mk = eye - H[0] * Dseq[k][None, :]
         dd = np.linalg.solve(Mk, acc)
@@ -220,7 +223,7 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
     # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1})
     U1 = np.empty((n, N * ns))
     U2 = np.empty((n, N * ns))
-    Sst = np.empty((N * ns, 2 * n))
+    Sst = np.empty((N * ns, ncols))
     for j in range(N):
         m = N - 1 - j
         for s in range(ns):
@@ -233,15 +236,16 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq):
 
 
 @_jit
-def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3):
+def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3, all_columns=True):
     """Integrate with the sensitivity of the final state.
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n), Sv = dv_N/d[q0; v0],
-    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  The state pass records the spring tangents
+    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  all_columns=False: only the n columns of dq0.  The state pass records the spring tangents
     D_k = 3 k3 d_k^2 and carries the single d/dh column; the 2n columns come from _monodromy.
     """
     n = q0.shape[0]
     ns = Bq.shape[0]
+    ncols = 2 * n if all_columns else n
     S, G, d, a = _start(q0, omega2, Bq, k3, h)
     q = q0.copy()
     v = v0.copy()
@@ -258,7 +262,7 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3):
     for k in range(nsteps):
         q1, v1, a1, d1, J, ok = _step(q, v, a, d, h, omega2, Bq, k3, G, S)
         if not ok:
-            return q1, v1, np.zeros((n, 2 * n)), np.zeros((n, 2 * n)), sq_h, sv_h, False
+            return q1, v1, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
         D1 = 3.0 * k3 * d1 ** 2
         Dseq[k + 1] = D1
         # the step size enters through c1, c2 and (N2)
@@ -275,5 +279,5 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3):
         sq_h = sq1_h
         sa_h = sa1_h
         q, v, a, d = q1, v1, a1, d1
-    Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq)
+    Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq, ncols)
     return q, v, Sq, Sv, sq_h, sv_h, True

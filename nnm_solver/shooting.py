@@ -111,6 +111,8 @@ class ShootingProblem:
         # unknowns: entries of y = [q0; v0 / w_r; T / T_r] that are free
         self.free = np.r_[0:n, 2 * n] if self.reversible else np.arange(2 * n + 1)
         self.rows = 2 * n if self.reversible else 2 * n + 1   # H (+ phase condition)
+        # the dv0 columns of the sensitivity are needed for v0 unknowns or the full-size Floquet problem
+        self.all_columns = not (self.reversible and self.symmetric)
         self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
         self.accepted_map = None  # ... at the last accepted point
 
@@ -152,18 +154,19 @@ class ShootingProblem:
             return bad
         h = self._h(T)
         q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, self.sys.omega2,
-                                                         self.sys.Bq, self.sys.k3)
+                                                         self.sys.Bq, self.sys.k3, self.all_columns)
         if not ok:
             return bad
         r = self._assemble(q, v, q0, v0)
-        self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0; v0]
+        self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0 (; v0)]
         dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
         sgn = 1.0 if self.symmetric else -1.0
         J = np.zeros((2 * n + 1, 2 * n + 1))
         J[:n, :n] = Sq[:, :n]
-        J[:n, n:2 * n] = Sq[:, n:] * w
         J[n:2 * n, :n] = Sv[:, :n] / w
-        J[n:2 * n, n:2 * n] = Sv[:, n:]
+        if self.all_columns:
+            J[:n, n:2 * n] = Sq[:, n:] * w
+            J[n:2 * n, n:2 * n] = Sv[:, n:]
         J[:n, 2 * n] = sq_h * dh_du
         J[n:2 * n, 2 * n] = sv_h * dh_du / w
         J[np.arange(2 * n), np.arange(2 * n)] += sgn
@@ -200,6 +203,8 @@ class ShootingProblem:
     # --------------------------------------------------------------- results
     def monodromy(self):
         """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
+        if not self.all_columns:
+            raise RuntimeError("the monodromy needs all sensitivity columns: set problem.all_columns = True")
         Mh = self.accepted_map
         return Mh @ Mh if self.symmetric else Mh
 

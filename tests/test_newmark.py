@@ -87,6 +87,7 @@ def test_monodromy_of_converged_orbit_matches_finite_differences(two_dof_nnm1):
     T = b.period[i]
     q0, v0 = ms.to_modal(b.x0[i]), ms.to_modal(b.v0[i])
     prob = ShootingProblem(ms, 0, N, symmetric=True)
+    prob.all_columns = True
     prob.jacobian(prob.pack(q0, v0, T))
     prob.accept(prob.pack(q0, v0, T), None)
     Mono = prob.monodromy()
