@@ -90,7 +90,7 @@ def main(argv=None):
     print(f"full FE model: {ac.fe.n_nodes} nodes, {n_full} DOF, mass {mass:.1f} kg, "
           f"built in {ac.build_seconds:.1f} s", flush=True)
     t = time.perf_counter()
-    n_eig = 90
+    n_eig = 60
     while True:
         f_full, V_full = modes(ac.K, ac.M, n_eig, sigma=-1.0, xyz=ac.fe.nodes)
         if f_full[-1] > args.fmax or n_eig > 400:

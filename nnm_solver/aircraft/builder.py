@@ -48,7 +48,7 @@ class ParisParams:
     wing_skin_t: float = 3.30072e-3
     wing_skin_tb: float = 0.012
     wing_web_t: float = 2.5e-3
-    wing_skin_ex: float = 0.31573
+    wing_skin_ex: float = 0.382
     wing_cap_area: float = 2e-4
     wing_rib_area: float = 1.5e-4
     # fuselage structure
@@ -62,7 +62,7 @@ class ParisParams:
     fin_skin_t: float = 5.5e-3
     tail_skin_tb: float = 0.010
     tail_cap_area: float = 2e-4
-    tail_tau: float = 0.1294
+    tail_tau: float = 0.1365
     # tip tanks and attachments
     tank_length: float = 2.9
     tank_radius: float = 0.225
@@ -74,12 +74,12 @@ class ParisParams:
     # joints and suspensions
     wf_k: float = 5e7
     wf_rear_k: float = 1.9e6
-    main_gear_k: tuple = (3e3, 8e3, 6e4)
-    nose_gear_k: tuple = (2e3, 3e3, 2e4)
-    k_aileron: float = 30.0
+    main_gear_k: tuple = (252.0, 66834.0, 83337.0)
+    nose_gear_k: tuple = (169.0, 51964.0, 395228.0)
+    k_aileron: float = 6.169
     k_aileron_sym: float = 8.5e3
-    k_elevator: float = 60.0
-    k_rudder: float = 40.0
+    k_elevator: float = 18.82
+    k_rudder: float = 47.72
     # masses (kg, structure included); the fuselage takes the rest of total_mass
     total_mass: float = 1945.0
     mass_wing: float = 380.0

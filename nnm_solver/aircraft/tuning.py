@@ -87,12 +87,16 @@ def tune_gears(ac, targets=GEAR_TARGETS):
     return tuple(float(v) for v in k[:3]), tuple(float(v) for v in k[3:]), gear_frequencies(ac, k[:3], k[3:], R, Mrb)
 
 
-def tune_low_modes(ac, low=TABLE2_HZ[:9]):
-    """Choose which 6 of the 9 lowest Table-2 modes are suspension modes (best rigid-body fit)
-    and fit gear and hinge stiffnesses.  Returns (dict of parameter values, gear Hz, hinge Hz)."""
+def tune_low_modes(ac, low=TABLE2_HZ[:9], gear_modes=None):
+    """Choose which 6 of the 9 lowest Table-2 modes are suspension modes (best rigid-body fit;
+    mode 1, 0.09 Hz, is kept as the rolling fore-aft mode on the tyres) and fit gear and hinge
+    stiffnesses.  ``gear_modes`` (0-based indices) skips the search.
+    Returns (dict of parameter values, gear Hz, hinge Hz)."""
     from itertools import combinations
     best = None
-    for idx in combinations(range(len(low)), 6):
+    cands = [tuple(gear_modes)] if gear_modes is not None else \
+        [c for c in combinations(range(len(low)), 6) if 0 in c]
+    for idx in cands:
         mk, nk, fg = tune_gears(ac, low[list(idx)])
         err = np.max(np.abs(np.log(fg / low[list(idx)])))
         if best is None or err < best[0]:

@@ -1,0 +1,65 @@
+"""Paris-like aircraft: a coarse build in seconds, and the shipped assets/paris.h5."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import nnm_solver
+from nnm_solver.aircraft import ParisParams, build_paris
+from nnm_solver.aircraft.labels import label_modes
+from nnm_solver.aircraft.tuning import TABLE2_HZ
+from nnm_solver.fem import modes
+
+ASSET = Path(__file__).resolve().parents[1] / "assets" / "paris.h5"
+
+
+@pytest.fixture(scope="module")
+def coarse():
+    ac = build_paris(ParisParams(mesh=0.4))
+    f, V = modes(ac.K, ac.M, 14, sigma=-1.0, xyz=ac.fe.nodes)
+    return ac, f, V
+
+
+def test_coarse_aircraft_mass_and_structure(coarse):
+    ac, f, V = coarse
+    assert ac.fe.total_mass(ac.M) == pytest.approx(1945.0, rel=0.05)
+    assert len(ac.retained_nodes) == 8 and len(ac.retained_dofs) == 48
+    # mirror map is an involution on the nodes that have a mirror
+    m = ac.mirror
+    ok = m >= 0
+    assert ok.mean() > 0.97 and np.all(m[m[ok]] == np.flatnonzero(ok))
+    assert np.allclose(ac.fe.nodes[m[ok], 1], -ac.fe.nodes[ok, 1], atol=1e-6)
+    # wing-side and tank-side nodes of each attachment are 5 cm apart, laterally
+    X = ac.fe.nodes[ac.retained_nodes].reshape(4, 2, 3)
+    d = X[:, 1] - X[:, 0]
+    assert np.allclose(np.abs(d[:, 1]), ac.params.tank_gap) and np.allclose(d[:, [0, 2]], 0.0)
+
+
+def test_coarse_aircraft_low_modes_and_labels(coarse):
+    ac, f, V = coarse
+    labels, kinds = label_modes(ac, V)
+    low = labels[:9]
+    assert sum(lab.startswith("gear suspension") for lab in low) == 6
+    assert sum("rotation" in lab for lab in low) == 3
+    assert np.all(f[:9] < 4.0) and f[9] > 4.0
+    assert len(labels) == len(f) and all(isinstance(s, str) and s for s in labels)
+
+
+def test_shipped_model():
+    assert ASSET.exists(), "assets/paris.h5 is missing: run python examples/build_paris.py"
+    assert ASSET.stat().st_size <= 25e6
+    model = nnm_solver.load_model(ASSET)
+    assert model.n == 548
+    assert len(model.springs) == 4
+    for s in model.springs:
+        assert s.k3 == -1e13 and s.other == s.dof + 6 and s.dof % 12 == 2
+    f, _ = model.linear_modes()
+    for mode in (10, 13, 19, 20):
+        assert f[mode - 1] == pytest.approx(TABLE2_HZ[mode - 1], rel=0.03), mode
+    assert len(model.mode_labels) >= 24 and len(model.dof_labels) == 548
+    assert model.dof_labels[2].endswith("uz") and "wing side" in model.dof_labels[2]
+    assert model.mesh.displacement_map.shape == (3 * len(model.mesh.vertices), 548)
+    cb = nnm_solver.load_extra(ASSET, "craig_bampton")
+    assert np.min(cb["mac"]) > 0.999 and np.max(np.abs(cb["freq_error"])) < 2e-3
+    ref = nnm_solver.load_extra(ASSET, "reference")
+    assert np.allclose(ref["table2_hz"], TABLE2_HZ)
