@@ -44,12 +44,14 @@ DPI = 100
 
 #: what the paper says about each mode (seed paper, section 4.2)
 PAPER = {
-    10: dict(name="first wing bending", label=r"^wing bending 1\b", paper="weakly softening; MAC low/high 0.99"),
-    13: dict(name="first tail bending", label=r"^horizontal tail bending 1\b",
+    10: dict(name="first wing bending", hz=8.1913, label=r"^wing bending 1\b",
+             paper="weakly softening; MAC low/high 0.99"),
+    13: dict(name="first tail bending", hz=21.2193, label=r"^(fin|horizontal tail|tail) bending 1\b",
              paper="frequency and shape practically unchanged"),
-    19: dict(name="first (symmetric) wing torsion", label=r"^wing torsion \d+ \(symmetric\)",
+    19: dict(name="first (symmetric) wing torsion", hz=31.0847, label=r"^wing torsion \d+ \(symmetric\)",
              paper="marked softening; 3:1, 5:1 and 9:1 tongues; MAC low/high 0.98"),
-    20: dict(name="second (anti-symmetric) wing torsion", label=r"^wing torsion \d+ \(anti-symmetric\)",
+    20: dict(name="second (anti-symmetric) wing torsion", hz=34.9151,
+             label=r"^wing torsion \d+ \(anti-symmetric\)",
              paper="about 5 % frequency drop; a 9:1 tongue at higher energy; MAC low/high 0.97"),
 }
 
@@ -66,16 +68,21 @@ MAX_DROP = 0.15
 
 
 def map_modes(model, wanted, overrides):
-    """Model mode number (1-based) of each paper mode, by label when possible."""
+    """Model mode number (1-based) of each paper mode: the same number when its label is of the paper's
+    kind (or there are no labels), else the mode of that kind nearest to the paper's frequency."""
     labels = model.mode_labels or []
+    freqs, _ = model.linear_modes()
     out = {}
     for m in wanted:
         if m in overrides:
             out[m] = overrides[m]
             continue
         pat = re.compile(PAPER[m]["label"])
+        if not labels or (m <= len(labels) and pat.search(labels[m - 1])):
+            out[m] = m
+            continue
         hits = [k + 1 for k, lab in enumerate(labels[:60]) if pat.search(lab)]
-        out[m] = hits[0] if hits else m
+        out[m] = min(hits, key=lambda k: abs(freqs[k - 1] - PAPER[m]["hz"])) if hits else m
     return out
 
 
@@ -123,8 +130,8 @@ def backbone_points(b, tongues, F):
     ok = np.ones(len(b), dtype=bool)
     for t in tongues:
         ok[t.start + 1: t.end] = False
-    sec = np.nan_to_num(F[:, 2:].max(axis=1), nan=0.0)
-    ok &= sec < 0.10
+    sec = F[:, 2:].max(axis=1)
+    ok &= np.nan_to_num(sec, nan=1.0) < 0.10   # NaN: the orbit could not be integrated again
     ok[0] = True
     return np.flatnonzero(ok)
 
@@ -277,7 +284,10 @@ def fig_tongue(b, t, path, n_harm=None):
         axs = fig.add_subplot(gs[1, col])
         draw_shape(axs, b.model, analysis.orbit_shape(b, i),
                    f"({lab}) E = {b.energy[i]:.3g} J, f = {b.frequency_hz[i]:.4f} Hz")
-        tt, x = b.motion(i, analysis.orbit_samples(b))
+        try:
+            tt, x = b.motion(i, analysis.orbit_samples(b))
+        except RuntimeError:
+            continue
         T = b.period[i]
         C = np.abs(analysis.harmonic_coefficients(b, i, n_harm))
         ax = fig.add_subplot(gs[2, col])

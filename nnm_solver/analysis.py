@@ -319,7 +319,8 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     share at the entry and exit).  Overlapping candidates keep the strongest; small fold pairs inside a
     tongue are part of it.  A branch that ends inside a tongue gives a provisional tip at its last point
     (``complete`` False).  Runs of points where a harmonic k >= 2 carries at least ``min_fraction``
-    outside all excursions are reported too (kind "content", e.g. a tongue stepped across).
+    outside all excursions are reported too (kind "content", e.g. a tongue stepped across).  Contiguous
+    excursions of the same order (a continuation going back and forth along one tongue) are merged.
 
     fractions : optional precomputed ``harmonic_fractions(branch, n, dof)`` (N, n+1), to save time.
     """
@@ -400,6 +401,20 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
                              erange=(float(E[a: j + 1].min()), float(E[a: j + 1].max())), direction=""))
         j += 1
     kept.sort(key=lambda d: d["start"])
+    # a continuation that goes back and forth along the same tongue gives contiguous excursions of the
+    # same order: one tongue
+    merged = []
+    for d in kept:
+        p = merged[-1] if merged else None
+        if p is not None and p["kind"] == d["kind"] == "fold" and p["order"] == d["order"] \
+                and d["start"] <= p["end"] + 1:
+            strong = d if d["frac"] > p["frac"] else p
+            p.update(tip=strong["tip"], frac=strong["frac"], direction=strong["direction"], end=max(p["end"], d["end"]),
+                     complete=d["complete"], erange=(min(p["erange"][0], d["erange"][0]),
+                                                     max(p["erange"][1], d["erange"][1])))
+            continue
+        merged.append(d)
+    kept = merged
     out = []
     for d in kept:
         tip = d["tip"]
@@ -437,7 +452,10 @@ def orbit_shape(branch, i, kind="peak", samples=None):
     if kind == "harmonic1":
         return harmonic_shape(branch, i, 1)
     if kind == "peak":
-        _, x = branch.motion(i, samples or orbit_samples(branch))
+        try:
+            _, x = branch.motion(i, samples or orbit_samples(branch))
+        except RuntimeError:  # the orbit cannot be integrated again (strongly unstable): its x0
+            return branch.x0[i].copy()
         q = modal_system(branch.model).to_modal(np.asarray(x, dtype=float))
         return np.asarray(x[int(np.argmax(np.sum(q * q, axis=1)))], dtype=float)
     raise NNMInputError(f"kind must be 'x0', 'peak' or 'harmonic1', got {kind!r}")
