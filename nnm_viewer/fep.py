@@ -225,7 +225,8 @@ def board_layout(bounds_min, bounds_max, view_dir, place="above"):
     width, height = 1.0 * size, 0.7 * size
     if place == "above":
         half_up = 0.5 * float(np.abs(hi - lo) @ np.abs(up))
-        origin = center + up * (half_up + 0.12 * size) - right * 0.5 * width
+        # the picture's bottom margin (tick labels) is about 0.2 of the plot height
+        origin = center + up * (half_up + 0.05 * size + 0.22 * height) - right * 0.5 * width
     else:
         half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
         origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height

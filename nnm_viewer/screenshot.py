@@ -72,15 +72,16 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
                 before = page.evaluate(_SELECTED_JS)
                 page.mouse.click(px, py)
                 page.wait_for_function(f"(old) => ({_SELECTED_JS})() != old", arg=before, timeout=60000)
+                if tab != "FEP":
+                    page.get_by_role("tab", name=tab).click()
+                time.sleep(5.0)
                 # close the "software WebGL rendering" notice of headless Chromium
                 for b in page.locator(".mantine-Notification-root button").all():
                     try:
                         b.click(timeout=2000)
                     except Exception:
                         pass
-                if tab != "FEP":
-                    page.get_by_role("tab", name=tab).click()
-                time.sleep(5.0)
+                time.sleep(1.0)
                 page.screenshot(path=str(out))
                 text = page.evaluate(_SELECTED_JS)
             finally:

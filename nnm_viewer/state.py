@@ -25,7 +25,8 @@ class BranchEntry:
 
     branch : nnm_solver Branch (for a running job: the latest snapshot).
     k3_factor : the branch's k3 relative to the file's model (1 for branches in the file).
-    source : "file", "running", "stopped", "computed" or "failed".  saved : stored in the file.
+    source : "file", "running", "stopped", "computed", "failed" or "saved" (saved from this
+    session).  saved : stored in the file.
     """
 
     branch: object
@@ -67,6 +68,8 @@ def branch_label(branch, k3_factor=1.0, source="file"):
         text += f" [{source}]"
     elif source == "computed":
         text += " [new]"
+    elif source == "saved":
+        text += " [saved]"
     return text
 
 
@@ -179,5 +182,5 @@ class SharedState:
         nnm_solver.save_branch(self.path, branch)
         with self.lock:
             entry.saved = True
-        self.notify("branches")
+        self.update(entry, source="saved")
         return branch

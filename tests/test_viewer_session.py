@@ -167,7 +167,7 @@ def test_recompute_confirms_scaling_and_save_keeps_file(server, demo_file, tmp_p
     assert f_interp == pytest.approx(old.frequency[inside], rel=2e-3)
     # save: the branch is mapped back to the file's k3 and appended; the file keeps the rest
     s._cb(s._on_save)(None)
-    assert new.saved and "saved" in s.h_status.content
+    assert new.saved and "saved" in s.h_status.content and new.label.endswith("[saved]")
     branches = nnm.load_branches(path)
     assert len(branches) == 3
     np.testing.assert_allclose(branches[2].model.k3, nnm.load_model(path).k3)
