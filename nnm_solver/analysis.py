@@ -320,7 +320,8 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     tongue are part of it.  A branch that ends inside a tongue gives a provisional tip at its last point
     (``complete`` False).  Runs of points where a harmonic k >= 2 carries at least ``min_fraction``
     outside all excursions are reported too (kind "content", e.g. a tongue stepped across).  Contiguous
-    excursions of the same order (a continuation going back and forth along one tongue) are merged.
+    excursions of the same order whose tips have the same frequency (within 0.1 %: a continuation going back
+    and forth along one tongue) are merged.
 
     fractions : optional precomputed ``harmonic_fractions(branch, n, dof)`` (N, n+1), to save time.
     """
@@ -406,8 +407,9 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     merged = []
     for d in kept:
         p = merged[-1] if merged else None
+        fr = branch.frequency_hz
         if p is not None and p["kind"] == d["kind"] == "fold" and p["order"] == d["order"] \
-                and d["start"] <= p["end"] + 1:
+                and d["start"] <= p["end"] + 1 and abs(fr[d["tip"]] - fr[p["tip"]]) <= 1e-3 * fr[p["tip"]]:
             strong = d if d["frac"] > p["frac"] else p
             p.update(tip=strong["tip"], frac=strong["frac"], direction=strong["direction"], end=max(p["end"], d["end"]),
                      complete=d["complete"], erange=(min(p["erange"][0], d["erange"][0]),
