@@ -313,6 +313,51 @@ def fig_tongue(b, t, path, n_harm=None):
 
 
 # ---------------------------------------------------------------------- saving
+#: the model file must stay below this size (bytes) with the branches added
+MAX_FILE_BYTES = 25e6
+
+
+def keep_points(b, tongues, n_keep):
+    """At most ``n_keep`` indices of branch b spread along the curve (log energy, frequency), always
+    keeping the first and last points, the folds, and the entries, tips and exits of the tongues."""
+    N = len(b)
+    if N <= n_keep:
+        return np.arange(N)
+    must = {0, N - 1} | {e["index"] for e in b.events if e["kind"] == "fold"}
+    for t in tongues:
+        must |= {t.start, t.tip, t.end, t.middle(b)}
+    x = np.log10(np.maximum(b.energy, 1e-300))
+    y = b.frequency_hz / b.frequency_hz[0]
+    d = np.r_[0, np.cumsum(np.hypot(np.diff(x) / max(np.ptp(x), 1e-12), np.diff(y) / max(np.ptp(y), 1e-12)))]
+    rest = max(n_keep - len(must), 2)
+    spread = {int(np.argmin(np.abs(d - s))) for s in np.linspace(0, d[-1], rest)}
+    return np.array(sorted(must | spread))
+
+
+def thin_for_file(path, branches, tongues, model_path=None, log=print):
+    """Branches thinned so that the file at ``path`` stays below MAX_FILE_BYTES (a new file starts with
+    a copy of the model, about the size of ``model_path``)."""
+    path = Path(path)
+    base = path.stat().st_size if path.exists() else (Path(model_path).stat().st_size if model_path else 0)
+    if not branches:
+        return []
+    n = branches[0].model.n
+    per_point = 8 * (2 * n) + 16 * (2 * n) + 32          # x0, v0, floquet (complex), scalars
+    budget = 0.9 * (MAX_FILE_BYTES - base) - 20e3 * len(branches)
+    total = sum(len(b) for b in branches)
+    if total * per_point <= budget:
+        return branches
+    n_keep = max(int(budget / per_point / len(branches)), 20)
+    out = []
+    for b, t in zip(branches, tongues):
+        idx = keep_points(b, t, n_keep)
+        c = b.subset(idx)
+        c.message = f"{b.message} [saved {len(idx)} of {len(b)} points to keep the file small]"
+        out.append(c)
+    log(f"  thinned to at most ~{n_keep} points per branch for {path} (limit {MAX_FILE_BYTES / 1e6:.0f} MB)")
+    return out
+
+
 def save_branches(path, branches, log=print):
     path = Path(path)
     existing = set()
@@ -400,7 +445,9 @@ def main(argv=None):
                 figs.append(fig_tongue(b, t, out_dir / f"paris_tongue_mode{m}_{t.label.replace(':', 'to')}.png"))
                 break
     if not args.no_save:
-        save_branches(args.save_to or model_path, list(branches.values()))
+        target = Path(args.save_to or model_path)
+        save_branches(target, thin_for_file(target, list(branches.values()), list(tongues_all.values()),
+                                            model_path))
     total = time.perf_counter() - t_all
     summary = dict(model=str(model_path), fast=bool(args.fast), steps_per_period=spp, tol=tol,
                    total_seconds=total, modes={str(m): r for m, r in results.items()})
