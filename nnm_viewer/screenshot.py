@@ -76,11 +76,8 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
                     page.get_by_role("tab", name=tab).click()
                 time.sleep(5.0)
                 # close the "software WebGL rendering" notice of headless Chromium
-                for b in page.locator(".mantine-Notification-root button").all():
-                    try:
-                        b.click(timeout=2000)
-                    except Exception:
-                        pass
+                page.evaluate("document.querySelectorAll('button.mantine-Notification-closeButton')"
+                              ".forEach(b => b.click())")
                 time.sleep(1.0)
                 page.screenshot(path=str(out))
                 text = page.evaluate(_SELECTED_JS)
