@@ -20,8 +20,11 @@ Predictor (eq. 7-8): u~ = u_j + s p_j, with p_j the unit tangent, i.e. the solut
 i.e. corrections orthogonal to the tangent.  The Jacobian is re-used between iterations (chord
 Newton) and refreshed only when the iteration stops contracting fast, so most iterations cost only
 a residual evaluation.  Step control: the step grows when the corrector converges in few iterations,
-shrinks when it needs many, and is halved on failure or when the new tangent turns by more than
-``max_angle`` (which guards against jumping between nearby branches).
+shrinks when it needs many, and is halved on failure, when the new tangent turns by more than
+``max_angle``, when the corrector lands far from the prediction (``max_correction``) or when the
+problem refuses the step (``check_step``); these guard against jumping between nearby branches and
+over the narrow entrance of internal-resonance tongues.  When small steps keep failing (a singular
+point, e.g. a branch point), one longer step is tried to step over it.
 """
 from __future__ import annotations
 
@@ -173,7 +176,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
             if failures == settings.jump_after - 1:
                 s_before_jump = s
             if s < settings.step_min or failures > settings.max_failures:
-                return f"continuation stopped: {exc}; step {s:.2e} below the minimum"
+                return f"{failures} consecutive failed steps (last: {exc}; step {s:.2e})"
             continue
         if failures == 0:
             s_clean = s
