@@ -50,7 +50,9 @@ def viewer_file(tmp_path):
     path = tmp_path / "paris.h5"
     shutil.copyfile(ASSET, path)
     model = nnm.load_model(path)
-    branch = nnm.continue_nnm(model, mode=min(10, model.n), energy_max=1e2, max_points=12)
+    # a short, cheap branch (coarse time step, no Floquet analysis): the test is about the page
+    branch = nnm.continue_nnm(model, mode=min(10, model.n), energy_max=1e2, max_points=8, steps_per_period=64,
+                              floquet=False)
     nnm.save_branch(path, branch)
     return path, "paris"
 
