@@ -163,6 +163,14 @@ def main(argv=None):
     except ViewerError as exc:
         print(f"nnm-view: error: {exc}", file=sys.stderr)
         return 2
+    except nnm_solver.NNMInputError as exc:          # e.g. a model the solver cannot analyse
+        print(f"nnm-view: error: {args.file}: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:                           # the web server could not start
+        print(f"nnm-view: error: cannot serve on {args.host}:{args.port} ({one_line(exc)})", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
     print(f"nnm-view: {args.file}: {model.n} DOFs, {len(branches)} branch(es). Open {app.url} "
           f"in a browser (Ctrl-C to quit)", flush=True)
     try:

@@ -75,3 +75,16 @@ def test_serves_page_and_prints_url(demo_file):
     finally:
         proc.terminate()
         proc.wait(10)
+
+
+def test_file_without_model_group(tmp_path):
+    import h5py
+    path = tmp_path / "empty.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "nnm"
+        f.attrs["format_version"] = 1
+    assert_one_line_error(run_cli(path), "empty.h5")
+
+
+def test_invalid_port(demo_file):
+    assert_one_line_error(run_cli(demo_file, "--port", 70000), "70000")
