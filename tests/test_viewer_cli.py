@@ -21,6 +21,15 @@ def free_port():
         return s.getsockname()[1]
 
 
+def in_process(capsys, *args):
+    """main() in this process (fast); returns an object like subprocess.run's."""
+    from types import SimpleNamespace
+    from nnm_viewer.app import main
+    code = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return SimpleNamespace(returncode=code, stdout=out.out, stderr=out.err)
+
+
 def assert_one_line_error(res, *words):
     assert res.returncode != 0
     err = res.stderr.strip()
@@ -41,18 +50,18 @@ def test_missing_file(tmp_path):
     assert_one_line_error(run_cli(tmp_path / "nope.h5"), "no such file")
 
 
-def test_invalid_file(tmp_path):
+def test_invalid_file(tmp_path, capsys):
     bad = tmp_path / "bad.h5"
     bad.write_text("not hdf5 at all")
-    assert_one_line_error(run_cli(bad), "bad.h5")
+    assert_one_line_error(in_process(capsys, bad), "bad.h5")
 
 
-def test_busy_port(demo_file):
+def test_busy_port(demo_file, capsys):
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         s.listen(1)
         port = s.getsockname()[1]
-        assert_one_line_error(run_cli(demo_file, "--port", port), f"port {port}", "in use")
+        assert_one_line_error(in_process(capsys, demo_file, "--port", port), f"port {port}", "in use")
 
 
 def test_serves_page_and_prints_url(demo_file):
@@ -77,14 +86,14 @@ def test_serves_page_and_prints_url(demo_file):
         proc.wait(10)
 
 
-def test_file_without_model_group(tmp_path):
+def test_file_without_model_group(tmp_path, capsys):
     import h5py
     path = tmp_path / "empty.h5"
     with h5py.File(path, "w") as f:
         f.attrs["format"] = "nnm"
         f.attrs["format_version"] = 1
-    assert_one_line_error(run_cli(path), "empty.h5")
+    assert_one_line_error(in_process(capsys, path), "empty.h5")
 
 
-def test_invalid_port(demo_file):
-    assert_one_line_error(run_cli(demo_file, "--port", 70000), "70000")
+def test_invalid_port(demo_file, capsys):
+    assert_one_line_error(in_process(capsys, demo_file, "--port", 70000), "70000")
