@@ -220,7 +220,7 @@ def measure_memory(method, case, args):
            "--tol", str(args.tol), "--energy-2dof", str(args.energy_2dof), "--energy-paris",
            str(args.energy_paris), "--paris-file", args.paris_file, "--paris-mode", str(args.paris_mode),
            "--max-points", str(args.max_points), "--memory-points", str(args.memory_points),
-           "--dense-step-max", str(args.dense_step_max), "--solver-time-limit", str(args.solver_time_limit),
+           "--dense-step-max", str(args.dense_step_max), "--blas-threads", str(args.blas_threads), "--solver-time-limit", str(args.solver_time_limit),
            "--freq-change", str(args.freq_change)]
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=str(ROOT))
     if out.returncode != 0:
@@ -330,14 +330,29 @@ def main(argv=None):
     ap.add_argument("--memory-points", type=int, default=2,
                     help="points of the dense baseline's memory runs (its peak is the same at every point)")
     ap.add_argument("--max-points", type=int, default=500)
+    ap.add_argument("--blas-threads", type=int, default=0,
+                    help="limit BLAS threads (threadpoolctl) for both methods; 0: leave as is. "
+                         "1 is much faster for the baseline on a loaded machine")
     ap.add_argument("--save", default="", help="save both branches to <SAVE>_<case>.npz")
     ap.add_argument("--no-memory", dest="memory", action="store_false", help="skip the memory subprocesses")
     ap.add_argument("--worker", choices=["dense", "solver"], help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.blas_threads > 0:
+        try:
+            from threadpoolctl import threadpool_limits
+            threadpool_limits(args.blas_threads)
+        except ImportError:
+            print("threadpoolctl is not installed: --blas-threads ignored (set OPENBLAS_NUM_THREADS)")
     if args.worker:
         memory_worker(args)
         return
     print(f"machine: {machine()}")
+    try:
+        from threadpoolctl import threadpool_info
+        print("BLAS threads: " + ", ".join(f"{i['internal_api']} {i['num_threads']}" for i in threadpool_info()))
+    except ImportError:
+        pass
+    print(f"load average: {os.getloadavg()[0]:.2f} (other jobs share the machine)")
     print(f"date: {time.strftime('%Y-%m-%d %H:%M %Z')}")
     t = time.perf_counter()
     warm_up()

@@ -175,7 +175,7 @@ def _evaluate(M, K, B, k3, y, steps, j):
     return F, J, r["monodromy"]
 
 
-def _correct(M, K, B, k3, y_pred, p, steps, j, tol, maxit):
+def _correct(M, K, B, k3, y_pred, p, steps, j, tol, maxit, verbose=False):
     """Pseudo-arclength corrector (eq. 9-10). Returns (y, J, monodromy, iterations) or None."""
     y = y_pred.copy()
     for it in range(maxit + 1):
@@ -186,6 +186,9 @@ def _correct(M, K, B, k3, y_pred, p, steps, j, tol, maxit):
         if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
             return None
         nz = np.linalg.norm(y[:-1])
+        if verbose:
+            print(f"    corrector it {it}: ||H||/||z0|| = {np.linalg.norm(F[:-1]) / nz:.3e}, T = {y[-1]:.6g}",
+                  flush=True)
         if np.linalg.norm(F[:-1]) < tol * nz and y[-1] > 0:
             return y, J, mono, it
         if it == maxit:
@@ -282,7 +285,7 @@ def dense_continue(M, K, springs, mode, energy_max, steps_per_period=200, tol=1e
 
     # first point: correct the linear-mode guess on the hyperplane orthogonal to the mode
     t0 = time.perf_counter()
-    res = _correct(M, K, B, k3, y, p, steps, j, tol, max_corrector_iterations)
+    res = _correct(M, K, B, k3, y, p, steps, j, tol, max_corrector_iterations, verbose)
     if res is None:
         raise RuntimeError("could not converge the starting point from the linear mode")
     y, J, mono, its = res
@@ -297,9 +300,11 @@ def dense_continue(M, K, springs, mode, energy_max, steps_per_period=200, tol=1e
         if len(pts["energy"]) >= max_points:
             stop = "max_points"
             break
-        res = _correct(M, K, B, k3, y + s * p, p, steps, j, tol, max_corrector_iterations)
+        res = _correct(M, K, B, k3, y + s * p, p, steps, j, tol, max_corrector_iterations, verbose)
         if res is None:
             s *= 0.5
+            if verbose:
+                print(f"  corrector failed: step halved to {s:.3e}", flush=True)
             if s < s_min:
                 stop = "step_min"
             continue
