@@ -29,6 +29,7 @@ class PointData:
     t: np.ndarray
     x: np.ndarray
     harmonics: np.ndarray
+    note: str = ""                 # e.g. why another point than the requested one is shown
 
     def scaled(self, ratio):
         """The same orbit when every k3 is multiplied by ``ratio`` (exact scaling law:
@@ -37,7 +38,7 @@ class PointData:
             return self
         r = 1.0 / np.sqrt(ratio)
         return PointData(self.energy / ratio, self.frequency, self.period, self.stable, self.floquet,
-                         self.mac, self.t, self.x * r, self.harmonics * r)
+                         self.mac, self.t, self.x * r, self.harmonics * r, self.note)
 
 
 def orbit_samples(branch):
@@ -52,12 +53,19 @@ def point_data(branch, s, samples=None):
     samples : per period (default: the branch's own time step, see orbit_samples)."""
     if samples is None:
         samples = orbit_samples(branch)
-    i = int(round(s))
+    i = int(np.clip(round(s), 0, len(branch) - 1))
+    note = ""
     if abs(s - i) < 1e-9 or len(branch) == 1:
-        b, j = branch, int(np.clip(i, 0, len(branch) - 1))
+        b, j = branch, i
+        t, x = b.motion(j, samples=samples)
     else:
         b, j = branch.interpolate(float(s)), 0
-    t, x = b.motion(j, samples=samples)
+        try:
+            t, x = b.motion(j, samples=samples)
+        except RuntimeError:       # the interpolated state is not on an orbit: show the nearest point
+            b, j = branch, i
+            t, x = b.motion(j, samples=samples)
+            note = f"the orbit between points could not be integrated; showing computed point {i}"
     harm = harmonic_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
     try:
         mac = np.asarray(b.mac_to_linear(j), dtype=float)
@@ -66,7 +74,7 @@ def point_data(branch, s, samples=None):
     floquet = np.asarray(b.floquet[j]) if getattr(b, "floquet", None) is not None and len(b.floquet) else np.zeros(0)
     return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
                      stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
-                     x=np.asarray(x, dtype=float), harmonics=harm)
+                     x=np.asarray(x, dtype=float), harmonics=harm, note=note)
 
 
 def harmonic_amplitudes(x, n):
@@ -120,6 +128,8 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
              f"- energy **{pd.energy:.4g} J**",
              f"- k3 factor x{k3_factor:.3g}",
              f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**"]
+    if pd.note:
+        lines.append(f"- note: {pd.note}")
     if pd.floquet.size:
         mod = np.abs(pd.floquet)
         order = np.argsort(-mod)[:6]

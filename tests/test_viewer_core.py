@@ -135,3 +135,34 @@ def test_info_helpers():
     h = harmonic_amplitudes(x, 15)
     assert h.shape == (16, 1) and h[1, 0] == pytest.approx(1.0) and h[3, 0] == pytest.approx(0.1)
     assert format_length(0.0123) == "12.3 mm" and format_length(2.0) == "2 m"
+
+
+def test_point_data_falls_back_to_a_computed_point():
+    from nnm_viewer.info import point_data
+
+    class Stub:
+        """Branch-like: integrating interpolated states fails, computed points work."""
+        energy, frequency_hz, period = np.array([1.0, 2.0]), np.array([1.0, 1.1]), np.array([1.0, 0.9])
+        stable, floquet, settings = np.array([True, False]), np.ones((2, 4), complex), {"steps_per_period": 64}
+
+        def __init__(self, interpolated=False):
+            self.interpolated = interpolated
+
+        def __len__(self):
+            return 1 if self.interpolated else 2
+
+        def interpolate(self, s):
+            return Stub(True)
+
+        def motion(self, i, samples):
+            if self.interpolated:
+                raise RuntimeError("time integration of point 0 failed")
+            t = np.arange(samples) * self.period[i] / samples
+            return t, np.stack([np.cos(2 * np.pi * t / self.period[i]), 0 * t], axis=1)
+
+        def mac_to_linear(self, i):
+            return np.array([1.0, 0.0])
+
+    pd = point_data(Stub(), 0.7)
+    assert pd.energy == 2.0 and not pd.stable and "showing computed point 1" in pd.note
+    assert len(pd.t) == 64 and pd.harmonics[1, 0] == pytest.approx(1.0)
