@@ -46,7 +46,7 @@ def viewer_file(tmp_path):
         write_demo_file(path, energy_max=10.0, max_points=30)
         return path, "demo"
     if nnm.load_branches(ASSET):
-        return ASSET, "paris"
+        return ASSET, ASSET.stem
     path = tmp_path / "paris.h5"
     shutil.copyfile(ASSET, path)
     model = nnm.load_model(path)
@@ -54,7 +54,7 @@ def viewer_file(tmp_path):
     branch = nnm.continue_nnm(model, mode=min(10, model.n), energy_max=1e2, max_points=8, steps_per_period=64,
                               floquet=False)
     nnm.save_branch(path, branch)
-    return path, "paris"
+    return path, ASSET.stem
 
 
 def _phase(t0, name):
