@@ -33,6 +33,15 @@ def atomic_h5(path, copy_existing=False):
         raise NNMInputError(f"cannot write {path}: folder {folder} does not exist")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     os.close(fd)
+    # mkstemp creates the file private (0600): give it the mode of the file it replaces, or the
+    # default mode for new files
+    if path.exists():
+        mode_bits = path.stat().st_mode & 0o777
+    else:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode_bits = 0o666 & ~umask
+    os.chmod(tmp, mode_bits)
     try:
         if copy_existing and path.exists():
             shutil.copyfile(path, tmp)

@@ -146,3 +146,14 @@ def test_mat_import(tmp_path):
     bad.write_bytes(b"garbage")
     with pytest.raises(NNMFileError, match="not a readable MATLAB"):
         nnm.load_mat_model(bad)
+
+
+def test_written_files_have_normal_permissions(tmp_path):
+    p = tmp_path / "perm.h5"
+    nnm.save_model(p, two_dof_model())
+    umask = os.umask(0)
+    os.umask(umask)
+    assert p.stat().st_mode & 0o777 == 0o666 & ~umask
+    os.chmod(p, 0o640)
+    nnm.save_model(p, two_dof_model())
+    assert p.stat().st_mode & 0o777 == 0o640
