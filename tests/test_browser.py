@@ -57,6 +57,22 @@ def viewer_file(tmp_path):
     return path, ASSET.stem
 
 
+def well_separated_point(series, geom, ranges, box, exclude):
+    """(branch index, point index) of the FEP point farthest on screen from every other point
+    (dense branches put spheres on top of each other), other than ``exclude``."""
+    pts, ids = [], []
+    for bi, ser in enumerate(series):
+        if len(ser):
+            pts.append(project_points(geom.board.to_world(ser.energy, ser.frequency, ranges), geom, box))
+            ids += [(bi, i) for i in range(len(ser))]
+    xy = np.concatenate(pts)
+    d = np.linalg.norm(xy[:, None] - xy[None], axis=2)
+    np.fill_diagonal(d, np.inf)
+    gap = d.min(axis=1)
+    gap[[k for k, bi_i in enumerate(ids) if bi_i == tuple(exclude)]] = -1
+    return ids[int(np.argmax(gap))]
+
+
 def _phase(t0, name):
     print(f"  [{time.time() - t0:5.1f} s] {name}", flush=True)
 
@@ -130,16 +146,16 @@ def test_viewer_in_chromium(tmp_path):
                                        "e => e.innerText.includes('Selected:')); return p && p.innerText != old; }",
                                        arg=before, timeout=20000)
                 after = selected_text(page)
-                n0 = len(branches[0])
-                assert f"point {n0 - 1:.2f}" in after, after
+                top = int(np.argmax(branches[0].energy))     # the slider's end: the highest energy
+                assert f"point {top:.2f}" in after, after
 
                 _phase(t_start, "energy slider moved the selection")
                 # 3) pick a point of the in-scene FEP with the mouse
                 entries = [BranchEntry(b, "") for b in branches]
                 series = [e.series(1.0) for e in entries]
                 ranges = axis_ranges(series)
-                target = n0 // 2
-                p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]], ranges)
+                bi, target = well_separated_point(series, geom, ranges, box, exclude=(0, top))
+                p3 = geom.board.to_world(series[bi].energy[[target]], series[bi].frequency[[target]], ranges)
                 (px, py), = project_points(p3, geom, box)
                 picked = False
                 for dx, dy in [(0, 0), (1, 1), (-1, -1), (2, 0), (0, 2)]:
@@ -147,7 +163,7 @@ def test_viewer_in_chromium(tmp_path):
                     try:
                         page.wait_for_function(
                             "(want) => [...document.querySelectorAll('p')].some(e => e.innerText.includes(want))",
-                            arg=f"branch 1, point {target:.2f}", timeout=5000)
+                            arg=f"branch {bi + 1}, point {target:.2f}", timeout=8000)
                         picked = True
                         break
                     except sync_api.TimeoutError:
