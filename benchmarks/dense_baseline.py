@@ -31,8 +31,8 @@ What it does, step by step (all dense, physical coordinates, state z = [x; v]):
     and the overdetermined system [dH/dz0 dH/dT; dh/dz0 0; p_j^T] dy = [-H; -h; 0]
     solved with ``np.linalg.lstsq``; converged when ||H|| / ||z0|| < tol (eq. 11);
   - step control: s *= 2 when the corrector converged in <= 3 iterations; on
-    failure (more than 10 iterations, or a non-finite / failed integration) s /= 2
-    and retry; stop at ``energy_max``, ``max_points``, or when s falls below a
+    failure (more than 10 iterations, a non-finite / failed integration, or a point
+    that lies behind the current one along the tangent) s /= 2 and retry; stop at ``energy_max``, ``max_points``, or when s falls below a
     minimum.
 * Start: linear mode k (1-based), mass-normalised, scaled to a small amplitude,
   with T = 2 pi / omega_k; corrected once on the hyperplane orthogonal to the mode.
@@ -305,6 +305,8 @@ def dense_continue(M, K, springs, mode, energy_max, steps_per_period=200, tol=1e
             stop = "max_points"
             break
         res = _correct(M, K, B, k3, y + s * p, p, steps, j, tol, max_corrector_iterations, verbose)
+        if res is not None and np.dot(res[0] - y, p) <= 0.0:
+            res = None          # converged behind the current point (curved branch, long step)
         if res is None:
             s *= 0.5
             if verbose:
