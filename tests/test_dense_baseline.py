@@ -90,7 +90,7 @@ def test_monodromy_matches_finite_differences_2dof():
 
 @pytest.fixture(scope="module")
 def nnm1_2dof():
-    return db.dense_continue(M2, K2, SPRINGS2, mode=1, energy_max=3.0, tol=1e-9)
+    return db.dense_continue(M2, K2, SPRINGS2, mode=1, energy_max=3.0, tol=1e-9, steps_per_period=100)
 
 
 def test_monodromy_of_converged_point_is_symplectic_and_has_trivial_multipliers(nnm1_2dof):
@@ -102,7 +102,7 @@ def test_monodromy_of_converged_point_is_symplectic_and_has_trivial_multipliers(
         assert np.sum(np.abs(mu - 1.0) < 1e-3) >= 2
         assert np.prod(mu).real == pytest.approx(1.0, abs=1e-8)
     # frequency starts at the linear NNM1 frequency 1/(2 pi) (+ Newmark elongation)
-    assert r["frequency_hz"][0] == pytest.approx(1 / (2 * np.pi), rel=2e-4)
+    assert r["frequency_hz"][0] == pytest.approx(1 / (2 * np.pi), rel=5e-4)
     # hardening spring on DOF 0
     assert np.all(np.diff(r["frequency_hz"]) > 0)
     assert np.all(np.diff(r["energy"]) > 0)
@@ -113,7 +113,7 @@ def test_discrete_orbit_conserves_energy_and_is_periodic(nnm1_2dof):
     B, k3 = db.spring_arrays(SPRINGS2, 2)
     z0 = np.concatenate([r["x0"][-1], r["v0"][-1]])
     T = r["period"][-1]
-    orb = db.newmark_shoot(M2, K2, B, k3, z0, T, 200, sensitivity=False, orbit=True)
+    orb = db.newmark_shoot(M2, K2, B, k3, z0, T, 100, sensitivity=False, orbit=True)
     E = np.array([db.energy(M2, K2, B, k3, x, v) for x, v in zip(orb["x"], orb["v"])])
     assert E[0] == pytest.approx(r["energy"][-1])
     # average acceleration is not exactly energy-conserving with a cubic force, but
@@ -137,13 +137,13 @@ def test_relative_spring_and_higher_mode():
     M = np.diag([1.0, 2.0, 1.5])
     K = np.array([[3.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
     springs = [(2, 1, 2.0)]
-    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.2, max_points=12)
+    r = db.dense_continue(M, K, springs, mode=2, energy_max=0.2, max_points=12, steps_per_period=100)
     lam = np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)
-    assert r["frequency_hz"][0] == pytest.approx(np.sqrt(lam[1]) / (2 * np.pi), rel=3e-4)
+    assert r["frequency_hz"][0] == pytest.approx(np.sqrt(lam[1]) / (2 * np.pi), rel=5e-4)
     B, k3 = db.spring_arrays(springs, 3)
     for x, v, E in zip(r["x0"], r["v0"], r["energy"]):
         assert db.energy(M, K, B, k3, x, v) == pytest.approx(E)
-        assert abs(v[r["phase_dof"]]) < 1e-9 * np.linalg.norm(np.concatenate([x, v]))
+        assert abs(v[r["phase_dof"]]) < 1e-7 * np.linalg.norm(np.concatenate([x, v]))
     # force check of the relative spring: f = k3 d^3 on DOF 2, -k3 d^3 on DOF 1
     x = np.array([0.1, 0.2, 0.5])
     assert np.allclose(db.nonlinear_force(B, k3, x), [0.0, -2.0 * 0.3 ** 3, 2.0 * 0.3 ** 3])
