@@ -165,8 +165,8 @@ def analyse(b, paper_mode, log=print):
 
 
 # ---------------------------------------------------------------------- figures
-def _save(fig, path):
-    fig.savefig(path, dpi=DPI)
+def _save(fig, path, dpi=DPI):
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
 
@@ -233,7 +233,7 @@ def fig_overview(results, branches, path):
     ax.set_xlabel("energy (J)")
     ax.set_ylabel("frequency change (%)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="center left")
     ax.set_title("Paris-like aircraft: NNM frequencies against energy", fontsize=10)
     fig.tight_layout()
     return _save(fig, path)
@@ -266,7 +266,7 @@ def fig_tongue(b, t, path, n_harm=None):
     n_harm = n_harm or max(9, t.order + 2)
     picks = {"a": t.start, "b": t.middle(b), "c": t.tip}
     watch = _watch_points(b, t)
-    fig = plt.figure(figsize=(11, 8.2))
+    fig = plt.figure(figsize=(10, 7.6))
     gs = fig.add_gridspec(4, 3, height_ratios=[1.1, 1, 1, 1])
     ax = fig.add_subplot(gs[0, :])
     i0, i1 = max(t.start - 6, 0), min(t.end + 4, len(b) - 1)
@@ -309,7 +309,7 @@ def fig_tongue(b, t, path, n_harm=None):
         ax2.set_ylabel("Fourier amplitude (mm)", fontsize=8)
         del C
     fig.tight_layout()
-    return _save(fig, path)
+    return _save(fig, path, dpi=90)
 
 
 # ---------------------------------------------------------------------- saving
@@ -399,6 +399,8 @@ def main(argv=None):
     p.add_argument("--out-dir", default=str(ROOT / "docs" / "img"), help="folder of the PNG figures")
     p.add_argument("--save-to", default=None, help="nnm file the branches are appended to (default: --model)")
     p.add_argument("--no-save", action="store_true", help="do not save the branches")
+    p.add_argument("--from-file", action="store_true",
+                   help="no computation: analyse and draw the branches already saved in --model")
     p.add_argument("--summary", default=None, help="JSON file with the numbers (default: <out-dir>/paris_summary.json "
                    "is not written unless given)")
     args = p.parse_args(argv)
@@ -412,12 +414,13 @@ def main(argv=None):
     mapping = map_modes(model, wanted, parse_map(args.map))
     spp = args.steps or (40 if args.fast else 100)
     tol = 1e-5 if args.fast else 1e-6
-    max_points = 30 if args.fast else 300
+    max_points = 30 if args.fast else 150
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     freqs, _ = model.linear_modes()
     print(f"{model_path}: {model.n} DOF, {len(model.springs)} cubic springs; {spp} steps/period, tol {tol:g}")
     branches, results, tongues_all, times = {}, {}, {}, {}
+    saved = {b.name: b for b in nnm.load_branches(model_path, model)} if args.from_file else {}
     # the unaffected tail mode last, over the energy range the wing modes reached
     order = [m for m in wanted if m != 13] + [m for m in wanted if m == 13]
     for m in order:
@@ -427,9 +430,17 @@ def main(argv=None):
         emax = args.energy_max or SETTINGS[m]["fast_energy_max" if args.fast else "energy_max"]
         if m == 13 and branches and not args.energy_max:
             emax = max(b.energy.max() for b in branches.values())
-        b, dt = run_mode(model, mm, emax, spp, tol, 120 if m == 13 else max_points,
-                         floquet=not args.fast)
-        b.name = f"mode{mm} (paper mode {m})" if mm != m else f"mode{mm}"
+        name = f"mode{mm} (paper mode {m})" if mm != m else f"mode{mm}"
+        if args.from_file:
+            b = saved.get(name)
+            if b is None:
+                print(f"error: {model_path} has no branch named {name!r}", file=sys.stderr)
+                return 2
+            dt = float("nan")
+        else:
+            b, dt = run_mode(model, mm, emax, spp, tol, 120 if m == 13 else max_points,
+                             floquet=not args.fast)
+        b.name = name
         times[m] = dt
         res, tongues, _ = analyse(b, m)
         res["seconds"] = dt
@@ -437,14 +448,14 @@ def main(argv=None):
         branches[m], results[m], tongues_all[m] = b, res, tongues
     branches = {m: branches[m] for m in wanted}
     results = {m: results[m] for m in wanted}
-    figs = [fig_overview(results, branches, out_dir / "paris_fep_overview.png")]
+    figs = [fig_overview(results, branches, out_dir / "paris_fep_overview.png")] if len(branches) > 1 else []
     for m, b in branches.items():
         figs.append(fig_mode(b, results[m], tongues_all[m], out_dir / f"paris_fep_mode{m}.png"))
-        for t in tongues_all[m]:
-            if t.kind == "fold" and t.label in ("3:1", "5:1", "9:1") and not args.fast:
-                figs.append(fig_tongue(b, t, out_dir / f"paris_tongue_mode{m}_{t.label.replace(':', 'to')}.png"))
-                break
-    if not args.no_save:
+        folds = [t for t in tongues_all[m] if t.kind == "fold"]
+        if folds and not args.fast:   # the clearest tongue of the mode, like the seed's Fig. 12
+            t = max(folds, key=lambda t: t.tip_fraction)
+            figs.append(fig_tongue(b, t, out_dir / f"paris_tongue_mode{m}_{t.label.replace(':', 'to')}.png"))
+    if not args.no_save and not args.from_file:
         target = Path(args.save_to or model_path)
         save_branches(target, thin_for_file(target, list(branches.values()), list(tongues_all.values()),
                                             model_path))

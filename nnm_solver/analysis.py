@@ -192,6 +192,8 @@ def _ratio(hc):
     if fr[1] >= 0.05 or len(fr) < 3:
         return hc.secondary, 1
     order = np.argsort(-fr[1:]) + 1
+    if fr[order[1]] < 0.05:   # one harmonic only: its order against the orbit's own frequency
+        return int(order[0]), 1
     a, b = sorted(int(x) for x in order[:2])
     g = gcd(a, b)
     return b // g, a // g
@@ -420,10 +422,7 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     out = []
     for d in kept:
         tip = d["tip"]
-        hc = _content_from_amplitudes(F[tip])  # fractions suffice for the ratio
-        ratio = _ratio(hc) if hc.order == 1 or hc.secondary == d["order"] else (d["order"], 1)
-        if ratio[1] == 1:
-            ratio = (d["order"], 1)
+        ratio = (d["order"], 1)
         mode, m = 0, float("nan")
         if with_mode:
             try:
