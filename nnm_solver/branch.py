@@ -97,9 +97,22 @@ class Branch:
 
     # ------------------------------------------------------------------ orbits
     def motion(self, i, samples=256):
-        """The periodic orbit of point i over one period: (t (samples,) s, x (samples, n) m).
+        """The periodic orbit of point i over one period: (t (samples,) s, x (samples, n) m)."""
+        t, x, _ = self.orbit(i, samples)
+        return t, x
 
-        Integrated with the branch's Newmark scheme at (at least) its steps per period.
+    def velocity(self, i, samples=256):
+        """Velocities (samples, n) m/s along the orbit of point i, at the times of motion()."""
+        return self.orbit(i, samples)[2]
+
+    def orbit(self, i, samples=256):
+        """Orbit of point i: (t (samples,) s, x, v (samples, n) m, m/s), t = k T / samples.
+
+        Shooting branches: the discrete orbit is re-integrated with the branch's own Newmark step
+        (the one it converged with), over half a period when the branch used the half-period
+        symmetry (the second half is -z(t)), then resampled to ``samples`` times by Fourier
+        interpolation.  This reproduces the converged orbit even when it is strongly unstable.
+        Harmonic-balance branches: the Fourier series itself.
         """
         i = self._check_index(i)
         samples = int(samples)
@@ -107,29 +120,20 @@ class Branch:
             raise NNMInputError("samples must be at least 2")
         if self.settings.get("method") == "harmonic_balance":
             from .hb import hb_motion
-            t, x, _ = hb_motion(self, i, samples)
-            return t, x
+            return hb_motion(self, i, samples)
         spp = int(self.settings.get("steps_per_period", 200))
-        sub = max(1, int(np.ceil(spp / samples)))
+        symmetric = bool(self.settings.get("symmetric", False)) and spp % 2 == 0
         ms = modal_system(self.model)
         T = self.period[i]
-        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), T, samples * sub)
+        nsteps = spp // 2 if symmetric else spp
+        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), T * nsteps / spp, nsteps)
         if not ok:
-            raise RuntimeError(f"time integration of point {i} failed")
+            raise RuntimeError(f"time integration of the orbit of point {i} failed")
+        Q, V = Q[:-1], V[:-1]
+        if symmetric:
+            Q, V = np.concatenate([Q, -Q]), np.concatenate([V, -V])
         t = np.arange(samples) * T / samples
-        return t, ms.to_physical(Q[:-1:sub])
-
-    def velocity(self, i, samples=256):
-        """Velocities (samples, n) m/s along the orbit of point i, at the times of motion()."""
-        i = self._check_index(i)
-        if self.settings.get("method") == "harmonic_balance":
-            from .hb import hb_motion
-            return hb_motion(self, i, samples)[2]
-        spp = int(self.settings.get("steps_per_period", 200))
-        sub = max(1, int(np.ceil(spp / samples)))
-        ms = modal_system(self.model)
-        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), self.period[i], samples * sub)
-        return ms.to_physical(V[:-1:sub])
+        return t, ms.to_physical(_resample(Q, samples)), ms.to_physical(_resample(V, samples))
 
     def harmonics(self, i, n=15):
         """Fourier amplitudes (n+1, n_dof) of the orbit of point i: row k = harmonic k (k=0: mean), m."""
@@ -170,6 +174,23 @@ class Branch:
         return Branch(self.model.scaled(factor), self.mode, self.energy / factor, self.frequency_hz,
                       self.period, self.x0 * r, self.v0 * r, self.floquet, self.stable, events, self.status,
                       self.message, settings, self.name)
+
+
+def _resample(X, samples):
+    """Periodic samples X (N, n) on a uniform grid -> (samples, n) by Fourier interpolation."""
+    N = len(X)
+    if samples == N:
+        return X
+    F = np.fft.rfft(X, axis=0)
+    m = samples // 2 + 1
+    G = np.zeros((m, X.shape[1]), dtype=complex)
+    k = min(m, len(F))
+    G[:k] = F[:k]
+    if samples % 2 == 0 and k == m and N > samples:
+        G[-1] = G[-1].real  # the Nyquist term of a real signal
+    if N % 2 == 0 and k == len(F) and samples > N:
+        G[k - 1] *= 0.5     # split the old Nyquist term between +/- frequencies
+    return np.fft.irfft(G, n=samples, axis=0) * (samples / N)
 
 
 def _match_energy(model, x, v, energy):
