@@ -33,7 +33,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .branch import Branch, mac, mac_vector
+from .branch import Branch
+from .reduction import mac
 from .errors import NNMInputError
 from .shooting import modal_system
 
@@ -172,7 +173,7 @@ def harmonic_shape(branch, i, k, n=None):
 
 def _closest_mode(branch, shape):
     _, Phi = branch.model.linear_modes()
-    m = mac_vector(shape, Phi)
+    m = mac(shape, Phi)[0]
     r = int(np.argmax(m))
     return r + 1, float(m[r])
 

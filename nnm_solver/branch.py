@@ -5,6 +5,7 @@ import numpy as np
 
 from .errors import NNMInputError
 from .floquet import detect_events
+from .reduction import mac
 from .shooting import modal_system
 
 
@@ -151,7 +152,7 @@ class Branch:
         """MAC (n_modes,) of the NNM shape x0 of point i with each linear mode shape (index k-1: mode k)."""
         i = self._check_index(i)
         _, shapes = self.model.linear_modes()
-        return mac_vector(self.x0[i], shapes)
+        return mac(self.x0[i], shapes)[0]
 
     def shape(self, i):
         """Displacement shape of point i: x0, or the largest-norm configuration if x0 is ~0."""
@@ -212,24 +213,3 @@ def _match_energy(model, x, v, energy):
         return x, v
     c = np.sqrt(c2)
     return c * x, c * v
-
-
-def mac_vector(x, shapes):
-    """MAC of one shape x (n,) with each column of shapes (n, m)."""
-    x = np.asarray(x, dtype=float)
-    num = (shapes.T @ x) ** 2
-    den = np.sum(shapes * shapes, axis=0) * (x @ x)
-    return num / np.maximum(den, 1e-300)
-
-
-def mac(a, b):
-    """MAC between two shapes (n,) -> float, or between the columns of two (n, k) arrays -> (k_a, k_b)."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    if a.ndim == 1 and b.ndim == 1:
-        return float(mac_vector(a, b[:, None])[0])
-    a2 = a if a.ndim == 2 else a[:, None]
-    b2 = b if b.ndim == 2 else b[:, None]
-    num = (a2.T @ b2) ** 2
-    den = np.outer(np.sum(a2 * a2, axis=0), np.sum(b2 * b2, axis=0))
-    return num / np.maximum(den, 1e-300)

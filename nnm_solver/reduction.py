@@ -116,10 +116,14 @@ class _InternalSolver:
 
 
 def mac(a, b):
-    """MAC matrix (na, nb) between the columns of a (n, na) and b (n, nb):
-    |a_i . b_j|^2 / ((a_i . a_i)(b_j . b_j)), in [0, 1]."""
+    """Modal assurance criterion |a_i . b_j|^2 / ((a_i . a_i)(b_j . b_j)), in [0, 1] (seed eq. 19).
+
+    a (n, na), b (n, nb): the MAC matrix (na, nb) between their columns; two vectors (n,): a float.
+    """
     a = np.asarray(a, float)
     b = np.asarray(b, float)
+    if a.ndim == 1 and b.ndim == 1:
+        return float(mac(a[:, None], b[:, None])[0, 0])
     if a.ndim == 1:
         a = a[:, None]
     if b.ndim == 1:
