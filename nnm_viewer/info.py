@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import nnm_solver
+
 from .animation import format_length
 
 N_HARMONICS = 15
@@ -30,6 +32,7 @@ class PointData:
     x: np.ndarray
     harmonics: np.ndarray
     note: str = ""                 # e.g. why another point than the requested one is shown
+    description: str = ""          # what the orbit is, from its own harmonic content (solver's describe_orbit)
 
     def scaled(self, ratio):
         """The same orbit when every k3 is multiplied by ``ratio`` (exact scaling law:
@@ -38,7 +41,7 @@ class PointData:
             return self
         r = 1.0 / np.sqrt(ratio)
         return PointData(self.energy / ratio, self.frequency, self.period, self.stable, self.floquet,
-                         self.mac, self.t, self.x * r, self.harmonics * r, self.note)
+                         self.mac, self.t, self.x * r, self.harmonics * r, self.note, self.description)
 
 
 def orbit_samples(branch):
@@ -72,9 +75,13 @@ def point_data(branch, s, samples=None):
     except Exception:
         mac = np.zeros(0)
     floquet = np.asarray(b.floquet[j]) if getattr(b, "floquet", None) is not None and len(b.floquet) else np.zeros(0)
+    try:
+        description = nnm_solver.describe_orbit(b, j)
+    except Exception:  # a description is a bonus: never lose the point for it
+        description = ""
     return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
                      stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
-                     x=np.asarray(x, dtype=float), harmonics=harm, note=note)
+                     x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description)
 
 
 def harmonic_amplitudes(x, n):
@@ -127,7 +134,8 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
              f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)",
              f"- energy **{pd.energy:.4g} J**",
              f"- k3 factor x{k3_factor:.3g}",
-             f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**"]
+             f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
+             f"- orbit: {pd.description}" if pd.description else ""]
     if pd.note:
         lines.append(f"- note: {pd.note}")
     if pd.floquet.size:

@@ -166,3 +166,14 @@ def test_point_data_falls_back_to_a_computed_point():
     pd = point_data(Stub(), 0.7)
     assert pd.energy == 2.0 and not pd.stable and "showing computed point 1" in pd.note
     assert len(pd.t) == 64 and pd.harmonics[1, 0] == pytest.approx(1.0)
+
+
+def test_info_panel_names_the_orbit_from_its_harmonics(two_dof_nnm1):
+    from nnm_viewer.info import info_markdown, point_data
+    b = two_dof_nnm1
+    tip = [e for e in b.events if e["kind"] == "fold"][1]["index"]
+    pd = point_data(b, float(tip))
+    assert pd.description.startswith("3:1 internal resonance")
+    text = info_markdown(pd, b.model, b.model.linear_modes()[0])
+    assert "3:1 internal resonance" in text
+    assert "fundamental NNM motion" in point_data(b, 0.0).description
