@@ -39,8 +39,7 @@ from .errors import NNMInputError
 from .floquet import STABILITY_TOL, is_stable
 from .hb_aft import BASES, HBBasis, HBProblem
 from .hb_hill import hill_multipliers
-from .model import Model
-from .nnm_continuation import _check_positive, collect_branch, start_amplitude
+from .nnm_continuation import _check_positive, check_branch_arguments, collect_branch, start_amplitude
 from .shooting import modal_system
 
 __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion"]
@@ -79,17 +78,8 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     Returns a Branch (settings["method"] = "harmonic_balance"); the Fourier coefficients of each
     point are available from ``hb_coefficients(branch, i)``.
     """
-    if not isinstance(model, Model):
-        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
-    _check_positive("energy_max", energy_max)
-    _check_positive("tol", tol)
-    _check_positive("max_points", max_points, integer=True)
-    if energy_min is not None:
-        _check_positive("energy_min", energy_min)
-        if energy_min >= energy_max:
-            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
     hb = _basis(harmonics, samples, basis)
-    k = model.check_mode(mode)
     system = modal_system(model)
     problem = HBProblem(system, k, hb, max_rel_step=max_rel_step)
     a0 = start_amplitude(system, k, energy_max, energy_min)

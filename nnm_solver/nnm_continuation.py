@@ -34,6 +34,20 @@ def _check_positive(name, value, integer=False):
         raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
 
 
+def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min):
+    """Validate the arguments every branch computation shares; returns the 0-based mode index."""
+    if not isinstance(model, Model):
+        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
+    _check_positive("energy_max", energy_max)
+    _check_positive("tol", tol)
+    _check_positive("max_points", max_points, integer=True)
+    if energy_min is not None:
+        _check_positive("energy_min", energy_min)
+        if energy_min >= energy_max:
+            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    return model.check_mode(mode)
+
+
 def start_amplitude(system, k, energy_max, energy_min=None):
     """Modal amplitude (sqrt(kg) m) of the first point: nearly linear, below energy_max."""
     w2 = system.omega2[k]
@@ -76,19 +90,10 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=1e-6, max_po
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
     """
-    if not isinstance(model, Model):
-        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
-    _check_positive("energy_max", energy_max)
+    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
     _check_positive("steps_per_period", steps_per_period, integer=True)
-    _check_positive("tol", tol)
-    _check_positive("max_points", max_points, integer=True)
-    if energy_min is not None:
-        _check_positive("energy_min", energy_min)
-        if energy_min >= energy_max:
-            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
     if steps_per_period < 8:
         raise NNMInputError(f"steps_per_period={steps_per_period} is too small; use at least 8 (200 is typical)")
-    k = model.check_mode(mode)
     system = modal_system(model)
     problem = ShootingProblem(system, k, steps_per_period, symmetric=symmetric, max_rel_step=max_rel_step,
                               reversible=reversible, max_rel_period_step=max_period_step)

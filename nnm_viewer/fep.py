@@ -140,18 +140,7 @@ class FepRenderer:
             if (~st).any():
                 ax.plot(le[~st], s.frequency[~st], "o", ms=4.5, mfc="white", mec=_hex(UNSTABLE_RGB), mew=1.2,
                         zorder=3)
-        (elo, ehi), (flo, fhi) = ranges or axis_ranges(list(series) + list(ghosts))
-        ax.set_xlim(elo, ehi)
-        ax.set_ylim(flo, fhi)
-        ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)
-        if len(ticks) > 8:
-            ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
-        ax.set_xticks(ticks)
-        ax.set_xticklabels([f"1e{int(t)}" for t in ticks], fontsize=8)
-        ax.tick_params(axis="y", labelsize=8)
-        ax.set_xlabel("energy (J)", fontsize=9)
-        ax.set_ylabel("frequency (Hz)", fontsize=9)
-        ax.grid(True, alpha=0.25)
+        set_fep_axes(ax, ranges or axis_ranges(list(series) + list(ghosts)), ticks_size=8, label_size=9)
         if drawn:
             ax.plot([], [], "o", mfc="white", mec=_hex(UNSTABLE_RGB), label="unstable")
             ax.legend(fontsize=7, loc="best", framealpha=0.7)
@@ -231,3 +220,19 @@ def board_layout(bounds_min, bounds_max, view_dir, place="above"):
         half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
         origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
     return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-f)
+
+
+def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25):
+    """Limits, decade ticks of log10(energy) ("1e-2", ...) and labels of a FEP drawn in log10(E)."""
+    (elo, ehi), (flo, fhi) = ranges
+    ax.set_xlim(elo, ehi)
+    ax.set_ylim(flo, fhi)
+    ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)
+    if len(ticks) > 8:
+        ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([f"1e{int(t)}" for t in ticks], fontsize=ticks_size)
+    ax.tick_params(labelsize=ticks_size)
+    ax.set_xlabel("energy (J)", fontsize=label_size)
+    ax.set_ylabel("frequency (Hz)", fontsize=label_size)
+    ax.grid(True, alpha=grid_alpha)

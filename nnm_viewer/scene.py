@@ -123,7 +123,7 @@ def render_board(board, ranges, series=(), width_px=900):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .fep import BRANCH_COLORS
+    from .fep import BRANCH_COLORS, set_fep_axes
 
     wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
     dpi = 100
@@ -136,17 +136,7 @@ def render_board(board, ranges, series=(), width_px=900):
         if len(ser):
             ax.plot(np.log10(ser.energy), ser.frequency, "-", lw=1.0, color=BRANCH_COLORS[k % len(BRANCH_COLORS)],
                     alpha=0.6)
-    ax.set_xlim(elo, ehi)
-    ax.set_ylim(flo, fhi)
-    ticks = np.arange(np.ceil(elo), np.floor(ehi) + 1)
-    if len(ticks) > 8:
-        ticks = ticks[:: int(np.ceil(len(ticks) / 8))]
-    ax.set_xticks(ticks)
-    ax.set_xticklabels([f"1e{int(t)}" for t in ticks])
-    ax.tick_params(labelsize=19)
-    ax.grid(True, alpha=0.3)
-    ax.set_xlabel("energy (J)", fontsize=21)
-    ax.set_ylabel("frequency (Hz)", fontsize=21)
+    set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3)
     ax.set_title("FEP: click a point to animate it", fontsize=22)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
