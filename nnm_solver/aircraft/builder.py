@@ -8,7 +8,7 @@ hang on soft hinge bushings, and rigid connections are penalty stiff beams.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -411,7 +411,6 @@ def build_paris(params: ParisParams | None = None, assemble=True) -> Aircraft:
                            p.fin_skin_t * 1.5, p.tail_cap_area, range(0, len(z), max(1, int(round(2 * p.mesh)))),
                            [("rudder", 3, "rudder", "rudder", np.ones(len(z) - 1, bool))], "fin")
     b.sections["fin tip"] = Fn["ring"][-1]
-    fin_nodes = np.unique(np.concatenate([Fn["ring"].ravel(), Fn["web"].ravel()]))
     # fin root to fuselage: stiff links
     for w in Fn["ring"][0]:
         d, i = tree.query(fe.nodes[w])
@@ -437,7 +436,6 @@ def build_paris(params: ParisParams | None = None, assemble=True) -> Aircraft:
                           [("elevator", 4, "elevator", "elevator", np.ones(len(yh) - 1, bool))], "htail")
     b.sections["htail tip R"] = H["ring"][-1]
     b.sections["htail tip L"] = H["ring"][0]
-    ht_nodes = np.unique(np.concatenate([H["ring"].ravel(), H["web"].ravel()]))
     # T-tail junction: a rigid body joining the fin tip rib and the HT centre section
     jt = b.pool(np.array([Pf[-1, 0] + 0.35 * fch[-1], 0.0, fin_top_z]), 400)[0]
     centre_h = np.flatnonzero(np.abs(yh) <= 0.3)

@@ -16,7 +16,7 @@ import scipy.linalg as sla
 from scipy.optimize import least_squares
 
 from ..fem import modes
-from .builder import ParisParams, build_paris
+from .builder import build_paris
 from .labels import label_modes
 
 TABLE2_HZ = np.array([0.0936, 0.7260, 0.9606, 1.2118, 1.2153, 1.7951, 2.1072, 2.5157, 3.5736,
@@ -73,7 +73,6 @@ def tune_gears(ac, targets=GEAR_TARGETS):
     """Gear spring stiffnesses (main (kx, ky, kz), nose (kx, ky, kz)) in N/m fitting the targets."""
     R = rigid_modes(ac)
     Mrb = R.T @ (ac.M @ R)
-    p = ac.params
     prior = np.log([300.0, 5e3, 6e4, 200.0, 3e3, 2e4])   # rolling tyres are soft fore-aft
     x0 = prior.copy()
 

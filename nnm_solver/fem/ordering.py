@@ -13,9 +13,6 @@ def nested_dissection(adj, xyz, leaf=48):
     """
     adj = sp.csr_matrix(adj)
     perm = []
-    stack = [(np.arange(adj.shape[0]), 0)]
-    out = []
-    # iterative post-order: (indices, state)
     def rec(idx, depth):
         if len(idx) <= leaf or depth > 60:
             perm.extend(idx.tolist())
