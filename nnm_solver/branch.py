@@ -154,11 +154,6 @@ class Branch:
         _, shapes = self.model.linear_modes()
         return mac(self.x0[i], shapes)[0]
 
-    def shape(self, i):
-        """Displacement shape of point i: x0, or the largest-norm configuration if x0 is ~0."""
-        i = self._check_index(i)
-        return self.x0[i]
-
     # ------------------------------------------------------------------ scaling
     def scaled(self, factor):
         """The branch of the same model with every k3 multiplied by ``factor`` (> 0).

@@ -51,7 +51,7 @@ def test_duffing_frequency_matches_exact_period(k):
 
 def test_duffing_period_converges_with_steps():
     """The discretisation error is O(h^2): halving h divides it by ~4."""
-    k, A = 1.0, 1.0
+    k = 1.0
     errs = []
     for steps in (100, 200):
         r = db.dense_continue([[1.0]], [[1.0]], [(0, None, k)], mode=1, energy_max=0.0,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nnm_viewer.animation import format_length, fourier_fit, orbit_animation
-from nnm_viewer.fep import (FepSeries, axis_ranges, board_layout, energy_to_s, interp_at, render_fep)
+from nnm_viewer.fep import (FepSeries, axis_ranges, energy_to_s, interp_at, render_fep)
 from nnm_viewer.glb import build_glb, read_glb_json
 from nnm_viewer.info import harmonic_amplitudes, parse_dofs
 from nnm_viewer.scene import fallback_mesh, view_geometry
