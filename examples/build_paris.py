@@ -3,7 +3,7 @@
     python examples/build_paris.py            # full model (> 50,000 DOF) -> assets/paris.h5
     python examples/build_paris.py --coarse   # small fast build -> paris_coarse.h5
 
-Steps: parametric FE model (nnm_solver.aircraft) -> full-model modes in 0-100 Hz with
+Steps: parametric FE model (examples/paris_aircraft) -> full-model modes in 0-100 Hz with
 labels from the model (strain energy by part, section motion, mirror symmetry) ->
 Craig-Bampton with the 8 attachment nodes x 6 DOF retained first and the first 500
 fixed-interface modes (548 DOF) -> validation (MAC, frequency error) -> 4 softening cubic
@@ -24,11 +24,11 @@ import numpy as np
 import scipy.linalg as sla
 
 import nnm_solver
-from nnm_solver.aircraft import ATTACHMENT_NAMES, BUILDER_VERSION, ParisParams, build_paris
-from nnm_solver.aircraft.labels import label_modes
-from nnm_solver.aircraft.tuning import TABLE2_HZ
-from nnm_solver.fem import DOF_NAMES, modes
+from nnm_fem import DOF_NAMES, modes
 from nnm_solver.reduction import craig_bampton, mac
+from paris_aircraft import ATTACHMENT_NAMES, BUILDER_VERSION, ParisParams, build_paris
+from paris_aircraft.labels import label_modes
+from paris_aircraft.tuning import TABLE2_HZ
 
 K3 = -1e13  # N/m^3, softening, per attachment (seed paper, section 4.1.3)
 

@@ -6,7 +6,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import NNMInputError
-from .fem.ordering import SparseSolver
+from .sparse import SparseSolver
 
 
 def _sym_sparse(name, A, n=None):

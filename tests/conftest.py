@@ -1,7 +1,15 @@
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import nnm_solver as nnm
+
+# the example packages (paris_aircraft) live in examples/, like scripts there see them
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+if str(EXAMPLES) not in sys.path:
+    sys.path.insert(0, str(EXAMPLES))
 
 
 def two_dof_model(k3=0.5):

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 import nnm_solver
-from nnm_solver.aircraft import ParisParams, build_paris
-from nnm_solver.aircraft.labels import label_modes
-from nnm_solver.aircraft.tuning import TABLE2_HZ
-from nnm_solver.fem import modes
+from nnm_fem import modes
+from paris_aircraft import ParisParams, build_paris
+from paris_aircraft.labels import label_modes
+from paris_aircraft.tuning import TABLE2_HZ
 
 ASSET = Path(__file__).resolve().parents[1] / "assets" / "paris.h5"
 

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from nnm_solver.fem import FEModel, modes
-from nnm_solver.fem.beam import beam_matrices
+from nnm_fem import FEModel, modes
+from nnm_fem.beam import beam_matrices
 from nnm_solver import NNMInputError
 
 E, G, RHO = 70e9, 26e9, 2700.0

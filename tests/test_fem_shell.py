@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from nnm_solver.fem import FEModel, modes
-from nnm_solver.fem.shell import shell_matrices
+from nnm_fem import FEModel, modes
+from nnm_fem.shell import shell_matrices
 from nnm_solver import NNMInputError
 
 E, NU, RHO = 70e9, 0.3, 2700.0

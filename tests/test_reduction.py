@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
+from nnm_fem import FEModel
 from nnm_solver import NNMInputError
-from nnm_solver.fem import FEModel
 from nnm_solver.reduction import craig_bampton, mac
 
 

@@ -5,8 +5,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..errors import NNMInputError
-from .ordering import SparseSolver
+from nnm_solver.errors import NNMInputError
+from nnm_solver.sparse import SparseSolver
 
 
 def modes(K, M, n_modes, sigma=None, fixed=None, tol=0.0, xyz=None):

@@ -1,4 +1,7 @@
-"""Fill-reducing ordering for sparse factorisation of FE matrices: geometric nested dissection."""
+"""Sparse symmetric factorisation and solve with a fill-reducing ordering (geometric nested dissection).
+
+Used by Craig-Bampton (reduction.py) and by the FE kit (nnm_fem) for shift-invert eigensolves.
+"""
 from __future__ import annotations
 
 import numpy as np

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import NNMInputError
+from nnm_solver.errors import NNMInputError
 from .beam import beam_matrices
 from .shell import shell_matrices
 

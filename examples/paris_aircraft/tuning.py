@@ -15,7 +15,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import least_squares
 
-from ..fem import modes
+from nnm_fem import modes
 from .builder import build_paris
 from .labels import label_modes
 

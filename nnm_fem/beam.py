@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import NNMInputError
+from nnm_solver.errors import NNMInputError
 
 
 def beam_frames(x1, x2, orient):

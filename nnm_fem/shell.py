@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import NNMInputError
+from nnm_solver.errors import NNMInputError
 
 _G = 1.0 / np.sqrt(3.0)
 _GP = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])

@@ -1,0 +1,117 @@
+"""Parameters and result of the Paris-like aircraft builder (SI units: m, kg, Pa, N/m, N m/rad).
+
+Axes: x aft from the nose (x = 0 at the nose, x = 10.4 m at the tail), y towards the
+right wing, z up (ground at z = 0).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nnm_fem import FEModel
+
+BUILDER_VERSION = "1.0"
+
+#: The retained (interface) nodes, in reduced-model order: 4 per wing.
+ATTACHMENT_NAMES = ["wing R front (wing side)", "wing R front (tank side)",
+                    "wing R rear (wing side)", "wing R rear (tank side)",
+                    "wing L front (wing side)", "wing L front (tank side)",
+                    "wing L rear (wing side)", "wing L rear (tank side)"]
+
+
+@dataclass
+class ParisParams:
+    """Builder parameters (SI units: m, kg, Pa, N/m, N m/rad).  ``mesh`` scales all mesh counts."""
+
+    mesh: float = 1.0
+    E: float = 71e9
+    nu: float = 0.33
+    rho: float = 2800.0
+    # wing planform
+    semi_span: float = 4.55
+    root_chord: float = 2.6
+    tip_chord: float = 1.2
+    x_le_root: float = 3.8
+    le_sweep_deg: float = 3.0
+    dihedral_deg: float = 5.0
+    z_wing_root: float = 0.45
+    tau_root: float = 0.15
+    tau_tip: float = 0.12
+    # wing structure
+    wing_skin_t: float = 3.30072e-3
+    wing_skin_tb: float = 0.012
+    wing_web_t: float = 2.5e-3
+    wing_skin_ex: float = 0.382
+    wing_cap_area: float = 2e-4
+    wing_rib_area: float = 1.5e-4
+    # fuselage structure
+    fus_skin_t: float = 1.2e-3
+    fus_rear_skin_t: float = 3.0e-3
+    fus_skin_tb: float = 0.012
+    fus_frame_area: float = 4e-4
+    fus_longeron_area: float = 4e-4
+    # tail structure
+    tail_skin_t: float = 2.5e-3
+    fin_skin_t: float = 5.5e-3
+    tail_skin_tb: float = 0.010
+    tail_cap_area: float = 2e-4
+    tail_tau: float = 0.1365
+    # tip tanks and attachments
+    tank_length: float = 2.9
+    tank_radius: float = 0.225
+    tank_gap: float = 0.05
+    att_spacing: float = 0.8
+    att_kz: float = 1.0e7
+    att_kx: float = 8.0e5
+    tank_skin_t: float = 1.5e-3
+    # joints and suspensions
+    wf_k: float = 5e7
+    wf_rear_k: float = 1.9e6
+    main_gear_k: tuple = (252.0, 66834.0, 83337.0)
+    nose_gear_k: tuple = (169.0, 51964.0, 395228.0)
+    k_aileron: float = 6.169
+    k_aileron_sym: float = 8.5e3
+    k_elevator: float = 18.82
+    k_rudder: float = 47.72
+    # masses (kg, structure included); the fuselage takes the rest of total_mass
+    total_mass: float = 1945.0
+    mass_wing: float = 380.0
+    mass_htail: float = 60.0
+    mass_fin: float = 65.0
+    mass_aileron: float = 9.0
+    mass_elevator: float = 14.0
+    mass_rudder: float = 9.0
+    mass_tank: float = 40.0
+    mass_gear_nose: float = 35.0
+    mass_gear_main: float = 55.0
+
+    tank_mass_sigma: float = 0.5
+
+    @property
+    def mass_fuselage(self):
+        """Fuselage mass (kg): the rest of total_mass."""
+        return self.total_mass - (self.mass_wing + self.mass_htail + self.mass_fin + 2 * self.mass_aileron
+                                  + self.mass_elevator + self.mass_rudder + 2 * self.mass_tank
+                                  + self.mass_gear_nose + 2 * self.mass_gear_main)
+
+
+@dataclass
+class Aircraft:
+    """The assembled aircraft: FE model, special nodes and bookkeeping for labels and display."""
+
+    fe: FEModel
+    params: ParisParams
+    K: object = None
+    M: object = None
+    retained_nodes: list = field(default_factory=list)
+    mirror: np.ndarray = None          # node -> mirror node
+    grids: list = field(default_factory=list)   # (display part, ids (S, R), periodic ring?)
+    sections: dict = field(default_factory=dict)  # name -> node ids for labelling
+    categories: dict = field(default_factory=dict)  # FE part -> label category
+    build_seconds: float = 0.0
+
+    @property
+    def retained_dofs(self):
+        return (6 * np.asarray(self.retained_nodes)[:, None] + np.arange(6)).ravel()
+
