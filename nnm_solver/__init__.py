@@ -4,21 +4,46 @@ Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
 
     import nnm_solver as nnm
     model = nnm.Model(M, K, springs=[nnm.CubicSpring(dof=0, k3=0.5)])
-    branch = nnm.continue_nnm(model, mode=1, energy_max=1e2)      # or nnm.start_branch(...) in a thread
+    branch = nnm.continue_nnm(model, mode=1, energy_max=1e2)      # method="shooting" or "hb"
+    for point in nnm.iter_nnm(model, 1, 1e2): ...                 # the same, one Point at a time
+    job = nnm.start_branch(model, 1, 1e2)                         # in a background thread
     nnm.save_branch("file.h5", branch); nnm.load_branches("file.h5")
 """
 from .errors import NNMFileError, NNMInputError
-from .model import CubicSpring, DisplayMesh, Model
+from .elements import CubicSpring, ElementSet
+from .mesh import DisplayMesh
+from .model import Model
+from .modal import ModalSystem, modal_system
 from .io import load_branches, load_extra, load_model, save_branch, save_model
 from .matio import load_mat_model
-from .branch import Branch
+from .branch import STATUSES, Branch, Point
+from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
 from .floquet import STABILITY_TOL
-from .nnm_continuation import continue_nnm
+from .driver import METHODS, NNMIterator, continue_nnm, iter_nnm
 from .jobs import Job, start_branch
 from .plotting import plot_fep
 from .reduction import craig_bampton, mac
+from .fourier import fourier_amplitudes, fourier_coefficients
+from .scaling import cubic_scaling
 from . import analysis, hb
 from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmonic, find_tongues, mac_orbits,
                        orbit_shape)
+
+__all__ = [
+    # models
+    "Model", "CubicSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
+    # computing branches
+    "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb",
+    # results
+    "Branch", "Point", "STATUSES", "MethodSettings", "ShootingSettings", "HarmonicBalanceSettings",
+    "STABILITY_TOL", "cubic_scaling", "fourier_coefficients", "fourier_amplitudes",
+    # files and plots
+    "load_model", "save_model", "load_branches", "save_branch", "load_extra", "load_mat_model", "plot_fep",
+    # reading branches
+    "analysis", "HarmonicContent", "Tongue", "describe_orbit", "dominant_harmonic", "find_tongues",
+    "mac_orbits", "orbit_shape",
+    # errors
+    "NNMInputError", "NNMFileError",
+]
 
 __version__ = "0.1.0"

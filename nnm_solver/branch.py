@@ -1,44 +1,129 @@
-"""A computed NNM branch: one row per converged periodic orbit, plus tools to look at the orbits."""
+"""A computed NNM branch: one row per converged periodic orbit (a Point), plus tools to look at the orbits."""
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import NNMInputError
 from .floquet import detect_events
+from .fourier import fourier_amplitudes
 from .reduction import mac
-from .shooting import modal_system
+from .scaling import cubic_scaling
+from .settings import MethodSettings, settings_from_dict
+
+__all__ = ["Branch", "Point", "STATUSES"]
+
+#: why a branch stopped: reached its end ('done'), hit max_points, was cancelled / stopped by the
+#: caller, could not converge ('failed'), or is still being computed ('running')
+STATUSES = ("done", "max_points", "cancelled", "stopped", "failed", "running")
+
+
+@dataclass
+class Point:
+    """One converged periodic orbit of a branch (a row of a Branch).
+
+    energy J; frequency_hz Hz; period s; x0, v0 (n,) initial state (m, m/s, t = 0 at the phase
+    condition); floquet (2n,) complex multipliers, largest modulus first (NaN if not computed);
+    stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
+    for harmonic-balance points, else None.  ``point["energy"]`` works too (first-release rows).
+    """
+
+    energy: float
+    frequency_hz: float
+    period: float
+    x0: np.ndarray
+    v0: np.ndarray
+    floquet: np.ndarray
+    stable: bool
+    iterations: int = 0
+    coefficients: np.ndarray | None = field(default=None, repr=False)
+
+    def __getitem__(self, key):
+        try:
+            return getattr(self, key)
+        except AttributeError:
+            raise KeyError(key) from None
 
 
 class Branch:
     """NNM branch of a model (columns have one row per converged point).
 
     energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
-    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus first), stable (N,)
-    bool, events: list of dicts (kind, index, energy, frequency_hz, detail).
-    status: 'done' | 'max_points' | 'cancelled' | 'failed' | 'running'; message: why it stopped.
-    settings: dict (steps_per_period, tol, symmetric, method, ...).
+    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus
+    first), stable (N,) bool, coefficients (N, N_b, n) Fourier coefficients (m) of harmonic-balance
+    branches (None otherwise), events: list of dicts (kind, index, energy, frequency_hz, detail).
+    status: one of STATUSES; message: why it stopped.
+    settings: the method's typed settings (settings.py; a plain dict is converted).
     """
 
     def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
-                 events=None, status="done", message="", settings=None, name=""):
+                 events=None, status="done", message="", settings=None, name="", coefficients=None):
         self.model = model
         self.mode = int(mode)
+        self.settings = settings_from_dict(settings)
+        self.status = str(status)
+        self.message = str(message)
+        self.name = str(name)
+        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients)
+        self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
+                           if events is None else events)
+
+    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients):
+        n = self.model.n
         self.energy = np.asarray(energy, dtype=float).reshape(-1)
         N = len(self.energy)
         self.frequency_hz = np.asarray(frequency_hz, dtype=float).reshape(N)
         self.period = np.asarray(period, dtype=float).reshape(N)
-        self.x0 = np.asarray(x0, dtype=float).reshape(N, model.n)
-        self.v0 = np.asarray(v0, dtype=float).reshape(N, model.n)
-        self.floquet = (np.full((N, 2 * model.n), np.nan, dtype=complex) if floquet is None
-                        else np.asarray(floquet, dtype=complex).reshape(N, 2 * model.n))
-        self.stable = (np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N))
-        if events is None:
-            events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
-        self.events = list(events)
-        self.status = str(status)
-        self.message = str(message)
-        self.settings = dict(settings or {})
-        self.name = str(name)
+        self.x0 = np.asarray(x0, dtype=float).reshape(N, n)
+        self.v0 = np.asarray(v0, dtype=float).reshape(N, n)
+        self.floquet = (np.full((N, 2 * n), np.nan, dtype=complex) if floquet is None
+                        else np.asarray(floquet, dtype=complex).reshape(N, 2 * n))
+        self.stable = np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N)
+        self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
+
+    # ------------------------------------------------------------------ building from points
+    @classmethod
+    def from_points(cls, model, mode, points, settings=None, status="done", message="", name=""):
+        """Branch whose rows are ``points`` (a sequence of Point)."""
+        b = cls(model, mode, [], [], [], [], [], settings=settings, status=status, message=message, name=name)
+        b.extend(points)
+        return b
+
+    def extend(self, points):
+        """Append rows (Points) in place; the events are recomputed."""
+        points = list(points)
+        if not points:
+            return self
+        n = self.model.n
+
+        def col(key, shape=(), dtype=float):
+            return np.array([getattr(p, key) for p in points], dtype=dtype).reshape((len(points),) + shape)
+
+        coeffs = None
+        if points[0].coefficients is not None and (self.coefficients is not None or len(self) == 0):
+            coeffs = np.concatenate([np.zeros((0,) + points[0].coefficients.shape) if self.coefficients is None
+                                     else self.coefficients, col("coefficients", points[0].coefficients.shape)])
+        self._set_columns(np.r_[self.energy, col("energy")], np.r_[self.frequency_hz, col("frequency_hz")],
+                          np.r_[self.period, col("period")], np.vstack([self.x0, col("x0", (n,))]),
+                          np.vstack([self.v0, col("v0", (n,))]),
+                          np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
+                          np.r_[self.stable, col("stable", dtype=bool)], coeffs)
+        self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
+        return self
+
+    def point(self, i):
+        """Row i as a Point."""
+        i = self.check_index(i)
+        return Point(float(self.energy[i]), float(self.frequency_hz[i]), float(self.period[i]), self.x0[i].copy(),
+                     self.v0[i].copy(), self.floquet[i].copy(), bool(self.stable[i]),
+                     coefficients=None if self.coefficients is None else self.coefficients[i].copy())
+
+    @property
+    def hb_coefficients(self):
+        """Fourier coefficients (N, N_b, n) of a harmonic-balance branch (first-release name of
+        ``coefficients``)."""
+        return self.coefficients
 
     def __len__(self):
         return len(self.energy)
@@ -49,17 +134,18 @@ class Branch:
                 f"status={self.status!r})")
 
     # ------------------------------------------------------------------ selection
-    def _check_index(self, i):
-        if not isinstance(i, (int, np.integer)) or not -len(self) <= i < len(self):
+    def check_index(self, i):
+        """Validate a point index (negative counts from the end); returns it in 0..N-1."""
+        if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not -len(self) <= i < len(self):
             raise NNMInputError(f"point index {i!r} is out of range: the branch has {len(self)} points")
         return int(i) % len(self)
 
     def subset(self, index):
         """Branch made of the rows ``index`` (slice, index array or boolean mask)."""
-        fl = self.floquet[index]
         return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
-                      self.x0[index], self.v0[index], fl, self.stable[index], None, self.status,
-                      self.message, self.settings, self.name)
+                      self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
+                      self.message, self.settings, self.name,
+                      None if self.coefficients is None else self.coefficients[index])
 
     def interpolate(self, s):
         """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
@@ -81,7 +167,7 @@ class Branch:
         return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
                       [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
-                      self.name)
+                      self.name, None if self.coefficients is None else lerp(self.coefficients)[None])
 
     def at_energy(self, energy):
         """One-point Branch at energy (J): the first crossing of that energy along the branch."""
@@ -109,32 +195,32 @@ class Branch:
     def orbit(self, i, samples=256):
         """Orbit of point i: (t (samples,) s, x, v (samples, n) m, m/s), t = k T / samples.
 
-        Shooting branches: the discrete orbit is re-integrated with the branch's own Newmark step
-        (the one it converged with), over half a period when the branch used the half-period
-        symmetry (the second half is -z(t)), then resampled to ``samples`` times by Fourier
-        interpolation.  This reproduces the converged orbit even when it is strongly unstable.
-        Harmonic-balance branches: the Fourier series itself.
+        Rebuilt by the branch's method (``settings.orbit``): shooting branches re-integrate the
+        discrete orbit with their own Newmark step (half a period when half-period shooting was used)
+        and resample it by Fourier interpolation, which reproduces the converged orbit even when it
+        is strongly unstable; harmonic-balance branches evaluate their Fourier series.
         """
-        i = self._check_index(i)
+        i = self.check_index(i)
         samples = int(samples)
         if samples < 2:
             raise NNMInputError("samples must be at least 2")
-        if self.settings.get("method") == "harmonic_balance":
-            from .hb import hb_motion
-            return hb_motion(self, i, samples)
-        spp = int(self.settings.get("steps_per_period", 200))
-        symmetric = bool(self.settings.get("symmetric", False)) and spp % 2 == 0
-        ms = modal_system(self.model)
-        T = self.period[i]
-        nsteps = spp // 2 if symmetric else spp
-        Q, V, ok = ms.orbit(ms.to_modal(self.x0[i]), ms.to_modal(self.v0[i]), T * nsteps / spp, nsteps)
-        if not ok:
-            raise RuntimeError(f"time integration of the orbit of point {i} failed")
-        Q, V = Q[:-1], V[:-1]
-        if symmetric:
-            Q, V = np.concatenate([Q, -Q]), np.concatenate([V, -V])
-        t = np.arange(samples) * T / samples
-        return t, ms.to_physical(_resample(Q, samples)), ms.to_physical(_resample(V, samples))
+        try:
+            x, v = self.settings.orbit(self, i, samples)
+        except RuntimeError as exc:
+            raise RuntimeError(f"point {i}: {exc}") from None
+        return np.arange(samples) * self.period[i] / samples, x, v
+
+    def coefficients_at(self, i):
+        """Fourier coefficients (N_b, n) m of point i of a harmonic-balance branch (stored, or
+        recomputed for branches of first-release files)."""
+        i = self.check_index(i)
+        if self.coefficients is not None:
+            return self.coefficients[i]
+        from .modal import modal_system
+        from .orbits.harmonic_balance import recover_coefficients
+        s = self.settings
+        return recover_coefficients(modal_system(self.model), self.mode - 1, s.hb_basis(), self.x0[i], self.v0[i],
+                                    self.period[i], s.tol)
 
     def harmonics(self, i, n=15):
         """Fourier amplitudes (n+1, n_dof) of the orbit of point i: row k = harmonic k (k=0: mean), m."""
@@ -142,69 +228,59 @@ class Branch:
         if n < 1:
             raise NNMInputError("n (number of harmonics) must be at least 1")
         samples = max(256, 4 * (n + 1))
-        t, x = self.motion(i, samples)
-        X = np.fft.rfft(x, axis=0) / samples
-        amps = np.abs(X[: n + 1])
-        amps[1:] *= 2.0
-        return amps
+        return fourier_amplitudes(self.motion(i, samples)[1], n)
 
     def mac_to_linear(self, i):
-        """MAC (n_modes,) of the NNM shape x0 of point i with each linear mode shape (index k-1: mode k)."""
-        i = self._check_index(i)
+        """Mass-weighted MAC (n_modes,) of the NNM shape x0 of point i with each linear mode
+        (index k-1: mode k): (phi_k^T M x0)^2 / ((phi_k^T M phi_k)(x0^T M x0))."""
+        i = self.check_index(i)
         _, shapes = self.model.linear_modes()
-        return mac(self.x0[i], shapes)[0]
+        return mac(self.x0[i], shapes, self.model.M)[0]
 
     # ------------------------------------------------------------------ scaling
     def scaled(self, factor):
         """The branch of the same model with every k3 multiplied by ``factor`` (> 0).
 
-        Exact for cubic springs: frequencies unchanged, displacements and velocities / sqrt(factor),
-        energies / factor, multipliers unchanged.
+        Exact for cubic springs (scaling.py): frequencies and multipliers unchanged, displacements
+        and velocities / sqrt(factor), energies / factor.
         """
-        factor = float(factor)
-        if not factor > 0 or not np.isfinite(factor):
-            raise NNMInputError(f"scale factor must be a positive number, got {factor}")
-        r = 1.0 / np.sqrt(factor)
-        events = [dict(e, energy=e["energy"] / factor) for e in self.events]
-        settings = dict(self.settings, k3_factor=self.settings.get("k3_factor", 1.0) * factor)
-        return Branch(self.model.scaled(factor), self.mode, self.energy / factor, self.frequency_hz,
-                      self.period, self.x0 * r, self.v0 * r, self.floquet, self.stable, events, self.status,
-                      self.message, settings, self.name)
-
-
-def _resample(X, samples):
-    """Periodic samples X (N, n) on a uniform grid -> (samples, n) by Fourier interpolation."""
-    N = len(X)
-    if samples == N:
-        return X
-    F = np.fft.rfft(X, axis=0)
-    m = samples // 2 + 1
-    G = np.zeros((m, X.shape[1]), dtype=complex)
-    k = min(m, len(F))
-    G[:k] = F[:k]
-    if samples % 2 == 0 and k == m and N > samples:
-        G[-1] = G[-1].real  # the Nyquist term of a real signal
-    if N % 2 == 0 and k == len(F) and samples > N:
-        G[k - 1] *= 0.5     # split the old Nyquist term between +/- frequencies
-    return np.fft.irfft(G, n=samples, axis=0) * (samples / N)
+        sc = cubic_scaling(factor)
+        el = self.model.elements
+        if len(el) and set(el.powers[np.any(el.coefficients != 0, axis=0)].tolist()) - {3}:
+            raise NNMInputError("the scaling law holds for cubic springs only; compute the branch of the scaled model")
+        events = [dict(e, energy=e["energy"] * sc.energy) for e in self.events]
+        settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio)
+        return Branch(self.model.scaled(sc.ratio), self.mode, self.energy * sc.energy, self.frequency_hz,
+                      self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
+                      self.status, self.message, settings, self.name,
+                      None if self.coefficients is None else self.coefficients * sc.amplitude)
 
 
 def _match_energy(model, x, v, energy):
-    """Scale (x, v) by c > 0 so that its energy is ``energy``: E2 c^2 + E4 c^4 = energy."""
+    """Scale (x, v) by c > 0 so that its energy is ``energy``.
+
+    E(c x, c v) = e_2 c^2 + sum_p e_p c^(p+1) (quadratic part, and one term per power p of the
+    element laws), solved for c by Newton from c = 1; (x, v) unchanged if no positive root is found.
+    """
+    el = model.elements
     e_tot = model.energy(x, v)
-    d = model.spring_matrix @ x
-    e4 = float(np.sum(0.25 * model.k3 * d ** 4))
-    e2 = e_tot - e4
+    d = el.B @ x
+    terms = {int(p) + 1: float(np.sum(el.coefficients[:, j] * d ** (p + 1) / (p + 1)))
+             for j, p in enumerate(el.powers)}
+    e2 = e_tot - sum(terms.values())
     if e2 <= 0 or energy <= 0:
         return x, v
-    if abs(e4) < 1e-14 * e2:
-        c2 = energy / e2
-    else:
-        disc = e2 * e2 + 4 * e4 * energy
-        if disc < 0:
+    terms[2] = terms.get(2, 0.0) + e2
+    c = 1.0
+    for _ in range(50):
+        f = sum(e * c ** k for k, e in terms.items()) - energy
+        df = sum(k * e * c ** (k - 1) for k, e in terms.items())
+        if not df > 0:
             return x, v
-        c2 = (-e2 + np.sqrt(disc)) / (2 * e4)
-    if not c2 > 0:
+        step = f / df
+        c = c - step if c - step > 0 else 0.5 * c
+        if abs(step) <= 1e-15 * c:
+            break
+    if not abs(sum(e * c ** k for k, e in terms.items()) - energy) <= 1e-9 * energy:
         return x, v
-    c = np.sqrt(c2)
     return c * x, c * v

@@ -49,7 +49,6 @@ class ContinuationSettings:
     jump_after: int = 4          # after this many failures, try one step of jump_factor x the last good step
     jump_factor: float = 2.5
     refresh_ratio: float = 0.5   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
-    reuse_jacobian: bool = False  # start the corrector with the previous point's Jacobian (chord)
 
 
 @dataclass
@@ -88,14 +87,13 @@ class CorrectorFailure(Exception):
     pass
 
 
-def correct(problem, u_pred, p, settings, tol, J=None):
+def correct(problem, u_pred, p, settings, tol):
     """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p.
 
     Returns (u, J, iterations, error).  J is the Jacobian at the converged point.
     """
     u = u_pred.copy()
-    # start from the previous point's Jacobian when given (chord Newton): one sweep less per point
-    factor = LeastSquares(np.vstack([J, p[None, :]])) if (J is not None and settings.reuse_jacobian) else None
+    factor = None
     last_norm = None
     for it in range(settings.max_iter + 1):
         fresh = False
@@ -129,7 +127,7 @@ def correct(problem, u_pred, p, settings, tol, J=None):
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 
-def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
+def pseudo_arclength(problem, u0, p0, settings, tol):
     """Iterate over converged points along the branch through u0 (first yielded point: u0 corrected).
 
     u0 : approximate first point; p0 : approximate direction (the first point is corrected with
@@ -139,7 +137,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
     """
     p0 = p0 / np.linalg.norm(p0)
     try:
-        u, J, it, err = correct(problem, u0, p0, settings, tol, J0)
+        u, J, it, err = correct(problem, u0, p0, settings, tol)
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
     p = tangent(J, p0)
@@ -151,7 +149,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol, J0=None):
     while True:
         u_pred = u + s * p
         try:
-            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol, J)
+            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol)
             dist = np.linalg.norm(u_new - u_pred)
             if dist > settings.max_correction * s:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")

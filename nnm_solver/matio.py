@@ -13,7 +13,8 @@ import numpy as np
 import scipy.io
 
 from .errors import NNMFileError
-from .model import CubicSpring, Model
+from .elements import CubicSpring
+from .model import Model
 
 
 def load_mat_model(path, name=None):

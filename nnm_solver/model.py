@@ -1,4 +1,4 @@
-"""Conservative structural models  M x'' + K x + f_nl(x) = 0  with cubic springs.
+"""Conservative structural models  M x'' + K x + f_nl(x) = 0  (nonlinear elements: elements.py).
 
 Units are SI throughout: M in kg (or kg m^2 for rotations), K in N/m, k3 in N/m^3,
 frequencies in Hz, energies in J.  Mode numbers seen by users are 1-based (as in the
@@ -6,73 +6,18 @@ seed paper's Table 2); DOF indices are 0-based array indices.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from .elements import ElementSet, check_element
 from .errors import NNMInputError
+from .mesh import DisplayMesh
 
 #: Largest model the shooting solver accepts (it works in the full modal basis).
 MAX_DENSE_DOF = 6000
-
-
-@dataclass(frozen=True)
-class CubicSpring:
-    """Cubic spring with force k3 * d**3 on the deformation d.
-
-    Grounded (``other=None``): d = x[dof].  Relative: d = x[dof] - x[other].
-    k3 in N/m^3 (negative: softening).
-    """
-
-    dof: int
-    k3: float
-    other: int | None = None
-
-    def potential(self, d):
-        """Potential energy (J) stored at deformation d (m)."""
-        return 0.25 * self.k3 * np.asarray(d) ** 4
-
-
-@dataclass
-class DisplayMesh:
-    """Triangle surface used to show a model's motion.
-
-    vertices : (V, 3) m; faces : (F, 3) vertex indices; displacement_map : (3V, n) maps the
-    model coordinates x to vertex displacements, vertex-major (v0x, v0y, v0z, v1x, ...);
-    part_ids : (F,) index into part_names (optional).
-    """
-
-    vertices: np.ndarray
-    faces: np.ndarray
-    displacement_map: np.ndarray
-    part_ids: np.ndarray | None = None
-    part_names: list[str] = field(default_factory=list)
-
-    def __post_init__(self):
-        self.vertices = np.asarray(self.vertices, dtype=float)
-        self.faces = np.asarray(self.faces, dtype=np.int64)
-        self.displacement_map = np.asarray(self.displacement_map)
-        nv = len(self.vertices)
-        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
-            raise NNMInputError(f"mesh vertices must have shape (V, 3), got {self.vertices.shape}")
-        if self.faces.ndim != 2 or self.faces.shape[1] != 3:
-            raise NNMInputError(f"mesh faces must have shape (F, 3), got {self.faces.shape}")
-        if self.faces.size and (self.faces.min() < 0 or self.faces.max() >= nv):
-            raise NNMInputError(f"mesh faces refer to vertices outside 0..{nv - 1}")
-        if self.displacement_map.ndim != 2 or self.displacement_map.shape[0] != 3 * nv:
-            raise NNMInputError(
-                f"mesh displacement_map must have 3*V = {3 * nv} rows, got {self.displacement_map.shape}")
-        if self.part_ids is not None:
-            self.part_ids = np.asarray(self.part_ids, dtype=np.int64)
-
-    def displacements(self, x):
-        """Vertex displacements (V, 3) in m for model coordinates x (n,); or (k, V, 3) for x (k, n)."""
-        x = np.asarray(x, dtype=float)
-        u = x @ self.displacement_map.T
-        return u.reshape(x.shape[:-1] + (len(self.vertices), 3))
 
 
 def _as_matrix(name, A):
@@ -107,13 +52,13 @@ def _check_symmetric(name, A):
 
 
 class Model:
-    """Conservative model  M x'' + K x + sum_s B_s^T k3_s d_s^3 = 0,  d_s = B_s x.
+    """Conservative model  M x'' + K x + f_nl(x) = 0,  f_nl = sum_s B_s^T g_s(B_s x)  (elements.py).
 
     Parameters
     ----------
     M, K : (n, n) dense arrays or scipy.sparse matrices (SI units). M symmetric positive
-        definite, K symmetric positive semi-definite.
-    springs : list of CubicSpring.
+        definite, K symmetric positive semi-definite.  Stored as float (sparse: CSR).
+    springs : list of nonlinear elements (CubicSpring).
     dof_labels : optional list of n strings (e.g. "node 12 uz").
     mode_labels : optional list of strings, label of linear mode k at index k-1.
     mesh : optional DisplayMesh for viewing.
@@ -122,31 +67,18 @@ class Model:
 
     def __init__(self, M, K, springs=(), *, dof_labels=None, mode_labels=None, mesh=None,
                  name="", info=None):
+        M = _as_matrix("M", M)
+        K = _as_matrix("K", K)
+        if M.shape != K.shape:
+            raise NNMInputError(f"M has shape {M.shape} but K has shape {K.shape}; they must match")
+        self.n = M.shape[0]
+        _check_symmetric("M", M)
+        _check_symmetric("K", K)
         self.M = M
         self.K = K
         self.springs = list(springs)
-        Md = _as_matrix("M", M)
-        Kd = _as_matrix("K", K)
-        if Md.shape != Kd.shape:
-            raise NNMInputError(f"M has shape {Md.shape} but K has shape {Kd.shape}; they must match")
-        self.n = Md.shape[0]
-        _check_symmetric("M", Md)
-        _check_symmetric("K", Kd)
-        self._M = Md
-        self._K = Kd
         for i, s in enumerate(self.springs):
-            if not isinstance(s, CubicSpring):
-                raise NNMInputError(f"spring {i} is {type(s).__name__}, expected nnm_solver.CubicSpring")
-            for which, d in (("dof", s.dof), ("other", s.other)):
-                if d is None and which == "other":
-                    continue
-                if not isinstance(d, (int, np.integer)) or not 0 <= d < self.n:
-                    raise NNMInputError(
-                        f"spring {i}: {which}={d} is not a DOF of this model (valid: 0..{self.n - 1})")
-            if s.other is not None and s.other == s.dof:
-                raise NNMInputError(f"spring {i}: dof and other are both {s.dof}; a relative spring needs two DOFs")
-            if not np.isfinite(s.k3):
-                raise NNMInputError(f"spring {i}: k3={s.k3} is not finite")
+            check_element(i, s, self.n)
         if dof_labels is not None and len(dof_labels) != self.n:
             raise NNMInputError(f"dof_labels has {len(dof_labels)} entries, the model has {self.n} DOFs")
         self.dof_labels = None if dof_labels is None else [str(s) for s in dof_labels]
@@ -158,27 +90,26 @@ class Model:
         self.name = str(name)
         self.info = dict(info or {})
 
-    # ------------------------------------------------------------------ springs
+    # ------------------------------------------------------------------ nonlinear elements
     @cached_property
+    def elements(self):
+        """The springs as an ElementSet (deformation matrix B and force laws)."""
+        return ElementSet(self.springs, self.n)
+
+    @property
     def spring_matrix(self):
         """B (n_s, n): spring deformations d = B x."""
-        B = np.zeros((len(self.springs), self.n))
-        for s, spring in enumerate(self.springs):
-            B[s, spring.dof] = 1.0
-            if spring.other is not None:
-                B[s, spring.other] = -1.0
-        return B
+        return self.elements.B
 
     @property
     def k3(self):
-        """Cubic coefficients (n_s,) in N/m^3."""
-        return np.array([s.k3 for s in self.springs], dtype=float)
+        """Cubic coefficients (n_s,) in N/m^3 (0 for an element without a cubic term)."""
+        return np.array([s.coefficients().get(3, 0.0) for s in self.springs], dtype=float)
 
     def nonlinear_force(self, x):
-        """f_nl(x) (n,) in N for displacements x (n,) in m."""
-        B = self.spring_matrix
-        d = B @ np.asarray(x, dtype=float)
-        return B.T @ (self.k3 * d ** 3)
+        """f_nl(x) (n,) in N for displacements x (n,) in m (or (k, n) for k states)."""
+        el = self.elements
+        return el.force(np.asarray(x, dtype=float) @ el.B.T) @ el.B
 
     def with_springs(self, springs):
         """Same linear model and metadata with other springs."""
@@ -186,13 +117,12 @@ class Model:
                      mesh=self.mesh, name=self.name, info=self.info)
 
     def scaled(self, factor):
-        """Same model with every k3 multiplied by ``factor``."""
-        return self.with_springs([CubicSpring(dof=s.dof, other=s.other, k3=s.k3 * factor)
-                                  for s in self.springs])
+        """Same model with every spring's force multiplied by ``factor``."""
+        return self.with_springs([s.scaled(factor) for s in self.springs])
 
     # ------------------------------------------------------------------ energy
     def energy(self, x, v):
-        """Total conserved energy (J): kinetic + linear potential + sum k3 d^4/4.
+        """Total conserved energy (J): kinetic + linear potential + the elements' potential.
 
         x, v : (n,) displacement (m) and velocity (m/s); or (k, n) for k states at once.
         """
@@ -200,20 +130,22 @@ class Model:
         v = np.asarray(v, dtype=float)
         if x.shape[-1] != self.n or v.shape != x.shape:
             raise NNMInputError(f"x and v must both have last dimension {self.n}, got {x.shape} and {v.shape}")
-        M, K = self._M, self._K
-        kin = 0.5 * np.sum(v * (v @ M.T if not sp.issparse(M) else (M @ v.T).T), axis=-1)
-        pot = 0.5 * np.sum(x * (x @ K.T if not sp.issparse(K) else (K @ x.T).T), axis=-1)
-        d = x @ self.spring_matrix.T
-        return kin + pot + np.sum(0.25 * self.k3 * d ** 4, axis=-1)
+        kin = 0.5 * np.sum(v * _apply(self.M, v), axis=-1)
+        pot = 0.5 * np.sum(x * _apply(self.K, x), axis=-1)
+        el = self.elements
+        return kin + pot + np.sum(el.potential(x @ el.B.T), axis=-1)
 
     # ------------------------------------------------------------------ linear modes
     @cached_property
-    def _eig(self):
+    def eigensolution(self):
+        """(lam (n,), Phi (n, n)): K Phi = M Phi diag(lam), Phi^T M Phi = I, ascending (rad^2/s^2).
+
+        Computed once; shared, do not modify (``linear_modes`` returns copies)."""
         if self.n > MAX_DENSE_DOF:
             raise NNMInputError(
                 f"the model has {self.n} DOFs; the NNM solver works in the full modal basis and accepts at most "
                 f"{MAX_DENSE_DOF}: reduce it first (nnm_solver.craig_bampton)")
-        Md, Kd = _dense(self._M), _dense(self._K)
+        Md, Kd = _dense(self.M), _dense(self.K)
         try:
             lam, Phi = sla.eigh(Kd, Md)
         except np.linalg.LinAlgError:
@@ -228,6 +160,8 @@ class Model:
         # fix the sign of each shape: largest-magnitude component positive
         idx = np.argmax(np.abs(Phi), axis=0)
         Phi = Phi * np.sign(Phi[idx, np.arange(self.n)])
+        lam.flags.writeable = False
+        Phi.flags.writeable = False
         return lam, Phi
 
     def linear_modes(self):
@@ -235,7 +169,7 @@ class Model:
 
         ``shapes[:, k-1]`` is mode k, mass-normalised (shapes^T M shapes = I).
         """
-        lam, Phi = self._eig
+        lam, Phi = self.eigensolution
         return np.sqrt(lam) / (2 * np.pi), Phi.copy()
 
     def check_mode(self, mode):
@@ -244,7 +178,7 @@ class Model:
             raise NNMInputError(f"mode must be an integer (1-based), got {mode!r}")
         if not 1 <= mode <= self.n:
             raise NNMInputError(f"mode {mode} is out of range: this model has modes 1..{self.n}")
-        lam, _ = self._eig
+        lam, _ = self.eigensolution
         if lam[mode - 1] <= 1e-12 * max(lam[-1], 1e-300):
             raise NNMInputError(
                 f"mode {mode} is a rigid-body (zero-frequency) mode and has no periodic NNM; "
@@ -253,3 +187,8 @@ class Model:
 
     def __repr__(self):
         return f"Model(n={self.n}, springs={len(self.springs)}{', name=' + repr(self.name) if self.name else ''})"
+
+
+def _apply(A, x):
+    """A x for every row x of (..., n), A dense or sparse."""
+    return (A @ x.T).T if sp.issparse(A) else x @ A.T

@@ -2,7 +2,7 @@ r"""Newmark time integration in modal coordinates, with the exact sensitivity of
 
 Equation of motion in mass-normalised modal coordinates q (x = Phi q):
 
-    q'' + Omega^2 q + Bq^T g(Bq q) = 0,      g(d) = k3 * d^3   (one entry per spring)
+    q'' + Omega^2 q + Bq^T g(Bq q) = 0,      g(d): the element force laws (elements.py), one per spring
 
 Average-acceleration Newmark (beta = 1/4, gamma = 1/2), step h:
 
@@ -26,28 +26,23 @@ every step.  The derivative with respect to the step h is carried as one extra c
 sweep, which gives the exact dH/dT of the discrete shooting function.
 
 The kernels are compiled with numba when it is installed (same source runs in plain Python).
+Their model arguments are ``ModalSystem.kernel`` = (omega2, Bq, powers, coeffs).
 """
 from __future__ import annotations
 
 import numpy as np
 
-try:  # numba compiles the time-stepping loops; the same code runs uncompiled without it
-    import numba
-
-    _jit = numba.njit(cache=True, nogil=True)
-except ImportError:  # pragma: no cover
-    numba = None
-
-    def _jit(f):
-        return f
+from .elements import law_force, law_force_tangent
+from .jit import jit as _jit
 
 NEWTON_MAX = 40
 NEWTON_RTOL = 1e-13
 
 
 @_jit
-def _solve_springs(dlin, G, k3, dguess):
-    """Solve d + G k3 d^3 = dlin (n_s unknowns) by damped Newton; returns (d, J, ok), J = I + G diag(g').
+def _solve_springs(dlin, G, powers, coeffs, dguess):
+    """Solve d + G g(d) = dlin (n_s unknowns) by damped Newton; returns (d, J, D, ok), J = I + G diag(g'),
+    D = g'(d) at the solution.
 
     The Newton step is halved until the residual decreases (softening springs make the step
     equation fold; a full step from the explicit guess can overshoot near the fold).
@@ -55,80 +50,82 @@ def _solve_springs(dlin, G, k3, dguess):
     ns = dlin.shape[0]
     d = dguess.copy()
     scale = np.sqrt(np.sum(dlin * dlin)) + 1e-300
-    F = d + G @ (k3 * d ** 3) - dlin
+    g, D = law_force_tangent(d, powers, coeffs)
+    F = d + G @ g - dlin
     nF = np.sqrt(np.sum(F * F))
-    J = np.eye(ns) + G * (3.0 * k3 * d ** 2)[None, :]
+    J = np.eye(ns) + G * D[None, :]
     for _ in range(NEWTON_MAX):
         if nF <= NEWTON_RTOL * scale:
-            return d, J, True
+            return d, J, D, True
         delta = np.linalg.solve(J, F)
         lam = 1.0
         for _ in range(30):
             d_try = d - lam * delta
-            F_try = d_try + G @ (k3 * d_try ** 3) - dlin
+            F_try = d_try + G @ law_force(d_try, powers, coeffs) - dlin
             n_try = np.sqrt(np.sum(F_try * F_try))
             if n_try < nF or lam < 1e-8:
                 break
             lam *= 0.5
         d, F, nF = d_try, F_try, n_try
-        J = np.eye(ns) + G * (3.0 * k3 * d ** 2)[None, :]
-    return d, J, nF <= 1e-9 * scale
+        g, D = law_force_tangent(d, powers, coeffs)
+        J = np.eye(ns) + G * D[None, :]
+    return d, J, D, nF <= 1e-9 * scale
 
 
 @_jit
-def _step(q, v, a, d, h, omega2, Bq, k3, G, S):
-    """One Newmark step; returns (q1, v1, a1, d1, J, ok)."""
+def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S):
+    """One Newmark step; returns (q1, v1, a1, d1, J, D1, ok), D1 = g'(d1)."""
     r = (4.0 / h ** 2) * q + (4.0 / h) * v + a
     y = r / S
     if Bq.shape[0] == 0:
         q1 = y
         a1 = -omega2 * q1
-        return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), True
+        return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
     dlin = Bq @ y
     dguess = Bq @ (q + h * v + 0.5 * h * h * a)
-    d1, J, ok = _solve_springs(dlin, G, k3, dguess)
-    fnl = Bq.T @ (k3 * d1 ** 3)
+    d1, J, D1, ok = _solve_springs(dlin, G, powers, coeffs, dguess)
+    fnl = Bq.T @ law_force(d1, powers, coeffs)
     q1 = (r - fnl) / S
     a1 = -omega2 * q1 - fnl
     v1 = v + 0.5 * h * (a + a1)
-    return q1, v1, a1, d1, J, ok
+    return q1, v1, a1, d1, J, D1, ok
 
 
 @_jit
-def _start(q0, omega2, Bq, k3, h):
+def _start(q0, omega2, Bq, powers, coeffs, h):
     S = 4.0 / h ** 2 + omega2
     G = (Bq / S[None, :]) @ Bq.T
     d = Bq @ q0
-    a = -omega2 * q0 - Bq.T @ (k3 * d ** 3)
+    a = -omega2 * q0 - Bq.T @ law_force(d, powers, coeffs)
     return S, G, d, a
 
 
 @_jit
-def sweep_state(q0, v0, h, nsteps, omega2, Bq, k3):
+def sweep_state(q0, v0, h, nsteps, omega2, Bq, powers, coeffs):
     """Integrate nsteps of size h from (q0, v0). Returns (q, v, ok)."""
-    S, G, d, a = _start(q0, omega2, Bq, k3, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
     q = q0.copy()
     v = v0.copy()
     for _ in range(nsteps):
-        q, v, a, d, J, ok = _step(q, v, a, d, h, omega2, Bq, k3, G, S)
+        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
         if not ok:
             return q, v, False
     return q, v, True
 
 
 @_jit
-def sweep_record(q0, v0, h, nsteps, omega2, Bq, k3):
+def sweep_record(q0, v0, h, nsteps, omega2, Bq, powers, coeffs):
     """Integrate and keep every state: (Q (nsteps+1, n), V (nsteps+1, n), ok)."""
     n = q0.shape[0]
     Q = np.empty((nsteps + 1, n))
     V = np.empty((nsteps + 1, n))
-    S, G, d, a = _start(q0, omega2, Bq, k3, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
     q = q0.copy()
     v = v0.copy()
     Q[0] = q
     V[0] = v
     for k in range(nsteps):
-        q, v, a, d, J, ok = _step(q, v, a, d, h, omega2, Bq, k3, G, S)
+        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
         if not ok:
             return Q[: k + 1], V[: k + 1], False
         Q[k + 1] = q
@@ -246,21 +243,21 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
 
 
 @_jit
-def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3, all_columns=True):
+def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, all_columns=True):
     """Integrate with the sensitivity of the final state.
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n), Sv = dv_N/d[q0; v0],
     sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  all_columns=False: only the n columns of dq0.  The state pass records the spring tangents
-    D_k = 3 k3 d_k^2 and carries the single d/dh column; the 2n columns come from _monodromy.
+    D_k = g'(d_k) and carries the single d/dh column; the 2n columns come from _monodromy.
     """
     n = q0.shape[0]
     ns = Bq.shape[0]
     ncols = 2 * n if all_columns else n
-    S, G, d, a = _start(q0, omega2, Bq, k3, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
     q = q0.copy()
     v = v0.copy()
     Dseq = np.empty((nsteps + 1, ns))
-    Dseq[0] = 3.0 * k3 * d ** 2
+    Dseq[0] = law_force_tangent(d, powers, coeffs)[1]
     sq_h = np.zeros(n)
     sv_h = np.zeros(n)
     sa_h = np.zeros(n)
@@ -270,10 +267,9 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, k3, all_columns=True):
     c2p = -4.0 / h ** 2
     invS = 1.0 / S
     for k in range(nsteps):
-        q1, v1, a1, d1, J, ok = _step(q, v, a, d, h, omega2, Bq, k3, G, S)
+        q1, v1, a1, d1, J, D1, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
         if not ok:
             return q1, v1, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
-        D1 = 3.0 * k3 * d1 ** 2
         Dseq[k + 1] = D1
         # the step size enters through c1, c2 and (N2)
         yh = (c1 * sq_h + c2 * sv_h + sa_h + c1p * (q - q1) + c2p * v) * invS

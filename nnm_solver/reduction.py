@@ -115,23 +115,27 @@ class _InternalSolver:
         return self.solver.solve(full)[self.internal]
 
 
-def mac(a, b):
+def mac(a, b, M=None):
     """Modal assurance criterion |a_i . b_j|^2 / ((a_i . a_i)(b_j . b_j)), in [0, 1] (seed eq. 19).
 
     a (n, na), b (n, nb): the MAC matrix (na, nb) between their columns; two vectors (n,): a float.
+    M : optional mass matrix (n, n), dense or sparse: the mass-weighted MAC
+    |a_i^T M b_j|^2 / ((a_i^T M a_i)(b_j^T M b_j)), for which distinct linear modes give exactly 0.
     """
     a = np.asarray(a, float)
     b = np.asarray(b, float)
     if a.ndim == 1 and b.ndim == 1:
-        return float(mac(a[:, None], b[:, None])[0, 0])
+        return float(mac(a[:, None], b[:, None], M)[0, 0])
     if a.ndim == 1:
         a = a[:, None]
     if b.ndim == 1:
         b = b[:, None]
     if a.ndim != 2 or b.ndim != 2 or a.shape[0] != b.shape[0]:
         raise NNMInputError(f"mac needs two sets of shapes with the same number of rows, got {a.shape} and {b.shape}")
-    na = np.einsum("ij,ij->j", a, a)
-    nb = np.einsum("ij,ij->j", b, b)
+    Ma = a if M is None else np.asarray(M @ a)
+    Mb = b if M is None else np.asarray(M @ b)
+    na = np.einsum("ij,ij->j", a, Ma)
+    nb = np.einsum("ij,ij->j", b, Mb)
     if np.any(na == 0) or np.any(nb == 0):
         raise NNMInputError("mac: a shape column is identically zero")
-    return (a.T @ b) ** 2 / np.outer(na, nb)
+    return (Ma.T @ b) ** 2 / np.outer(na, nb)

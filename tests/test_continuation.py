@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-from nnm_solver.shooting import ShootingProblem, modal_system
+from nnm_solver.modal import modal_system
+from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import duffing_model, two_dof_model
 
@@ -94,10 +95,13 @@ def test_cancelled_job_keeps_its_points():
 
 
 def test_job_reports_solver_errors_without_raising_in_thread():
-    def boom(*args, **kwargs):
+    def boom():
         raise RuntimeError("solver exploded")
+        yield
     m = two_dof_model()
-    job = nnm.Job(m, 1, 1.0, {}, runner=boom)
+    it = nnm.iter_nnm(m, 1, 1.0)
+    it._engine = boom()
+    job = nnm.Job(it)
     job._thread.start()
     with pytest.raises(RuntimeError, match="exploded"):
         job.result(timeout=10)

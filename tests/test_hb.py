@@ -7,8 +7,8 @@ from scipy.special import ellipk
 
 import nnm_solver as nnm
 from nnm_solver.hb import continue_nnm_hb, hb_coefficients, hb_motion
-from nnm_solver.hb_aft import HBBasis, HBProblem
-from nnm_solver.shooting import modal_system
+from nnm_solver.orbits.harmonic_balance import HBBasis, HBProblem
+from nnm_solver.modal import modal_system
 
 
 def duffing_period(k, A):

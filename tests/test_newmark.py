@@ -4,7 +4,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nnm_solver.newmark import sweep_record, sweep_sensitivity, sweep_state
-from nnm_solver.shooting import ShootingProblem, modal_system
+from nnm_solver.modal import modal_system
+from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import two_dof_model
 
@@ -27,7 +28,7 @@ def test_matches_solve_ivp_and_converges_second_order():
     ref = solve_ivp(rhs, (0, T), np.concatenate([x0, [0, 0]]), rtol=1e-12, atol=1e-12).y[:2, -1]
     errs = []
     for N in (400, 800):
-        q, v, ok = sweep_state(q0, np.zeros(2), T / N, N, ms.omega2, ms.Bq, ms.k3)
+        q, v, ok = sweep_state(q0, np.zeros(2), T / N, N, *ms.kernel)
         assert ok
         errs.append(np.linalg.norm(ms.to_physical(q) - ref))
     assert errs[0] < 5e-3
@@ -37,7 +38,7 @@ def test_matches_solve_ivp_and_converges_second_order():
 def test_energy_bounded_along_orbit():
     ms = _system()
     x0 = np.array([2.0, 1.0])
-    Q, V, ok = sweep_record(ms.to_modal(x0), np.zeros(2), 0.05, 400, ms.omega2, ms.Bq, ms.k3)
+    Q, V, ok = sweep_record(ms.to_modal(x0), np.zeros(2), 0.05, 400, *ms.kernel)
     assert ok
     E = ms.model.energy(ms.to_physical(Q), ms.to_physical(V))
     assert np.ptp(E) / E[0] < 2e-3
@@ -49,19 +50,19 @@ def test_sensitivity_matches_finite_differences(k3):
     q0 = np.array([0.9, -0.3])
     v0 = np.array([0.2, 0.5])
     h, N = 0.04, 150
-    q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, N, ms.omega2, ms.Bq, ms.k3)
+    q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, N, *ms.kernel)
     assert ok
     eps = 1e-6
     z0 = np.concatenate([q0, v0])
     for j in range(4):
         dz = np.zeros(4)
         dz[j] = eps
-        qp, vp, _ = sweep_state(*np.split(z0 + dz, 2), h, N, ms.omega2, ms.Bq, ms.k3)
-        qm, vm, _ = sweep_state(*np.split(z0 - dz, 2), h, N, ms.omega2, ms.Bq, ms.k3)
+        qp, vp, _ = sweep_state(*np.split(z0 + dz, 2), h, N, *ms.kernel)
+        qm, vm, _ = sweep_state(*np.split(z0 - dz, 2), h, N, *ms.kernel)
         fd = np.concatenate([qp - qm, vp - vm]) / (2 * eps)
         assert np.allclose(np.concatenate([Sq[:, j], Sv[:, j]]), fd, rtol=1e-6, atol=1e-7)
-    qp, vp, _ = sweep_state(q0, v0, h + 1e-7, N, ms.omega2, ms.Bq, ms.k3)
-    qm, vm, _ = sweep_state(q0, v0, h - 1e-7, N, ms.omega2, ms.Bq, ms.k3)
+    qp, vp, _ = sweep_state(q0, v0, h + 1e-7, N, *ms.kernel)
+    qm, vm, _ = sweep_state(q0, v0, h - 1e-7, N, *ms.kernel)
     fd = np.concatenate([qp - qm, vp - vm]) / 2e-7
     assert np.allclose(np.concatenate([sq_h, sv_h]), fd, rtol=1e-5, atol=1e-5)
 
@@ -96,8 +97,8 @@ def test_monodromy_of_converged_orbit_matches_finite_differences(two_dof_nnm1):
     cols = []
     for j in range(4):
         dz = eps * np.eye(4)[j]
-        qp, vp, _ = sweep_state(*np.split(z0 + dz, 2), T / N, N, ms.omega2, ms.Bq, ms.k3)
-        qm, vm, _ = sweep_state(*np.split(z0 - dz, 2), T / N, N, ms.omega2, ms.Bq, ms.k3)
+        qp, vp, _ = sweep_state(*np.split(z0 + dz, 2), T / N, N, *ms.kernel)
+        qm, vm, _ = sweep_state(*np.split(z0 - dz, 2), T / N, N, *ms.kernel)
         cols.append(np.concatenate([qp - qm, vp - vm]) / (2 * eps))
     assert np.allclose(Mono, np.column_stack(cols), rtol=1e-5, atol=1e-6)
     # and its eigenvalues are the stored multipliers

@@ -1,9 +1,9 @@
 r"""Harmonic-balance residual and analytic Jacobian by AFT (alternating frequency/time).
 
-Used by ``hb.py`` (see its docstring for the user-level description).  In mass-normalised
+The harmonic-balance periodic-orbit problem (the user-level description is in ``hb.py``).  In mass-normalised
 modal coordinates x = Phi q (Phi^T M Phi = I, Phi^T K Phi = Omega^2) the model reads
 
-    q'' + Omega^2 q + Bq^T [k3 * (Bq q)^3] = 0,         Bq = B Phi   (n_s, n),
+    q'' + Omega^2 q + Bq^T g(Bq q) = 0,         Bq = B Phi   (n_s, n),
 
 with d = Bq q (m) the n_s spring deformations.  Ansatz, with theta = omega t (omega in rad/s):
 
@@ -12,7 +12,7 @@ with d = Bq q (m) the n_s spring deformations.  Ansatz, with theta = omega t (om
 Because c_j'' = -(h_j omega)^2 c_j, the Galerkin (harmonic-balance) equations are
 
     R[j] = (Omega^2 - h_j^2 omega^2) A[j] + F[j] = 0          (N/sqrt(kg), per basis function j)
-    F    = P g(E A Bq^T) Bq,        g(d) = k3 d^3 per spring   (AFT)
+    F    = P g(E A Bq^T) Bq,        g(d): the element force laws   (AFT)
 
 where E[k, j] = c_j(theta_k) at N equispaced samples theta_k = 2 pi k / N and P is the
 Galerkin projector (rows (2/N) c_j(theta_k), (1/N) for the constant), so that P E = I.  The
@@ -20,7 +20,7 @@ cubic of a series of order h_max has order 3 h_max, so the projection is exact (
 when N > 4 h_max.  Only the n_s spring deformations are sampled in time.
 
 Analytic Jacobian (chain rule through E and P):
-    dF[j, i] / dA[l, m] = sum_s Bq[s, i] C_s[j, l] Bq[s, m],   C_s = P diag(3 k3_s d_s(theta_k)^2) E
+    dF[j, i] / dA[l, m] = sum_s Bq[s, i] C_s[j, l] Bq[s, m],   C_s = P diag(g_s'(d_s(theta_k))) E
     dR[j] / domega      = -2 h_j^2 omega A[j].
 
 Bases: ``"odd"`` = cos(h theta), h = 1, 3, 5, ... <= h_max.  The symmetric NNMs of odd (cubic)
@@ -102,12 +102,27 @@ class HBProblem:
         A, w = self.unpack(u)
         return self.basis.functions([0.0])[0] @ A, w * (self.basis.derivatives([0.0])[0] @ A)
 
+    # --------------------------------------------------------------- results (driver protocol)
+    def state(self, u):
+        """(q0, v0, T) of the orbit u: modal initial state and period (s)."""
+        q0, v0 = self.initial_state(u)
+        return q0, v0, 2 * np.pi / self.unpack(u)[1]
+
+    def multipliers(self, u):
+        """Floquet multipliers of the orbit u by Hill's method (hill.py)."""
+        from .hill import hill_multipliers
+        return hill_multipliers(self, u)
+
+    def coefficients(self, u):
+        """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m)."""
+        return self.unpack(u)[0].copy()
+
     # --------------------------------------------------------------- problem protocol
     def _parts(self, u):
         A, w = self.unpack(u)
         s = self.sys
         d = self.basis.E @ (A @ s.Bq.T)                       # (N, n_s) spring deformations
-        F = self.basis.P @ ((s.k3 * d ** 3) @ s.Bq)           # (N_b, n) nonlinear force coefficients
+        F = self.basis.P @ (s.force(d) @ s.Bq)                # (N_b, n) nonlinear force coefficients
         R = (s.omega2[None, :] - self.h2 * w ** 2) * A + F
         r = R.ravel() / self.w_r ** 2
         if self.phase:
@@ -120,7 +135,7 @@ class HBProblem:
     def jacobian(self, u):
         A, w, d, r = self._parts(u)
         s, bs, nb, n = self.sys, self.basis, self.nb, self.n
-        C = np.einsum("jk,ks,kl->sjl", bs.P, 3.0 * s.k3 * d ** 2, bs.E)
+        C = np.einsum("jk,ks,kl->sjl", bs.P, s.tangent(d), bs.E)
         J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
         J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w ** 2).ravel()
         J /= self.w_r ** 2
@@ -144,3 +159,40 @@ class HBProblem:
 
     def max_step(self, u):
         return self.max_rel_step * np.linalg.norm(u[:-1])
+
+
+def series_orbit(basis, X, period, samples):
+    """Orbit of a Fourier series: (x, v) (samples, n) at t = k T / samples, from coefficients X (N_b, n)."""
+    theta = 2 * np.pi * np.arange(int(samples)) / int(samples)
+    return basis.functions(theta) @ X, (2 * np.pi / period) * (basis.derivatives(theta) @ X)
+
+
+def recover_coefficients(system, mode_index, basis, x0, v0, period, tol):
+    """Fourier coefficients X (N_b, n) (physical, m) of the HB orbit through (x0, v0) with period T.
+
+    For branches stored without their coefficients (files of the first release): the orbit is
+    integrated with Newmark at 16 steps per AFT sample and projected on the basis (a close first
+    guess), then refined by Gauss-Newton on the HB equations plus the point's initial state.
+    Raises RuntimeError if the refined series does not satisfy the HB equations to 10 tol.
+    """
+    problem = HBProblem(system, mode_index, basis)
+    q0, v0 = system.to_modal(x0), system.to_modal(v0)
+    problem.q_ref = q0 / max(np.linalg.norm(q0), 1e-300)
+    sub = 16
+    Q, _, _ = system.orbit(q0, v0, period, basis.samples * sub)
+    u = problem.pack(basis.P @ Q[:-1:sub], 2 * np.pi / period)
+    c0, s0 = basis.functions([0.0])[0], basis.derivatives([0.0])[0]
+    n = problem.n
+    for _ in range(30):
+        r, J = problem.jacobian(u)
+        A, w = problem.unpack(u)
+        r0 = np.concatenate([c0 @ A - q0, (w * (s0 @ A) - v0) / problem.w_r])
+        J0 = np.vstack([np.hstack([np.kron(c0, np.eye(n)), np.zeros((n, 1))]),
+                        np.hstack([np.kron(s0, np.eye(n)) * w / problem.w_r, (s0 @ A)[:, None]])])
+        du = np.linalg.lstsq(np.vstack([J, J0]), -np.concatenate([r, r0]), rcond=None)[0]
+        u += du
+        if np.linalg.norm(du) <= 1e-13 * np.linalg.norm(u):
+            break
+    if not problem.error(u, problem.residual(u)) < 10 * tol:
+        raise RuntimeError("the harmonic-balance coefficients could not be recomputed")
+    return system.to_physical(problem.unpack(u)[0])

@@ -21,49 +21,16 @@ previous shape.  The trivial orbit u = 0 is excluded by starting at finite ampli
 arclength condition.
 
 Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
+
+Half-period shooting needs an odd f_nl (only odd powers in the element laws): the driver checks it.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
 
-from .newmark import sweep_record, sweep_sensitivity, sweep_state
-
-
-class ModalSystem:
-    """A Model in mass-normalised modal coordinates:  q'' + Omega^2 q + Bq^T k3 (Bq q)^3 = 0."""
-
-    def __init__(self, model):
-        lam, Phi = model._eig
-        self.model = model
-        self.n = model.n
-        self.omega2 = np.ascontiguousarray(lam, dtype=float)
-        self.Phi = np.ascontiguousarray(Phi)
-        MPhi = model._M @ Phi
-        self.PhiT_M = np.ascontiguousarray(np.asarray(MPhi).T)  # q = Phi^T M x
-        self.Bq = np.ascontiguousarray(model.spring_matrix @ Phi)
-        self.k3 = np.ascontiguousarray(model.k3, dtype=float)
-
-    def to_modal(self, x):
-        """Modal coordinates of x: (n,) -> (n,), or (k, n) -> (k, n)."""
-        return np.asarray(x) @ self.PhiT_M.T
-
-    def to_physical(self, q):
-        return np.asarray(q) @ self.Phi.T
-
-    def orbit(self, q0, v0, duration, nsteps):
-        """States at nsteps + 1 equally spaced times over ``duration`` (s): (Q, V, ok)."""
-        return sweep_record(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float),
-                            duration / nsteps, int(nsteps), self.omega2, self.Bq, self.k3)
-
-
-def modal_system(model):
-    """The (cached) ModalSystem of a model."""
-    ms = model.__dict__.get("_modal_system")
-    if ms is None:
-        ms = ModalSystem(model)
-        model.__dict__["_modal_system"] = ms
-    return ms
+from ..fourier import resample_periodic
+from ..newmark import sweep_sensitivity, sweep_state
 
 
 def discrete_linear_period(omega, nsteps_per_period):
@@ -136,7 +103,7 @@ class ShootingProblem:
         q0, v0, T = self.unpack(u)
         if not T > 0:
             return np.full(self.rows, np.nan)
-        q, v, ok = sweep_state(q0, v0, self._h(T), self.nsteps, self.sys.omega2, self.sys.Bq, self.sys.k3)
+        q, v, ok = sweep_state(q0, v0, self._h(T), self.nsteps, *self.sys.kernel)
         if not ok:
             return np.full(self.rows, np.nan)
         return self._assemble(q, v, q0, v0)
@@ -153,8 +120,8 @@ class ShootingProblem:
         if not T > 0:
             return bad
         h = self._h(T)
-        q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, self.sys.omega2,
-                                                         self.sys.Bq, self.sys.k3, self.all_columns)
+        q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, *self.sys.kernel,
+                                                         self.all_columns)
         if not ok:
             return bad
         r = self._assemble(q, v, q0, v0)
@@ -200,7 +167,19 @@ class ShootingProblem:
         q0, v0, _ = self.unpack(u)
         return self.max_rel_step * np.linalg.norm(np.concatenate([q0, v0 / self.w_r]))
 
-    # --------------------------------------------------------------- results
+    # --------------------------------------------------------------- results (driver protocol)
+    def state(self, u):
+        """(q0, v0, T) of the orbit u: modal initial state and period (s)."""
+        return self.unpack(u)
+
+    def multipliers(self, u):
+        """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep)."""
+        return self.floquet_multipliers()
+
+    def coefficients(self, u):
+        """No Fourier coefficients: the orbit is rebuilt by integration (ShootingSettings.orbit)."""
+        return None
+
     def monodromy(self):
         """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
         if not self.all_columns:
@@ -226,3 +205,23 @@ class ShootingProblem:
             return np.concatenate([(c + root) ** 2, (c - root) ** 2])
         lam = sla.eigvals(A, check_finite=False)
         return lam ** 2 if self.symmetric else lam
+
+
+def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples):
+    """Orbit of a converged shooting point: (x, v) (samples, n) at t = k T / samples (m, m/s).
+
+    The discrete orbit is re-integrated with the step it converged with (T / steps_per_period), over
+    half a period when it was found by half-period shooting (the second half is -z(t)), then
+    resampled by Fourier interpolation.  This reproduces the converged orbit even when it is strongly
+    unstable.  Raises RuntimeError if the time integration fails.
+    """
+    spp = int(steps_per_period)
+    symmetric = bool(symmetric) and spp % 2 == 0
+    nsteps = spp // 2 if symmetric else spp
+    Q, V, ok = system.orbit(system.to_modal(x0), system.to_modal(v0), period * nsteps / spp, nsteps)
+    if not ok:
+        raise RuntimeError("time integration of the orbit failed")
+    Q, V = Q[:-1], V[:-1]
+    if symmetric:
+        Q, V = np.concatenate([Q, -Q]), np.concatenate([V, -V])
+    return (system.to_physical(resample_periodic(Q, samples)), system.to_physical(resample_periodic(V, samples)))

@@ -1,6 +1,6 @@
-r"""Floquet multipliers of a harmonic-balance orbit by Hill's method (used by hb.py).
+r"""Floquet multipliers of a harmonic-balance orbit by Hill's method (harmonic_balance.py).
 
-A perturbation y of the orbit q(t) obeys  y'' + K(t) y = 0,  K(t) = Omega^2 + Bq^T diag(3 k3 d(t)^2) Bq
+A perturbation y of the orbit q(t) obeys  y'' + K(t) y = 0,  K(t) = Omega^2 + Bq^T diag(g'(d(t))) Bq
 (modal coordinates, d = Bq q the spring deformations).  Floquet form y = e^{lambda t} p(t), p
 T-periodic, expanded in the full basis (1, cos h theta, sin h theta, h = 1..H; theta = omega t):
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from .hb_aft import HBBasis
+from .harmonic_balance import HBBasis
 
 
 def derivative_matrix(basis):
@@ -44,7 +44,7 @@ def hill_multipliers(problem, u, harmonics=None):
     theta = 2 * np.pi * np.arange(bp.samples) / bp.samples
     d = problem.basis.functions(theta) @ (A @ s.Bq.T)
     nb = len(bp)
-    C = np.einsum("jk,ks,kl->sjl", bp.P, 3.0 * s.k3 * d ** 2, bp.E)
+    C = np.einsum("jk,ks,kl->sjl", bp.P, s.tangent(d), bp.E)
     Kh = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
     Kh[np.diag_indices(nb * n)] += np.tile(s.omega2, nb)
     D = np.kron(derivative_matrix(bp), np.eye(n)) * w

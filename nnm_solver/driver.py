@@ -1,0 +1,320 @@
+r"""The NNM driver: one branch from a linear mode at low energy up to a target energy, for any method.
+
+    iter_nnm(model, mode, energy_max, method="shooting" | "hb", ...)   an iterator of converged Points
+    continue_nnm(...)                                                  the Branch: a loop over iter_nnm
+
+The driver checks the arguments, builds the method's periodic-orbit problem (orbits/) on the modal
+system (modal.py) from a nearly linear first orbit, runs the generic pseudo-arclength engine
+(continuation.py) and turns each converged point into a ``Point`` (energy J, frequency Hz, period s,
+initial state, Floquet multipliers and stability, floquet.py).  A user's own stopping rule is a
+``break`` out of the loop; ``iterator.branch()`` then holds every point seen.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .branch import Branch, Point
+from .continuation import ContinuationSettings, pseudo_arclength
+from .errors import NNMInputError
+from .floquet import STABILITY_TOL, is_stable, sort_multipliers
+from .modal import modal_system
+from .model import Model
+from .orbits.harmonic_balance import BASES, HBBasis, HBProblem
+from .orbits.shooting import ShootingProblem, discrete_linear_period
+from .settings import HarmonicBalanceSettings, ShootingSettings
+from .threads import blas_limited
+
+__all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
+
+#: fraction of the linear potential energy carried by the springs at the first point
+START_NONLINEARITY = 1e-5
+
+#: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
+METHODS = ("shooting", "hb")
+
+#: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
+HILL_AUTO_SIZE = 1000
+
+_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=True, reversible=None, max_period_step=0.005)
+_HB_OPTIONS = dict(harmonics=7, samples=None, basis="odd")
+
+
+def check_positive(name, value, integer=False):
+    """NNMInputError unless ``value`` is a positive finite number (an integer if ``integer``)."""
+    ok = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.number))
+    if not ok or isinstance(value, bool) or not np.isfinite(value) or value <= 0:
+        raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
+
+
+def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min):
+    """Validate the arguments every branch computation shares; returns the 0-based mode index."""
+    if not isinstance(model, Model):
+        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
+    check_positive("energy_max", energy_max)
+    check_positive("tol", tol)
+    check_positive("max_points", max_points, integer=True)
+    if energy_min is not None:
+        check_positive("energy_min", energy_min)
+        if energy_min >= energy_max:
+            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    return model.check_mode(mode)
+
+
+def start_amplitude(system, k, energy_max, energy_min=None):
+    """Modal amplitude a (sqrt(kg) m) of the first point along linear mode k (0-based).
+
+    With energy_min: the linear amplitude of that energy.  Otherwise nearly linear: the springs hold
+    START_NONLINEARITY of the linear potential w^2 a^2 / 2, and the energy stays below 1 % of energy_max.
+    """
+    w2 = system.omega2[k]
+    if energy_min is not None:
+        return math.sqrt(2.0 * energy_min / w2)
+    a_cap = math.sqrt(2.0 * energy_max * 1e-2 / w2)
+    b = np.abs(system.Bq[:, k])
+    C = np.abs(system.coefficients)
+    p = system.powers.astype(float)
+    if not np.any(C * (b[:, None] > 0)):
+        return math.sqrt(2.0 * energy_max * 1e-6 / w2)
+
+    def share(a):  # bound on (nonlinear potential) / (linear potential) at amplitude a; grows with a
+        return float(np.sum(C * (b[:, None] * a) ** (p + 1) / (p + 1))) / (0.5 * w2 * a * a)
+
+    lo, hi = 1e-30, a_cap
+    if share(hi) <= START_NONLINEARITY:
+        return a_cap
+    for _ in range(200):  # bisection in log a
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if share(mid) < START_NONLINEARITY else (lo, mid)
+        if hi / lo < 1 + 1e-12:
+            break
+    return hi
+
+
+def _method_options(method, options):
+    """Split the method-specific options; NNMInputError for an option of the other method."""
+    if method == "harmonic_balance":
+        method = "hb"
+    if method not in METHODS:
+        raise NNMInputError(f"method must be one of {METHODS}, got {method!r}")
+    own, other = (_SHOOTING_OPTIONS, _HB_OPTIONS) if method == "shooting" else (_HB_OPTIONS, _SHOOTING_OPTIONS)
+    for key in options:
+        if key not in own:
+            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'}" if key in other else ""
+            raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
+    return method, {**own, **options}
+
+
+def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
+    spp = opts["steps_per_period"]
+    check_positive("steps_per_period", spp, integer=True)
+    if spp < 8:
+        raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
+    symmetric = bool(opts["symmetric"])
+    if symmetric and not system.elements.odd:
+        raise NNMInputError("symmetric=True (half-period shooting) needs odd nonlinear forces; "
+                            "use symmetric=False for elements with even powers")
+    problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
+                              reversible=opts["reversible"], max_rel_period_step=opts["max_period_step"])
+    n = system.n
+    q0 = np.zeros(n)
+    q0[k] = a0
+    u0 = problem.pack(q0, np.zeros(n), discrete_linear_period(math.sqrt(system.omega2[k]), problem.spp))
+    p0 = problem.pack(q0 / a0, np.zeros(n), 0.0)
+    settings = ShootingSettings(steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
+                                reversible=problem.reversible, energy_max=energy_max,
+                                floquet=True if floquet is None else bool(floquet))
+    return problem, u0, p0, settings
+
+
+def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
+    basis, harmonics, samples = opts["basis"], opts["harmonics"], opts["samples"]
+    if basis not in BASES:
+        raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
+    check_positive("harmonics", harmonics, integer=True)
+    if samples is not None:
+        check_positive("samples", samples, integer=True)
+        if samples < 2 * harmonics + 1:
+            raise NNMInputError(f"samples={samples} is too few for {harmonics} harmonics; use at least "
+                                f"{2 * harmonics + 1} (more than {4 * harmonics} avoids aliasing of the cubic)")
+    if basis == "odd" and not system.elements.odd:
+        raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers")
+    hb = HBBasis(harmonics, basis, samples)
+    problem = HBProblem(system, k, hb, max_rel_step=opts["max_rel_step"])
+    A0 = np.zeros((len(hb), system.n))
+    A0[int(np.flatnonzero((hb.h == 1) & ~hb.sine)[0]), k] = a0
+    u0 = problem.pack(A0, problem.w_r)
+    p0 = np.zeros_like(u0)
+    p0[:-1] = A0.ravel() / a0
+    if floquet is None:
+        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
+    settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
+                                       energy_max=energy_max, floquet=bool(floquet))
+    return problem, u0, p0, settings
+
+
+class NNMIterator:
+    """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
+
+    Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
+    The iteration ends by itself at energy_max, at max_points, when the branch returns to low
+    energy, or when the continuation cannot go on; ``status`` and ``message`` then say why
+    ('done', 'max_points', 'failed').  ``cancel()`` (or a ``break`` followed by ``branch()``) ends it
+    early ('cancelled' / 'stopped').  ``branch()`` returns the Branch of every point so far.
+    """
+
+    def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points):
+        self.model = model
+        self.mode = int(mode)
+        self.settings = settings
+        self.energy_max = float(energy_max)
+        self.max_points = int(max_points)
+        self.points = []
+        self.status = "running"
+        self.message = ""
+        self._problem = problem
+        self._system = system
+        self._engine = engine
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if self.status != "running":
+            raise StopIteration
+        N = len(self.points)
+        with blas_limited():
+            try:
+                cp = next(self._engine)
+            except StopIteration as fin:
+                where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
+                         f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
+                self._finish("failed", f"no convergence {where}: {fin.value or 'continuation stopped'}; the points "
+                                       f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
+                raise StopIteration from None
+            point = self._record(cp)
+        self.points.append(point)
+        E, E0 = point.energy, self.points[0].energy
+        if E >= self.energy_max:
+            self._finish("done", f"reached energy_max = {self.energy_max:g} J")
+        elif N + 1 >= self.max_points:
+            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J)")
+        elif N + 1 > 3 and E < 0.5 * E0:
+            self._finish("done", "the branch returned to low energy")
+        return point
+
+    def _record(self, cp):
+        sys_, prob = self._system, self._problem
+        q0, v0, T = prob.state(cp.u)
+        x0, v0 = sys_.to_physical(q0), sys_.to_physical(v0)
+        if self.settings.floquet:
+            mu = sort_multipliers(prob.multipliers(cp.u))
+            stable = is_stable(mu, STABILITY_TOL)
+        else:
+            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
+        A = prob.coefficients(cp.u)
+        return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=1.0 / T, period=T, x0=x0, v0=v0,
+                     floquet=mu, stable=stable, iterations=cp.iterations,
+                     coefficients=None if A is None else sys_.to_physical(A))
+
+    def _finish(self, status, message):
+        self.status, self.message = status, message
+        self._engine.close()
+
+    def cancel(self, message=""):
+        """End the iteration now (status 'cancelled'); the points so far are kept."""
+        if self.status == "running":
+            self._finish("cancelled", message or f"cancelled after {len(self.points)} points")
+
+    def branch(self):
+        """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
+        if self.status == "running":
+            self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
+        return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
+                                  status=self.status, message=self.message)
+
+
+def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
+             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, **method_options):
+    """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
+
+    Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
+    ``Point`` objects (energy J, frequency_hz Hz, period s, x0, v0, floquet, stable, ...); returns an
+    NNMIterator, whose ``branch()`` collects them (see ``continue_nnm`` for the arguments)::
+
+        it = nnm.iter_nnm(model, 1, 1e3)
+        for p in it:
+            if p.frequency_hz > 1.2 * it.points[0].frequency_hz:
+                break                       # a stopping rule of one's own
+        branch = it.branch()                # status 'stopped'
+
+    Bad arguments raise NNMInputError here, before any computation.
+    """
+    method, opts = _method_options(method, method_options)
+    if tol is None:
+        tol = 1e-6 if method == "shooting" else 1e-8
+    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
+    for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step)):
+        check_positive(name, value)
+    if step is not None:
+        check_positive("step", step)
+    system = modal_system(model)
+    a0 = start_amplitude(system, k, energy_max, energy_min)
+    build = _shooting_problem if method == "shooting" else _hb_problem
+    problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step), tol, energy_max, floquet)
+    cs = ContinuationSettings(step=0.5 * a0 if step is None else float(step), step_min=1e-8 * a0, step_max=np.inf,
+                              max_angle=max_angle, max_correction=max_correction)
+    engine = pseudo_arclength(problem, u0, p0, cs, tol)
+    return NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points)
+
+
+def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
+                 stop=None, energy_min=None, symmetric=True, floquet=None, step=None, max_angle=0.35,
+                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
+                 method="shooting", **hb_options):
+    """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
+
+    Parameters
+    ----------
+    method : "shooting" (Newmark shooting, the seed paper's method; default) or "hb" (harmonic
+        balance; options ``harmonics``, ``samples``, ``basis``, see ``nnm_solver.hb``).
+    steps_per_period : Newmark steps per period (the error in frequency is O(steps^-2)); shooting.
+    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11); default 1e-6 (HB: 1e-8 on
+        the relative residual).
+    max_points : largest number of points kept.
+    on_point : optional callable(point: Point) called after each converged point.
+    stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
+    energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
+    symmetric : half-period shooting (valid for odd nonlinear forces; see orbits/shooting.py).
+    reversible : orbits starting at rest (v0 = 0, default with symmetric) or general orbits with a
+        phase condition (False); see orbits.shooting.ShootingProblem.
+    floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when
+        the Hill matrix has at most HILL_AUTO_SIZE rows).
+    step : first step length in units of the scaled unknowns (default: half the starting amplitude).
+    max_angle : largest turn (rad) of the branch tangent between two points.
+    max_correction : largest corrector displacement, relative to the step length.
+    max_rel_step : largest step relative to the amplitude of the current orbit.
+    max_period_step : largest relative change of the period between two points (keeps the
+        continuation from stepping over the entrance of internal-resonance tongues); shooting.
+
+    Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
+    point computed before a failure is kept.
+    """
+    if method == "shooting":
+        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible,
+                    max_period_step=max_period_step, **hb_options)
+    else:
+        opts = dict(hb_options)
+    it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
+                  floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
+                  max_rel_step=max_rel_step, **opts)
+    while True:
+        if stop is not None and stop.is_set():
+            it.cancel()
+        try:
+            point = next(it)
+        except StopIteration:
+            return it.branch()
+        if on_point is not None:
+            on_point(point)
