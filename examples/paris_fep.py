@@ -86,40 +86,34 @@ def map_modes(model, wanted, overrides):
     return out
 
 
-class StopRule:
-    """Stops the continuation (threading.Event-like ``stop`` for continue_nnm, fed by its ``on_point``)
-    once the frequency has dropped by more than ``drop`` below the linear value (the NNM then heads for
-    the escape of the softening springs, outside the paper's range), or when the continuation crawls
-    (the last ``window`` points within 1 % of energy and 1e-5 of frequency: it is stuck at a singular
-    point and would only spend time)."""
-
-    def __init__(self, drop, window=25):
-        self.drop, self.window = drop, window
-        self.E, self.f = [], []
-        self.reason = ""
-
-    def on_point(self, row):
-        self.E.append(row["energy"])
-        self.f.append(row["frequency_hz"])
-        if self.f[-1] < (1 - self.drop) * self.f[0]:
-            self.reason = f"stopped after a {100 * self.drop:.0f} % frequency drop"
-        elif len(self.E) > self.window:
-            e, f = np.array(self.E[-self.window:]), np.array(self.f[-self.window:])
-            if e.max() < 1.01 * e.min() and f.max() - f.min() < 1e-5 * f.max():
-                self.reason = f"stopped: the continuation crawled for {self.window} points (singular point)"
-
-    def is_set(self):
-        return bool(self.reason)
+def stop_reason(points, drop, window=25):
+    """Why to stop the continuation after ``points`` (a list of nnm.Point), or '' to go on: the
+    frequency has dropped by more than ``drop`` below the linear value (the NNM then heads for the
+    escape of the softening springs, outside the paper's range), or the continuation crawls (the last
+    ``window`` points within 1 % of energy and 1e-5 of frequency: it is stuck at a singular point)."""
+    f0, f = points[0].frequency_hz, points[-1].frequency_hz
+    if f < (1 - drop) * f0:
+        return f"stopped after a {100 * drop:.0f} % frequency drop"
+    if len(points) > window:
+        e = np.array([p.energy for p in points[-window:]])
+        fr = np.array([p.frequency_hz for p in points[-window:]])
+        if e.max() < 1.01 * e.min() and fr.max() - fr.min() < 1e-5 * fr.max():
+            return f"stopped: the continuation crawled for {window} points (singular point)"
+    return ""
 
 
 def run_mode(model, mode, energy_max, spp, tol, max_points, floquet=True, log=print):
-    stop = StopRule(MAX_DROP)
     t = time.perf_counter()
-    b = nnm.continue_nnm(model, mode, energy_max=energy_max, steps_per_period=spp, tol=tol,
-                         max_points=max_points, on_point=stop.on_point, stop=stop, floquet=floquet)
+    it = nnm.iter_nnm(model, mode, energy_max=energy_max, steps_per_period=spp, tol=tol,
+                      max_points=max_points, floquet=floquet)
+    for _ in it:
+        reason = stop_reason(it.points, MAX_DROP)
+        if reason:
+            break
+    b = it.branch()
+    if b.status == "stopped":
+        b.message = reason
     dt = time.perf_counter() - t
-    if stop.reason:
-        b.status, b.message = "done", stop.reason
     log(f"mode {mode}: {len(b)} points, E {b.energy[0]:.3g}..{b.energy.max():.3g} J, "
         f"f {b.frequency_hz[0]:.5g} -> {b.frequency_hz[-1]:.5g} Hz in {dt:.1f} s ({b.message})")
     return b, dt

@@ -101,7 +101,7 @@ def _method_options(method, options):
     own, other = (_SHOOTING_OPTIONS, _HB_OPTIONS) if method == "shooting" else (_HB_OPTIONS, _SHOOTING_OPTIONS)
     for key in options:
         if key not in own:
-            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'}" if key in other else ""
+            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'!r}" if key in other else ""
             raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
     return method, {**own, **options}
 
@@ -214,7 +214,7 @@ class NNMIterator:
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
-        return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=1.0 / T, period=T, x0=x0, v0=v0,
+        return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0, v0=v0,
                      floquet=mu, stable=stable, iterations=cp.iterations,
                      coefficients=None if A is None else sys_.to_physical(A))
 

@@ -122,6 +122,16 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
     F = np.nan_to_num(F, nan=0.0)
     sec = F[:, 2:].max(axis=1) if F.shape[1] > 2 else np.zeros(N)
     E = branch.energy
+    found = _accepted(_excursions(E, sec), F, sec, min_fraction)
+    kept = _strongest_disjoint(found)
+    kept = _with_content_runs(kept, F, sec, E, min_fraction)
+    kept = _merge_back_and_forth(kept, branch.frequency_hz)
+    return [_tongue(branch, d, F, n, with_mode) for d in kept]
+
+
+def _excursions(E, sec):
+    """Candidate excursions between folds: (i0, tip, i1, complete, (E_low, E_high), direction)."""
+    N = len(E)
     mins, maxs = _local_extrema(E)
     if E[-1] < E[-2]:
         mins.append(N - 1)  # the branch ends on the way down: its last point is a provisional tip
@@ -148,6 +158,11 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
         after = np.arange(i1 + 1, N)
         back = bool(len(after) and np.any((E[after] > E[i1] * 1.01) & (sec[after] < 0.5 * sec[tip])))
         cands.append((i0, tip, i1, back, (float(E[i1] if back else E[i0]), float(E[tip])), "higher"))
+    return cands
+
+
+def _accepted(cands, F, sec, min_fraction):
+    """The candidates whose tip carries a strong enough harmonic k >= 2, as dicts."""
     found = []
     for i0, tip, i1, complete, erange, direction in cands:
         near = np.arange(max(i0, tip - 2), min(i1, tip + 2) + 1)
@@ -159,13 +174,22 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
         k = int(np.argmax(F[jpk, 2:]) + 2)
         found.append(dict(start=i0, tip=tip, end=i1, complete=complete, order=k, frac=float(F[jpk, k]),
                           kind="fold", strength=s_tip, erange=erange, direction=direction))
-    # overlapping excursions: keep the strongest (e.g. not a small fold pair on a tongue's way out)
+    return found
+
+
+def _strongest_disjoint(found):
+    """Overlapping excursions: keep the strongest (e.g. not a small fold pair on a tongue's way out)."""
     kept = []
     for d in sorted(found, key=lambda d: -d["strength"]):
         if any(d["start"] < e["end"] and e["start"] < d["end"] for e in kept):
             continue
         kept.append(d)
-    # high harmonic content outside the excursions
+    return kept
+
+
+def _with_content_runs(kept, F, sec, E, min_fraction):
+    """Add the runs of high harmonic content outside the excursions (kind "content"), sorted by start."""
+    N = len(E)
     covered = np.zeros(N, dtype=bool)
     for d in kept:
         covered[d["start"]: d["end"] + 1] = True
@@ -189,12 +213,15 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
                              erange=(float(E[a: j + 1].min()), float(E[a: j + 1].max())), direction=""))
         j += 1
     kept.sort(key=lambda d: d["start"])
-    # a continuation that goes back and forth along the same tongue gives contiguous excursions of the
-    # same order: one tongue
+    return kept
+
+
+def _merge_back_and_forth(kept, fr):
+    """A continuation that goes back and forth along the same tongue gives contiguous excursions of the
+    same order: one tongue."""
     merged = []
     for d in kept:
         p = merged[-1] if merged else None
-        fr = branch.frequency_hz
         if p is not None and p["kind"] == d["kind"] == "fold" and p["order"] == d["order"] \
                 and d["start"] <= p["end"] + 1 and abs(fr[d["tip"]] - fr[p["tip"]]) <= 1e-3 * fr[p["tip"]]:
             strong = d if d["frac"] > p["frac"] else p
@@ -203,21 +230,23 @@ def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fracti
                                                      max(p["erange"][1], d["erange"][1])))
             continue
         merged.append(d)
-    kept = merged
-    out = []
-    for d in kept:
-        tip = d["tip"]
-        ratio = (d["order"], 1)
-        mode, m = 0, float("nan")
-        if with_mode:
-            try:
-                mode, m = closest_mode(branch, harmonic_shape(branch, tip, d["order"], n))
-            except Exception:  # pragma: no cover
-                pass
-        out.append(Tongue(ratio=tuple(int(r) for r in ratio), order=d["order"], start=d["start"], tip=tip,
-                          end=d["end"], energy_range=d["erange"], direction=d["direction"],
-                          tip_energy=float(E[tip]), tip_frequency_hz=float(branch.frequency_hz[tip]),
-                          entry_frequency_hz=float(branch.frequency_hz[d["start"]]), tip_fraction=d["frac"],
-                          complete=d["complete"], kind=d["kind"], mode=mode, mac=m,
-                          fractions=F[d["start"]: d["end"] + 1].copy()))
-    return out
+    return merged
+
+
+def _tongue(branch, d, F, n, with_mode):
+    """The Tongue of a kept excursion dict."""
+    E = branch.energy
+    tip = d["tip"]
+    ratio = (d["order"], 1)
+    mode, m = 0, float("nan")
+    if with_mode:
+        try:
+            mode, m = closest_mode(branch, harmonic_shape(branch, tip, d["order"], n))
+        except Exception:  # pragma: no cover
+            pass
+    return Tongue(ratio=tuple(int(r) for r in ratio), order=d["order"], start=d["start"], tip=tip,
+                  end=d["end"], energy_range=d["erange"], direction=d["direction"],
+                  tip_energy=float(E[tip]), tip_frequency_hz=float(branch.frequency_hz[tip]),
+                  entry_frequency_hz=float(branch.frequency_hz[d["start"]]), tip_fraction=d["frac"],
+                  complete=d["complete"], kind=d["kind"], mode=mode, mac=m,
+                  fractions=F[d["start"]: d["end"] + 1].copy())
