@@ -16,9 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -32,24 +30,12 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 import nnm_solver as nnm  # noqa: E402
 from nnm_viewer.animation import MeshMapper, orbit_animation  # noqa: E402
+from nnm_viewer.browser import (CHROMIUM, VIEWPORT, free_port, launch_chromium, screen_box,  # noqa: E402
+                                selected_text, viewer_process, wait_selection_change)
 from nnm_viewer.fep import axis_ranges  # noqa: E402
 from nnm_viewer.info import point_data  # noqa: E402
 from nnm_viewer.scene import fallback_mesh, project_points as project, view_geometry  # noqa: E402
 from nnm_viewer.state import BranchEntry  # noqa: E402
-
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync"]
-VIEWPORT = {"width": 1600, "height": 900}
-SELECTED_JS = ("() => { const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));"
-               " return p ? p.innerText : ''; }")
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def in_process(model, branch, mesh, picks):
@@ -88,61 +74,55 @@ def in_browser(path, model, branches, mesh, starts, picks):
     from playwright.sync_api import sync_playwright, TimeoutError as PWTimeout
 
     geom = view_geometry(mesh.vertices)
-    exe = shutil.which("nnm-view")
-    cmd = [exe] if exe else [sys.executable, "-m", "nnm_viewer"]
     series = [BranchEntry(b, "").series(1.0) for b in branches]
     ranges = axis_ranges(series)
     first_frames, pick_times = [], []
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        browser = launch_chromium(pw)
         try:
             for run in range(starts):
                 port = free_port()
                 page = browser.new_page(viewport=VIEWPORT)
                 t0 = time.perf_counter()
-                proc = subprocess.Popen(cmd + [str(path), "--port", str(port)], stdout=subprocess.PIPE,
-                                        stderr=subprocess.PIPE, text=True)
                 try:
-                    proc.stdout.readline()
-                    page.goto(f"http://127.0.0.1:{port}/")
-                    page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=60000)
-                    box = page.locator("canvas").first.bounding_box()
-                    xy = project(mesh.vertices[:: max(1, len(mesh.vertices) // 2000)], geom, box)
-                    lo = np.clip(xy.min(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
-                    hi = np.clip(xy.max(axis=0), 0, [VIEWPORT["width"] - 1, VIEWPORT["height"] - 1]).astype(int)
-                    while True:
-                        if blank_fraction(page.screenshot(), (lo[0], lo[1], hi[0] + 1, hi[1] + 1)) > 0.05:
-                            break
-                        if time.perf_counter() - t0 > 120:
-                            raise RuntimeError("the model never appeared")
-                    first_frames.append(time.perf_counter() - t0)
-                    if run == 0:
-                        page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=60000)
-                        time.sleep(2.0)
-                        box = page.locator("canvas").first.bounding_box()   # after the panels docked
-                        N = len(series[0])
-                        for k in range(picks):
-                            target = int(round((k + 1) * (N - 1) / (picks + 1)))
-                            p3 = geom.board.to_world(series[0].energy[[target]], series[0].frequency[[target]],
-                                                     ranges)
-                            (px, py), = project(p3, geom, box)
-                            before = page.evaluate(SELECTED_JS)
-                            t1 = time.perf_counter()
-                            page.mouse.click(px, py)
-                            try:   # any new selection counts (neighbouring spheres may overlap)
-                                page.wait_for_function(f"(old) => ({SELECTED_JS})() != old", arg=before,
-                                                       timeout=30000)
-                                pick_times.append(time.perf_counter() - t1)
-                            except PWTimeout:
-                                print(f"  click on point {target} selected nothing", file=sys.stderr)
+                    with viewer_process(path, port):
+                        page.goto(f"http://127.0.0.1:{port}/")
+                        page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=60000)
+                        x0, y0, x1, y1 = screen_box(mesh.vertices, geom, page.locator("canvas").first.bounding_box())
+                        while blank_fraction(page.screenshot(), (x0, y0, x1 + 1, y1 + 1)) <= 0.05:
+                            if time.perf_counter() - t0 > 120:
+                                raise RuntimeError("the model never appeared")
+                        first_frames.append(time.perf_counter() - t0)
+                        if run == 0:
+                            pick_times += pick_points(page, series[0], geom, ranges, picks, PWTimeout)
                 finally:
                     page.close()
-                    proc.terminate()
-                    proc.wait(10)
         finally:
             browser.close()
     med = (lambda v: statistics.median(v) if v else float("nan"))
     return med(first_frames), len(first_frames), med(pick_times), len(pick_times)
+
+
+def pick_points(page, series, geom, ranges, picks, timeout_error):
+    """Seconds from a mouse click on ``picks`` FEP points of ``series`` to the page showing a new selection."""
+    page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=60000)
+    time.sleep(2.0)
+    box = page.locator("canvas").first.bounding_box()   # after the panels docked
+    N = len(series)
+    times = []
+    for k in range(picks):
+        target = int(round((k + 1) * (N - 1) / (picks + 1)))
+        p3 = geom.board.to_world(series.energy[[target]], series.frequency[[target]], ranges)
+        (px, py), = project(p3, geom, box)
+        before = selected_text(page)
+        t1 = time.perf_counter()
+        page.mouse.click(px, py)
+        try:   # any new selection counts (neighbouring spheres may overlap)
+            wait_selection_change(page, before, timeout_ms=30000)
+            times.append(time.perf_counter() - t1)
+        except timeout_error:
+            print(f"  click on point {target} selected nothing", file=sys.stderr)
+    return times
 
 
 def main():

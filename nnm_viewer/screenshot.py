@@ -5,33 +5,18 @@
 Starts ``nnm-view`` on FILE, opens it in Chromium (Playwright, software WebGL), picks the point
 at fraction ``--point`` of the first branch by clicking its sphere in the 3D FEP, pauses the
 animation at a phase of large displacement, and saves the page.  Needs the ``playwright``
-package and /usr/bin/chromium (never downloads a browser).
+package and /usr/bin/chromium (never downloads a browser; see browser.py).
 """
 from __future__ import annotations
 
 import argparse
-import shutil
-import socket
-import subprocess
 import sys
 import time
 
 import numpy as np
 
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync"]
-
-
-_SELECTED_JS = ("() => { const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));"
-                " return p ? p.innerText : ''; }")
-
-
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from .browser import CLOSE_NOTIFICATIONS_JS, free_port, launch_chromium, open_page, selected_text, \
+    viewer_process, wait_selection_change
 
 
 def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
@@ -53,39 +38,27 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
     series = [BranchEntry(b, "").series(1.0) for b in branches]
     ranges = axis_ranges(series)
     target = int(round(point * (len(series[branch]) - 1)))
-    port = _free_port()
-    exe = shutil.which("nnm-view")
-    cmd = ([exe] if exe else [sys.executable, "-m", "nnm_viewer"]) + [str(path), "--port", str(port)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        proc.stdout.readline()
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-            try:
-                page = browser.new_page(viewport={"width": size[0], "height": size[1]})
-                page.goto(f"http://127.0.0.1:{port}/")
-                page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=120000)
-                time.sleep(3.0)
-                box = page.locator("canvas").first.bounding_box()
-                p3 = geom.board.to_world(series[branch].energy[[target]], series[branch].frequency[[target]], ranges)
-                (px, py), = project_points(p3, geom, box)
-                before = page.evaluate(_SELECTED_JS)
-                page.mouse.click(px, py)
-                page.wait_for_function(f"(old) => ({_SELECTED_JS})() != old", arg=before, timeout=60000)
-                if tab != "FEP":
-                    page.get_by_role("tab", name=tab).click()
-                time.sleep(5.0)
-                # close the "software WebGL rendering" notice of headless Chromium
-                page.evaluate("document.querySelectorAll('button.mantine-Notification-closeButton')"
-                              ".forEach(b => b.click())")
-                time.sleep(1.0)
-                page.screenshot(path=str(out))
-                text = page.evaluate(_SELECTED_JS)
-            finally:
-                browser.close()
-    finally:
-        proc.terminate()
-        proc.wait(10)
+    port = free_port()
+    with viewer_process(path, port), sync_playwright() as pw:
+        browser = launch_chromium(pw)
+        try:
+            page = open_page(browser, port, viewport={"width": size[0], "height": size[1]})
+            time.sleep(3.0)
+            box = page.locator("canvas").first.bounding_box()
+            p3 = geom.board.to_world(series[branch].energy[[target]], series[branch].frequency[[target]], ranges)
+            (px, py), = project_points(p3, geom, box)
+            before = selected_text(page)
+            page.mouse.click(px, py)
+            wait_selection_change(page, before)
+            if tab != "FEP":
+                page.get_by_role("tab", name=tab).click()
+            time.sleep(5.0)
+            page.evaluate(CLOSE_NOTIFICATIONS_JS)
+            time.sleep(1.0)
+            page.screenshot(path=str(out))
+            text = selected_text(page)
+        finally:
+            browser.close()
     return text
 
 

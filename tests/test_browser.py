@@ -5,7 +5,6 @@ artifacts/.  Skipped only when /usr/bin/chromium is absent.  (Several tabs: test
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import time
@@ -15,26 +14,16 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
+from nnm_viewer.browser import CHROMIUM, FLAGS, VIEWPORT, free_port, selected_text
 from nnm_viewer.fep import axis_ranges
 from nnm_viewer.scene import fallback_mesh, project_points, view_geometry
 from nnm_viewer.state import BranchEntry
 
-CHROMIUM = "/usr/bin/chromium"
 ROOT = Path(__file__).resolve().parents[1]
 ASSET = Path(os.environ.get("NNM_BROWSER_TEST_FILE", ROOT / "assets" / "paris.h5"))  # override: another model
 ARTIFACTS = ROOT / "artifacts"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-         "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync"]
-VIEWPORT = {"width": 1600, "height": 900}
 
 pytestmark = pytest.mark.browser
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def viewer_file(tmp_path):
@@ -75,13 +64,6 @@ def well_separated_point(series, geom, ranges, box, exclude):
 
 def _phase(t0, name):
     print(f"  [{time.time() - t0:5.1f} s] {name}", flush=True)
-
-
-def selected_text(page):
-    return page.evaluate("""() => {
-        const p = [...document.querySelectorAll('p')].find(e => e.innerText.includes('Selected:'));
-        return p ? p.innerText : '';
-    }""")
 
 
 def test_viewer_in_chromium(tmp_path):
