@@ -1,6 +1,6 @@
 """From a periodic orbit x(t) to an animated, coloured mesh (GLB with morph targets).
 
-The orbit over one period T is fitted by a Fourier series
+The orbit, sampled uniformly over one period T, is written as a Fourier series
     x(t) = c_0 + sum_{k=1..H} a_k cos(k w t) + b_k sin(k w t),   w = 2 pi / T,
 so every harmonic the solver found is kept (not only the linear mode shape).  Mapped to
 the mesh, each a_k, b_k becomes a morph target (vertex displacements, m); the animation
@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nnm_solver import fourier_coefficients
+
 from .glb import build_glb
 
 #: harmonics whose largest vertex amplitude is below this fraction of the largest are dropped
@@ -20,32 +22,32 @@ HARMONIC_CUTOFF = 1e-4
 
 
 def fourier_fit(t, x, period, n_harm=15):
-    """Least-squares Fourier coefficients of samples x (S, n) at times t (S,) s.
+    """Real Fourier coefficients of samples x (S, n) at uniform times t (S,) s over one period.
 
     Returns (orders (2H+1,), coeffs (2H+1, n)): rows are c_0, a_1, b_1, a_2, b_2, ...;
-    ``orders`` gives the harmonic number k of each row.  Works whether or not the sample
-    at t = T (a repeat of t = 0) is included.
+    ``orders`` gives the harmonic number k of each row; H = min(n_harm, (S - 1) // 2).  The
+    coefficients are the solver's (``fourier_coefficients``: x = c_0 + sum Re(c_k exp(i k w t)),
+    so a_k = Re c_k, b_k = -Im c_k).  A last sample at t[0] + T (a repeat
+    of the first) is dropped.
     """
     t = np.asarray(t, dtype=float).reshape(-1)
     x = np.asarray(x, dtype=float).reshape(len(t), -1)
-    w = 2 * np.pi / float(period)
-    phases = np.mod(t * w, 2 * np.pi)
-    n_unique = len(np.unique(np.round(phases, 9)))
-    H = int(max(1, min(n_harm, (n_unique - 1) // 2)))
-    B, orders = basis(t * w, H)
-    coeffs = np.linalg.pinv(B) @ x          # B is small (S x 2H+1): cheaper than lstsq with many DOFs
+    period = float(period)
+    if len(t) > 2 and abs(t[-1] - t[0] - period) < 1e-9 * period:
+        t, x = t[:-1], x[:-1]
+    dt = np.diff(t)
+    if len(t) < 3 or np.ptp(dt) > 1e-6 * period or abs(len(t) * dt.mean() - period) > 1e-6 * period:
+        raise ValueError(f"fourier_fit needs samples uniform over one period ({period:.4g} s), "
+                         f"got {len(t)} samples from {t[0]:.4g} to {t[-1]:.4g} s")
+    H = int(max(1, min(n_harm, (len(t) - 1) // 2)))
+    c = fourier_coefficients(x, H)                                   # phases measured from t[0]
+    c *= np.exp(-2j * np.pi * np.arange(H + 1) * t[0] / period)[:, None]
+    orders = np.concatenate([[0], np.repeat(np.arange(1, H + 1), 2)])
+    coeffs = np.empty((2 * H + 1, x.shape[1]))
+    coeffs[0] = c[0].real
+    coeffs[1::2] = c[1:].real
+    coeffs[2::2] = -c[1:].imag
     return orders, coeffs
-
-
-def basis(theta, H):
-    """Fourier basis at phase angles theta (rad): (len(theta), 2H+1) and the orders (2H+1,)."""
-    theta = np.asarray(theta, dtype=float).reshape(-1)
-    cols = [np.ones_like(theta)]
-    orders = [0]
-    for k in range(1, H + 1):
-        cols += [np.cos(k * theta), np.sin(k * theta)]
-        orders += [k, k]
-    return np.stack(cols, axis=1), np.array(orders)
 
 
 @dataclass

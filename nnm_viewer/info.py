@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import nnm_solver
+from nnm_solver import analysis, cubic_scaling, fourier_amplitudes
 
 from .animation import format_length
 
@@ -39,16 +40,17 @@ class PointData:
         displacements / sqrt(ratio), energy / ratio, same frequency and multipliers)."""
         if abs(ratio - 1.0) < 1e-15:
             return self
-        r = 1.0 / np.sqrt(ratio)
-        return PointData(self.energy / ratio, self.frequency, self.period, self.stable, self.floquet,
-                         self.mac, self.t, self.x * r, self.harmonics * r, self.note, self.description)
+        law = cubic_scaling(ratio)
+        return PointData(self.energy * law.energy, self.frequency, self.period, self.stable, self.floquet,
+                         self.mac, self.t, self.x * law.amplitude, self.harmonics * law.amplitude, self.note,
+                         self.description)
 
 
 def orbit_samples(branch):
-    """Samples per period for the viewer: the branch's own Newmark steps per period (the
-    orbit the solver converged), at least 64 and at most 400."""
-    settings = getattr(branch, "settings", None) or {}
-    return int(np.clip(int(settings.get("steps_per_period", 200)), 64, 400))
+    """Samples per period for the viewer: the solver's (``analysis.orbit_samples``: for shooting
+    branches their own Newmark steps per period, the orbit the solver converged), at least 64 and
+    at most 400."""
+    return int(np.clip(analysis.orbit_samples(branch), 64, 400))
 
 
 def point_data(branch, s, samples=None):
@@ -69,7 +71,7 @@ def point_data(branch, s, samples=None):
             b, j = branch, i
             t, x = b.motion(j, samples=samples)
             note = f"the orbit between points could not be integrated; showing computed point {i}"
-    harm = harmonic_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
+    harm = fourier_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
     try:
         mac = np.asarray(b.mac_to_linear(j), dtype=float)
     except Exception:
@@ -82,18 +84,6 @@ def point_data(branch, s, samples=None):
     return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
                      stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
                      x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description)
-
-
-def harmonic_amplitudes(x, n):
-    """Fourier amplitudes (n+1, n_dof) m of samples x (S, n_dof) uniform over one period
-    (endpoint excluded), like Branch.harmonics but without integrating the orbit again."""
-    S = len(x)
-    X = np.fft.rfft(x, axis=0) / S
-    amps = np.abs(X[: n + 1])
-    amps[1:] *= 2.0
-    if amps.shape[0] < n + 1:
-        amps = np.vstack([amps, np.zeros((n + 1 - amps.shape[0], x.shape[1]))])
-    return amps
 
 
 def parse_dofs(text, n, auto):

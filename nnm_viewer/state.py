@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import nnm_solver
+from nnm_solver import cubic_scaling
 
 from .fep import FepSeries
 
@@ -47,12 +48,12 @@ class BranchEntry:
     def series(self, factor=1.0, label=None):
         """FEP arrays when every k3 is ``factor`` x the file's: exact scaling law
         (frequency unchanged, energy / ratio), ratio = factor / k3_factor."""
-        ratio = factor / self.k3_factor
         b = self.branch
         if b is None or len(b) == 0:
             z = np.zeros(0)
             return FepSeries(z, z, np.zeros(0, bool), label or self.label)
-        return FepSeries(np.asarray(b.energy, dtype=float) / ratio, np.asarray(b.frequency_hz, dtype=float),
+        law = cubic_scaling(factor / self.k3_factor)
+        return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
                          np.asarray(b.stable, dtype=bool), label or self.label)
 
 

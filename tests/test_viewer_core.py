@@ -5,10 +5,11 @@ import struct
 import numpy as np
 import pytest
 
+from nnm_solver import ShootingSettings, fourier_amplitudes
 from nnm_viewer.animation import format_length, fourier_fit, orbit_animation
 from nnm_viewer.fep import (FepSeries, axis_ranges, energy_to_s, interp_at, render_fep)
 from nnm_viewer.glb import build_glb, read_glb_json
-from nnm_viewer.info import harmonic_amplitudes, parse_dofs
+from nnm_viewer.info import parse_dofs
 from nnm_viewer.scene import fallback_mesh, view_geometry
 
 
@@ -132,7 +133,7 @@ def test_info_helpers():
         parse_dofs("a", 5, [])
     t = np.arange(64) / 64
     x = np.stack([np.cos(2 * np.pi * t) + 0.1 * np.cos(6 * np.pi * t)], axis=1)
-    h = harmonic_amplitudes(x, 15)
+    h = fourier_amplitudes(x, 15)
     assert h.shape == (16, 1) and h[1, 0] == pytest.approx(1.0) and h[3, 0] == pytest.approx(0.1)
     assert format_length(0.0123) == "12.3 mm" and format_length(2.0) == "2 m"
 
@@ -143,7 +144,8 @@ def test_point_data_falls_back_to_a_computed_point():
     class Stub:
         """Branch-like: integrating interpolated states fails, computed points work."""
         energy, frequency_hz, period = np.array([1.0, 2.0]), np.array([1.0, 1.1]), np.array([1.0, 0.9])
-        stable, floquet, settings = np.array([True, False]), np.ones((2, 4), complex), {"steps_per_period": 64}
+        stable, floquet = np.array([True, False]), np.ones((2, 4), complex)
+        settings = ShootingSettings(steps_per_period=64)
 
         def __init__(self, interpolated=False):
             self.interpolated = interpolated
