@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import NNMInputError
-from .jit import jit
+from .jit import jit_inline
 
 __all__ = ["CubicSpring", "ElementSet", "law_force", "law_force_tangent"]
 
@@ -116,23 +116,51 @@ class ElementSet:
                 np.ascontiguousarray(self.coefficients))
 
 
-@jit
+@jit_inline
+def _ipow(x, p):
+    """x ** p for an integer p >= 0 by repeated squaring (faster than pow for the small powers here)."""
+    r = 1.0
+    while p > 0:
+        if p & 1:
+            r *= x
+        x *= x
+        p >>= 1
+    return r
+
+
+@jit_inline
 def law_force(d, powers, coeffs):
     """g(d) (n_s,) of the polynomial laws (numba kernel; see ElementSet)."""
-    g = np.zeros(d.shape[0])
-    for j in range(powers.shape[0]):
-        g += coeffs[:, j] * d ** powers[j]
+    ns = d.shape[0]
+    g = np.empty(ns)
+    for s in range(ns):
+        x = d[s]
+        acc = 0.0
+        for j in range(powers.shape[0]):
+            c = coeffs[s, j]
+            if c != 0.0:
+                acc += c * x ** powers[j]
+        g[s] = acc
     return g
 
 
-@jit
+@jit_inline
 def law_force_tangent(d, powers, coeffs):
     """(g(d), g'(d)) (n_s,) each, of the polynomial laws (numba kernel)."""
-    g = np.zeros(d.shape[0])
-    t = np.zeros(d.shape[0])
-    for j in range(powers.shape[0]):
-        p = powers[j]
-        dp1 = d ** (p - 1)
-        g += coeffs[:, j] * dp1 * d
-        t += p * coeffs[:, j] * dp1
+    ns = d.shape[0]
+    g = np.empty(ns)
+    t = np.empty(ns)
+    for s in range(ns):
+        x = d[s]
+        acc = 0.0
+        dacc = 0.0
+        for j in range(powers.shape[0]):
+            c = coeffs[s, j]
+            if c != 0.0:
+                p = powers[j]
+                xp1 = x ** (p - 1)
+                acc += c * xp1 * x
+                dacc += p * c * xp1
+        g[s] = acc
+        t[s] = dacc
     return g, t

@@ -41,8 +41,8 @@ NEWTON_RTOL = 1e-13
 
 @_jit
 def _solve_springs(dlin, G, powers, coeffs, dguess):
-    """Solve d + G g(d) = dlin (n_s unknowns) by damped Newton; returns (d, J, D, ok), J = I + G diag(g'),
-    D = g'(d) at the solution.
+    """Solve d + G g(d) = dlin (n_s unknowns) by damped Newton; returns (d, J, g, D, ok), J = I + G diag(g'),
+    g = g(d) and D = g'(d) at the solution.
 
     The Newton step is halved until the residual decreases (softening springs make the step
     equation fold; a full step from the explicit guess can overshoot near the fold).
@@ -56,20 +56,20 @@ def _solve_springs(dlin, G, powers, coeffs, dguess):
     J = np.eye(ns) + G * D[None, :]
     for _ in range(NEWTON_MAX):
         if nF <= NEWTON_RTOL * scale:
-            return d, J, D, True
+            return d, J, g, D, True
         delta = np.linalg.solve(J, F)
         lam = 1.0
         for _ in range(30):
             d_try = d - lam * delta
-            F_try = d_try + G @ law_force(d_try, powers, coeffs) - dlin
+            g_try, D_try = law_force_tangent(d_try, powers, coeffs)
+            F_try = d_try + G @ g_try - dlin
             n_try = np.sqrt(np.sum(F_try * F_try))
             if n_try < nF or lam < 1e-8:
                 break
             lam *= 0.5
-        d, F, nF = d_try, F_try, n_try
-        g, D = law_force_tangent(d, powers, coeffs)
+        d, F, nF, g, D = d_try, F_try, n_try, g_try, D_try
         J = np.eye(ns) + G * D[None, :]
-    return d, J, D, nF <= 1e-9 * scale
+    return d, J, g, D, nF <= 1e-9 * scale
 
 
 @_jit
@@ -83,8 +83,8 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S):
         return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
     dlin = Bq @ y
     dguess = Bq @ (q + h * v + 0.5 * h * h * a)
-    d1, J, D1, ok = _solve_springs(dlin, G, powers, coeffs, dguess)
-    fnl = Bq.T @ law_force(d1, powers, coeffs)
+    d1, J, g1, D1, ok = _solve_springs(dlin, G, powers, coeffs, dguess)
+    fnl = Bq.T @ g1
     q1 = (r - fnl) / S
     a1 = -omega2 * q1 - fnl
     v1 = v + 0.5 * h * (a + a1)
