@@ -156,10 +156,9 @@ class FEModel:
         """Sparse stiffness of the elements of one part (for strain-energy splits)."""
         return self._assemble("k", {part})
 
-    def part_mass(self, part):
-        """Mass (kg) of one part (translational, one direction)."""
-        M = self._assemble("m", {part})
-        return float(M.diagonal()[0::6].sum() + (M[0::6, :][:, 0::6].sum() - M.diagonal()[0::6].sum()))
+    def element_dofs(self, part):
+        """Global DOF indices (E, nd) of every element block of one part (a list, one array per block)."""
+        return [dofs for p, dofs, _, _ in self._blocks if p == part]
 
     def total_mass(self, M=None):
         """Total translational mass (kg) from the assembled M (x direction)."""

@@ -111,11 +111,9 @@ def tune_low_modes(ac, low=TABLE2_HZ[:9], gear_modes=None):
 def hinge_inertia(ac, part):
     """Rotary inertia (kg m^2) of a control surface about its hinge line and its hinge count."""
     fe = ac.fe
-    blocks = [b for b in fe._blocks if b[0] == part]
-    nodes = np.unique(np.concatenate([b[1][:, ::6].ravel() // 6 for b in blocks]))
-    hb = [b for b in fe._blocks if b[0] == f"hinge {part.split()[0]}" and b[1].shape[1] == 12
-          and b[1][0, 0] % 6 == 0]
-    hn = [b[1][0, 0] // 6 for b in hb if b[1][0, 0] // 6 in set(nodes)]
+    nodes = np.unique(np.concatenate([dofs[:, ::6].ravel() // 6 for dofs in fe.element_dofs(part)]))
+    hb = [dofs for dofs in fe.element_dofs(f"hinge {part.split()[0]}") if dofs.shape[1] == 12 and dofs[0, 0] % 6 == 0]
+    hn = [dofs[0, 0] // 6 for dofs in hb if dofs[0, 0] // 6 in set(nodes)]
     a = fe.nodes[hn[-1]] - fe.nodes[hn[0]]
     a /= np.linalg.norm(a)
     r = fe.nodes[nodes] - fe.nodes[hn[0]]
