@@ -1,10 +1,13 @@
 """nnm_viewer: explore nonlinear normal modes in the browser (viser + trimesh).
 
 Run ``nnm-view FILE.h5`` and open the printed address.  Modules: ``app`` (CLI, server),
-``controls`` (one session per tab: state and callbacks), ``layout`` (its controls and
-panels), ``drawing`` (coalesced redraws), ``scene`` (mesh, camera, the clickable FEP), ``fep`` (FEP image and energy mapping), ``animation``/``glb`` (orbit as a
-GLB with morph targets), ``info`` (point information), ``state``/``worker`` (shared
-branches, background jobs), ``demo`` (a 2-DOF demo file), ``screenshot`` (docs images).
+``controls`` (``Session``: one tab's state and callbacks), ``layout`` (its GUI handles),
+``drawing`` (coalesced redraws, control panel), ``fep_view`` (branch list, clickable FEP,
+sliders), ``point_view`` (picked orbit: animation, Point tab), ``scene`` (mesh, camera, the 3D
+FEP board), ``fep`` (FEP image and energy mapping), ``animation``/``glb`` (orbit as a GLB with
+morph targets), ``info`` (point information), ``state``/``worker`` (shared branches, background
+jobs), ``demo`` (a 2-DOF demo file), ``browser`` (headless Chromium helpers), ``screenshot``
+(docs images).
 """
 
 import os as _os

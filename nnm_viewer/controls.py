@@ -1,37 +1,56 @@
-"""One browser tab: its controls, its selection and the drawing of its scene.
+"""One browser tab: its view state, the callbacks of its controls, and what they redraw.
 
-Callbacks only change the session state under ``self.lock`` and ``request`` redraws; a
-per-session draw thread coalesces the requests (latest state wins), so dragging a slider
-never queues up stale work and the slider being dragged is never reset under the user.
+A ``Session`` owns its state (selection, animation and stiffness settings, the point shown),
+a ``Layout`` (the viser handles, ``session.layout``) and a ``Drawing`` (the draw steps,
+``session.drawing``).  Callbacks only change the state under ``self.lock`` and ``request``
+redraws; the drawing coalesces the requests in a per-tab thread (latest state wins), so dragging a
+slider never queues up stale work and the slider being dragged is never reset under the user.
 With ``sync=True`` (tests) every request is drawn at once in the caller's thread.
 """
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 
+from nnm_solver import cubic_scaling
+
 from . import scene as sc
-from .drawing import ALL_KINDS, SessionDrawing
-from .fep import FepRenderer, energy_to_s
-from .layout import SessionLayout
+from .drawing import ALL_KINDS, Drawing
+from .fep import axis_ranges, energy_to_s
+from .fep_view import entry_option
+from .layout import Layout
 from .worker import JobRunner, one_line
 
+#: auto amplification: the peak displacement is shown as this fraction of the model size
+AUTO_PEAK_FRACTION = 0.12
 
-class Session(SessionLayout, SessionDrawing):
+#: controls that set one state field from their value: handle -> (field, type, redraws)
+SIMPLE_CONTROLS = {
+    "h_along": ("s", float, ("fep", "sliders:energy", "point")),
+    "h_play": ("playing", bool, ("controls", "glb")),
+    "h_phase": ("phase", float, ("glb",)),
+    "h_auto": ("auto_amp", bool, ("controls", "glb")),
+    "h_amp": ("amp_log", float, ("glb",)),
+    "h_speed": ("speed", float, ("glb",)),
+    "h_board": ("show_board", bool, ("branches",)),
+    "h_zoom": ("zoom", bool, ("branches",)),
+    "h_k3": ("factor_log", float, ("branches", "point", "controls")),
+    "h_dofs": ("dofs_text", str, ("info",)),
+}
+
+
+class Session:
     """State and GUI of one tab. ``api`` is a viser ``ClientHandle`` (one tab) or the
     ``ViserServer`` (shared by all tabs, used by tests); both have ``.gui`` and ``.scene``."""
 
     def __init__(self, api, shared, sync=False, start_job=None):
         self.api = api
-        self.gui = api.gui
         self.scene = api.scene
         self.shared = shared
         self.model = shared.model
         self.mesh = shared.mesh
         self.geom = sc.view_geometry(self.mesh.vertices)
-        self.sync = sync
         self.start_job = start_job
         self.lock = threading.RLock()
         # ---- view state (under self.lock)
@@ -47,62 +66,51 @@ class Session(SessionLayout, SessionDrawing):
         self.zoom = False            # FEP axes fitted to the selected branch only
         self.dofs_text = "auto"
         self.message = ""            # last status line for this tab
-        # ---- drawing machinery
-        self._dirty: set[str] = set()
-        self._wake = threading.Event()
-        self._draw_lock = threading.RLock()
-        self._closed = False
-        self._tl = threading.local()
-        self._anim_cache: dict = {}
-        self._point_cache: dict = {}
-        self._ranges = None
-        self._board_handles = {}
-        self._fep = FepRenderer(size=(480, 350))
-        self._charts = {}            # uPlot handles of the Point tab: name -> (handle, n_series)
-        self._ratio = 1.0
+        # ---- the point shown (written by the drawing, under self.lock)
+        self.current_point = None    # PointData shown (scaled to the current k3), or None
+        self.current_anim = None     # its OrbitAnimation (for the branch's own k3)
+        self.current_uid = None      # uid of the branch it belongs to
+        self.ratio = 1.0             # k3 factor of the view / k3 factor of that branch
         self.last_runner = None      # the JobRunner started from this tab
-        self.last_glb = None         # bytes of the last GLB sent (tests, benchmark)
-        self.last_pick_time = None
-        self.anim_ready_time = None
-        self.current_point = None    # PointData shown (scaled), or None
-        self.current_anim = None
-        self._build_gui()
-        entries = shared.snapshot()
-        first = next((e for e in entries if len(e)), None)
+        self.layout = Layout(api.gui, self.model, shared.linear_freqs)
+        self.drawing = Drawing(self, sync=sync)
+        self.layout.connect(self._callbacks())
+        first = next((e for e in shared.snapshot() if len(e)), None)
         if first is not None:
             self.sel_uid = first.uid
         shared.subscribe(self._on_shared)
-        if not sync:
-            self._thread = threading.Thread(target=self._loop, name="nnm-view-draw", daemon=True)
-            self._thread.start()
+        self.drawing.start()
         self.request(*ALL_KINDS)
 
-    # ================================================================== GUI
+    def __getattr__(self, name):
+        """The GUI handles ``h_*`` of ``self.layout`` read as ``session.h_*`` (tests, scripts)."""
+        if name.startswith("h_") and "layout" in self.__dict__:
+            return getattr(self.layout, name)
+        raise AttributeError(f"'Session' object has no attribute {name!r}")
 
-    def _cb(self, fn):
-        """Wrap a callback: ignore programmatic updates, report exceptions in the page."""
-        def wrapped(event=None):
-            if getattr(self._tl, "programmatic", False):
-                return
-            try:
-                fn(event)
-            except Exception as exc:
-                self.show_error(one_line(exc))
-        return wrapped
+    # ================================================================== drawing
+    def request(self, *kinds):
+        """Ask for redraws (see Drawing.request)."""
+        self.drawing.request(*kinds)
 
-    def _set(self, handle, **props):
-        """Set handle properties from Python without triggering our callbacks."""
-        self._tl.programmatic = True
-        try:
-            for k, v in props.items():
-                if k == "value":
-                    if handle.value != v:
-                        handle.value = v
-                elif getattr(handle, k) != v:
-                    setattr(handle, k, v)
-        finally:
-            self._tl.programmatic = False
+    def close(self):
+        self.drawing.close()
+        self.shared.unsubscribe(self._on_shared)
 
+    @property
+    def last_glb(self):
+        """Bytes of the last GLB sent to the scene (tests, benchmark)."""
+        return self.drawing.point.last_glb
+
+    @property
+    def _charts(self):
+        return self.drawing.point.charts
+
+    @property
+    def _board_handles(self):
+        return self.drawing.fep.board_handles
+
+    # ================================================================== state queries
     @property
     def factor(self):
         return float(10.0 ** self.factor_log)
@@ -115,27 +123,76 @@ class Session(SessionLayout, SessionDrawing):
                 return e
         return None
 
-    def _on_branch(self, _):
-        label = self.h_branch.value
+    def _series(self):
+        """(entries, their FEP series at the current k3)."""
         entries = self.shared.snapshot()
-        for i, e in enumerate(entries):
-            if self._entry_option(i, e) == label:
-                with self.lock:
-                    changed = e.uid != self.sel_uid
-                    self.sel_uid, self.s = e.uid, 0.0
-                self.mark_pick()
-                self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
+        return entries, [e.series(self.factor) for e in entries]
+
+    def _view_ranges(self, entries, series):
+        """FEP axis ranges: all branches, or the selected one when zoomed."""
+        if self.zoom:
+            sel = [s for e, s in zip(entries, series) if e.uid == self.sel_uid and len(s)]
+            if sel:
+                return axis_ranges(sel)
+        return axis_ranges(series)
+
+    def amplification(self):
+        """Display amplification and the physical peak displacement (m) of the shown orbit."""
+        anim = self.current_anim
+        if anim is None:
+            return 1.0, 0.0
+        peak = anim.peak_max * cubic_scaling(self.ratio).amplitude
+        if self.auto_amp:
+            amp = AUTO_PEAK_FRACTION * self.geom.size / peak if peak > 0 else 1.0
+        else:
+            amp = 10.0 ** self.amp_log
+        return float(amp), float(peak)
+
+    # ================================================================== callbacks
+    def _cb(self, fn):
+        """Wrap a callback: ignore programmatic updates, report exceptions in the page."""
+        def wrapped(event=None):
+            if self.layout.programmatic:
+                return
+            try:
+                fn(event)
+            except Exception as exc:
+                self.show_error(one_line(exc))
+        return wrapped
+
+    def _callbacks(self):
+        """The callback of every control, by handle name (wired by Layout.connect)."""
+        cbs = {name: self._set_field(name) for name in SIMPLE_CONTROLS}
+        cbs.update(h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
+                   h_recompute=self._on_recompute, h_start=self._on_start, h_stop=self._on_stop,
+                   h_save=self._on_save, h_dismiss=self._dismiss_error)
+        return {name: self._cb(fn) for name, fn in cbs.items()}
+
+    def _set_field(self, name):
+        """Callback of a SIMPLE_CONTROLS handle: copy its value into its state field, redraw."""
+        field, kind, redraws = SIMPLE_CONTROLS[name]
+
+        def on_update(_):
+            with self.lock:
+                setattr(self, field, kind(getattr(self.layout, name).value))
+            self.request(*redraws)
+        return on_update
+
+    def _on_branch(self, _):
+        for i, e in enumerate(self.shared.snapshot()):
+            if entry_option(i, e) == self.h_branch.value:
+                self._select_uid(e.uid, 0.0)
                 return
 
     def select(self, index, s):
         """Select point ``s`` (fractional index) of branch ``index`` (position in the list)."""
-        entries = self.shared.snapshot()
-        e = entries[index]
+        e = self.shared.snapshot()[index]
+        self._select_uid(e.uid, float(np.clip(s, 0, max(len(e) - 1, 0))))
+
+    def _select_uid(self, uid, s):
         with self.lock:
-            changed = e.uid != self.sel_uid
-            self.sel_uid = e.uid
-            self.s = float(np.clip(s, 0, max(len(e) - 1, 0)))
-        self.mark_pick()
+            changed = uid != self.sel_uid
+            self.sel_uid, self.s = uid, float(s)
         self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
 
     def pick(self, uid, instance_index):
@@ -146,9 +203,6 @@ class Session(SessionLayout, SessionDrawing):
         if idx is not None:
             self.select(idx, int(instance_index))
 
-    def mark_pick(self):
-        self.last_pick_time = time.perf_counter()
-
     def _on_energy(self, _):
         e = self.selected_entry()
         if e is None or not len(e):
@@ -158,71 +212,18 @@ class Session(SessionLayout, SessionDrawing):
             self.s = energy_to_s(ser.energy, 10.0 ** float(self.h_energy.value), self.s)
         self.request("fep", "sliders:along", "point")
 
-    def _on_along(self, _):
-        with self.lock:
-            self.s = float(self.h_along.value)
-        self.request("fep", "sliders:energy", "point")
-
-    def _on_play(self, _):
-        with self.lock:
-            self.playing = bool(self.h_play.value)
-        self._set(self.h_phase, visible=not self.playing)
-        self.request("glb")
-
-    def _on_phase(self, _):
-        with self.lock:
-            self.phase = float(self.h_phase.value)
-        self.request("glb")
-
-    def _on_auto(self, _):
-        with self.lock:
-            self.auto_amp = bool(self.h_auto.value)
-        self._set(self.h_amp, disabled=self.auto_amp)
-        self.request("glb")
-
-    def _on_amp(self, _):
-        with self.lock:
-            self.amp_log = float(self.h_amp.value)
-        self.request("glb")
-
-    def _on_speed(self, _):
-        with self.lock:
-            self.speed = float(self.h_speed.value)
-        self.request("glb")
-
-    def _on_board(self, _):
-        with self.lock:
-            self.show_board = bool(self.h_board.value)
-        self.request("branches")
-
     def _on_reset_camera(self, _):
         cam = getattr(self.api, "camera", None)        # a tab (ClientHandle); tests use the server
         if cam is not None:
             cam.position = tuple(self.geom.camera_position)
             cam.look_at = tuple(self.geom.camera_look_at)
 
-    def _on_zoom(self, _):
-        with self.lock:
-            self.zoom = bool(self.h_zoom.value)
-        self.request("branches")
-
-    def _on_k3(self, _):
-        with self.lock:
-            self.factor_log = float(self.h_k3.value)
-        self.request("branches", "point")
-
-    def _on_dofs(self, _):
-        with self.lock:
-            self.dofs_text = str(self.h_dofs.value)
-        self.request("info")
-
     def _on_recompute(self, _):
         e = self.selected_entry()
         if e is None or not len(e):
             raise ValueError("select a branch first")
-        mode = e.mode
         emax = float(np.max(e.series(self.factor).energy))
-        self._start(mode, emax, self.factor)
+        self._start(e.mode, emax, self.factor)
 
     def _on_start(self, _):
         mode = int(str(self.h_mode.value).split(":")[0])
@@ -239,9 +240,10 @@ class Session(SessionLayout, SessionDrawing):
         runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
         runner.start()
         self.last_runner = runner
-        with self.lock:
+        with self.lock:            # the new branch is selected: its points replace the old animation
             self.sel_uid, self.s = runner.entry.uid, 0.0
-        self.request("branches", "progress")
+            self.current_point = self.current_anim = self.current_uid = None
+        self.request("branches", "point", "progress")
 
     def _on_stop(self, _):
         job = self.shared.job
@@ -278,16 +280,15 @@ class Session(SessionLayout, SessionDrawing):
                 except Exception:
                     pass
 
+    # ================================================================== messages
     def show_error(self, msg):
         """Show an error of this tab in the page (the server keeps running)."""
         with self.lock:
             self.message = msg
-        self._set(self.h_error, content=f"**Error:** {msg}", visible=True)
-        self._set(self.h_dismiss, visible=True)
+        self.layout.set(self.h_error, content=f"**Error:** {msg}", visible=True)
+        self.layout.set(self.h_dismiss, visible=True)
 
     def show_status(self, msg):
         with self.lock:
             self.message = msg
-        self._set(self.h_status, content=msg)
-
-    # ================================================================== drawing
+        self.layout.set(self.h_status, content=msg)

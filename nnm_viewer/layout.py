@@ -1,9 +1,12 @@
 """Layout of a tab: the controls (left), the 3D view (centre) and the tabbed panel (right).
 
-``SessionLayout._build_gui`` creates the viser handles of a ``Session`` and wires them to its
-callbacks (defined in controls.py); nothing here holds state.
+``Layout`` creates and holds the viser handles of one tab (``h_*``); it has no view state and no
+behaviour besides ``set`` (update a handle from Python without firing our callbacks) and
+``connect`` (wire the handles to a session's callbacks).
 """
 from __future__ import annotations
+
+import threading
 
 import numpy as np
 import viser
@@ -15,20 +18,44 @@ PANEL_WIDTH = 500
 MAX_MODES_LISTED = 60
 #: modes listed in the Modes tab
 MAX_MODES_TABLE = 200
+#: handles that are buttons (wired on click)
+BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save")
 
 
-class SessionLayout:
-    """Mixin of Session: builds its GUI."""
+def k3_text(factor):
+    """Label under the k3 slider: the factor applied to every k3 of the file."""
+    return "k3 x 1 (as in the file)" if abs(factor - 1.0) < 1e-9 else f"k3 x {factor:.3g} (scaling law)"
 
-    def _build_gui(self):
-        gui = self.gui
-        m = self.model
-        name = m.name or "model"
+
+def mode_label(model, linear_freqs, k):
+    """'k: f Hz label' of linear mode k (1-based)."""
+    labels = model.mode_labels or []
+    lab = f" {labels[k - 1]}" if k - 1 < len(labels) else ""
+    return f"{k}: {linear_freqs[k - 1]:.4g} Hz{lab}"
+
+
+def modes_markdown(model, linear_freqs):
+    """Markdown table of the linear modes (at most MAX_MODES_TABLE rows)."""
+    labels = model.mode_labels or []
+    rows = ["| mode | f (Hz) | label |", "|---|---|---|"]
+    for k in range(min(model.n, MAX_MODES_TABLE)):
+        rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {labels[k] if k < len(labels) else ''} |")
+    more = (f"\n\n({model.n - MAX_MODES_TABLE} more modes not listed)" if model.n > MAX_MODES_TABLE else "")
+    return "**Linear modes**\n\n" + "\n".join(rows) + more
+
+
+class Layout:
+    """The GUI handles of one tab, built on ``gui`` (a tab's or the server's ``.gui``)."""
+
+    def __init__(self, gui, model, linear_freqs):
+        self.gui = gui
+        self._tl = threading.local()
+        name = model.name or "model"
         gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
-        self.h_title = gui.add_markdown(f"**nnm-view** · {name} · {m.n} DOFs · {len(m.springs)} cubic springs")
+        self.h_title = gui.add_markdown(f"**nnm-view** · {name} · {model.n} DOFs · "
+                                        f"{len(model.springs)} cubic springs")
         self.h_error = gui.add_markdown("", visible=False)
         self.h_dismiss = gui.add_button("Dismiss error", visible=False, color="red")
-        self.h_dismiss.on_click(self._cb(self._dismiss_error))
         with gui.add_folder("Selection"):
             self.h_branch = gui.add_dropdown("Branch", options=("(none)",), initial_value="(none)")
             self.h_energy = gui.add_slider("Energy log10(J)", min=-3.0, max=3.0, step=0.01, initial_value=0.0,
@@ -51,7 +78,7 @@ class SessionLayout:
         with gui.add_folder("Nonlinear stiffness"):
             self.h_k3 = gui.add_slider("k3 factor log10", min=-2.0, max=2.0, step=0.05, initial_value=0.0,
                                        marks=((-2, "0.01x"), (-1, "0.1x"), (0, "1x"), (1, "10x"), (2, "100x")))
-            self.h_k3_text = gui.add_markdown("k3 x 1 (as in the file)")
+            self.h_k3_text = gui.add_markdown(k3_text(1.0))
             self.h_recompute = gui.add_button("Recompute at this stiffness", disabled=True,
                                               hint="Background job on the scaled model, to confirm the scaling law")
         self.h_status = gui.add_markdown("")
@@ -68,9 +95,8 @@ class SessionLayout:
             self.h_dofs = gui.add_text("DOFs (0-based)", initial_value="auto",
                                        hint="comma-separated DOF indices, or 'auto'")
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
-            nmodes = min(m.n, MAX_MODES_LISTED)
-            self._mode_options = tuple(self._mode_label(k) for k in range(1, nmodes + 1))
-            self.h_mode = gui.add_dropdown("Mode", options=self._mode_options, initial_value=self._mode_options[0])
+            options = tuple(mode_label(model, linear_freqs, k) for k in range(1, min(model.n, MAX_MODES_LISTED) + 1))
+            self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
             self.h_emin = gui.add_number("Min energy (J), 0 = auto", initial_value=0.0, min=0.0, step=1e-6)
             self.h_emax = gui.add_number("Max energy (J)", initial_value=100.0, min=1e-12, step=1e-6)
             self.h_maxpts = gui.add_number("Max points", initial_value=80, min=2, max=5000, step=1)
@@ -80,43 +106,34 @@ class SessionLayout:
             self.h_progress = gui.add_progress_bar(0.0, animated=False)
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):
-            gui.add_markdown(self._modes_markdown())
+            gui.add_markdown(modes_markdown(model, linear_freqs))
         panel.dock_right()
         panel.set_width(PANEL_WIDTH)
         main = gui.main_panel
         main.dock_left()
         main.set_width(CONTROL_WIDTH)
 
-        self.h_branch.on_update(self._cb(self._on_branch))
-        self.h_energy.on_update(self._cb(self._on_energy))
-        self.h_along.on_update(self._cb(self._on_along))
-        self.h_play.on_update(self._cb(self._on_play))
-        self.h_phase.on_update(self._cb(self._on_phase))
-        self.h_auto.on_update(self._cb(self._on_auto))
-        self.h_amp.on_update(self._cb(self._on_amp))
-        self.h_speed.on_update(self._cb(self._on_speed))
-        self.h_board.on_update(self._cb(self._on_board))
-        self.h_zoom.on_update(self._cb(self._on_zoom))
-        self.h_reset.on_click(self._cb(self._on_reset_camera))
-        self.h_k3.on_update(self._cb(self._on_k3))
-        self.h_recompute.on_click(self._cb(self._on_recompute))
-        self.h_dofs.on_update(self._cb(self._on_dofs))
-        self.h_start.on_click(self._cb(self._on_start))
-        self.h_stop.on_click(self._cb(self._on_stop))
-        self.h_save.on_click(self._cb(self._on_save))
+    def connect(self, callbacks):
+        """Wire the controls to ``callbacks`` (handle name -> callable(event)): buttons on click,
+        the other controls on every update."""
+        for name, fn in callbacks.items():
+            handle = getattr(self, name)
+            (handle.on_click if name in BUTTONS else handle.on_update)(fn)
 
-    def _mode_label(self, k):
-        labels = self.model.mode_labels or []
-        lab = f" {labels[k - 1]}" if k - 1 < len(labels) else ""
-        return f"{k}: {self.shared.linear_freqs[k - 1]:.4g} Hz{lab}"
+    @property
+    def programmatic(self):
+        """True while ``set`` is changing a handle in this thread (our callbacks must ignore it)."""
+        return getattr(self._tl, "programmatic", False)
 
-    def _modes_markdown(self):
-        labels = self.model.mode_labels or []
-        rows = ["| mode | f (Hz) | label |", "|---|---|---|"]
-        for k in range(min(self.model.n, MAX_MODES_TABLE)):
-            rows.append(f"| {k + 1} | {self.shared.linear_freqs[k]:.5g} | {labels[k] if k < len(labels) else ''} |")
-        more = (f"\n\n({self.model.n - MAX_MODES_TABLE} more modes not listed)"
-                if self.model.n > MAX_MODES_TABLE else "")
-        return "**Linear modes**\n\n" + "\n".join(rows) + more
-
-    # ================================================================== callbacks
+    def set(self, handle, **props):
+        """Set handle properties from Python without triggering our callbacks."""
+        self._tl.programmatic = True
+        try:
+            for k, v in props.items():
+                if k == "value":
+                    if handle.value != v:
+                        handle.value = v
+                elif getattr(handle, k) != v:
+                    setattr(handle, k, v)
+        finally:
+            self._tl.programmatic = False

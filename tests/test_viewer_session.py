@@ -282,3 +282,76 @@ def test_zoom_fits_the_selected_branch(server, demo_file):
     assert zoomed[1][0] > full[1][0] and zoomed[1][0] < f2.min()  # frequency axis fitted to NNM 2
     assert s._board_handles[shared.entries[0].uid] is None          # other branches hidden on the board
     s.close()
+
+
+def test_start_animates_the_new_branch_not_the_old_pick(server, demo_file, tmp_path):
+    """Issue 14a: after Start the scene shows the new branch (at rest until its first point, then
+    point 0, then the picked point), while points stream in, after Stop and after Save."""
+    path = tmp_path / "copy.h5"
+    path.write_bytes(demo_file.read_bytes())
+    full = nnm.load_branches(path)[0]
+    fake = FakeJob(full)
+    s, shared = make_session(server, path, start_job=lambda m, mode, energy_max, **kw: fake)
+    s.pick(shared.entries[1].uid, 5)                        # an orbit of NNM 2 is animated
+    assert s.current_point.energy == pytest.approx(shared.entries[1].branch.energy[5])
+    s._cb(s._on_start)(None)
+    runner = shared.job
+    runner.poll = 0.01
+    entry = runner.entry
+    assert s.sel_uid == entry.uid
+    assert s.current_point is None and "animations" not in read_glb_json(s.last_glb)   # model at rest
+    fake.release(4)
+    wait_for(lambda: len(entry) == 4)
+    wait_for(lambda: s.h_branch.value.endswith("(4 pts)"))
+    assert s.current_point.energy == pytest.approx(full.energy[0])        # the new branch's point 0
+    assert "animations" in read_glb_json(s.last_glb)
+    s.pick(entry.uid, 2)
+    fake.release(3)
+    wait_for(lambda: len(entry) == 7)
+    wait_for(lambda: s.h_branch.value.endswith("(7 pts)"))
+    assert s.current_point.energy == pytest.approx(full.energy[2])        # the picked point stays
+    s._cb(s._on_stop)(None)
+    runner.finished.wait(5)
+    wait_for(lambda: entry.source == "stopped")
+    assert s.sel_uid == entry.uid and s.current_point.energy == pytest.approx(full.energy[2])
+    s._cb(s._on_save)(None)
+    assert entry.saved and s.sel_uid == entry.uid
+    assert s.current_point.energy == pytest.approx(full.energy[2])
+    s.close()
+
+
+def test_k3_label_follows_the_slider(server, demo_file):
+    """Issue 14b: the label under the k3 slider gives the factor in use."""
+    s, _ = make_session(server, demo_file)
+    assert s.h_k3_text.content == "k3 x 1 (as in the file)"
+    s.h_k3.value = 1.0
+    assert "k3 x 10 " in s.h_k3_text.content and "as in the file" not in s.h_k3_text.content
+    s.h_k3.value = -0.5
+    assert "k3 x 0.316 " in s.h_k3_text.content
+    s.h_k3.value = 0.0
+    assert s.h_k3_text.content == "k3 x 1 (as in the file)"
+    s.close()
+
+
+def test_point_tab_mac_is_mass_weighted(server, tmp_path):
+    """Issue 14c: MAC(x0, phi_k) = (phi_k^T M x0)^2 / ((phi_k^T M phi_k)(x0^T M x0)) with the
+    model's mass matrix (here sparse, with unequal masses)."""
+    import scipy.sparse as sparse
+
+    M = sparse.diags([1.0, 4.0]).tocsr()
+    model = nnm.Model(M, np.array([[3.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)], name="masses")
+    path = tmp_path / "masses.h5"
+    nnm.save_model(path, model)
+    branch = nnm.continue_nnm(model, mode=1, energy_max=1.0, max_points=8)
+    nnm.save_branch(path, branch)
+    s, _ = make_session(server, path)
+    s.pick(s.sel_uid, 6)
+    x0 = nnm.load_branches(path)[0].x0[6]
+    _, phi = model.linear_modes()
+    Md = M.toarray()
+    want = (phi.T @ Md @ x0) ** 2 / (np.einsum("ik,ij,jk->k", phi, Md, phi) * (x0 @ Md @ x0))
+    unweighted = (phi.T @ x0) ** 2 / ((phi ** 2).sum(axis=0) * (x0 @ x0))
+    assert not np.allclose(want, unweighted, atol=1e-3)                 # the weighting matters here
+    np.testing.assert_allclose(s.current_point.mac, want, atol=1e-9)
+    assert f"| {want[0]:.3f} |" in s.h_info.content
+    s.close()

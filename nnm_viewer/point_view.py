@@ -1,0 +1,118 @@
+"""Draw steps of the picked point: its orbit (solver), the animated mesh (GLB) and the Point tab
+(numbers and charts).  Orbits and animations are computed for the branch's own springs and
+cached; the current k3 factor is applied with the exact scaling law."""
+from __future__ import annotations
+
+import numpy as np
+
+from nnm_solver import cubic_scaling
+
+from . import scene as sc
+from .animation import orbit_animation
+from .info import auto_dofs, info_markdown, parse_dofs, peak_text, point_data, uplot_harmonics, uplot_time_series
+
+#: cached orbits / animations per tab (cleared when full)
+POINT_CACHE = 64
+ANIM_CACHE = 32
+
+
+class PointView:
+    """The orbit shown by one tab: ``compute`` sets the session's ``current_*``, the draw steps
+    show it."""
+
+    def __init__(self, session):
+        self.session = session
+        self.ui = session.layout
+        self._point_cache: dict = {}
+        self._anim_cache: dict = {}
+        self.charts = {}             # uPlot handles of the Point tab: name -> (handle, n_series)
+        self.last_glb = None         # bytes of the last GLB sent (tests, benchmark)
+
+    def compute(self):
+        """Orbit and animation of the selection (None if the branch has no point); True."""
+        s = self.session
+        e = s.selected_entry()
+        if e is None or not len(e):
+            with s.lock:
+                s.current_point = s.current_anim = None
+                s.current_uid = None if e is None else e.uid
+            return True
+        along = float(np.clip(s.s, 0, len(e) - 1))
+        key = (e.uid, len(e), round(along, 4))
+        pd = self._point_cache.get(key)
+        if pd is None:
+            pd = point_data(e.branch, along)
+            if len(self._point_cache) > POINT_CACHE:
+                self._point_cache.clear()
+            self._point_cache[key] = pd
+        anim = self._anim_cache.get(key)
+        if anim is None:
+            anim = orbit_animation(s.mesh.vertices, s.mesh.faces, s.shared.mapper, pd.t, pd.x, pd.period)
+            if len(self._anim_cache) > ANIM_CACHE:
+                self._anim_cache.clear()
+            self._anim_cache[key] = anim
+        ratio = s.factor / e.k3_factor
+        with s.lock:
+            s.current_point = pd.scaled(ratio)
+            s.current_anim = anim
+            s.current_uid = e.uid
+            s.ratio = ratio
+        return True
+
+    def draw_glb(self):
+        """The model: animated over one orbit, or at rest if no point is shown."""
+        s, ui = self.session, self.ui
+        anim = s.current_anim
+        if anim is None:
+            glb = sc.static_glb(s.mesh)
+            ui.set(ui.h_peak, content="")
+        else:
+            amp, peak = s.amplification()
+            shown = 1.0 / max(s.speed, 1e-3)
+            glb = anim.glb(amp * cubic_scaling(s.ratio).amplitude, display_period=shown, playing=s.playing,
+                           phase=s.phase)
+            if s.auto_amp:
+                ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
+            ui.set(ui.h_peak, content=peak_text(peak, amp, s.auto_amp)
+                   + f"  \nreal period {anim.period:.4g} s, shown in {shown:.3g} s")
+        s.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
+        self.last_glb = glb
+
+    def draw_info(self):
+        """The Point tab: numbers, MAC table, time series and Fourier amplitudes of chosen DOFs."""
+        s, ui = self.session, self.ui
+        pd = s.current_point
+        if pd is None:
+            ui.set(ui.h_info, content="no point selected")
+            return
+        idx = s.shared.index_of(s.sel_uid)
+        e = s.selected_entry()
+        where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
+        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.factor, where=where))
+        try:
+            dofs = parse_dofs(s.dofs_text, s.model.n, auto_dofs(s.model, pd.x))
+        except ValueError as exc:
+            s.show_error(str(exc))
+            dofs = auto_dofs(s.model, pd.x)
+        self._chart("time", "Time series over one period (vs t/T)", *uplot_time_series(pd, s.model, dofs),
+                    order=1000.0)
+        self._chart("harm", "Fourier coefficients: log10 amplitude (m) vs harmonic k",
+                    *uplot_harmonics(pd, s.model, dofs), order=1001.0)
+
+    def _chart(self, key, title, data, series, order):
+        """Create or update a uPlot chart of the Point tab (re-created if the series change)."""
+        from viser import uplot
+
+        h, n = self.charts.get(key, (None, 0))
+        if h is not None and n == len(series):
+            h.series = series
+            h.data = data
+            return
+        if h is not None:
+            h.remove()
+        scales = {"x": uplot.Scale(time=False, auto=True), "y": uplot.Scale(auto=True)}
+        axes = (uplot.Axis(), uplot.Axis(size=64))
+        with self.ui.tab_point:
+            h = self.ui.gui.add_uplot(data, series, title=title, scales=scales, axes=axes, aspect=1.6,
+                                      legend=uplot.Legend(show=True), order=order)
+        self.charts[key] = (h, len(series))
