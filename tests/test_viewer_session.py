@@ -1,5 +1,6 @@
 """App logic in-process: a Session on a real viser server (no browser), driven by setting
 handle values like a user would; background jobs streamed into the shared state."""
+import queue
 import time
 
 import numpy as np
@@ -43,29 +44,40 @@ def wait_for(cond, timeout=10.0):
 
 
 class FakeJob:
-    """A job with the solver's Job contract whose points are released by the test."""
+    """A job with the solver's Job contract (``queue`` of Points, then None once it has ended;
+    ``settings``, ``progress``, ``cancel``, ``result``) whose points are released by the test."""
 
     def __init__(self, branch, error=None):
         self.branch, self.n, self.error_after = branch, 0, error
         self.done, self.error, self.cancelled = False, None, False
+        self.queue = queue.Queue()
+        self.settings = branch.settings
 
     @property
     def progress(self):
         return self.n / len(self.branch)
 
     def release(self, k):
-        self.n = min(self.n + k, len(self.branch))
+        new = min(self.n + k, len(self.branch))
+        for i in range(self.n, new):
+            self.queue.put(self.branch.point(i))
+        self.n = new
 
     def points(self):
         return self.branch.subset(slice(0, self.n))
 
+    def _end(self):
+        if not self.done:
+            self.done = True
+            self.queue.put(None)
+
     def cancel(self):
         self.cancelled = True
-        self.done = True
+        self._end()
 
     def fail(self):
         self.error = self.error_after
-        self.done = True
+        self._end()
 
     def result(self, timeout=None):
         if self.error is not None:
