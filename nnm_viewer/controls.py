@@ -180,7 +180,7 @@ class Session:
 
     def _on_branch(self, _):
         for i, e in enumerate(self.shared.snapshot()):
-            if entry_option(i, e) == self.h_branch.value:
+            if entry_option(i, e) == self.layout.h_branch.value:
                 self._select_uid(e.uid, 0.0)
                 return
 
@@ -209,7 +209,7 @@ class Session:
             return
         ser = e.series(self.factor)
         with self.lock:
-            self.s = energy_to_s(ser.energy, 10.0 ** float(self.h_energy.value), self.s)
+            self.s = energy_to_s(ser.energy, 10.0 ** float(self.layout.h_energy.value), self.s)
         self.request("fep", "sliders:along", "point")
 
     def _on_reset_camera(self, _):
@@ -226,15 +226,15 @@ class Session:
         self._start(e.mode, emax, self.factor)
 
     def _on_start(self, _):
-        mode = int(str(self.h_mode.value).split(":")[0])
-        emin = float(self.h_emin.value)
-        self._start(mode, float(self.h_emax.value), self.factor, energy_min=emin if emin > 0 else None)
+        mode = int(str(self.layout.h_mode.value).split(":")[0])
+        emin, emax = float(self.layout.h_emin.value), float(self.layout.h_emax.value)
+        self._start(mode, emax, self.factor, energy_min=emin if emin > 0 else None)
 
     def _start(self, mode, emax, factor, energy_min=None):
         with self.shared.lock:
             if self.shared.job is not None and self.shared.job.running:
                 raise ValueError("a job is already running; stop it first")
-        opts = {"max_points": int(self.h_maxpts.value)}
+        opts = {"max_points": int(self.layout.h_maxpts.value)}
         if energy_min is not None:
             opts["energy_min"] = float(energy_min)
         runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
@@ -285,10 +285,11 @@ class Session:
         """Show an error of this tab in the page (the server keeps running)."""
         with self.lock:
             self.message = msg
-        self.layout.set(self.h_error, content=f"**Error:** {msg}", visible=True)
-        self.layout.set(self.h_dismiss, visible=True)
+        ui = self.layout
+        ui.set(ui.h_error, content=f"**Error:** {msg}", visible=True)
+        ui.set(ui.h_dismiss, visible=True)
 
     def show_status(self, msg):
         with self.lock:
             self.message = msg
-        self.layout.set(self.h_status, content=msg)
+        self.layout.set(self.layout.h_status, content=msg)
