@@ -11,12 +11,12 @@ from .fourier import fourier_amplitudes
 from .reduction import mac
 from .scaling import cubic_scaling
 from .settings import MethodSettings, settings_from_dict
+from .stops import STOP_STATUSES
 
 __all__ = ["Branch", "Point", "STATUSES"]
 
-#: why a branch stopped: reached its end ('done'), hit max_points, was cancelled / stopped by the
-#: caller, could not converge ('failed'), or is still being computed ('running')
-STATUSES = ("done", "max_points", "cancelled", "stopped", "failed", "running")
+#: why a branch stopped (stops.py documents each)
+STATUSES = STOP_STATUSES
 
 
 @dataclass

@@ -7,21 +7,33 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
     problem.error(u, r) -> float              relative error used for convergence (eq. 11)
     problem.accept(u, J)                      called once a point is accepted (e.g. moves the
                                               phase-condition reference)
-    problem.max_step(u) -> float              optional: largest step from u (e.g. relative to
-                                              the amplitude)
+    problem.scale(u) -> w                     optional: positive weights (len(u),); steps, angles and
+                                              the arclength condition are measured in y = w * u
+    problem.max_step(u, p) -> float           optional: largest step from u along the tangent p
+                                              (in the scaled units)
     problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
                                               (e.g. too large a change of period), or ''
+    problem.energy(u) -> float                optional: the conserved energy, for the fold guard
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
 
-Predictor (eq. 7-8): u~ = u_j + s p_j, with p_j the unit tangent, i.e. the solution of
-[J; p_{j-1}^T] p = [0; 1] normalised.  Corrector (eq. 9-10): Newton on [F(u); p_j^T (u - u~)] = 0,
-i.e. corrections orthogonal to the tangent.  The Jacobian is re-used between iterations (chord
-Newton) and refreshed only when the iteration stops contracting fast, so most iterations cost only
-a residual evaluation.  Step control: the step grows when the corrector converges in few iterations,
-shrinks when it needs many, and is halved on failure, when the new tangent turns by more than
-``max_angle``, when the corrector lands far from the prediction (``max_correction``) or when the
+Scaling.  The unknowns of an orbit mix an amplitude part (m, from 1e-8 to 1e3 along one branch) and a
+period part (O(1)).  Measured in u itself, a step would be all period at small amplitude (crawling)
+and all amplitude at large amplitude (the period, and with it the entrance of internal-resonance
+tongues, jumps unseen).  With the problem's weights w (e.g. 1/|amplitude| and 1/period), re-evaluated
+at every accepted point, a step s = 0.1 changes the orbit by about 10 % in the balanced norm
+|w * du|, whatever the amplitude.
+
+Predictor (eq. 7-8): u~ = u_j + s p_j, with p_j the tangent, i.e. the solution of
+[J; p_{j-1}^T] p = [0; 1], normalised to |w * p| = 1.  Corrector (eq. 9-10): Newton on
+[F(u); (w^2 p_j)^T (u - u~)] = 0, i.e. corrections orthogonal to the tangent in the scaled norm.  The
+Jacobian is re-used between iterations (chord Newton) and refreshed only when the iteration stops
+contracting fast, so most iterations cost only a residual evaluation.  Step control: the step grows
+when the corrector converges in few iterations, shrinks when it needs many, and is halved on
+failure, when the new tangent turns by more than ``max_angle``, when the corrector lands far from the
+prediction (``max_correction``), when the energy changed against the tangent's energy derivative at
+both ends of the step (an even number of folds crossed unseen: a tongue stepped over), or when the
 problem refuses the step (``check_step``); these guard against jumping between nearby branches and
 over the narrow entrance of internal-resonance tongues.  When small steps keep failing (a singular
 point, e.g. a branch point), one longer step is tried to step over it.
@@ -73,25 +85,28 @@ class LeastSquares:
         return sla.solve_triangular(self.R, self.Q.T @ b, check_finite=False)
 
 
-def tangent(J, previous):
-    """Unit tangent p of F(u) = 0 from J = dF/du, oriented along ``previous`` (eq. 8)."""
+def tangent(J, previous, w=None):
+    """Tangent p of F(u) = 0 from J = dF/du (eq. 8), |w * p| = 1, oriented along ``previous``."""
+    w = np.ones(J.shape[1]) if w is None else w
     A = np.vstack([J, previous[None, :]])
     b = np.zeros(A.shape[0])
     b[-1] = 1.0
     p = LeastSquares(A).solve(b)
-    p /= np.linalg.norm(p)
-    return p if p @ previous >= 0 else -p
+    p /= np.linalg.norm(w * p)
+    return p if (w * p) @ (w * previous) >= 0 else -p
 
 
 class CorrectorFailure(Exception):
     pass
 
 
-def correct(problem, u_pred, p, settings, tol):
-    """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p.
+def correct(problem, u_pred, p, settings, tol, w=None):
+    """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p in the
+    norm |w * u|.
 
     Returns (u, J, iterations, error).  J is the Jacobian at the converged point.
     """
+    row = p if w is None else w * w * p
     u = u_pred.copy()
     factor = None
     last_norm = None
@@ -100,7 +115,7 @@ def correct(problem, u_pred, p, settings, tol):
         if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
-            factor = LeastSquares(np.vstack([J, p[None, :]]))
+            factor = LeastSquares(np.vstack([J, row[None, :]]))
         else:
             r = problem.residual(u)
         if not np.all(np.isfinite(r)):
@@ -115,7 +130,7 @@ def correct(problem, u_pred, p, settings, tol):
             return u, J, it, err
         if it == settings.max_iter:
             break
-        rhs = np.concatenate([-r, [-(p @ (u - u_pred))]])
+        rhs = np.concatenate([-r, [-(row @ (u - u_pred))]])
         du = factor.solve(rhs)
         nrm = np.linalg.norm(du)
         if not np.isfinite(nrm):
@@ -127,20 +142,26 @@ def correct(problem, u_pred, p, settings, tol):
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 
+def _scale(problem, u):
+    return problem.scale(u) if hasattr(problem, "scale") else np.ones(len(u))
+
+
 def pseudo_arclength(problem, u0, p0, settings, tol):
     """Iterate over converged points along the branch through u0 (first yielded point: u0 corrected).
 
     u0 : approximate first point; p0 : approximate direction (the first point is corrected with
-    corrections orthogonal to p0).  Yields ContinuationPoint; the caller stops the iteration.
-    When a step cannot be completed even at ``step_min`` the generator returns with a
-    ``StopIteration`` value: the reason (str).
+    corrections orthogonal to p0).  Yields ContinuationPoint; the caller stops
+    the iteration.  When a step cannot be completed even at ``step_min`` the generator returns with
+    a ``StopIteration`` value: the reason (str).  Step lengths are in the problem's scaled units.
     """
-    p0 = p0 / np.linalg.norm(p0)
+    w = _scale(problem, u0)
+    p0 = p0 / np.linalg.norm(w * p0)
     try:
-        u, J, it, err = correct(problem, u0, p0, settings, tol)
+        u, J, it, err = correct(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
-    p = tangent(J, p0)
+    w = _scale(problem, u)
+    p = tangent(J, p0, w)
     problem.accept(u, J)
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err)
@@ -149,17 +170,22 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     while True:
         u_pred = u + s * p
         try:
-            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol)
-            dist = np.linalg.norm(u_new - u_pred)
+            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol, w)
+            dist = np.linalg.norm(w * (u_new - u_pred))
             if dist > settings.max_correction * s:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
             if hasattr(problem, "check_step"):
                 reason = problem.check_step(u, u_new)
                 if reason:
                     raise CorrectorFailure(reason)
-            p_new = tangent(J_new, p)
-            if p_new @ p < np.cos(settings.max_angle):
-                raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(p_new @ p, -1, 1))):.0f} deg")
+            p_new = tangent(J_new, p, w)
+            cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
+            if cos < np.cos(settings.max_angle):
+                raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
+            if hasattr(problem, "energy"):
+                reason = _unseen_folds(problem.energy, u, p, u_new, p_new)
+                if reason:
+                    raise CorrectorFailure(reason)
         except CorrectorFailure as exc:
             failures += 1
             if failures == settings.jump_after:
@@ -179,7 +205,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         if failures == 0:
             s_clean = s
         failures = 0
-        u, J, p = u_new, J_new, p_new
+        w = _scale(problem, u_new)
+        u, J, p = u_new, J_new, p_new / np.linalg.norm(w * p_new)
         problem.accept(u, J)
         yield ContinuationPoint(u, p, J, it, s, err)
         # step control from the number of corrector iterations
@@ -191,5 +218,22 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             s *= 0.6
         s_max = settings.step_max
         if hasattr(problem, "max_step"):
-            s_max = min(s_max, problem.max_step(u))
+            s_max = min(s_max, problem.max_step(u, p))
         s = float(np.clip(s, settings.step_min, max(s_max, settings.step_min)))
+
+
+def _energy_slope(energy, u, p, h=1e-6):
+    """dE/ds along the tangent p (scaled so that h p is a relative change of h), central difference."""
+    return (energy(u + h * p) - energy(u - h * p)) / (2 * h)
+
+
+def _unseen_folds(energy, u, p, u_new, p_new):
+    """A reason to refuse the step if the energy changed against its derivative along the tangent at
+    both ends (the step crossed an even number of folds: the branch turned back and forth unseen)."""
+    E0, E1 = energy(u), energy(u_new)
+    dE = E1 - E0
+    if abs(dE) <= 1e-9 * max(abs(E0), abs(E1)):
+        return ""
+    if dE * _energy_slope(energy, u, p) < 0 and dE * _energy_slope(energy, u_new, p_new) < 0:
+        return "the energy changed against its slope at both ends of the step (folds crossed unseen)"
+    return ""

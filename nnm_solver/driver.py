@@ -24,6 +24,7 @@ from .model import Model
 from .orbits.harmonic_balance import BASES, HBBasis, HBProblem
 from .orbits.shooting import ShootingProblem, discrete_linear_period
 from .settings import HarmonicBalanceSettings, ShootingSettings
+from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
@@ -37,7 +38,7 @@ METHODS = ("shooting", "hb")
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
 
-_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=True, reversible=None, max_period_step=0.005)
+_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=True, reversible=None)
 _HB_OPTIONS = dict(harmonics=7, samples=None, basis="odd")
 
 
@@ -141,7 +142,7 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
     if basis == "odd" and not system.elements.odd:
         raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers")
     hb = HBBasis(harmonics, basis, samples)
-    problem = HBProblem(system, k, hb, max_rel_step=opts["max_rel_step"])
+    problem = HBProblem(system, k, hb, max_rel_step=opts["max_rel_step"], max_rel_period_step=opts["max_period_step"])
     A0 = np.zeros((len(hb), system.n))
     A0[int(np.flatnonzero((hb.h == 1) & ~hb.sine)[0]), k] = a0
     u0 = problem.pack(A0, problem.w_r)
@@ -159,8 +160,8 @@ class NNMIterator:
 
     Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
     The iteration ends by itself at energy_max, at max_points, when the branch returns to low
-    energy, or when the continuation cannot go on; ``status`` and ``message`` then say why
-    ('done', 'max_points', 'failed').  ``cancel()`` (or a ``break`` followed by ``branch()``) ends it
+    energy, escapes, closes a loop, or when the continuation cannot go on; ``status`` and ``message``
+    then say why (stops.py lists the statuses).  ``cancel()`` (or a ``break`` followed by ``branch()``) ends it
     early ('cancelled' / 'stopped').  ``branch()`` returns the Branch of every point so far.
     """
 
@@ -176,6 +177,9 @@ class NNMIterator:
         self._problem = problem
         self._system = system
         self._engine = engine
+        self._w_r = float(np.sqrt(system.omega2[mode - 1]))
+        self._loops = LoopDetector()
+        self._last = None
 
     def __iter__(self):
         return self
@@ -188,35 +192,62 @@ class NNMIterator:
             try:
                 cp = next(self._engine)
             except StopIteration as fin:
-                where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
-                         f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
-                self._finish("failed", f"no convergence {where}: {fin.value or 'continuation stopped'}; the points "
-                                       f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
+                self._failed(fin.value)
                 raise StopIteration from None
-            point = self._record(cp)
+            point, (q0, v0, T) = self._record(cp)
+        loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
+        if loop is not None:
+            p = self.points[loop]
+            self._finish("closed_loop", f"closed loop: from point {N - 1} on the continuation re-traverses points "
+                                        f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
+                                        f"one lap is kept")
+            raise StopIteration
         self.points.append(point)
         E, E0 = point.energy, self.points[0].energy
-        if E >= self.energy_max:
+        ratio = self._turning_ratio(q0, v0)
+        if ratio < ESCAPE_RATIO:
+            self._finish("escape", escape_message(point, ratio))
+        elif E >= self.energy_max:
             self._finish("done", f"reached energy_max = {self.energy_max:g} J")
         elif N + 1 >= self.max_points:
-            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J)")
+            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
+                                       f"raise max_points to go on")
         elif N + 1 > 3 and E < 0.5 * E0:
             self._finish("done", "the branch returned to low energy")
+        self._last = (q0, v0)
         return point
+
+    def _turning_ratio(self, q0, v0):
+        """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
+        if np.linalg.norm(v0) > 1e-6 * self._w_r * np.linalg.norm(q0):
+            return 1.0
+        return restoring_ratio(self._system, q0)
+
+    def _failed(self, reason):
+        N = len(self.points)
+        if N and self._turning_ratio(*self._last) < 0.1:
+            p = self.points[-1]
+            self._finish("escape", escape_message(p, self._turning_ratio(*self._last)) +
+                         f" (the continuation could not go further: {reason})")
+            return
+        where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
+                 f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
+        self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
+                               f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
 
     def _record(self, cp):
         sys_, prob = self._system, self._problem
-        q0, v0, T = prob.state(cp.u)
-        x0, v0 = sys_.to_physical(q0), sys_.to_physical(v0)
+        q0, vq0, T = prob.state(cp.u)
+        x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
         if self.settings.floquet:
-            mu = sort_multipliers(prob.multipliers(cp.u))
+            mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
             stable = is_stable(mu, STABILITY_TOL)
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
         return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0, v0=v0,
                      floquet=mu, stable=stable, iterations=cp.iterations,
-                     coefficients=None if A is None else sys_.to_physical(A))
+                     coefficients=None if A is None else sys_.to_physical(A)), (q0, vq0, T)
 
     def _finish(self, status, message):
         self.status, self.message = status, message
@@ -236,7 +267,8 @@ class NNMIterator:
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
-             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, **method_options):
+             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
+             **method_options):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
     Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
@@ -255,15 +287,17 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     if tol is None:
         tol = 1e-6 if method == "shooting" else 1e-8
     k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
-    for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step)):
+    for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step),
+                        ("max_period_step", max_period_step)):
         check_positive(name, value)
     if step is not None:
         check_positive("step", step)
     system = modal_system(model)
     a0 = start_amplitude(system, k, energy_max, energy_min)
     build = _shooting_problem if method == "shooting" else _hb_problem
-    problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step), tol, energy_max, floquet)
-    cs = ContinuationSettings(step=0.5 * a0 if step is None else float(step), step_min=1e-8 * a0, step_max=np.inf,
+    problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
+                                      tol, energy_max, floquet)
+    cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
                               max_angle=max_angle, max_correction=max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
     return NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points)
@@ -291,24 +325,25 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
         phase condition (False); see orbits.shooting.ShootingProblem.
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when
         the Hill matrix has at most HILL_AUTO_SIZE rows).
-    step : first step length in units of the scaled unknowns (default: half the starting amplitude).
+    step : first step length, relative to the orbit (default 0.5: half the starting amplitude); steps
+        are measured in the balanced norm of continuation.py (state relative to its norm, period
+        relative to itself).
     max_angle : largest turn (rad) of the branch tangent between two points.
     max_correction : largest corrector displacement, relative to the step length.
-    max_rel_step : largest step relative to the amplitude of the current orbit.
+    max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
     max_period_step : largest relative change of the period between two points (keeps the
-        continuation from stepping over the entrance of internal-resonance tongues); shooting.
+        continuation from stepping over the entrance of internal-resonance tongues).
 
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
     """
     if method == "shooting":
-        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible,
-                    max_period_step=max_period_step, **hb_options)
+        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible, **hb_options)
     else:
         opts = dict(hb_options)
     it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
                   floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
-                  max_rel_step=max_rel_step, **opts)
+                  max_rel_step=max_rel_step, max_period_step=max_period_step, **opts)
     while True:
         if stop is not None and stop.is_set():
             it.cancel()

@@ -52,6 +52,10 @@ class ModalSystem:
         """Element stiffnesses g'(d) (..., n_s)."""
         return self.elements.tangent(d)
 
+    def energy(self, q0, v0):
+        """Energy (J) of the modal state (q0, v0): |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + element potentials."""
+        return float(0.5 * v0 @ v0 + 0.5 * q0 @ (self.omega2 * q0) + np.sum(self.elements.potential(self.Bq @ q0)))
+
     def orbit(self, q0, v0, duration, nsteps):
         """Newmark states at nsteps + 1 equally spaced times over ``duration`` (s): (Q, V, ok)."""
         from .newmark import sweep_record

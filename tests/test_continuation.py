@@ -108,14 +108,30 @@ def test_job_reports_solver_errors_without_raising_in_thread():
     assert job.done and isinstance(job.error, RuntimeError)
 
 
-def test_branch_that_stops_converging_keeps_its_points():
+def test_softening_duffing_stops_at_its_escape():
     # softening Duffing: no periodic orbit above the separatrix energy 1/(4|k|) = 0.25 J
-    b = nnm.continue_nnm(duffing_model(-1.0), mode=1, energy_max=1.0, max_points=300, max_period_step=0.1)
-    assert b.status == "failed"
-    assert "kept" in b.message
+    b = nnm.continue_nnm(duffing_model(-1.0), mode=1, energy_max=1.0, max_points=2000)
+    assert b.status == "escape" and "escape" in b.message and "equilibrium" in b.message
     assert len(b) > 10
-    assert b.energy.max() < 0.25 + 1e-9 and b.energy.max() > 0.24
-    assert b.frequency_hz[-1] < 0.2 * b.frequency_hz[0]     # the period grows towards the separatrix
+    assert b.energy.max() < 0.25 + 1e-9 and b.energy.max() > 0.2499
+    assert b.frequency_hz[-1] < 0.4 * b.frequency_hz[0]     # the period grows towards the separatrix
+    assert b.stable.all()                                    # every orbit of a 1-DOF oscillator is stable
+
+
+def test_branch_that_stops_converging_keeps_its_points():
+    it = nnm.iter_nnm(two_dof_model(), 1, 1e4)
+    engine = it._engine
+
+    def singular_after_ten():          # the engine gives up after 10 points, as at a singular point
+        for _ in range(10):
+            yield next(engine)
+        return "16 consecutive failed steps (last: singular corrector system)"
+
+    it._engine = singular_after_ten()
+    list(it)
+    b = it.branch()
+    assert b.status == "failed" and len(b) == 10
+    assert "kept" in b.message and "singular corrector system" in b.message and "after point 10" in b.message
 
 
 def test_at_energy_and_interpolate(two_dof_nnm1):

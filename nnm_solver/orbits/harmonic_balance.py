@@ -78,7 +78,7 @@ class HBBasis:
 class HBProblem:
     """Harmonic-balance equations of one NNM branch, for ``continuation.pseudo_arclength``."""
 
-    def __init__(self, system, mode_index, basis, max_rel_step=0.4):
+    def __init__(self, system, mode_index, basis, max_rel_step=0.4, max_rel_period_step=np.inf):
         self.sys = system
         self.n = system.n
         self.basis = basis
@@ -89,6 +89,7 @@ class HBProblem:
         self.q_ref = np.zeros(self.n)
         self.q_ref[mode_index] = 1.0
         self.max_rel_step = max_rel_step
+        self.max_rel_period_step = max_rel_period_step
 
     # --------------------------------------------------------------- packing
     def pack(self, A, omega):
@@ -108,10 +109,12 @@ class HBProblem:
         q0, v0 = self.initial_state(u)
         return q0, v0, 2 * np.pi / self.unpack(u)[1]
 
-    def multipliers(self, u):
-        """Floquet multipliers of the orbit u by Hill's method (hill.py)."""
+    def multipliers(self, u, tangent=None):
+        """Floquet multipliers of the orbit u by Hill's method (hill.py), the two nearest to +1 (the
+        trivial pair) set to exactly 1."""
+        from ..floquet import without_nearest_to_one
         from .hill import hill_multipliers
-        return hill_multipliers(self, u)
+        return without_nearest_to_one(hill_multipliers(self, u))
 
     def coefficients(self, u):
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m)."""
@@ -157,8 +160,27 @@ class HBProblem:
         if nrm > 0:
             self.q_ref = q0 / nrm
 
-    def max_step(self, u):
-        return self.max_rel_step * np.linalg.norm(u[:-1])
+    def scale(self, u):
+        """Weights of the balanced step norm: 1 / |A| on the coefficients, w_r / omega on the frequency."""
+        w = np.full(len(u), 1.0 / max(np.linalg.norm(u[:-1]), 1e-300))
+        w[-1] = 1.0 / u[-1]
+        return w
+
+    def max_step(self, u, p):
+        """Largest step along p (scaled units): coefficients change by at most max_rel_step and the
+        frequency by at most max_rel_period_step (relative)."""
+        from .shooting import balanced_max_step
+        return balanced_max_step(self.scale(u) * p, self.max_rel_step, self.max_rel_period_step)
+
+    def check_step(self, u_old, u_new):
+        change = abs(u_old[-1] / u_new[-1] - 1)
+        if change > self.max_rel_period_step:
+            return f"the period changed by {100 * change:.2f} % in one step"
+        return ""
+
+    def energy(self, u):
+        q0, v0 = self.initial_state(u)
+        return self.sys.energy(q0, v0)
 
 
 def series_orbit(basis, X, period, samples):

@@ -29,8 +29,15 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from ..floquet import nontrivial_multipliers, reversible_multipliers
 from ..fourier import resample_periodic
 from ..newmark import sweep_sensitivity, sweep_state
+
+
+def balanced_max_step(wp, max_rel_state, max_rel_period):
+    """Largest step s along a scaled tangent wp = w * p whose last entry is the period's: the relative
+    state change s |wp[:-1]| <= max_rel_state and the relative period change s |wp[-1]| <= max_rel_period."""
+    return min(max_rel_state / max(np.linalg.norm(wp[:-1]), 1e-300), max_rel_period / max(abs(wp[-1]), 1e-300))
 
 
 def discrete_linear_period(omega, nsteps_per_period):
@@ -150,6 +157,7 @@ class ShootingProblem:
         q0 = self.unpack(u)[0]
         self.q_ref = q0 / np.linalg.norm(q0)
         self.accepted_map = self.half_map
+        self.accepted_u = u.copy()
 
     def check_step(self, u_old, u_new):
         """Refuse steps that change the period by more than max_rel_period_step (relative).
@@ -163,18 +171,31 @@ class ShootingProblem:
             return f"the period changed by {100 * change:.2f} % in one step"
         return ""
 
-    def max_step(self, u):
+    def scale(self, u):
+        """Weights of the balanced step norm: 1 / |z| on the state z = [q0; v0 / w_r], T_r / T on the period."""
+        q0, v0, T = self.unpack(u)
+        w = np.full(len(u), 1.0 / max(np.linalg.norm(np.concatenate([q0, v0 / self.w_r])), 1e-300))
+        w[-1] = self.T_r / T
+        return w
+
+    def max_step(self, u, p):
+        """Largest step along p (scaled units): the state changes by at most max_rel_step (relative)
+        and the period by at most max_rel_period_step."""
+        return balanced_max_step(self.scale(u) * p, self.max_rel_step, self.max_rel_period_step)
+
+    def energy(self, u):
         q0, v0, _ = self.unpack(u)
-        return self.max_rel_step * np.linalg.norm(np.concatenate([q0, v0 / self.w_r]))
+        return self.sys.energy(q0, v0)
 
     # --------------------------------------------------------------- results (driver protocol)
     def state(self, u):
         """(q0, v0, T) of the orbit u: modal initial state and period (s)."""
         return self.unpack(u)
 
-    def multipliers(self, u):
-        """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep)."""
-        return self.floquet_multipliers()
+    def multipliers(self, u, tangent=None):
+        """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep),
+        the trivial pair identified with the family tangent (u-space, optional) and set to 1."""
+        return self.floquet_multipliers(None if tangent is None else self.unpack(tangent))
 
     def coefficients(self, u):
         """No Fourier coefficients: the orbit is rebuilt by integration (ShootingSettings.orbit)."""
@@ -187,24 +208,24 @@ class ShootingProblem:
         Mh = self.accepted_map
         return Mh @ Mh if self.symmetric else Mh
 
-    def floquet_multipliers(self):
-        """Eigenvalues of the monodromy of the last accepted point.
+    def floquet_multipliers(self, family=None):
+        """Floquet multipliers (2n,) of the last accepted point.
 
-        Symmetric reversible orbits (the default) need only an n x n eigenproblem.  The discrete
-        half-period map A = dz(T/2)/dz0 starts and ends on the set v = 0, and Newmark's average
-        acceleration scheme (the trapezoidal rule) is time-reversible, so R A R = A^-1 with
-        R = diag(I, -I).  Hence (A + A^-1)/2 = diag(A11, A22): the values c = (lam + 1/lam)/2 of
-        the eigenvalues lam of A are the eigenvalues of A11 = dq(T/2)/dq0, lam = c +- sqrt(c^2 - 1),
-        and the multipliers of the full period are mu = lam^2 (the monodromy is A^2).  Otherwise the
-        full 2n x 2n eigenproblem is solved.
+        family : optional (dq0, dv0, dT) tangent of the family at that point; with it the trivial
+        pair is identified and reported as exactly 1, 1 (floquet.py).  Symmetric reversible orbits
+        (the default) need only an n x n eigenproblem (floquet.reversible_multipliers); otherwise the
+        full 2n x 2n monodromy is deflated by the velocity and family directions.
         """
         A = self.accepted_map
         if self.symmetric and self.reversible:
-            c = sla.eigvals(A[:self.n, :self.n], check_finite=False).astype(complex)
-            root = np.sqrt(c * c - 1.0)
-            return np.concatenate([(c + root) ** 2, (c - root) ** 2])
-        lam = sla.eigvals(A, check_finite=False)
-        return lam ** 2 if self.symmetric else lam
+            return reversible_multipliers(A[:self.n, :self.n], None if family is None else family[0])
+        Phi = A @ A if self.symmetric else A
+        if family is None:
+            return sla.eigvals(Phi, check_finite=False)
+        q0, v0, _ = self.unpack(self.accepted_u)
+        s = self.sys
+        f = np.concatenate([v0, -s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)])
+        return nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
 
 
 def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples):

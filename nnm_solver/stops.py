@@ -1,0 +1,98 @@
+r"""Why a branch stops: the documented stop reasons, escape to a saddle, and closed loops.
+
+Every branch ends with one of these statuses (``Branch.status``), its message naming the cause and,
+where there is one, the remedy:
+
+* ``done``        reached energy_max, or the branch returned to low energy (it came back to its start)
+* ``max_points``  stopped at max_points (raise it to go on)
+* ``escape``      the orbit reached the escape energy of a softening structure: its turning point is
+                  within reach of a static equilibrium x* != 0 (a saddle of the potential); above that
+                  energy the motion is unbounded and no NNM exists.  Nothing to fix: the family ends
+* ``closed_loop`` the continuation came back onto points it had already computed (a loop of the
+                  solution set); one lap is kept
+* ``failed``      the corrector could not converge at the smallest step (a singular point, or too
+                  coarse a time discretisation: try a larger steps_per_period or tol)
+* ``cancelled``   cancelled through ``stop`` / ``Job.cancel``;  ``stopped``: the caller left the
+                  iteration (a ``break``)
+* ``running``     a snapshot of a job in progress
+
+Escape test.  At the turning point x0 of a reversible orbit (v0 = 0) the restoring force
+K x0 + f_nl(x0) vanishes only at an equilibrium.  In modal coordinates its size relative to the linear
+force, r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0|, is 1 for a linear motion and falls to 0 as the
+family approaches a saddle (a homoclinic orbit, whose period tends to infinity).  r < ESCAPE_RATIO
+stops the branch with status ``escape``; so does a failure of the continuation where r < 0.1.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+STOP_STATUSES = ("done", "max_points", "escape", "closed_loop", "failed", "cancelled", "stopped", "running")
+
+#: restoring force at the turning point relative to the linear one below which the orbit has escaped
+ESCAPE_RATIO = 1e-2
+
+
+def restoring_ratio(system, q0):
+    """r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0| at the modal displacement q0 (1: linear, 0: equilibrium)."""
+    lin = system.omega2 * q0
+    return float(np.linalg.norm(lin + system.Bq.T @ system.force(system.Bq @ q0)) / max(np.linalg.norm(lin), 1e-300))
+
+
+def escape_message(point, ratio):
+    return (f"escape at E = {point.energy:.6g} J, f = {point.frequency_hz:.6g} Hz: the orbit's turning point is "
+            f"within reach of a static equilibrium (restoring force {ratio:.1e} of the linear one), so the "
+            f"softening structure escapes above this energy and the NNM family ends here")
+
+
+class LoopDetector:
+    """Detects a continuation that re-traverses points it has already computed.
+
+    Points are compared in scaled coordinates y = [z / |z|; T / T_r; log |z|], z = [q0; v0 / w_r]
+    (the orbit's shape, period and log-amplitude).  A new point re-traverses the path when it lies
+    on a segment between two earlier points (not the latest ``skip``), within the segment's own
+    chord-to-arc deviation (a quarter of its length times the turn of the polyline there, plus
+    ``floor``), moving the same way along it (the two sides of a fold come close to each other but
+    are run in opposite directions), and the next point does too.
+    """
+
+    def __init__(self, skip=4, floor=1e-4):
+        self.skip = skip
+        self.floor = floor
+        self.Y = []
+        self.pending = None
+
+    def add(self, q0, v0, w_r, T, T_r):
+        """Record the next point; returns the index j of the earlier segment (j, j+1) that the
+        continuation is re-traversing (confirmed over two points), or None."""
+        z = np.concatenate([q0, v0 / w_r])
+        nz = max(np.linalg.norm(z), 1e-300)
+        y = np.concatenate([z / nz, [T / T_r, np.log(nz)]])
+        hit = self._near_segment(y, y - self.Y[-1] if self.Y else None)
+        self.Y.append(y)
+        if hit is None:
+            self.pending = None
+            return None
+        if self.pending is not None and abs(hit - self.pending) <= 3:
+            return self.pending
+        self.pending = hit
+        return None
+
+    def _near_segment(self, y, move):
+        m = len(self.Y) - self.skip
+        if m < 3 or move is None:
+            return None
+        Y = np.array(self.Y[:m])
+        ab = np.diff(Y, axis=0)                                   # segments j -> j+1
+        L = np.maximum(np.linalg.norm(ab, axis=1), 1e-300)
+        u = ab / L[:, None]
+        turn = np.zeros(len(ab))                                  # turn (rad) of the polyline at each end
+        cos = np.clip(np.einsum("ij,ij->i", u[1:], u[:-1]), -1.0, 1.0)
+        ang = np.arccos(cos)
+        turn[1:] = np.maximum(turn[1:], ang)
+        turn[:-1] = np.maximum(turn[:-1], ang)
+        a = Y[:-1]
+        t = np.clip(np.einsum("ij,ij->i", y - a, ab) / L ** 2, 0.0, 1.0)
+        d = np.linalg.norm(a + t[:, None] * ab - y, axis=1)
+        same_way = u @ move >= 0.8 * max(np.linalg.norm(move), 1e-300)
+        ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way)
+        return int(ok[0]) if len(ok) else None
