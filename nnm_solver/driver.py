@@ -178,7 +178,7 @@ class NNMIterator:
         self._system = system
         self._engine = engine
         self._w_r = float(np.sqrt(system.omega2[mode - 1]))
-        self._loops = LoopDetector()
+        self._loops = LoopDetector(mirror=system.elements.odd)
         self._last = None
 
     def __iter__(self):

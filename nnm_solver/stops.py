@@ -52,12 +52,15 @@ class LoopDetector:
     on a segment between two earlier points (not the latest ``skip``), within the segment's own
     chord-to-arc deviation (a quarter of its length times the turn of the polyline there, plus
     ``floor``), moving the same way along it (the two sides of a fold come close to each other but
-    are run in opposite directions), and the next point does too.
+    are run in opposite directions), and the next point does too.  Half-wave symmetric orbits
+    (odd forces) are the same orbit from -x0 as from x0 (shifted by half a period), so both are
+    compared: a loop that comes back through the mirrored orbits is caught after one lap.
     """
 
-    def __init__(self, skip=4, floor=1e-4):
+    def __init__(self, skip=4, floor=1e-4, mirror=True):
         self.skip = skip
         self.floor = floor
+        self.mirror = mirror
         self.Y = []
         self.pending = None
 
@@ -67,7 +70,12 @@ class LoopDetector:
         z = np.concatenate([q0, v0 / w_r])
         nz = max(np.linalg.norm(z), 1e-300)
         y = np.concatenate([z / nz, [T / T_r, np.log(nz)]])
-        hit = self._near_segment(y, y - self.Y[-1] if self.Y else None)
+        move = y - self.Y[-1] if self.Y else None
+        hit = self._near_segment(y, move)
+        if hit is None and self.mirror and move is not None:
+            flip = np.ones(len(y))
+            flip[:-2] = -1.0
+            hit = self._near_segment(y * flip, move * flip)
         self.Y.append(y)
         if hit is None:
             self.pending = None
@@ -91,7 +99,7 @@ class LoopDetector:
         turn[1:] = np.maximum(turn[1:], ang)
         turn[:-1] = np.maximum(turn[:-1], ang)
         a = Y[:-1]
-        t = np.clip(np.einsum("ij,ij->i", y - a, ab) / L ** 2, 0.0, 1.0)
+        t = np.clip(np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300), 0.0, 1.0)
         d = np.linalg.norm(a + t[:, None] * ab - y, axis=1)
         same_way = u @ move >= 0.8 * max(np.linalg.norm(move), 1e-300)
         ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way)
