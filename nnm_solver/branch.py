@@ -84,10 +84,13 @@ class Branch:
 
     # ------------------------------------------------------------------ building from points
     @classmethod
-    def from_points(cls, model, mode, points, settings=None, status="done", message="", name=""):
-        """Branch whose rows are ``points`` (a sequence of Point)."""
+    def from_points(cls, model, mode, points, settings=None, status="done", message="", name="", events=None):
+        """Branch whose rows are ``points`` (a sequence of Point); events: located events (events.py),
+        or None to bracket them from the rows (floquet.detect_events)."""
         b = cls(model, mode, [], [], [], [], [], settings=settings, status=status, message=message, name=name)
         b.extend(points)
+        if events is not None:
+            b.events = sorted(events, key=lambda e: (e["index"], e["energy"]))
         return b
 
     def extend(self, points):

@@ -16,7 +16,8 @@ import math
 import numpy as np
 
 from .branch import Branch, Point
-from .continuation import ContinuationSettings, pseudo_arclength
+from .continuation import ContinuationPoint, ContinuationSettings, CorrectorFailure, _energy_slope, pseudo_arclength
+from .events import Locator, locate_between
 from .errors import NNMInputError
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .modal import modal_system
@@ -165,7 +166,8 @@ class NNMIterator:
     early ('cancelled' / 'stopped').  ``branch()`` returns the Branch of every point so far.
     """
 
-    def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points):
+    def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
+                 tol=None, locate=True):
         self.model = model
         self.mode = int(mode)
         self.settings = settings
@@ -180,6 +182,10 @@ class NNMIterator:
         self._w_r = float(np.sqrt(system.omega2[mode - 1]))
         self._loops = LoopDetector(mirror=system.elements.odd)
         self._last = None
+        self._prev = None              # (ContinuationPoint, Point, dE/ds) of the last point
+        self._cs, self._tol = continuation, tol
+        self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
+        self.events = []
 
     def __iter__(self):
         return self
@@ -194,7 +200,9 @@ class NNMIterator:
             except StopIteration as fin:
                 self._failed(fin.value)
                 raise StopIteration from None
-            point, (q0, v0, T) = self._record(cp)
+            point, (q0, v0, T) = self._record(cp, self._problem)
+            if self.locate:
+                point, (q0, v0, T) = self._locate(cp, point, (q0, v0, T))
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
             p = self.points[loop]
@@ -235,8 +243,35 @@ class NNMIterator:
         self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
                                f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
 
-    def _record(self, cp):
-        sys_, prob = self._system, self._problem
+    def _locate(self, cp, point, state):
+        """Locate the events between the previous point and this one (events.py); cut the branch at
+        energy_max.  Returns the (possibly located) end point and its modal state."""
+        slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
+        prev, self._prev = self._prev, (cp, point, slope)
+        if prev is None:
+            return point, state
+        pcp, ppoint, pslope = prev
+        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent)
+
+        def record(sigma):
+            u, J, p = loc.at(sigma)
+            loc.problem.accept(u, J)
+            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem)[0]
+
+        try:
+            events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
+                                         self.energy_max)
+        except CorrectorFailure:      # an event that cannot be located is still bracketed by the points
+            return point, state
+        self.events.extend(events)
+        if end is not None:
+            u, J, p = loc.at(end[0])
+            self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
+            return end[1], self._problem.state(u)
+        return point, state
+
+    def _record(self, cp, prob):
+        sys_ = self._system
         q0, vq0, T = prob.state(cp.u)
         x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
         if self.settings.floquet:
@@ -263,12 +298,13 @@ class NNMIterator:
         if self.status == "running":
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
-                                  status=self.status, message=self.message)
+                                  status=self.status, message=self.message,
+                                  events=self.events if self.locate else None)
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
              floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
-             **method_options):
+             locate_events=True, **method_options):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
     Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
@@ -300,7 +336,8 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
                               max_angle=max_angle, max_correction=max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
-    return NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points)
+    return NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
+                       locate=locate_events)
 
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,

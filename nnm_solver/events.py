@@ -1,0 +1,177 @@
+r"""Events along a branch located between two converged points, and classified.
+
+Between two consecutive points u_a and u_b of the continuation (u_b reached by a step s along the
+tangent p_a of u_a), the branch is parametrised by the pseudo-arclength sigma in [0, s]: u(sigma)
+solves F(u) = 0 on the hyperplane (w^2 p_a)^T (u - u_a - sigma p_a) = 0, by the same corrector as the
+continuation (continuation.correct).  A scalar test function g(u(sigma)) that changes sign between
+the two points is zeroed by the Illinois (regula falsi) method, or by bisection when it is a flag:
+
+* fold         g = dE/ds, the energy's derivative along the local tangent (an energy extremum);
+* stability    the stability flag of the non-trivial Floquet multipliers (floquet.py);
+* energy_max   g = E - energy_max (the branch ends exactly at the requested energy).
+
+Events are located to a relative energy tolerance of 1e-7 (or to a step of 1e-12 in sigma) and
+stored with their orbit (x0, v0 in m, m/s; period in s).  A change of stability is classified by the
+critical multiplier on its unstable side: ``branch_point`` (a real pair through +1 away from a fold:
+pitchfork or transcritical), ``period_doubling`` (through -1), ``torus`` (a complex quadruple leaves
+the unit circle: a Krein collision); at an energy fold the stability change is part of the ``fold``.
+"""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from .continuation import CorrectorFailure, _energy_slope, correct, tangent
+from .floquet import STABILITY_TOL, is_stable, sort_multipliers
+
+__all__ = ["Locator", "classify_multipliers", "EVENT_KINDS"]
+
+EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
+
+#: relative energy tolerance of located events
+EVENT_RTOL = 1e-7
+
+
+def classify_multipliers(mu, tol=STABILITY_TOL):
+    """Kind of instability of a multiplier set (2n,): 'branch_point' (real > 1), 'period_doubling'
+    (real < -1), 'torus' (complex outside the unit circle) or '' (stable)."""
+    mu = sort_multipliers(mu)
+    m = mu[0]
+    if not abs(m) > 1.0 + tol:
+        return ""
+    if abs(m.imag) > 1e-6 * abs(m):
+        return "torus"
+    return "branch_point" if m.real > 0 else "period_doubling"
+
+
+class Locator:
+    """Points of the branch between a converged point a and the next one, for event location.
+
+    problem : the continuation's problem (a shallow copy is used, so the continuation's own state --
+    phase reference, last monodromy -- is untouched); settings, tol : the continuation's.
+    """
+
+    def __init__(self, problem, settings, tol, u_a, p_a):
+        self.problem = copy.copy(problem)
+        self.settings = settings
+        self.tol = tol
+        self.u_a = u_a
+        self.p_a = p_a
+        self.w = problem.scale(u_a) if hasattr(problem, "scale") else np.ones(len(u_a))
+        self.cache = {}
+
+    def at(self, sigma):
+        """(u, J, p) on the branch at pseudo-arclength sigma from point a (CorrectorFailure if the
+        corrector does not converge there)."""
+        key = float(sigma)
+        if key not in self.cache:
+            u, J, _, _ = correct(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings, self.tol, self.w)
+            self.cache[key] = (u, J, tangent(J, self.p_a, self.w))
+        return self.cache[key]
+
+    def energy(self, sigma):
+        return self.problem.energy(self.at(sigma)[0])
+
+    def slope(self, sigma):
+        u, _, p = self.at(sigma)
+        return _energy_slope(self.problem.energy, u, p)
+
+    def multipliers(self, sigma):
+        u, J, p = self.at(sigma)
+        self.problem.accept(u, J)
+        return sort_multipliers(self.problem.multipliers(u, p))
+
+    def stable(self, sigma):
+        return is_stable(self.multipliers(sigma))
+
+    def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60):
+        """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi)."""
+        a, fa = lo, (g(lo) if g_lo is None else g_lo)
+        b, fb = hi, (g(hi) if g_hi is None else g_hi)
+        side = 0
+        for _ in range(max_iter):
+            if fa == 0.0 or fb == 0.0 or self._converged(a, b):
+                break
+            c = (a * fb - b * fa) / (fb - fa)
+            if not min(a, b) < c < max(a, b):
+                c = 0.5 * (a + b)
+            fc = g(c)
+            if fc * fb > 0:
+                b, fb = c, fc
+                if side == -1:
+                    fa *= 0.5
+                side = -1
+            elif fc * fa > 0:
+                a, fa = c, fc
+                if side == 1:
+                    fb *= 0.5
+                side = 1
+            else:
+                return c
+        return a if abs(fa) <= abs(fb) else b
+
+    def bisect(self, flag, lo, hi, max_iter=60):
+        """sigma at the change of a boolean flag between lo and hi (flag(lo) != flag(hi))."""
+        f_lo = flag(lo)
+        for _ in range(max_iter):
+            if self._converged(lo, hi):
+                break
+            mid = 0.5 * (lo + hi)
+            if flag(mid) == f_lo:
+                lo = mid
+            else:
+                hi = mid
+        return lo, hi
+
+    def _converged(self, lo, hi):
+        if abs(hi - lo) <= 1e-12 * max(1.0, abs(hi)):
+            return True
+        try:
+            E_lo, E_hi = self.energy(lo), self.energy(hi)
+        except CorrectorFailure:
+            return False
+        return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
+
+
+def event_record(kind, index, point, detail, **extra):
+    """An event dict: kind, index (first branch point after it), energy J, frequency_hz Hz, period s,
+    x0, v0 (lists, m and m/s), detail, located=True, plus ``extra``."""
+    return dict(kind=kind, index=int(index), energy=float(point.energy), frequency_hz=float(point.frequency_hz),
+                period=float(point.period), x0=np.asarray(point.x0, dtype=float).tolist(),
+                v0=np.asarray(point.v0, dtype=float).tolist(), detail=detail, located=True, **extra)
+
+
+def locate_between(loc, s, a, b, index, record, energy_max=None):
+    """Events between point a (sigma = 0) and point b (sigma = s) of the continuation.
+
+    a, b : (point, slope) with slope = dE/ds at the point; record(sigma) -> Point at sigma.
+    energy_max : if the step crosses it upwards, the branch is cut there: returns the located end
+    point as well.  Returns (events, end) with end = (sigma, Point) or None.
+    """
+    (pa, slope_a), (pb, slope_b) = a, b
+    events, end = [], None
+    if energy_max is not None and pa.energy < energy_max <= pb.energy:
+        sig = loc.root(lambda x: loc.energy(x) - energy_max, 0.0, s, pa.energy - energy_max, pb.energy - energy_max)
+        end = (sig, record(sig))
+        s, pb, slope_b = sig, end[1], loc.slope(sig)
+    fold = None
+    if slope_a * slope_b < 0:
+        sig = loc.root(loc.slope, 0.0, s, slope_a, slope_b)
+        pf = record(sig)
+        fold = (sig, pf)
+        events.append(event_record("fold", index, pf, "energy maximum" if slope_a > 0 else "energy minimum"))
+    if not (np.isnan(pa.floquet).any() or np.isnan(pb.floquet).any()) and pa.stable != pb.stable:
+        lo, hi = loc.bisect(loc.stable, 0.0, s)
+        pu = pb if pa.stable else pa      # the bracket's unstable end: its critical multiplier has left the circle
+        kind = classify_multipliers(pu.floquet) or "branch_point"
+        change = "loss" if pa.stable else "gain"
+        if fold is not None and abs(pu.energy - fold[1].energy) <= 1e-4 * abs(fold[1].energy):
+            events[-1]["detail"] += f"; {change} of stability there"
+        else:
+            crit = pu.floquet[0]
+            through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
+            events.append(event_record(kind, index, record(0.5 * (lo + hi)),
+                                       f"{change} of stability, multiplier through {through} "
+                                       f"(next point: {crit:.5g})"))
+    return events, end
