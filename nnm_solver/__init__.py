@@ -20,11 +20,14 @@ from .branch import STATUSES, Branch, Point
 from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
 from .floquet import STABILITY_TOL
 from .driver import METHODS, NNMIterator, continue_nnm, iter_nnm
+from .switching import switch_branch
 from .jobs import Job, start_branch
-from .plotting import plot_fep
+from .plotting import plot_atlas, plot_fep
 from .reduction import craig_bampton, mac
 from .fourier import fourier_amplitudes, fourier_coefficients
 from .scaling import cubic_scaling
+from .variants import Variant, load_sweep_file, variant_grid
+from .sweeps import SweepProgress, load_sweep, sweep
 from . import analysis, hb
 from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmonic, find_tongues, mac_orbits,
                        orbit_shape)
@@ -33,7 +36,9 @@ __all__ = [
     # models
     "Model", "CubicSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
-    "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb",
+    "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
+    # sweeps and atlases (Dask, imported only when a sweep runs)
+    "sweep", "Variant", "variant_grid", "load_sweep_file", "load_sweep", "SweepProgress", "plot_atlas",
     # results
     "Branch", "Point", "STATUSES", "MethodSettings", "ShootingSettings", "HarmonicBalanceSettings",
     "STABILITY_TOL", "cubic_scaling", "fourier_coefficients", "fourier_amplitudes",

@@ -2,6 +2,7 @@
 
     nnm-solve FILE --list-modes
     nnm-solve FILE --mode N --energy-max E [--out OUT.h5] [--plot fep.png]
+    nnm-solve FILE --modes 10-24 --energy-max E [--sweep SWEEP.toml] [--workers N | --scheduler ADDRESS]
 
 FILE is an nnm HDF5 file or a MATLAB .mat file (M, K, springs = [dof other k3], 1-based).
 Ctrl-C stops the continuation and saves the points computed so far.
@@ -51,18 +52,64 @@ def list_modes(model, reference=None, count=30, out=sys.stdout):
         print(line + ("  " + label if label else ""), file=out)
 
 
-def _progress(job, stream):
+def _progress(job, stream, interval=0.2):
+    """One progress line, rewritten in place until the job is done (the latest point's E and f once
+    there is one; before it, the time waited: the first run after installing compiles the solver)."""
     width = 30
+    t0 = time.perf_counter()
+    last = 0
     while not job.done:
         f = job.progress
         pts = job.points()
-        e = pts.energy[-1] if len(pts) else float("nan")
-        fr = pts.frequency_hz[-1] if len(pts) else float("nan")
         bar = "#" * int(width * f) + "-" * (width - int(width * f))
-        stream.write(f"\r[{bar}] {100 * f:5.1f}%  {len(pts):4d} points  E = {e:.3e} J  f = {fr:.5f} Hz ")
+        if len(pts):
+            text = (f"[{bar}] {100 * f:5.1f}%  {len(pts):4d} points  E = {pts.energy[-1]:.3e} J  "
+                    f"f = {pts.frequency_hz[-1]:.5f} Hz")
+        else:
+            text = (f"[{bar}] waiting for the first point ({time.perf_counter() - t0:.0f} s; the first run "
+                    f"compiles the solver)")
+        stream.write("\r" + text.ljust(last))
+        last = len(text)
         stream.flush()
-        time.sleep(0.2)
+        time.sleep(interval)
     stream.write("\n")
+
+
+#: the example files shipped with the viewer (nnm_viewer/data), never written to by default
+SHIPPED_EXAMPLES = ("paris.h5", "two_dof.h5")
+
+
+def _is_shipped_example(path):
+    """True if ``path`` is one of the example files shipped in the nnm_viewer package (found
+    without importing the viewer)."""
+    import importlib.util
+
+    try:
+        spec = importlib.util.find_spec("nnm_viewer")
+        p = Path(path).resolve()
+    except (ImportError, ValueError, OSError):
+        return False
+    if spec is None or not spec.submodule_search_locations or p.name not in SHIPPED_EXAMPLES:
+        return False
+    return any(p == (Path(loc) / "data" / p.name).resolve() for loc in spec.submodule_search_locations)
+
+
+def _default_out(path):
+    """(the file a branch computed on ``path`` is appended to, the reason it is not ``path`` or ''):
+    ``path`` itself (FILE.h5 for a .mat file), unless it is a shipped example or cannot be written;
+    then ``<stem>_branches.h5`` in the current folder."""
+    import os
+
+    p = Path(path)
+    out = p.with_suffix(".h5") if p.suffix.lower() == ".mat" else p
+    folder = out.parent if str(out.parent) else Path(".")
+    if _is_shipped_example(out):
+        reason = f"{out.name} is a shipped example"
+    elif not os.access(folder, os.W_OK) or (out.exists() and not os.access(out, os.W_OK)):
+        reason = f"{out} is not writable"
+    else:
+        return out, ""
+    return Path.cwd() / f"{p.stem}_branches.h5", reason
 
 
 def main(argv=None):
@@ -76,11 +123,19 @@ def main(argv=None):
     parser.add_argument("--steps-per-period", type=int, default=200)
     parser.add_argument("--tol", type=float, default=1e-6, help="relative periodicity tolerance")
     parser.add_argument("--max-points", type=int, default=500)
-    parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat)")
+    parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat; "
+                        "./STEM_branches.h5 if that is a shipped example or not writable)")
     parser.add_argument("--plot", help="save the frequency-energy plot to this image file")
+    parser.add_argument("--modes", help="sweep: modes to compute in parallel on Dask, e.g. 10-24 or 1,3,5-7")
+    parser.add_argument("--sweep", metavar="SWEEP.toml", help="sweep: model variants (and modes, energy_max, "
+                        "options) from a TOML file (docs/sweep.md)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="sweep: local worker processes (default: one per core)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="sweep: address of a running Dask scheduler, "
+                       "e.g. tcp://host:8786")
     args = parser.parse_args(argv)
     try:
-        return _run(args)
+        return _run_sweep(args, parser) if (args.modes or args.sweep) else _run(args)
     except NNMInputError as exc:
         print(f"nnm-solve: error: {exc}", file=sys.stderr)
         return 2
@@ -99,9 +154,15 @@ def _run(args):
         return 0
     if args.mode is None or args.energy_max is None:
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
-    out = Path(args.out) if args.out else Path(args.file)
-    if out.suffix.lower() == ".mat":
-        out = out.with_suffix(".h5")
+    if args.out:
+        out = Path(args.out)
+        if out.suffix.lower() == ".mat":
+            out = out.with_suffix(".h5")
+    else:
+        out, reason = _default_out(args.file)
+        if reason:
+            print(f"nnm-solve: {reason}: the branch will be saved to {out} (the model and the branch; "
+                  f"--out chooses another file)", flush=True)
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     job = start_branch(model, args.mode, args.energy_max, steps_per_period=args.steps_per_period, tol=args.tol,
@@ -137,6 +198,63 @@ def _run(args):
             print(f"FEP written to {args.plot}")
     return 0 if branch.status in ("done", "max_points", "cancelled") else 1
 
+
+def _run_sweep(args, parser):
+    """nnm-solve FILE --modes ... : many branches (modes x variants) in parallel on Dask (nnm_solver.sweep)."""
+    from .sweeps import sweep
+    from .variants import load_sweep_file
+
+    if args.mode is not None:
+        raise NNMInputError("give --mode N for one branch or --modes for a sweep, not both")
+    if args.list_modes:
+        raise NNMInputError("--list-modes does not go with --modes / --sweep")
+    if args.workers is not None and args.workers < 1:
+        raise NNMInputError(f"--workers must be at least 1, got {args.workers}")
+    spec = load_sweep_file(args.sweep) if args.sweep else None
+    modes = args.modes if args.modes is not None else (spec.modes if spec else None)
+    energy_max = args.energy_max if args.energy_max is not None else (spec.energy_max if spec else None)
+    if modes is None or energy_max is None:
+        raise NNMInputError("a sweep needs --modes (e.g. 10-24) and --energy-max E, on the command line or as "
+                            "modes = ... and energy_max = ... in the sweep file")
+    options = dict(spec.options) if spec else {}
+    for key in ("steps_per_period", "tol", "max_points", "energy_min"):   # explicit flags win over the file
+        value = getattr(args, key)
+        if key not in options or value != parser.get_default(key):
+            if value is not None:
+                options[key] = value
+    model, _ = _load(args.file)
+    out = Path(args.out) if args.out else Path(args.file)
+    if out.suffix.lower() == ".mat":
+        out = out.with_suffix(".h5")
+    if args.plot and not Path(args.plot).resolve().parent.is_dir():
+        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    client = args.scheduler or args.workers
+    t0 = time.perf_counter()
+    try:
+        branches = sweep(model, modes, energy_max, variants=spec.variants if spec else None, client=client, out=out,
+                         progress=True, **options)
+    except KeyboardInterrupt:
+        sys.stderr.write(f"\ninterrupted: the finished branches are saved in {out}; run the same command again to "
+                         f"compute the others\n")
+        return 130
+    dt = time.perf_counter() - t0
+    print(f"{'branch':<28} {'points':>6}  {'energy (J)':<19}  {'frequency (Hz)':<21}  {'time':>7}  status")
+    for b in branches:
+        info = getattr(b, "sweep_info", {})
+        took = f"{info['seconds']:6.1f}s" if info.get("seconds") is not None else f"{info.get('source', ''):>7}"
+        span = (f"{b.energy.min():.2e}..{b.energy.max():.2e}  {b.frequency_hz[0]:9.5f} -> {b.frequency_hz[-1]:9.5f}"
+                if len(b) else f"{'-':<19}  {'-':<21}")
+        print(f"{b.name:<28} {len(b):>6}  {span}  {took}  {b.status}: {b.message}")
+    computed = sum(getattr(b, "sweep_info", {}).get("source") == "computed" for b in branches)
+    in_file = sum(getattr(b, "sweep_info", {}).get("source") == "file" for b in branches)
+    failed = sum(b.status == "failed" for b in branches)
+    print(f"{len(branches)} branches in {dt:.1f} s: {computed} computed, {in_file} already in {out}"
+          f"{f', {failed} failed' if failed else ''}; saved as /branches/<variant>:mode<N> in {out}")
+    if args.plot and any(len(b) for b in branches):
+        from .plotting import plot_atlas
+        plot_atlas(branches, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM atlas")
+        print(f"atlas written to {args.plot}")
+    return 1 if failed else 0
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

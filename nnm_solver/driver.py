@@ -186,6 +186,7 @@ class NNMIterator:
         self._cs, self._tol = continuation, tol
         self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
         self.events = []
+        self._landed = False
 
     def __iter__(self):
         return self
@@ -215,7 +216,7 @@ class NNMIterator:
         ratio = self._turning_ratio(q0, v0)
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
-        elif E >= self.energy_max:
+        elif E >= self.energy_max or self._landed:
             self._finish("done", f"reached energy_max = {self.energy_max:g} J")
         elif N + 1 >= self.max_points:
             self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
@@ -267,6 +268,7 @@ class NNMIterator:
         if end is not None:
             u, J, p = loc.at(end[0])
             self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
+            self._landed = True
             return end[1], self._problem.state(u)
         return point, state
 

@@ -14,7 +14,8 @@ Events are located to a relative energy tolerance of 1e-7 (or to a step of 1e-12
 stored with their orbit (x0, v0 in m, m/s; period in s).  A change of stability is classified by the
 critical multiplier on its unstable side: ``branch_point`` (a real pair through +1 away from a fold:
 pitchfork or transcritical), ``period_doubling`` (through -1), ``torus`` (a complex quadruple leaves
-the unit circle: a Krein collision); at an energy fold the stability change is part of the ``fold``.
+the unit circle: a Krein collision); at an energy fold the stability change is part of the ``fold``
+(its key ``stability_change`` is then "loss" or "gain").
 """
 from __future__ import annotations
 
@@ -152,7 +153,8 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
     (pa, slope_a), (pb, slope_b) = a, b
     events, end = [], None
     if energy_max is not None and pa.energy < energy_max <= pb.energy:
-        sig = loc.root(lambda x: loc.energy(x) - energy_max, 0.0, s, pa.energy - energy_max, pb.energy - energy_max)
+        target = energy_max * (1 + 2 * EVENT_RTOL)    # the end point is at or just above energy_max
+        sig = loc.root(lambda x: loc.energy(x) - target, 0.0, s, pa.energy - target, pb.energy - target)
         end = (sig, record(sig))
         s, pb, slope_b = sig, end[1], loc.slope(sig)
     fold = None
@@ -166,12 +168,17 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
         pu = pb if pa.stable else pa      # the bracket's unstable end: its critical multiplier has left the circle
         kind = classify_multipliers(pu.floquet) or "branch_point"
         change = "loss" if pa.stable else "gain"
-        if fold is not None and abs(pu.energy - fold[1].energy) <= 1e-4 * abs(fold[1].energy):
-            events[-1]["detail"] += f"; {change} of stability there"
+        pe = record(0.5 * (lo + hi))
+        if fold is not None and abs(pe.energy - fold[1].energy) <= 1e-4 * abs(fold[1].energy):
+            events[-1]["stability_change"] = change
         else:
             crit = pu.floquet[0]
             through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
-            events.append(event_record(kind, index, record(0.5 * (lo + hi)),
-                                       f"{change} of stability, multiplier through {through} "
-                                       f"(next point: {crit:.5g})"))
+            events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
+                                                        f"(next point: {crit:.5g})", stability_change=change))
     return events, end
+
+
+def stability_changes(events):
+    """The events where the stability changes (classified bifurcations, and folds where it changes)."""
+    return [e for e in events if e.get("stability_change")]

@@ -86,24 +86,26 @@ def is_stable(mu, tol=STABILITY_TOL):
 
 
 def instability_kind(mu, tol=STABILITY_TOL):
-    """How an orbit is unstable, from its largest multiplier: '+1', '-1', 'complex' or '' if stable."""
+    """How an orbit is unstable, from its largest multiplier: 'branch_point' (real > 1),
+    'period_doubling' (real < -1), 'torus' (complex) or '' if stable."""
     mu = sort_multipliers(mu)
     m = mu[0]
     if abs(m) <= 1.0 + tol:
         return ""
     if abs(m.imag) <= 1e-6 * abs(m):
-        return "+1" if m.real > 0 else "-1"
-    return "complex"
+        return "branch_point" if m.real > 0 else "period_doubling"
+    return "torus"
 
 
 def detect_events(energy, frequency_hz, floquet, stable):
-    """Folds and bifurcations along a branch.
+    """Folds and stability changes bracketed by the points of a branch (for branches whose events
+    were not located, e.g. subsets and files of the first release; events.py locates them).
 
-    fold: the energy turns back between points i-1, i, i+1 (recorded at i).
-    bifurcation: the stability flag changes between i-1 and i; the kind says where the critical
-    multiplier leaves the unit circle ('+1': branch point or fold of the period, '-1': period
-    doubling, 'complex': Neimark-Sacker / Krein collision).
-    Returns a list of dicts with keys kind, index, energy, frequency_hz, detail.
+    fold: the energy turns back between points i-1, i, i+1 (recorded at i).  A change of the
+    stability flag between i-1 and i is classified by the largest multiplier on the unstable side:
+    'branch_point' (through +1), 'period_doubling' (-1) or 'torus' (a complex pair).
+    Returns a list of dicts with keys kind, index, energy, frequency_hz, detail (and
+    stability_change for the stability events).
     """
     events = []
     E = np.asarray(energy)
@@ -115,9 +117,11 @@ def detect_events(energy, frequency_hz, floquet, stable):
     for i in range(1, len(E)):
         if bool(stable[i]) != bool(stable[i - 1]):
             j = i if not stable[i] else i - 1
-            kind = instability_kind(floquet[j]) or "+1"
-            events.append(dict(kind="bifurcation", index=i, energy=float(E[i]),
-                               frequency_hz=float(frequency_hz[i]),
-                               detail=f"{'loss' if not stable[i] else 'gain'} of stability, multiplier through {kind}"))
+            kind = instability_kind(floquet[j]) or "branch_point"
+            change = "loss" if not stable[i] else "gain"
+            through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
+            events.append(dict(kind=kind, index=i, energy=float(E[i]), frequency_hz=float(frequency_hz[i]),
+                               detail=f"{change} of stability, multiplier through {through}",
+                               stability_change=change))
     events.sort(key=lambda e: (e["index"], e["kind"]))
     return events

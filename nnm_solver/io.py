@@ -12,6 +12,7 @@ import numpy as np
 from .branch import Branch
 from .elements import CubicSpring
 from .errors import NNMFileError, NNMInputError
+from .importers import import_model, is_import_path
 from .h5file import (STR, atomic_h5, open_nnm, read_attrs, read_group_tree, read_matrix, strings, write_attrs,
                      write_group_tree, write_matrix)
 from .mesh import DisplayMesh
@@ -60,6 +61,8 @@ def save_model(path, model, extra=None):
     """
     if not isinstance(model, Model):
         raise NNMInputError(f"save_model needs an nnm_solver.Model, got {type(model).__name__}")
+    if is_import_path(path):
+        raise NNMInputError(f"{path}: nnm writes HDF5 model files; give a .h5 path (this suffix is an import format)")
     with atomic_h5(path) as f:
         write_model_group(f, model, extra)
 
@@ -101,7 +104,11 @@ def read_model_group(f, path):
 
 
 def load_model(path):
-    """Read the model (matrices, springs, labels, mesh) of an nnm HDF5 file."""
+    """Read a model (matrices, springs, labels, mesh): an nnm HDF5 file, or by suffix an FE model import,
+    .mat (MATLAB v5/v7.3), .toml (model description naming MatrixMarket / Abaqus / ANSYS / MATLAB matrix
+    files, springs, units, display mesh) or .full (ANSYS); see nnm_solver.importers and docs/import.md."""
+    if is_import_path(path):
+        return import_model(path)
     with open_nnm(path) as f:
         return read_model_group(f, path)
 
@@ -133,6 +140,9 @@ def save_branch(path, branch, name=None):
     if not isinstance(branch, Branch):
         raise NNMInputError(f"save_branch needs an nnm_solver.Branch, got {type(branch).__name__}")
     path = Path(path)
+    if is_import_path(path):
+        raise NNMInputError(f"{path} is an imported model file, not an nnm HDF5 file: save branches to a .h5 file "
+                            f"(nnm-solve import {path.name} --out {path.with_suffix('.h5').name} makes one)")
     if path.exists():
         with open_nnm(path) as f:
             n_file = int(f["model"].attrs["n_dof"]) if "model" in f else None
@@ -177,8 +187,11 @@ def _jsonable(obj):
 def load_branches(path, model=None):
     """All branches stored in the nnm file at ``path`` (list of Branch, in file order).
 
-    model : the file's model if already loaded (saves reading it again).
+    model : the file's model if already loaded (saves reading it again).  Imported model files
+    (.mat, .toml, .full) hold no branches: [].
     """
+    if is_import_path(path):
+        return []
     with open_nnm(path) as f:
         if model is None:
             model = read_model_group(f, path)

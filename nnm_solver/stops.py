@@ -99,8 +99,14 @@ class LoopDetector:
         turn[1:] = np.maximum(turn[1:], ang)
         turn[:-1] = np.maximum(turn[:-1], ang)
         a = Y[:-1]
-        t = np.clip(np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300), 0.0, 1.0)
+        t = np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300)
+        inside = (t > 0.0) & (t < 1.0)
+        t = np.clip(t, 0.0, 1.0)
         d = np.linalg.norm(a + t[:, None] * ab - y, axis=1)
         same_way = u @ move >= 0.8 * max(np.linalg.norm(move), 1e-300)
-        ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way)
+        # the path travelled since the segment must be much longer than the segment: a lap, not a
+        # continuation that merely crawls on from the segment's end
+        all_L = np.linalg.norm(np.diff(np.array(self.Y), axis=0), axis=1)
+        since = np.sum(all_L) - np.concatenate([[0.0], np.cumsum(all_L)])[1:m] + np.linalg.norm(y - self.Y[-1])
+        ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way & inside & (since > 3.0 * L))
         return int(ok[0]) if len(ok) else None

@@ -9,6 +9,7 @@ import nnm_solver as nnm
 from nnm_solver.hb import continue_nnm_hb, hb_coefficients, hb_motion
 from nnm_solver.orbits.harmonic_balance import HBBasis, HBProblem
 from nnm_solver.modal import modal_system
+from nnm_solver.events import stability_changes
 
 
 def duffing_period(k, A):
@@ -140,9 +141,9 @@ def test_hill_stability_matches_shooting_floquet(nnm1_hb, nnm1_shooting):
     assert sh.status == "done"
     low = hb.energy < 1.0
     assert np.all(hb.stable[low]) and np.allclose(np.abs(hb.floquet[low]), 1.0, atol=1e-6)
-    bif_hb = [e for e in hb.events if e["kind"] == "bifurcation"]
-    bif_sh = [e for e in sh.events if e["kind"] == "bifurcation"]
-    assert [e["detail"] for e in bif_hb] == [e["detail"] for e in bif_sh]
+    bif_hb = stability_changes(hb.events)
+    bif_sh = stability_changes(sh.events)
+    assert [e["stability_change"] for e in bif_hb] == [e["stability_change"] for e in bif_sh]
     assert len(bif_hb) >= 6  # loss/gain on the backbone, on the tongue, after it
     for a, b in zip(bif_hb, bif_sh):  # the crossing lies between points index-1 and index on each branch
         ia, ib = a["index"], b["index"]

@@ -2,7 +2,7 @@
 import subprocess
 import sys
 
-FORBIDDEN = ["nnm_fem", "paris_aircraft", "viser", "trimesh", "nnm_viewer"]
+FORBIDDEN = ["nnm_fem", "paris_aircraft", "viser", "trimesh", "nnm_viewer", "dask", "distributed"]
 
 
 def test_import_nnm_solver_does_not_import_fem_aircraft_or_viewer():

@@ -1,13 +1,17 @@
 """`nnm-view` command line: one-line errors with a non-zero exit, and a served page."""
+import os
 import socket
 import subprocess
 import sys
 import time
 import urllib.request
+from pathlib import Path
 
 import pytest
 
 from nnm_viewer.demo import write_demo_file
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def run_cli(*args, timeout=60):
@@ -47,7 +51,77 @@ def demo_file(tmp_path_factory):
 
 
 def test_missing_file(tmp_path):
-    assert_one_line_error(run_cli(tmp_path / "nope.h5"), "no such file")
+    assert_one_line_error(run_cli(tmp_path / "nope.h5"), "no such file", "paris.h5", "two_dof.h5")
+
+
+def test_shipped_examples_are_found_by_name_from_any_folder(tmp_path, monkeypatch):
+    """Issue 14, item 2: `nnm-view paris.h5` / `two_dof.h5` from any folder, `nnm-view` alone opens
+    the aircraft, a local file of the same name wins, the README's `assets/paris.h5` still works."""
+    from nnm_viewer.app import find_file, parse_args
+    from nnm_viewer.examples import data_dir
+
+    monkeypatch.chdir(tmp_path)
+    for name in ("paris.h5", "two_dof.h5", "two_dof", "assets/paris.h5"):
+        path, shipped = find_file(name)
+        assert shipped and path.parent == data_dir() and path.is_file(), name
+    assert parse_args([]).file is None and find_file(None)[0].name == "paris.h5"
+    (tmp_path / "two_dof.h5").write_bytes(b"mine")
+    assert find_file("two_dof.h5") == (Path("two_dof.h5"), False)
+    monkeypatch.chdir(ROOT)
+    assert find_file("assets/paris.h5")[0] == Path("assets/paris.h5")
+
+
+def _can_build_wheels():
+    """True if this venv's setuptools has bdist_wheel (setuptools >= 70.1 or the wheel package)."""
+    import importlib.util
+    import setuptools
+    major, minor = (int(x) for x in setuptools.__version__.split(".")[:2])
+    return (major, minor) >= (70, 1) or importlib.util.find_spec("wheel") is not None
+
+
+def test_wheel_ships_the_examples(tmp_path):
+    """Issue 14, item 2: a plain (non-editable) install has the examples: build the wheel from a copy
+    of the source tree, list it, install it in a folder of its own and find the examples from elsewhere."""
+    import shutil
+    import zipfile
+
+    src = tmp_path / "src"
+    src.mkdir()
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
+    for name in ("nnm_solver", "nnm_viewer", "nnm_fem", "assets"):
+        shutil.copytree(ROOT / name, src / name, symlinks=True, ignore=ignore)
+    wheels = tmp_path / "wheels"
+    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
+    # offline with this venv's setuptools when it can build wheels, else pip's isolated build (network)
+    r = subprocess.run(pip + ["wheel", str(src), "-w", str(wheels), "--no-deps"]
+                       + (["--no-build-isolation"] if _can_build_wheels() else []),
+                       capture_output=True, text=True, timeout=300)
+    if r.returncode and not _can_build_wheels() and "network" in r.stderr.lower():
+        pytest.skip("no network for pip's isolated build, and this setuptools cannot build wheels")
+    assert r.returncode == 0, r.stderr
+    (wheel,) = wheels.glob("nnm-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert {"nnm_viewer/data/paris.h5", "nnm_viewer/data/two_dof.h5", "nnm_viewer/examples.py"} <= set(names)
+    site = tmp_path / "site"
+    zipfile.ZipFile(wheel).extractall(site)                    # a pure wheel unpacks as installed
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    code = ("import nnm_viewer, nnm_solver as nnm\n"
+            "from nnm_viewer.app import find_file\n"
+            "print(nnm_viewer.__file__)\n"
+            "for name in ('paris.h5', 'two_dof.h5', None):\n"
+            "    p, shipped = find_file(name)\n"
+            "    print(p, shipped, len(nnm.load_branches(p)))\n")
+    r = subprocess.run([sys.executable, "-c", code], cwd=elsewhere, capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(site)})
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith(str(site))                      # the installed copy, not the source tree
+    for line, name in zip(lines[1:], ("paris.h5", "two_dof.h5", "paris.h5")):
+        path, shipped, n = line.split()
+        assert path == str(site / "nnm_viewer" / "data" / name) and shipped == "True" and int(n) >= 1
 
 
 def test_invalid_file(tmp_path, capsys):

@@ -15,10 +15,12 @@ half-period problem is an exact periodic orbit of period T.
 
 Phase condition (eq. 6).  Default (reversible orbits): v0 = 0, i.e. t = 0 is an instant of zero
 velocity, and the unknowns reduce to u = [q0; T / T_r] (see ShootingProblem).  General orbits
-(reversible=False): h(u) = <q_ref, v0> / w_r = <x_ref, M xdot(0)> / w_r = 0, where q_ref is the
-displacement of the previous converged point: t = 0 is an extremum of the motion projected on the
-previous shape.  The trivial orbit u = 0 is excluded by starting at finite amplitude and by the
-arclength condition.
+(reversible=False): a Poincare section through the previous converged initial state z_ref,
+h(u) = <f(z_ref), z0 - z_ref> = 0 with f the vector field ([v; -Omega^2 q - Bq^T g(Bq q)], scaled as u):
+t = 0 is where the orbit crosses the hyperplane through z_ref normal to the flow there.  Unlike the
+condition <q_ref, v0> = 0 (an extremum of the motion along q_ref, which degenerates when two such
+extrema merge as the orbit's shape changes), the section stays transversal along the family.  The
+trivial orbit u = 0 is excluded by starting at finite amplitude and by the arclength condition.
 
 Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
 
@@ -36,8 +38,10 @@ from ..newmark import sweep_sensitivity, sweep_state
 
 def balanced_max_step(wp, max_rel_state, max_rel_period):
     """Largest step s along a scaled tangent wp = w * p whose last entry is the period's: the relative
-    state change s |wp[:-1]| <= max_rel_state and the relative period change s |wp[-1]| <= max_rel_period."""
-    return min(max_rel_state / max(np.linalg.norm(wp[:-1]), 1e-300), max_rel_period / max(abs(wp[-1]), 1e-300))
+    state change s |wp[:-1]| <= max_rel_state and the relative period change s |wp[-1]| <= 0.8
+    max_rel_period (a margin for the curvature of the branch, so that the converged point rarely exceeds
+    the hard limit that check_step enforces)."""
+    return min(max_rel_state / max(np.linalg.norm(wp[:-1]), 1e-300), 0.8 * max_rel_period / max(abs(wp[-1]), 1e-300))
 
 
 def discrete_linear_period(omega, nsteps_per_period):
@@ -80,6 +84,7 @@ class ShootingProblem:
         self.T_r = 2 * np.pi / self.w_r
         self.q_ref = np.zeros(n)
         self.q_ref[mode_index] = 1.0
+        self.section = None          # (z_ref, g): the phase section of general orbits, g = f(z_ref) in u units
         self.max_rel_step = max_rel_step
         self.max_rel_period_step = max_rel_period_step
         # unknowns: entries of y = [q0; v0 / w_r; T / T_r] that are free
@@ -117,7 +122,7 @@ class ShootingProblem:
 
     def _assemble(self, q, v, q0, v0):
         sgn = 1.0 if self.symmetric else -1.0
-        r = np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self.q_ref @ v0 / self.w_r]])
+        r = np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self._phase(q0, v0)]])
         return r[:self.rows]
 
     def jacobian(self, u):
@@ -144,7 +149,10 @@ class ShootingProblem:
         J[:n, 2 * n] = sq_h * dh_du
         J[n:2 * n, 2 * n] = sv_h * dh_du / w
         J[np.arange(2 * n), np.arange(2 * n)] += sgn
-        J[2 * n, n:2 * n] = self.q_ref
+        if self.section is None:
+            J[2 * n, n:2 * n] = self.q_ref
+        else:
+            J[2 * n, :2 * n] = self.section[1]
         return r, J[:self.rows][:, self.free]
 
     def error(self, u, r):
@@ -153,9 +161,24 @@ class ShootingProblem:
         z = np.concatenate([q0, v0 / self.w_r])
         return float(np.linalg.norm(r[:2 * self.n]) / max(np.linalg.norm(z), 1e-300))
 
+    def set_section(self, q0, v0):
+        """Phase section of general orbits through the state (q0, v0): normal to the flow there."""
+        s = self.sys
+        z = np.concatenate([q0, v0 / self.w_r])
+        g = np.concatenate([v0, (-s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)) / self.w_r])
+        self.section = (z, g / max(np.linalg.norm(g), 1e-300))
+
+    def _phase(self, q0, v0):
+        if self.section is None:
+            return self.q_ref @ v0 / self.w_r
+        z_ref, g = self.section
+        return g @ (np.concatenate([q0, v0 / self.w_r]) - z_ref)
+
     def accept(self, u, J):
-        q0 = self.unpack(u)[0]
+        q0, v0, _ = self.unpack(u)
         self.q_ref = q0 / np.linalg.norm(q0)
+        if not self.reversible:
+            self.set_section(q0, v0)
         self.accepted_map = self.half_map
         self.accepted_u = u.copy()
 

@@ -1,0 +1,67 @@
+"""nnm-solve's progress line and default output file (issue 14, item 12)."""
+import hashlib
+import io
+from pathlib import Path
+
+import numpy as np
+
+import nnm_solver as nnm
+from nnm_solver import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ROOT / "nnm_viewer" / "data" / "two_dof.h5"
+
+
+class _Job:
+    """A job with no point for two polls, then one point, then done."""
+
+    def __init__(self, model):
+        self.model, self.polls = model, 0
+
+    @property
+    def done(self):
+        return self.polls >= 4
+
+    @property
+    def progress(self):
+        return 0.0 if self.polls < 3 else 0.5
+
+    def points(self):
+        self.polls += 1
+        b = nnm.Branch(self.model, 1, [], [], [], np.zeros((0, 2)), np.zeros((0, 2)), status="running")
+        if self.polls >= 3:
+            b = nnm.Branch(self.model, 1, [1.5], [0.2], [5.0], np.zeros((1, 2)), np.zeros((1, 2)), status="running")
+        return b
+
+
+def test_progress_shows_no_nan_before_the_first_point():
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)])
+    out = io.StringIO()
+    cli._progress(_Job(model), out, interval=0.0)
+    lines = out.getvalue().split("\r")
+    assert "nan" not in out.getvalue().lower()
+    assert "waiting for the first point" in lines[1]
+    assert "E = 1.500e+00 J" in lines[-1] and "f = 0.20000 Hz" in lines[-1]
+
+
+def test_branch_on_a_shipped_example_goes_to_the_current_folder(tmp_path, monkeypatch, capsys):
+    before = hashlib.sha1(SHIPPED.read_bytes()).hexdigest()
+    monkeypatch.chdir(tmp_path)
+    assert cli._default_out(SHIPPED) == (tmp_path / "two_dof_branches.h5", "two_dof.h5 is a shipped example")
+    code = cli.main([str(SHIPPED), "--mode", "2", "--energy-max", "0.01", "--max-points", "3"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "two_dof.h5 is a shipped example: the branch will be saved to" in out
+    assert [b.mode for b in nnm.load_branches(tmp_path / "two_dof_branches.h5")] == [2]
+    assert hashlib.sha1(SHIPPED.read_bytes()).hexdigest() == before
+
+
+def test_default_out_is_the_file_unless_it_cannot_be_written(tmp_path, monkeypatch):
+    p = tmp_path / "m.h5"
+    p.write_bytes(b"")
+    assert cli._default_out(p) == (p, "")
+    assert cli._default_out(tmp_path / "m.mat") == (tmp_path / "m.h5", "")
+    monkeypatch.chdir(tmp_path / "..")
+    monkeypatch.setattr("os.access", lambda path, mode: False)        # (root may write anywhere)
+    out, reason = cli._default_out(p)
+    assert out == Path.cwd() / "m_branches.h5" and reason == f"{p} is not writable"

@@ -1,0 +1,264 @@
+"""nnm.sweep on a local Dask cluster (2 worker processes, 1 thread each): the atlas equals the serial
+branches point for point, a killed worker's branch is retried or reported, a cancelled sweep keeps its
+finished branches and a rerun skips them, bad scheduler addresses and bad input give one-line errors;
+model variants and the TOML sweep file."""
+import importlib
+import os
+import signal
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from conftest import two_dof_model
+
+sweeps = importlib.import_module("nnm_solver.sweeps")
+
+SHORT = dict(steps_per_period=64, max_points=40)            # ~0.1-0.5 s per branch
+LONG = dict(energy_max=1e4, steps_per_period=200, max_points=400)   # 2-DOF NNM1 through the 3:1 tongue
+
+
+def chain(n=5):
+    """n unit masses in a fixed-fixed chain of unit springs, a grounded and a relative cubic spring."""
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    return nnm.Model(np.eye(n), K, [nnm.CubicSpring(dof=0, k3=0.5), nnm.CubicSpring(dof=3, other=4, k3=0.2)],
+                     name="chain")
+
+
+def assert_same(a, b):
+    assert (len(a), a.status, a.message, a.mode) == (len(b), b.status, b.message, b.mode)
+    for key in ("energy", "frequency_hz", "period", "x0", "v0", "stable"):
+        np.testing.assert_array_equal(getattr(a, key), getattr(b, key), err_msg=key)
+    np.testing.assert_array_equal(a.floquet, b.floquet)
+    assert a.events == b.events
+
+
+def file_names(path):
+    return [b.name for b in nnm.load_branches(path)]
+
+
+# ---------------------------------------------------------------------- variants, sweep file (no Dask)
+def test_variants_change_the_model():
+    m = chain()
+    v = nnm.Variant(spring_factor=2.0, added_stiffness=[(1, 0.3), (2, 4, 0.5)], mass_factor=4.0, mass_dofs=[2])
+    assert v.name == "springs2_k[0.3@1,0.5@2-4]_mass4@2"
+    mv = v.apply(m)
+    np.testing.assert_allclose(mv.k3, 2 * m.k3)
+    dK = mv.K - m.K
+    assert dK[1, 1] == 0.3 and dK[2, 2] == 0.5 and dK[4, 4] == 0.5 and dK[2, 4] == dK[4, 2] == -0.5
+    assert np.count_nonzero(dK) == 5
+    assert mv.M[2, 2] == 4.0 and np.trace(mv.M) == 8.0
+    assert nnm.Variant().apply(m) is m and nnm.Variant().name == "base"
+    per_spring = nnm.Variant(spring_factor=[1.0, 0.0]).apply(m)
+    assert list(per_spring.k3) == [0.5, 0.0]
+    grid = nnm.variant_grid(spring_factor=[0.5, 1.0], stiffness=[0.0, 1e3], stiffness_dofs=[0, 4])
+    assert [g.name for g in grid] == ["springs0.5", "springs0.5_k1000@0,4", "base", "k1000@0,4"]
+    assert grid[3].apply(m).K[4, 4] == 1002.0
+    with pytest.raises(nnm.NNMInputError, match="3 values but the model has 2 springs"):
+        nnm.Variant(spring_factor=[1, 2, 3]).apply(m)
+    with pytest.raises(nnm.NNMInputError, match="DOF 7 is not a DOF"):
+        nnm.Variant(added_stiffness=[(7, 1.0)]).apply(m)
+    with pytest.raises(nnm.NNMInputError, match="may not contain"):
+        nnm.Variant(name="a:b")
+    with pytest.raises(nnm.NNMInputError, match="mass_factor must be positive"):
+        nnm.Variant(mass_factor=0)
+
+
+def test_sweep_file(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text('modes = "2-4,7"\nenergy_max = 3.5\n[options]\nmax_points = 12\n'
+                 '[grid]\nspring_factor = [1.0, 2.0]\n'
+                 '[[variant]]\nname = "stiff"\nadded_stiffness = [[1, 2.5]]\nmass_factor = 1.2\nmass_dofs = [0]\n')
+    spec = nnm.load_sweep_file(p)
+    assert spec.modes == [2, 3, 4, 7] and spec.energy_max == 3.5 and spec.options == {"max_points": 12}
+    assert [v.name for v in spec.variants] == ["base", "springs2", "stiff"]
+    assert spec.variants[2].added_stiffness == ((1, 2.5),) and spec.variants[2].mass_dofs == (0,)
+    p.write_text("[grid]\nspring_factr = [1.0]\n")
+    with pytest.raises(nnm.NNMInputError, match="grid"):
+        nnm.load_sweep_file(p)
+    p.write_text("modes = [1, 1]\n")
+    with pytest.raises(nnm.NNMInputError, match="repeats"):
+        nnm.load_sweep_file(p)
+    p.write_text("modes = \n")
+    with pytest.raises(nnm.NNMInputError, match="not valid TOML"):
+        nnm.load_sweep_file(p)
+
+
+def test_bad_input_fails_before_any_cluster(tmp_path):
+    m = chain()
+    for kwargs, match in [(dict(modes="1-9"), "mode 6 is out of range"), (dict(modes="3-1"), "empty"),
+                          (dict(modes=[1], steps_per_period=4), "steps_per_period"),
+                          (dict(modes=[1], harmonics=3), "unknown option 'harmonics'"),
+                          (dict(modes=[1], on_point=print), "on_point"),
+                          (dict(modes=[1], client=object()), "client must be")]:
+        with pytest.raises(nnm.NNMInputError, match=match):
+            nnm.sweep(m, energy_max=1.0, **kwargs)
+    with pytest.raises(nnm.NNMInputError, match="unique"):
+        nnm.sweep(m, [1], 1.0, variants=[nnm.Variant(name="a"), nnm.Variant(name="a", mass_factor=2)])
+    other = tmp_path / "other.h5"
+    nnm.save_model(other, two_dof_model())
+    with pytest.raises(nnm.NNMInputError, match="holds another model"):
+        nnm.sweep(m, [1], 1.0, out=other, client=object())
+
+
+def test_bad_scheduler_address(monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(sweeps, "CONNECT_TIMEOUT", 1.0)
+    for address in ("tcp://127.0.0.1:1", "nonsense://nowhere:x"):
+        with pytest.raises(nnm.NNMInputError, match="cannot reach the Dask scheduler"):
+            nnm.sweep(chain(), [1], 1.0, client=address, **SHORT)
+
+
+# ---------------------------------------------------------------------- on a LocalCluster
+@pytest.fixture(scope="module")
+def client():
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                       env=dict(sweeps.WORKER_ENV))
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def test_atlas_equals_serial_point_for_point(client, tmp_path):
+    m = chain()
+    variants = nnm.variant_grid(spring_factor=[1.0, 2.0]) + [
+        nnm.Variant(name="stiff-heavy", added_stiffness=[(2, 0.5)], mass_factor=1.5, mass_dofs=[4])]
+    out = tmp_path / "atlas.h5"
+    got = nnm.sweep(m, "1-3", 2.0, variants=variants, client=client, out=out, **SHORT)
+    want = [nnm.continue_nnm(v.apply(m), mode, 2.0, **SHORT) for v in variants for mode in (1, 2, 3)]
+    names = [f"{v.name}:mode{mode}" for v in variants for mode in (1, 2, 3)]
+    assert [b.name for b in got] == names
+    for a, b in zip(want, got):
+        assert_same(a, b)
+        assert b.sweep_info["source"] == "computed" and b.sweep_info["worker"].startswith("tcp://")
+    assert got[-1].model.M[4, 4] == 1.5 and got[-1].model.K[2, 2] == 2.5
+    # the file holds every branch once, under its name; load_sweep gives each its variant's model
+    assert sorted(file_names(out)) == sorted(names)
+    loaded = {b.name: b for b in nnm.load_sweep(out)}
+    for a, name in zip(want, names):
+        np.testing.assert_array_equal(loaded[name].x0, a.x0)
+        np.testing.assert_array_equal(loaded[name].model.M, a.model.M)
+        np.testing.assert_array_equal(loaded[name].model.K, a.model.K)
+    assert nnm.load_model(out).n == 5 and list(nnm.load_model(out).k3) == [0.5, 0.2]
+    ax = nnm.plot_atlas(list(loaded.values()), path=tmp_path / "atlas.png")
+    assert (tmp_path / "atlas.png").stat().st_size > 10_000
+    lines = [ln for ln in ax.get_lines() if ln.get_label().endswith("NNM 1")]
+    assert abs(lines[0].get_ydata()[0]) < 1e-3                   # relative change starts at 0 %
+    # a rerun finds everything in the file: nothing to compute, so no scheduler is even contacted
+    again = nnm.sweep(m, "1-3", 2.0, variants=variants, client="tcp://127.0.0.1:1", out=out, **SHORT)
+    assert [b.sweep_info["source"] for b in again] == ["file"] * 9
+    for a, b in zip(want, again):
+        np.testing.assert_array_equal(a.energy, b.energy)
+    assert again[-1].model is got[-1].model or np.array_equal(again[-1].model.M, got[-1].model.M)
+    with pytest.raises(nnm.NNMInputError, match="energy_max"):
+        nnm.sweep(m, "1-3", 5.0, variants=variants, client=client, out=out, **SHORT)
+
+
+def test_cancel_keeps_finished_branches_and_rerun_skips_them(client, tmp_path):
+    m = chain()
+    variants = nnm.variant_grid(spring_factor=[1.0, 2.0])
+    opts = dict(steps_per_period=128, max_points=80)
+    out = tmp_path / "cancel.h5"
+    stop = threading.Event()
+    seen = []
+
+    def progress(state):
+        seen.append((state.finished, state.all_points))
+        if state.finished >= 1:
+            stop.set()
+
+    first = nnm.sweep(m, "1-5", 2.0, variants=variants, client=client, out=out, progress=progress, stop=stop, **opts)
+    done = [b.name for b in first if b.status != "cancelled"]
+    cancelled = [b.name for b in first if b.status == "cancelled"]
+    assert done and len(cancelled) >= 5, [b.status for b in first]
+    assert all(len(b) == 0 and "run it again" in b.message for b in first if b.status == "cancelled")
+    assert sorted(file_names(out)) == sorted(done)
+    assert max(p for _, p in seen) > 0
+    second = nnm.sweep(m, "1-5", 2.0, variants=variants, client=client, out=out, **opts)
+    assert {b.name for b in second if b.sweep_info["source"] == "file"} == set(done)
+    assert {b.name for b in second if b.sweep_info["source"] == "computed"} == set(cancelled)
+    assert all(b.status in ("done", "max_points") for b in second)
+    assert sorted(file_names(out)) == sorted(b.name for b in second)    # each branch exactly once
+
+
+def _killer(target):
+    """progress callable killing (SIGKILL) the worker process computing ``target`` once it has a point."""
+    killed = []
+
+    def progress(state):
+        if not killed and state.running.get(target, 0) >= 1:
+            pid = state.workers[target]["pid"]
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+    progress.killed = killed
+    return progress
+
+
+def test_killed_worker_branch_is_retried(client, tmp_path):
+    m = two_dof_model()
+    out = tmp_path / "killed.h5"
+    progress = _killer("base:mode1")
+    got = nnm.sweep(m, [1, 2], client=client, out=out, progress=progress, **LONG)
+    assert progress.killed, "the branch finished before the worker could be killed"
+    assert got[0].sweep_info["pid"] != progress.killed[0]       # computed again by another process
+    assert_same(nnm.continue_nnm(m, 1, **LONG), got[0])
+    assert sorted(file_names(out)) == ["base:mode1", "base:mode2"]
+
+
+def test_killed_worker_branch_is_reported_then_rerun(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    import dask
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0,
+                          "distributed.scheduler.worker-saturation": 1.0}):
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                           env=dict(sweeps.WORKER_ENV))
+    try:
+        with distributed.Client(cluster) as c:
+            m = two_dof_model()
+            out = tmp_path / "reported.h5"
+            progress = _killer("base:mode1")
+            got = nnm.sweep(m, [1, 2], client=c, out=out, progress=progress, **LONG)
+            assert progress.killed
+            assert got[0].status == "failed" and len(got[0]) == 0 and got[0].sweep_info["source"] == "lost"
+            assert "worker computing this branch died" in got[0].message and "run the sweep again" in got[0].message
+            assert got[1].status == "done"
+            assert file_names(out) == ["base:mode2"]              # nothing saved for the lost branch
+            again = nnm.sweep(m, [1, 2], client=c, out=out, **LONG)
+            assert [b.sweep_info["source"] for b in again] == ["computed", "file"]
+            assert_same(nnm.continue_nnm(m, 1, **LONG), again[0])
+    finally:
+        cluster.close()
+
+
+# ---------------------------------------------------------------------- command line
+def run(*args, timeout=240):
+    return subprocess.run([sys.executable, "-m", "nnm_solver.cli", *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_cli_sweep(tmp_path):
+    pytest.importorskip("distributed")
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, chain())
+    toml = tmp_path / "s.toml"
+    toml.write_text('energy_max = 1.0\n[options]\nsteps_per_period = 64\n[grid]\nspring_factor = [1.0, 2.0]\n')
+    out, png = tmp_path / "out.h5", tmp_path / "atlas.png"
+    r = run(p, "--modes", "1-2", "--sweep", toml, "--max-points", 30, "--workers", 2, "--out", out, "--plot", png)
+    assert r.returncode == 0, r.stderr
+    assert "4 computed, 0 already in" in r.stdout and "atlas written" in r.stdout
+    assert sorted(file_names(out)) == ["base:mode1", "base:mode2", "springs2:mode1", "springs2:mode2"]
+    assert all(b.settings["steps_per_period"] == 64 for b in nnm.load_branches(out))
+    assert png.stat().st_size > 10_000
+    r = run(p, "--modes", "1-2", "--sweep", toml, "--max-points", 30, "--out", out)
+    assert r.returncode == 0, r.stderr
+    assert "0 computed, 4 already in" in r.stdout
+    r = run(p, "--modes", "1-2", "--mode", 1, "--energy-max", 1)
+    assert r.returncode == 2 and "not both" in r.stderr
+    r = run(p, "--modes", "1-9", "--energy-max", 1)
+    assert r.returncode == 2 and "out of range" in r.stderr and "Traceback" not in r.stderr
