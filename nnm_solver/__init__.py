@@ -15,11 +15,15 @@ from .mesh import DisplayMesh
 from .model import Model
 from .modal import ModalSystem, modal_system
 from .io import load_branches, load_extra, load_model, save_branch, save_model
-from .matio import load_mat_model
+from .importers import DofMap, import_model
+from .importers.matlab import load_mat_model
+from .importers.toml import load_toml_model
+from .importers.ansys import load_full_model
+from .exports import Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit
 from .branch import STATUSES, Branch, Point
 from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
 from .floquet import STABILITY_TOL
-from .driver import METHODS, NNMIterator, continue_nnm, iter_nnm
+from .driver import METHODS, NNMIterator, continue_nnm, continue_tongue, iter_nnm
 from .switching import switch_branch
 from .jobs import Job, start_branch
 from .plotting import plot_atlas, plot_fep
@@ -37,6 +41,7 @@ __all__ = [
     "Model", "CubicSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
     "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
+    "continue_tongue",
     # sweeps and atlases (Dask, imported only when a sweep runs)
     "sweep", "Variant", "variant_grid", "load_sweep_file", "load_sweep", "SweepProgress", "plot_atlas",
     # results
@@ -44,6 +49,9 @@ __all__ = [
     "STABILITY_TOL", "cubic_scaling", "fourier_coefficients", "fourier_amplitudes",
     # files and plots
     "load_model", "save_model", "load_branches", "save_branch", "load_extra", "load_mat_model", "plot_fep",
+    # importing FE models, exporting to the test lab (docs/import.md)
+    "import_model", "load_toml_model", "load_full_model", "DofMap",
+    "export_csv", "export_uff", "export_uff_orbit", "amplitude_backbone", "export_backbone_csv", "Backbone",
     # reading branches
     "analysis", "HarmonicContent", "Tongue", "describe_orbit", "dominant_harmonic", "find_tongues",
     "mac_orbits", "orbit_shape",

@@ -26,7 +26,8 @@ class Point:
     energy J; frequency_hz Hz; period s; x0, v0 (n,) initial state (m, m/s, t = 0 at the phase
     condition); floquet (2n,) complex multipliers, largest modulus first (NaN if not computed);
     stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
-    for harmonic-balance points, else None.  ``point["energy"]`` works too (first-release rows).
+    for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py).
+    ``point["energy"]`` works too (first-release rows).
     """
 
     energy: float
@@ -38,6 +39,7 @@ class Point:
     stable: bool
     iterations: int = 0
     coefficients: np.ndarray | None = field(default=None, repr=False)
+    label: str = "backbone"
 
     def __getitem__(self, key):
         try:
@@ -52,24 +54,29 @@ class Branch:
     energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
     each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus
     first), stable (N,) bool, coefficients (N, N_b, n) Fourier coefficients (m) of harmonic-balance
-    branches (None otherwise), events: list of dicts (kind, index, energy, frequency_hz, detail).
+    branches (None otherwise), labels (N,) str ("backbone" / "tongue k:1"), events: list of dicts
+    (kind, index, energy, frequency_hz, detail; located events also x0, v0, period), tongues: the
+    tongues passed by a ``tongues="skip"`` continuation (dicts: ratio, order, partner_mode, entry_energy,
+    entry_frequency_hz, ...).
     status: one of STATUSES; message: why it stopped.
     settings: the method's typed settings (settings.py; a plain dict is converted).
     """
 
     def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
-                 events=None, status="done", message="", settings=None, name="", coefficients=None):
+                 events=None, status="done", message="", settings=None, name="", coefficients=None, labels=None,
+                 tongues=None):
         self.model = model
         self.mode = int(mode)
         self.settings = settings_from_dict(settings)
         self.status = str(status)
         self.message = str(message)
         self.name = str(name)
-        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients)
+        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels)
         self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
                            if events is None else events)
+        self.tongues = list(tongues or [])
 
-    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients):
+    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None):
         n = self.model.n
         self.energy = np.asarray(energy, dtype=float).reshape(-1)
         N = len(self.energy)
@@ -81,13 +88,17 @@ class Branch:
                         else np.asarray(floquet, dtype=complex).reshape(N, 2 * n))
         self.stable = np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N)
         self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
+        self.labels = (np.full(N, "backbone", dtype=object) if labels is None
+                       else np.asarray([str(x) for x in np.asarray(labels, dtype=object).reshape(N)], dtype=object))
 
     # ------------------------------------------------------------------ building from points
     @classmethod
-    def from_points(cls, model, mode, points, settings=None, status="done", message="", name="", events=None):
+    def from_points(cls, model, mode, points, settings=None, status="done", message="", name="", events=None,
+                    tongues=None):
         """Branch whose rows are ``points`` (a sequence of Point); events: located events (events.py),
         or None to bracket them from the rows (floquet.detect_events)."""
-        b = cls(model, mode, [], [], [], [], [], settings=settings, status=status, message=message, name=name)
+        b = cls(model, mode, [], [], [], [], [], settings=settings, status=status, message=message, name=name,
+                tongues=tongues)
         b.extend(points)
         if events is not None:
             b.events = sorted(events, key=lambda e: (e["index"], e["energy"]))
@@ -111,7 +122,8 @@ class Branch:
                           np.r_[self.period, col("period")], np.vstack([self.x0, col("x0", (n,))]),
                           np.vstack([self.v0, col("v0", (n,))]),
                           np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
-                          np.r_[self.stable, col("stable", dtype=bool)], coeffs)
+                          np.r_[self.stable, col("stable", dtype=bool)], coeffs,
+                          np.r_[self.labels, col("label", dtype=object)])
         self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         return self
 
@@ -120,7 +132,8 @@ class Branch:
         i = self.check_index(i)
         return Point(float(self.energy[i]), float(self.frequency_hz[i]), float(self.period[i]), self.x0[i].copy(),
                      self.v0[i].copy(), self.floquet[i].copy(), bool(self.stable[i]),
-                     coefficients=None if self.coefficients is None else self.coefficients[i].copy())
+                     coefficients=None if self.coefficients is None else self.coefficients[i].copy(),
+                     label=str(self.labels[i]))
 
     @property
     def hb_coefficients(self):
@@ -148,7 +161,8 @@ class Branch:
         return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
                       self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
                       self.message, self.settings, self.name,
-                      None if self.coefficients is None else self.coefficients[index])
+                      None if self.coefficients is None else self.coefficients[index], self.labels[index],
+                      self.tongues)
 
     def interpolate(self, s):
         """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
@@ -170,7 +184,8 @@ class Branch:
         return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
                       [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
-                      self.name, None if self.coefficients is None else lerp(self.coefficients)[None])
+                      self.name, None if self.coefficients is None else lerp(self.coefficients)[None],
+                      [self.labels[near]])
 
     def at_energy(self, energy):
         """One-point Branch at energy (J): the first crossing of that energy along the branch."""
@@ -256,7 +271,8 @@ class Branch:
         return Branch(self.model.scaled(sc.ratio), self.mode, self.energy * sc.energy, self.frequency_hz,
                       self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
                       self.status, self.message, settings, self.name,
-                      None if self.coefficients is None else self.coefficients * sc.amplitude)
+                      None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
+                      [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues])
 
 
 def _match_energy(model, x, v, energy):

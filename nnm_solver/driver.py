@@ -27,6 +27,7 @@ from .orbits.shooting import ShootingProblem, discrete_linear_period
 from .settings import HarmonicBalanceSettings, ShootingSettings
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
+from .tongue_skip import SKIP_FRACTION, TongueSkipper, harmonic_label, partner_mode
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
 
@@ -167,7 +168,7 @@ class NNMIterator:
     """
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True):
+                 tol=None, locate=True, tongues="follow"):
         self.model = model
         self.mode = int(mode)
         self.settings = settings
@@ -187,6 +188,11 @@ class NNMIterator:
         self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
         self.events = []
         self._landed = False
+        self.tongue_mode = tongues
+        self.tongues = []
+        self._tongue = None            # the tongue being traversed (skip mode)
+        self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
+        self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
 
     def __iter__(self):
         return self
@@ -196,14 +202,19 @@ class NNMIterator:
             raise StopIteration
         N = len(self.points)
         with blas_limited():
-            try:
-                cp = next(self._engine)
-            except StopIteration as fin:
-                self._failed(fin.value)
-                raise StopIteration from None
-            point, (q0, v0, T) = self._record(cp, self._problem)
+            while True:
+                try:
+                    cp = next(self._engine)
+                except StopIteration as fin:
+                    self._failed(fin.value)
+                    raise StopIteration from None
+                point, (q0, v0, T) = self._record(cp, self._problem)
+                if self.tongue_mode != "skip" or not self._hidden(cp, point):
+                    break
             if self.locate:
                 point, (q0, v0, T) = self._locate(cp, point, (q0, v0, T))
+            if self.tongue_mode == "skip":
+                self._last_backbone = (cp, point)
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
             p = self.points[loop]
@@ -221,10 +232,86 @@ class NNMIterator:
         elif N + 1 >= self.max_points:
             self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
                                        f"raise max_points to go on")
-        elif N + 1 > 3 and E < 0.5 * E0:
+        elif N + 1 > 3 and E < 0.5 * E0 and self._start_is_low:
             self._finish("done", "the branch returned to low energy")
         self._last = (q0, v0)
         return point
+
+    def _hidden(self, cp, point):
+        """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
+        a tongue, or is traversing one it could not jump over)."""
+        t = self._tongue
+        if t is not None:                       # traversing a tongue: back on the backbone above its entry?
+            rising = point.energy > t["last_energy"]
+            t["last_energy"] = point.energy
+            if rising and point.energy > t["entry_energy"] and not self._entering_tongue(point, t["backbone"]):
+                t.update(exit_energy=point.energy, exit_frequency_hz=point.frequency_hz)
+                self._tongue = None
+                self._prev = None              # no event is located across the tongue
+                return False
+            t["hidden_points"] += 1
+            if t["hidden_points"] > 3 * self.max_points:
+                self._failed(f"the {t['label']} tongue at {t['entry_energy']:.4g} J could not be passed "
+                             f"({t['hidden_points']} points inside it)")
+                raise StopIteration
+            return True
+        if self._last_backbone is None or not self._entering_tongue(point, self._last_backbone[1]):
+            return False
+        bpoint = self._last_backbone[1]
+        if self._skip(cp, point):
+            return True
+        t = self.tongues[-1]
+        t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint)
+        self._tongue = t
+        return True
+
+    def _entering_tongue(self, point, bpoint):
+        """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy
+        turned back (a backbone continued in energy has no fold), or a harmonic k >= 2 carries
+        SKIP_FRACTION of its amplitude and grew by half since the last backbone point."""
+        if point.energy < bpoint.energy:
+            return True
+        k, frac = self._content(point)
+        kb, frac_b = self._content(bpoint)
+        return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
+
+    def _content(self, point):
+        """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (cached on the point)."""
+        if not hasattr(point, "_content"):
+            x = np.asarray(point.x0)
+            sys_ = self._system
+            u = self._problem.pack(sys_.to_modal(x), sys_.to_modal(np.asarray(point.v0)), point.period) \
+                if self.settings.method == "shooting" else None
+            Q = self._problem.modal_orbit(u) if u is not None else None
+            point._content = harmonic_label(Q)[1:3] if Q is not None else (1, 0.0)
+        return point._content
+
+    def _skip(self, cp, point):
+        """Jump over the tongue that ``point`` entered (tongue_skip.py); True if the continuation now
+        restarts beyond it."""
+        bcp, bpoint = self._last_backbone
+        Q = self._problem.modal_orbit(cp.u)
+        k = harmonic_label(Q)[1] if Q is not None else 1
+        mode, mac = partner_mode(self._system, Q, k) if Q is not None else (0, float("nan"))
+        tongue = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
+                      entry_index=len(self.points) - 1, entry_energy=bpoint.energy,
+                      entry_frequency_hz=bpoint.frequency_hz, entry_period=bpoint.period,
+                      entry_x0=np.asarray(bpoint.x0).tolist(), entry_v0=np.asarray(bpoint.v0).tolist(),
+                      inside_x0=np.asarray(point.x0).tolist(), inside_v0=np.asarray(point.v0).tolist(),
+                      inside_period=point.period)
+        self._last_backbone = None
+        E_base = max(bpoint.energy, point.energy)
+        jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
+        self.tongues.append(tongue)
+        if jumped is None:
+            tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
+            return False
+        u, J, delta = jumped
+        tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)))
+        self._engine.close()
+        self._engine = pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol)
+        self._prev = None          # no events are located across the jump
+        return True
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
@@ -282,9 +369,10 @@ class NNMIterator:
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
+        label = harmonic_label(prob.modal_orbit(cp.u))[0] if hasattr(prob, "modal_orbit") else "backbone"
         return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0, v0=v0,
                      floquet=mu, stable=stable, iterations=cp.iterations,
-                     coefficients=None if A is None else sys_.to_physical(A)), (q0, vq0, T)
+                     coefficients=None if A is None else sys_.to_physical(A), label=label), (q0, vq0, T)
 
     def _finish(self, status, message):
         self.status, self.message = status, message
@@ -299,14 +387,15 @@ class NNMIterator:
         """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
         if self.status == "running":
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
+        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy")} for t in self.tongues]
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=self.message,
-                                  events=self.events if self.locate else None)
+                                  events=self.events if self.locate else None, tongues=tongues)
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
              floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
-             locate_events=True, **method_options):
+             locate_events=True, tongues="follow", _start=None, **method_options):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
     Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
@@ -319,8 +408,15 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
                 break                       # a stopping rule of one's own
         branch = it.branch()                # status 'stopped'
 
+    tongues : "follow" (the continuation follows the internal-resonance tongues it meets) or "skip"
+    (it jumps over them and returns the backbone; each tongue passed is listed in branch.tongues and
+    can be computed with ``continue_tongue``); see tongue_skip.py.  locate_events : locate folds and
+    stability changes between points (events.py).
+
     Bad arguments raise NNMInputError here, before any computation.
     """
+    if tongues not in ("follow", "skip"):
+        raise NNMInputError(f"tongues must be 'follow' or 'skip', got {tongues!r}")
     method, opts = _method_options(method, method_options)
     if tol is None:
         tol = 1e-6 if method == "shooting" else 1e-8
@@ -335,17 +431,24 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     build = _shooting_problem if method == "shooting" else _hb_problem
     problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
                                       tol, energy_max, floquet)
+    if _start is not None:                     # start at a given orbit, towards another (continue_tongue)
+        (xa, va, Ta), (xb, vb, Tb) = _start
+        u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
+        p0 = problem.pack(system.to_modal(xb), system.to_modal(vb), Tb) - u0
+        problem.accept(u0, None)
     cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
                               max_angle=max_angle, max_correction=max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
-    return NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
-                       locate=locate_events)
+    it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
+                     locate=locate_events, tongues=tongues)
+    it._start_is_low = _start is None
+    return it
 
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
                  stop=None, energy_min=None, symmetric=True, floquet=None, step=None, max_angle=0.35,
                  max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
-                 method="shooting", **hb_options):
+                 method="shooting", tongues="follow", locate_events=True, **hb_options):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
 
     Parameters
@@ -372,6 +475,9 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
     max_period_step : largest relative change of the period between two points (keeps the
         continuation from stepping over the entrance of internal-resonance tongues).
+    tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
+        each computable with ``continue_tongue``).
+    locate_events : locate folds and stability changes between points (default True).
 
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
@@ -382,7 +488,8 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
         opts = dict(hb_options)
     it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
                   floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
-                  max_rel_step=max_rel_step, max_period_step=max_period_step, **opts)
+                  max_rel_step=max_rel_step, max_period_step=max_period_step, tongues=tongues,
+                  locate_events=locate_events, **opts)
     while True:
         if stop is not None and stop.is_set():
             it.cancel()
@@ -392,3 +499,48 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
             return it.branch()
         if on_point is not None:
             on_point(point)
+
+
+def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
+    """The internal-resonance tongue ``tongue`` (one of ``branch.tongues``, or its index) as its own branch.
+
+    branch : a backbone computed with ``continue_nnm(..., tongues="skip")`` (shooting).  The
+    continuation restarts at the tongue's entry orbit, heads into the tongue and follows it through
+    its turning points until it is back on the backbone above the entry energy (message: where), closes
+    a loop, or reaches energy_max (default: 100 x the entry energy).  Points are labelled by their
+    harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
+    branch's own steps_per_period, symmetric and tol are the defaults).
+    """
+    if isinstance(tongue, (int, np.integer)) and not isinstance(tongue, bool):
+        if not -len(branch.tongues) <= tongue < len(branch.tongues):
+            raise NNMInputError(f"tongue {tongue} is out of range: the branch lists {len(branch.tongues)} tongues")
+        tongue = branch.tongues[int(tongue)]
+    if not isinstance(tongue, dict) or "entry_x0" not in tongue:
+        raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
+    s = branch.settings
+    if s.method != "shooting":
+        raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
+    for key in ("steps_per_period", "symmetric", "tol"):
+        options.setdefault(key, getattr(s, key))
+    E_in = float(tongue["entry_energy"])
+    energy_max = 100 * E_in if energy_max is None else energy_max
+    start = ((np.asarray(tongue["entry_x0"]), np.asarray(tongue["entry_v0"]), tongue["entry_period"]),
+             (np.asarray(tongue["inside_x0"]), np.asarray(tongue["inside_v0"]), tongue["inside_period"]))
+    tol = options.pop("tol")
+    it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
+                  _start=start, **options)
+    entry = Point(E_in, tongue["entry_frequency_hz"], tongue["entry_period"], start[0][0], start[0][1],
+                  np.full(2 * branch.model.n, np.nan, dtype=complex), True)
+    last, inside = E_in, False
+    for p in it:
+        inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
+        if inside and p.energy > E_in and p.energy > last and not it._entering_tongue(p, entry):
+            it.cancel(f"back on the backbone at E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz, above the "
+                      f"tongue's entry at {E_in:.6g} J")
+            break
+        last = p.energy
+    out = it.branch()
+    if out.status == "cancelled":
+        out.status = "done"
+    out.name = f"{branch.name or f'NNM {branch.mode}'}: {tongue['label']} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
+    return out

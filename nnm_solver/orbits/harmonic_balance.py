@@ -120,6 +120,21 @@ class HBProblem:
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m)."""
         return self.unpack(u)[0].copy()
 
+    def modal_orbit(self, u, samples=None):
+        """Modal displacements (samples, n) of the orbit u over one period (default: the AFT samples)."""
+        samples = samples or max(self.basis.samples, 4 * self.basis.harmonics + 4)
+        theta = 2 * np.pi * np.arange(samples) / samples
+        return self.basis.functions(theta) @ self.unpack(u)[0]
+
+    def energy_gradient(self, u, h=1e-7):
+        """dE/du by central differences (J per unit of u)."""
+        g = np.zeros(len(u))
+        for i in range(len(u)):
+            e = np.zeros(len(u))
+            e[i] = h * max(abs(u[i]), np.linalg.norm(u[:-1]) / np.sqrt(len(u)), 1e-300)
+            g[i] = (self.energy(u + e) - self.energy(u - e)) / (2 * e[i])
+        return g
+
     # --------------------------------------------------------------- problem protocol
     def _parts(self, u):
         A, w = self.unpack(u)

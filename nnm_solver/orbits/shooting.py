@@ -224,6 +224,22 @@ class ShootingProblem:
         """No Fourier coefficients: the orbit is rebuilt by integration (ShootingSettings.orbit)."""
         return None
 
+    def modal_orbit(self, u):
+        """Modal displacements (N, n) of the orbit u at its N = steps_per_period time steps over a period."""
+        q0, v0, T = self.unpack(u)
+        Q, _, ok = self.sys.orbit(q0, v0, self.frac * T, self.nsteps)
+        if not ok:
+            return None
+        Q = Q[:-1]
+        return np.concatenate([Q, -Q]) if self.symmetric else Q
+
+    def energy_gradient(self, u):
+        """dE/du (J per unit of u): E = |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + element potentials."""
+        q0, v0, _ = self.unpack(u)
+        s = self.sys
+        g = np.concatenate([s.omega2 * q0 + s.Bq.T @ s.force(s.Bq @ q0), v0 * self.w_r, [0.0]])
+        return g[self.free]
+
     def monodromy(self):
         """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
         if not self.all_columns:
