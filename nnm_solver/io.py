@@ -164,6 +164,8 @@ def save_branch(path, branch, name=None):
         g.attrs["name"] = branch.name or gname
         g.attrs["settings_json"] = json.dumps(_jsonable(branch.settings.as_dict()))
         g.attrs["events_json"] = json.dumps(_jsonable(branch.events))
+        g.attrs["tongues_json"] = json.dumps(_jsonable(branch.tongues))
+        g.create_dataset("labels", data=np.array([str(x) for x in branch.labels], dtype=STR))
         columns = BRANCH_COLUMNS + (("coefficients",) if branch.coefficients is not None else ())
         for key in columns:
             data = getattr(branch, key)
@@ -205,8 +207,11 @@ def load_branches(path, model=None):
                 if "coefficients" in g:
                     cols["coefficients"] = g["coefficients"][()]
                 k3 = g["k3"][()] if "k3" in g else model.k3
+                if "labels" in g:
+                    cols["labels"] = strings(g["labels"])
                 settings = json.loads(g.attrs.get("settings_json", "{}"))
                 events = json.loads(g.attrs.get("events_json", "[]"))
+                cols["tongues"] = json.loads(g.attrs.get("tongues_json", "[]"))
             except (KeyError, OSError, ValueError) as exc:
                 raise NNMFileError(f"{path}: branch {gname} is incomplete or damaged ({exc})") from None
             m = model

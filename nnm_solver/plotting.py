@@ -4,6 +4,11 @@ from __future__ import annotations
 import numpy as np
 
 
+#: FEP markers of located events by kind: (matplotlib marker, colour)
+EVENT_MARKERS = {"fold": ("x", "k"), "branch_point": ("s", "tab:red"), "period_doubling": ("D", "tab:purple"),
+                 "torus": ("^", "tab:green")}
+
+
 def plot_fep(branches, ax=None, path=None, title=None):
     """Draw the FEP of one or several branches; stable points filled, unstable points hollow.
 
@@ -20,6 +25,7 @@ def plot_fep(branches, ax=None, path=None, title=None):
     if ax is None:
         fig, ax = plt.subplots(figsize=(7, 4.5))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    seen = set()
     for j, b in enumerate(branches):
         c = colors[j % len(colors)]
         label = b.name or f"NNM {b.mode}"
@@ -29,8 +35,11 @@ def plot_fep(branches, ax=None, path=None, title=None):
         if np.any(~st):
             ax.plot(b.energy[~st], b.frequency_hz[~st], "o", ms=4, mfc="none", color=c, label=f"{label} unstable")
         for e in b.events:
-            if e["kind"] == "fold":
-                ax.plot(e["energy"], e["frequency_hz"], "x", color="k", ms=6)
+            marker, colour = EVENT_MARKERS.get(e["kind"], ("o", "k"))
+            label = e["kind"].replace("_", " ")
+            ax.plot(e["energy"], e["frequency_hz"], marker, color=colour, ms=7, mfc="none", mew=1.5,
+                    label=label if label not in seen else None)
+            seen.add(label)
     ax.set_xscale("log")
     ax.set_xlabel("energy (J)")
     ax.set_ylabel("frequency (Hz)")

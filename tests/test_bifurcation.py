@@ -1,0 +1,107 @@
+"""Bifurcation analysis (issue 11): located and classified events, branch switching, backbones past
+tongues and tongues as their own branches.  The reference is the project's harmonic balance with
+21 harmonics (an independent method), and the shooting results extrapolated in the time step."""
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from conftest import two_dof_model
+from nnm_solver.events import classify_multipliers, stability_changes
+
+
+@pytest.fixture(scope="module")
+def located():
+    m = two_dof_model()
+    shooting = {spp: nnm.continue_nnm(m, 1, 5000, steps_per_period=spp) for spp in (200, 1000)}
+    hb = nnm.continue_nnm(m, 1, 5000, method="hb", harmonics=21, max_points=400)
+    return shooting, hb
+
+
+def _first(b, kind, n=1):
+    return [e for e in b.events if e["kind"] == kind][:n]
+
+
+def test_events_located_against_harmonic_balance(located):
+    shooting, hb = located
+    picks = lambda b: _first(b, "branch_point", 2) + _first(b, "fold", 2)     # loss, regain, tongue entry, tip
+    ref = np.array([e["energy"] for e in picks(hb)])
+    E200 = np.array([e["energy"] for e in picks(shooting[200])])
+    E1000 = np.array([e["energy"] for e in picks(shooting[1000])])
+    assert ref[0] == pytest.approx(40.975, rel=1e-4) and ref[2] == pytest.approx(4680.4, rel=1e-4)
+    # at 1000 steps per period the located events carry Newmark's O(N^-2) error: <= 3e-4 here
+    assert np.max(np.abs(E1000 / ref - 1)) < 3e-4
+    # the error is the discretisation's, not the location's: extrapolated in N it vanishes
+    extrapolated = E1000 + (E1000 - E200) / (25 - 1)
+    assert np.max(np.abs(extrapolated / ref - 1)) < 5e-5
+
+
+def test_located_events_carry_their_orbit(located):
+    b = located[0][1000]
+    m = b.model
+    for e in b.events:
+        assert e["located"] and len(e["x0"]) == m.n
+        assert m.energy(np.array(e["x0"]), np.array(e["v0"])) == pytest.approx(e["energy"], rel=1e-9)
+    fold = _first(b, "fold")[0]
+    i = fold["index"]
+    assert fold["energy"] >= b.energy[i - 1] and fold["energy"] >= b.energy[i]     # the maximum itself
+    assert [e["stability_change"] for e in stability_changes(b.events)][:2] == ["loss", "gain"]
+
+
+def test_classifier_on_synthetic_multipliers():
+    unit = np.exp(1j * np.array([0.3, -0.3, 1.0, -1.0]))
+    assert classify_multipliers(np.r_[unit, 1.0, 1.0]) == ""
+    assert classify_multipliers(np.r_[unit, 1.2, 1 / 1.2]) == "branch_point"
+    assert classify_multipliers(np.r_[unit, -1.3, -1 / 1.3]) == "period_doubling"
+    z = 1.05 * np.exp(0.7j)
+    assert classify_multipliers(np.r_[unit, z, np.conj(z), 1 / z, 1 / np.conj(z)]) == "torus"
+
+
+def test_switch_branch_at_the_first_loss_of_stability(located):
+    b = located[0][200]
+    k = b.events.index(_first(b, "branch_point")[0])
+    s = nnm.switch_branch(b, k, 1e4)
+    assert len(s) > 10 and s.status in ("done", "closed_loop", "max_points")
+    assert "family from the branch_point" in s.message and s.message.split(": ", 1)[1]
+    assert not s.settings.symmetric and not s.settings.reversible
+    assert np.abs(s.v0).max() > 1e-3 * np.abs(s.x0).max()                # general orbits, not at rest at t = 0
+    h = s.harmonics(len(s) // 2, 4)
+    assert h[2].max() > 0.05 * h[1].max()                                 # even harmonics: symmetry broken
+    parent = b.harmonics(10, 4)
+    assert parent[2].max() < 1e-6 * parent[1].max()                       # the parent family has none
+    with pytest.raises(nnm.NNMInputError, match="cannot switch"):
+        nnm.switch_branch(b, b.events.index(_first(b, "fold")[0]), 1e4)
+
+
+def test_skip_mode_returns_the_backbone_and_tongues_match_follow():
+    m = two_dof_model()
+    follow = nnm.continue_nnm(m, 1, 3e5)
+    skip = nnm.continue_nnm(m, 1, 3e5, tongues="skip")
+    assert skip.status == "done" and np.all(np.diff(skip.energy) > 0)     # a backbone, no excursion
+    assert set(skip.labels) == {"backbone"}
+    assert [t["label"] for t in skip.tongues] == ["tongue 3:1", "tongue 5:1"]
+    assert all(t["partner_mode"] == 2 for t in skip.tongues)
+    assert len(skip) < len(follow)
+    folds_follow = [e["energy"] for e in follow.events if e["kind"] == "fold"]
+    for j, t in enumerate(skip.tongues):
+        tb = nnm.continue_tongue(skip, j)
+        assert tb.status == "done" and "back on the backbone" in tb.message
+        assert any(lab == t["label"] for lab in tb.labels)
+        for e in (e for e in tb.events if e["kind"] == "fold"):           # every fold of the tongue ...
+            assert min(abs(E / e["energy"] - 1) for E in folds_follow) < 1e-5   # ... is one of follow's
+        tip = min(e["energy"] for e in tb.events if e["kind"] == "fold")
+        assert tip < 0.1 * t["entry_energy"]                              # the tongue's tip, far below
+
+
+def test_events_labels_and_tongues_survive_the_file(tmp_path):
+    m = two_dof_model()
+    b = nnm.continue_nnm(m, 1, 3e5, tongues="skip", max_points=400)
+    f = nnm.continue_nnm(m, 1, 1e4)
+    path = tmp_path / "b.h5"
+    nnm.save_branch(path, b)
+    nnm.save_branch(path, f)
+    lb, lf = nnm.load_branches(path)
+    assert lb.tongues == b.tongues and lb.events == b.events
+    assert list(lf.labels) == list(f.labels) and "tongue 3:1" in set(lf.labels)
+    ax = nnm.plot_fep([lf], path=str(tmp_path / "fep.png"))
+    labels = ax.get_legend_handles_labels()[1]
+    assert "fold" in labels and "branch point" in labels
