@@ -18,6 +18,7 @@ import time
 import nnm_solver
 
 from .state import SharedState
+from .warmup import SolverWarmUp
 from .worker import one_line
 
 log = logging.getLogger("nnm_viewer")
@@ -25,6 +26,16 @@ log = logging.getLogger("nnm_viewer")
 
 class ViewerError(Exception):
     """A start-up problem reported as one line (bad file, busy port)."""
+
+
+def find_file(name):
+    """(path, shipped) of ``name``: an existing file, else the shipped example of that name (the
+    aircraft when ``name`` is None); one-line ViewerError listing the shipped examples otherwise."""
+    from .examples import MissingFile, resolve_file
+    try:
+        return resolve_file(name)
+    except MissingFile as exc:
+        raise ViewerError(str(exc)) from None
 
 
 def load(path):
@@ -70,11 +81,11 @@ class ViewerApp:
     """The server: shared state plus one Session per connected tab."""
 
     def __init__(self, model, branches=(), path=None, host="127.0.0.1", port=8080, start_job=None,
-                 verbose=False):
+                 verbose=False, warm=None):
         import viser
         from . import scene as sc
 
-        self.shared = SharedState(model, path=path, branches=branches)
+        self.shared = SharedState(model, path=path, branches=branches, solver_ready=False)
         self.start_job = start_job
         with contextlib.redirect_stdout(io.StringIO()):   # viser's own banner: we print one line
             self.server = viser.ViserServer(host=host, port=port, label="nnm-view", verbose=verbose)
@@ -94,21 +105,10 @@ class ViewerApp:
         self.geometry = geom
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
-        threading.Thread(target=self._warm_up, name="nnm-view-warm-up", daemon=True).start()
-
-    def _warm_up(self):
-        """Integrate one orbit and import matplotlib before the first tab connects (the solver's
-        compiled kernels and the plotting library then cost nothing at the first pick)."""
-        t0 = time.perf_counter()
-        try:
-            import matplotlib.backends.backend_agg  # noqa: F401
-            from .info import point_data
-            entry = next((e for e in self.shared.snapshot() if len(e)), None)
-            if entry is not None:
-                point_data(entry.branch, 0.0, samples=16)
-        except Exception as exc:   # only a warm-up: the session will report real errors
-            log.info("warm-up failed: %s", one_line(exc))
-        log.info("warm-up done in %.2f s", time.perf_counter() - t0)
+        # the solver's kernels are compiled in the background (about 30 s on the first start after
+        # installing): the pages are served and drawn meanwhile, and show "preparing the solver"
+        self.warm_up = SolverWarmUp(on_done=lambda seconds, error: self.shared.set_solver_ready(),
+                                    warm=warm).start()
 
     @property
     def url(self):
@@ -145,7 +145,9 @@ class ViewerApp:
 def parse_args(argv=None):
     p = argparse.ArgumentParser(prog="nnm-view", description="Explore the nonlinear normal modes of a model "
                                 "in the browser (FEP picking, animated orbits, stiffness scaling).")
-    p.add_argument("file", help="nnm HDF5 file (model, mesh and branches)")
+    p.add_argument("file", nargs="?", default=None,
+                   help="nnm HDF5 file (model, mesh and branches), or the name of a shipped example "
+                        "(paris.h5: the Paris-like aircraft, the default; two_dof.h5: the 2-DOF teaching model)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
     p.add_argument("-v", "--verbose", action="store_true", help="log timings to stderr")
@@ -157,21 +159,23 @@ def main(argv=None):
     if args.verbose:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s", stream=sys.stderr)
     try:
-        model, branches = load(args.file)
+        path, shipped = find_file(args.file)
+        model, branches = load(path)
         check_port(args.host, args.port)
-        app = ViewerApp(model, branches, path=args.file, host=args.host, port=args.port)
+        app = ViewerApp(model, branches, path=path, host=args.host, port=args.port)
     except ViewerError as exc:
         print(f"nnm-view: error: {exc}", file=sys.stderr)
         return 2
     except nnm_solver.NNMInputError as exc:          # e.g. a model the solver cannot analyse
-        print(f"nnm-view: error: {args.file}: {exc}", file=sys.stderr)
+        print(f"nnm-view: error: {path}: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:                           # the web server could not start
         print(f"nnm-view: error: cannot serve on {args.host}:{args.port} ({one_line(exc)})", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130
-    print(f"nnm-view: {args.file}: {model.n} DOFs, {len(branches)} branch(es). Open {app.url} "
+    shown = f"{path.name} (shipped example)" if shipped and str(args.file or "") != str(path) else str(path)
+    print(f"nnm-view: {shown}: {model.n} DOFs, {len(branches)} branch(es). Open {app.url} "
           f"in a browser (Ctrl-C to quit)", flush=True)
     try:
         while True:

@@ -41,10 +41,12 @@ def viewer_command(path, port):
 
 
 @contextlib.contextmanager
-def viewer_process(path, port):
-    """Run ``nnm-view`` on ``path`` in a subprocess; yields (process, the line it printed when ready).
-    The process is terminated (killed after 10 s) on exit."""
-    proc = subprocess.Popen(viewer_command(path, port), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def viewer_process(path, port, cwd=None):
+    """Run ``nnm-view`` on ``path`` (a file or a shipped example's name) in a subprocess, in folder
+    ``cwd``; yields (process, the line it printed when ready).  The process is terminated (killed
+    after 10 s) on exit."""
+    proc = subprocess.Popen(viewer_command(path, port), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=cwd)
     try:
         yield proc, proc.stdout.readline()
     finally:

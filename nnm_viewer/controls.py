@@ -20,6 +20,7 @@ from .drawing import ALL_KINDS, Drawing
 from .fep import axis_ranges, energy_to_s
 from .fep_view import entry_option
 from .layout import Layout
+from .state import branch_label
 from .worker import JobRunner, one_line
 
 #: auto amplification: the peak displacement is shown as this fraction of the model size
@@ -258,8 +259,11 @@ class Session:
             raise ValueError("the branch is still being computed: stop it or wait, then save")
         if e.saved:
             raise ValueError("this branch is already in the file")
-        self.shared.save(e)
-        self.show_status(f"saved {e.label} ({len(e)} points) to {self.shared.path}")
+        name = branch_label(e.branch, e.k3_factor, source="file")
+        target, reason = self.shared.save(e)
+        self.show_status(f"saved {name} ({len(e)} points) to {target}"
+                         + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
+                            if reason else ""))
 
     def _dismiss_error(self, _):
         with self.shared.lock:
@@ -271,6 +275,8 @@ class Session:
             self.request("branches", "progress")
         elif kind == "progress":
             self.request("progress")
+        elif kind == "solver":
+            self.request("solver", "point", "progress")
         elif kind == "error":
             self.request("error")
             msg = self.shared.error

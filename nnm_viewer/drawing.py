@@ -22,7 +22,7 @@ from .worker import one_line
 log = logging.getLogger("nnm_viewer")
 
 #: everything a new tab draws
-ALL_KINDS = ("branches", "controls", "fep", "sliders", "point", "glb", "info", "progress", "error")
+ALL_KINDS = ("branches", "controls", "fep", "sliders", "point", "glb", "info", "progress", "error", "solver")
 
 
 class Drawing:
@@ -96,6 +96,8 @@ class Drawing:
             if step(self.fep.check_selection):
                 kinds.add("point")
             kinds |= {"fep", "sliders", "fep_series"}
+        if "solver" in kinds:
+            step(self.draw_solver)
         if "controls" in kinds:
             step(self.draw_controls)
         if "point" in kinds and step(self.point.compute):
@@ -129,13 +131,21 @@ class Drawing:
         ui.set(ui.h_amp, disabled=s.auto_amp)
         ui.set(ui.h_k3_text, content=k3_text(s.factor))
 
+    def draw_solver(self):
+        """'Preparing the solver' while its kernels are being compiled (warmup.py)."""
+        self.ui.set(self.ui.h_solver, visible=not self.session.shared.solver_ready.is_set())
+
     def draw_progress(self):
         s, ui = self.session, self.ui
         job = s.shared.job
         running = job is not None and job.running
         e = s.selected_entry()
         ui.set(ui.h_progress, value=float(np.clip(100.0 * s.shared.progress, 0, 100)))
-        ui.set(ui.h_job, content=s.shared.status or "no job running")
+        status = s.shared.status or "no job running"
+        if not s.shared.solver_ready.is_set():
+            status = ("preparing the solver (compiling its kernels): a job started now begins when it is ready"
+                      + (f"  \n{s.shared.status}" if s.shared.status else ""))
+        ui.set(ui.h_job, content=status)
         ui.set(ui.h_start, disabled=running)
         ui.set(ui.h_stop, disabled=not running)
         ui.set(ui.h_recompute, disabled=running or e is None or abs(s.factor / e.k3_factor - 1.0) < 1e-9)

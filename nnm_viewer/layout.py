@@ -22,6 +22,27 @@ MAX_MODES_TABLE = 200
 BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save")
 
 
+#: shown while the solver's kernels are being compiled (nnm_viewer/warmup.py)
+SOLVER_PREPARING = ("**Preparing the solver** (compiling its kernels: about 30 s after installing, then "
+                    "cached) … The FEP can be browsed meanwhile; the orbits are animated as soon as it is ready.")
+
+
+#: JavaScript run once per page: arrow keys pressed on a focused slider (or another widget that uses
+#: them: tabs, radio buttons, menus) stop at <body>, after the widget has handled them, so that
+#: viser's keyboard camera controls (a listener on the document, skipped only for text fields) do not
+#: also turn the camera.
+KEY_GUARD_JS = ("if(!window.__nnmKeyGuard){window.__nnmKeyGuard=1;document.body.addEventListener('keydown',"
+                "function(e){var t=e.target;if(e.key&&e.key.indexOf('Arrow')===0&&t&&t.closest&&t.closest("
+                "'[role=slider],[role=tab],[role=radio],[role=option],[role=menuitem],[role=combobox]'))"
+                "e.stopPropagation();});}")
+
+
+def key_guard_html():
+    """HTML that runs KEY_GUARD_JS when the page shows it (viser's add_html has no script hook: an
+    image that fails to load runs its onerror handler)."""
+    return f'<img alt="" src="data:," style="display:none" onerror="{KEY_GUARD_JS}">'
+
+
 def k3_text(factor):
     """Label under the k3 slider: the factor applied to every k3 of the file."""
     return "k3 x 1 (as in the file)" if abs(factor - 1.0) < 1e-9 else f"k3 x {factor:.3g} (scaling law)"
@@ -54,6 +75,7 @@ class Layout:
         gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.h_title = gui.add_markdown(f"**nnm-view** · {name} · {model.n} DOFs · "
                                         f"{len(model.springs)} cubic springs")
+        self.h_solver = gui.add_markdown(SOLVER_PREPARING, visible=False)
         self.h_error = gui.add_markdown("", visible=False)
         self.h_dismiss = gui.add_button("Dismiss error", visible=False, color="red")
         with gui.add_folder("Selection"):
@@ -82,6 +104,7 @@ class Layout:
             self.h_recompute = gui.add_button("Recompute at this stiffness", disabled=True,
                                               hint="Background job on the scaled model, to confirm the scaling law")
         self.h_status = gui.add_markdown("")
+        self.h_keys = gui.add_html(key_guard_html())
 
         panel = gui.add_panel()
         self.panel = panel

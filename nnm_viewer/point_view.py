@@ -32,6 +32,11 @@ class PointView:
         """Orbit and animation of the selection (None if the branch has no point); True."""
         s = self.session
         e = s.selected_entry()
+        if not s.shared.solver_ready.is_set():     # no orbit before the kernels are compiled (warmup.py);
+            with s.lock:                           # the session asks again when they are
+                drawn = s.current_point is None and self.last_glb is not None
+                s.current_point = s.current_anim = None
+            return not drawn
         if e is None or not len(e):
             with s.lock:
                 s.current_point = s.current_anim = None
@@ -83,7 +88,8 @@ class PointView:
         s, ui = self.session, self.ui
         pd = s.current_point
         if pd is None:
-            ui.set(ui.h_info, content="no point selected")
+            ui.set(ui.h_info, content="no point selected" if s.shared.solver_ready.is_set() else
+                   "preparing the solver (compiling its kernels): the orbit is shown as soon as it is ready")
             return
         idx = s.shared.index_of(s.sel_uid)
         e = s.selected_entry()

@@ -78,14 +78,19 @@ class SharedState:
     """Model, branch entries and jobs shared by all sessions (thread-safe).
 
     ``mesh`` is the model's display mesh (boxes per DOF if it has none), ``mapper`` its
-    displacement map ready for fast products.  Listeners (callables taking a kind string: "branches", "progress", "error") are
-    called after every change, outside the lock.
+    displacement map ready for fast products.  Listeners (callables taking a kind string:
+    "branches", "progress", "error", "solver") are called after every change, outside the lock.
     """
 
-    def __init__(self, model, path=None, branches=()):
+    def __init__(self, model, path=None, branches=(), solver_ready=True):
         self.model = model
         self.path = path
         self.lock = threading.RLock()
+        #: set once the solver's compiled kernels are ready (app.py warms them in the background);
+        #: until then the sessions draw everything but the orbits
+        self.solver_ready = threading.Event()
+        if solver_ready:
+            self.solver_ready.set()
         self.entries: list[BranchEntry] = []
         self.listeners: list = []
         self.job = None                 # worker.JobRunner or None
@@ -159,6 +164,11 @@ class SharedState:
             self.error = message
         self.notify("error")
 
+    def set_solver_ready(self):
+        """The solver's kernels are compiled: the sessions compute their orbits now."""
+        self.solver_ready.set()
+        self.notify("solver")
+
     def set_progress(self, value, status=None):
         with self.lock:
             self.progress = float(value)
@@ -168,11 +178,16 @@ class SharedState:
 
     # ------------------------------------------------------------------ saving
     def save(self, entry):
-        """Append ``entry``'s branch to the model file (atomic write by the solver).
+        """Append ``entry``'s branch to the model file (atomic write by the solver); returns
+        (the file written, why it is not the opened file or '').
 
-        A branch computed with scaled springs is mapped back to the file's springs with
-        the exact scaling law before saving, so the file stays consistent.
+        A shipped example or a file that cannot be written is left alone: the branch goes to
+        ``<stem>_branches.h5`` in the current folder (examples.branch_output).  A branch computed
+        with scaled springs is mapped back to the file's springs with the exact scaling law before
+        saving, so the file stays consistent.
         """
+        from .examples import branch_output
+
         if self.path is None:
             raise nnm_solver.NNMInputError("this viewer has no file to save into")
         if entry.branch is None or len(entry.branch) == 0:
@@ -180,8 +195,9 @@ class SharedState:
         branch = entry.branch
         if abs(entry.k3_factor - 1.0) > 1e-12:
             branch = branch.scaled(1.0 / entry.k3_factor)
-        nnm_solver.save_branch(self.path, branch)
+        target, reason = branch_output(self.path)
+        nnm_solver.save_branch(target, branch)
         with self.lock:
             entry.saved = True
         self.update(entry, source="saved")
-        return branch
+        return target, reason

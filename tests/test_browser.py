@@ -157,6 +157,12 @@ def test_viewer_in_chromium(tmp_path):
                 assert re.search(r"peak displacement \S+ \S*m", text), "no peak displacement shown"
 
                 _phase(t_start, "FEP point picked")
+                # 4) issue 14, item 5: arrow keys on a focused slider move the slider, not the camera
+                #    (viser turns the camera on arrow keys unless a text field has the focus)
+                changed = board_change_on_arrow_keys(page, geom, box, tmp_path / "board.png")
+                page.screenshot(path=str(ARTIFACTS / f"browser_{kind}_arrow_keys.png"))
+                assert changed < 0.05, f"arrow keys on a slider moved the camera ({changed:.0%} of the board changed)"
+                _phase(t_start, "arrow keys on a slider left the camera alone")
             finally:
                 browser.close()
     finally:
@@ -174,3 +180,46 @@ def _read_png(path):
     if img.dtype != np.uint8:
         img = (img[..., :3] * 255).astype(np.uint8)
     return img[..., :3]
+
+
+def board_screen_box(geom, box):
+    """Screen rectangle (x0, y0, x1, y1) of the FEP board's plotting area, seen by the initial camera."""
+    b = geom.board
+    corners = np.array([b.origin + a * b.width * b.right + c * b.height * b.up for a in (0, 1) for c in (0, 1)])
+    xy = project_points(corners, geom, box)
+    x0, y0 = np.floor(xy.min(axis=0)).astype(int)
+    x1, y1 = np.ceil(xy.max(axis=0)).astype(int)
+    return max(x0, 0), max(y0, 0), x1, y1
+
+
+
+def board_screen_box(geom, box):
+    """Screen rectangle (x0, y0, x1, y1) of the FEP board's plotting area, seen by the initial camera."""
+    b = geom.board
+    corners = np.array([b.origin + a * b.width * b.right + c * b.height * b.up for a in (0, 1) for c in (0, 1)])
+    xy = project_points(corners, geom, box)
+    x0, y0 = np.floor(xy.min(axis=0)).astype(int)
+    x1, y1 = np.ceil(xy.max(axis=0)).astype(int)
+    return max(x0, 0), max(y0, 0), x1, y1
+
+
+def board_change_on_arrow_keys(page, geom, box, shot):
+    """Fraction of the FEP board's screen pixels changed by holding the arrow keys on the focused
+    Speed slider (which changes nothing on the board); asserts that the slider moved."""
+    x0, y0, x1, y1 = board_screen_box(geom, box)
+
+    def board():
+        page.screenshot(path=str(shot))
+        return _read_png(shot)[y0:y1, x0:x1].astype(float)
+
+    before = board()
+    slider = page.locator('[role=slider][aria-valuemin="0.05"][aria-valuemax="3"]')     # Speed (cycles/s)
+    value = slider.get_attribute("aria-valuenow")
+    slider.focus()
+    for key in ("ArrowRight", "ArrowUp"):
+        page.keyboard.down(key)
+        time.sleep(0.6)                     # held: viser would turn the camera by 30 degrees
+        page.keyboard.up(key)
+    time.sleep(0.5)
+    assert slider.get_attribute("aria-valuenow") != value, "the slider did not move"
+    return float(np.mean(np.abs(board() - before).sum(axis=2) > 30))

@@ -367,3 +367,51 @@ def test_point_tab_mac_is_mass_weighted(server, tmp_path):
     np.testing.assert_allclose(s.current_point.mac, want, atol=1e-9)
     assert f"| {want[0]:.3f} |" in s.h_info.content
     s.close()
+
+
+def test_page_is_drawn_while_the_solver_is_prepared(server, demo_file, monkeypatch):
+    """Issue 14, item 3: until the solver's kernels are compiled (warmup.py) a new tab draws the
+    branch list, the FEP and the sliders, says "preparing the solver" and computes no orbit (which
+    would wait for the compiler); once ready, the selected orbit is animated."""
+    import nnm_viewer.point_view as pv
+
+    calls = []
+    real = pv.point_data
+    monkeypatch.setattr(pv, "point_data", lambda *a, **k: calls.append(a) or real(*a, **k))
+    model = nnm.load_model(demo_file)
+    shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file), solver_ready=False)
+    s = Session(server, shared, sync=True)
+    assert s.h_solver.visible and "Preparing the solver" in s.h_solver.content
+    assert "Selected:" in s.h_sel.content and len(s.h_branch.options) == 2 and len(s._board_handles) == 2
+    assert s.current_point is None and not calls and "animations" not in read_glb_json(s.last_glb)
+    assert "preparing the solver" in s.h_job.content and "preparing the solver" in s.h_info.content
+    b2 = shared.entries[1]
+    s.pick(b2.uid, 5)                                     # picking works meanwhile
+    assert s.sel_uid == b2.uid and "branch 2, point 5.00" in s.h_sel.content and not calls
+    shared.set_solver_ready()
+    assert not s.h_solver.visible and calls
+    assert s.current_point.energy == pytest.approx(b2.branch.energy[5])
+    assert "animations" in read_glb_json(s.last_glb) and "preparing" not in s.h_job.content
+    s.close()
+
+
+def test_server_warms_the_solver_in_the_background(demo_file):
+    """Issue 14, item 3: ViewerApp serves at once and marks the solver ready when the warm-up ends."""
+    import threading
+
+    from nnm_viewer.app import ViewerApp
+    from nnm_viewer.browser import free_port
+    from nnm_viewer.warmup import warm_kernels
+
+    release = threading.Event()
+    app = ViewerApp(nnm.load_model(demo_file), nnm.load_branches(demo_file), port=free_port(),
+                    warm=lambda: release.wait(10))
+    try:
+        assert not app.shared.solver_ready.is_set()
+        release.set()
+        assert app.shared.solver_ready.wait(10) and app.warm_up.error is None
+    finally:
+        app.stop()
+    t0 = time.perf_counter()
+    warm_kernels()                                        # the real warm-up runs (kernels cached here)
+    assert time.perf_counter() - t0 < 60
