@@ -346,11 +346,8 @@ class NNMIterator:
             loc.problem.accept(u, J)
             return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem)[0]
 
-        try:
-            events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
-                                         self.energy_max)
-        except CorrectorFailure:      # an event that cannot be located is still bracketed by the points
-            return point, state
+        events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
+                                     self.energy_max)
         self.events.extend(events)
         if end is not None:
             u, J, p = loc.at(end[0])

@@ -86,6 +86,12 @@ class Locator:
     def stable(self, sigma):
         return is_stable(self.multipliers(sigma))
 
+    def real_crossing(self, sigma):
+        """max_i |Re rho_i| - 1, rho = (mu + 1/mu) / 2 over the non-trivial multipliers:
+        smooth through a real pair's collision at +1 or -1 (rho = cos(theta) on the circle, cosh or
+        -cosh off it), negative while stable; its zero is where the pair leaves the circle."""
+        return real_crossing(self.multipliers(sigma))
+
     def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60):
         """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi)."""
         a, fa = lo, (g(lo) if g_lo is None else g_lo)
@@ -135,12 +141,24 @@ class Locator:
         return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
 
 
+def real_crossing(mu):
+    """Test function of a real pair leaving the unit circle (see Locator.real_crossing)."""
+    mu = np.asarray(mu, dtype=complex)
+    mu = mu[np.abs(mu - 1.0) > 0.0]                # the trivial pair is reported as exactly 1
+    if not len(mu):
+        return -1.0
+    rho = 0.5 * (mu + 1.0 / mu)
+    return float(np.max(np.abs(rho.real)) - 1.0)
+
+
 def event_record(kind, index, point, detail, **extra):
     """An event dict: kind, index (first branch point after it), energy J, frequency_hz Hz, period s,
     x0, v0 (lists, m and m/s), detail, located=True, plus ``extra``."""
-    return dict(kind=kind, index=int(index), energy=float(point.energy), frequency_hz=float(point.frequency_hz),
-                period=float(point.period), x0=np.asarray(point.x0, dtype=float).tolist(),
-                v0=np.asarray(point.v0, dtype=float).tolist(), detail=detail, located=True, **extra)
+    rec = dict(kind=kind, index=int(index), energy=float(point.energy), frequency_hz=float(point.frequency_hz),
+               period=float(point.period), x0=np.asarray(point.x0, dtype=float).tolist(),
+               v0=np.asarray(point.v0, dtype=float).tolist(), detail=detail, located=True)
+    rec.update(extra)
+    return rec
 
 
 def locate_between(loc, s, a, b, index, record, energy_max=None):
@@ -148,34 +166,53 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
 
     a, b : (point, slope) with slope = dE/ds at the point; record(sigma) -> Point at sigma.
     energy_max : if the step crosses it upwards, the branch is cut there: returns the located end
-    point as well.  Returns (events, end) with end = (sigma, Point) or None.
+    point as well.  Returns (events, end) with end = (sigma, Point) or None.  An event whose
+    location fails (the corrector does not converge inside the step) is kept, bracketed by the two
+    points (``located`` False, orbit of the nearer point).
     """
     (pa, slope_a), (pb, slope_b) = a, b
     events, end = [], None
     if energy_max is not None and pa.energy < energy_max <= pb.energy:
         target = energy_max * (1 + 2 * EVENT_RTOL)    # the end point is at or just above energy_max
-        sig = loc.root(lambda x: loc.energy(x) - target, 0.0, s, pa.energy - target, pb.energy - target)
-        end = (sig, record(sig))
-        s, pb, slope_b = sig, end[1], loc.slope(sig)
+        try:
+            sig = loc.root(lambda x: loc.energy(x) - target, 0.0, s, pa.energy - target, pb.energy - target)
+            end = (sig, record(sig))
+            s, pb, slope_b = sig, end[1], loc.slope(sig)
+        except CorrectorFailure:
+            pass
     fold = None
     if slope_a * slope_b < 0:
-        sig = loc.root(loc.slope, 0.0, s, slope_a, slope_b)
-        pf = record(sig)
-        fold = (sig, pf)
-        events.append(event_record("fold", index, pf, "energy maximum" if slope_a > 0 else "energy minimum"))
+        detail = "energy maximum" if slope_a > 0 else "energy minimum"
+        try:
+            sig = loc.root(loc.slope, 0.0, s, slope_a, slope_b)
+            fold = (sig, record(sig))
+            events.append(event_record("fold", index, fold[1], detail))
+        except CorrectorFailure:
+            near = pa if abs(slope_a) < abs(slope_b) else pb
+            events.append(event_record("fold", index, near, detail, located=False))
     if not (np.isnan(pa.floquet).any() or np.isnan(pb.floquet).any()) and pa.stable != pb.stable:
-        lo, hi = loc.bisect(loc.stable, 0.0, s)
         pu = pb if pa.stable else pa      # the bracket's unstable end: its critical multiplier has left the circle
         kind = classify_multipliers(pu.floquet) or "branch_point"
         change = "loss" if pa.stable else "gain"
-        pe = record(0.5 * (lo + hi))
+        ga, gb = real_crossing(pa.floquet), real_crossing(pb.floquet)
+        located = True
+        try:
+            if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
+                sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
+            else:                                    # a Krein collision: bisection on the flag
+                lo, hi = loc.bisect(loc.stable, 0.0, s)
+                sig = 0.5 * (lo + hi)
+            pe = record(sig)
+        except CorrectorFailure:
+            pe, located = pu, False
         if fold is not None and abs(pe.energy - fold[1].energy) <= 1e-4 * abs(fold[1].energy):
             events[-1]["stability_change"] = change
         else:
             crit = pu.floquet[0]
             through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
             events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
-                                                        f"(next point: {crit:.5g})", stability_change=change))
+                                                        f"(next point: {crit:.5g})", stability_change=change,
+                                       **({} if located else dict(located=False))))
     return events, end
 
 
