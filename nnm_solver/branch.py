@@ -150,6 +150,17 @@ class Branch:
                 f"status={self.status!r})")
 
     # ------------------------------------------------------------------ selection
+    def pick(self, what, item):
+        """One of the branch's ``events`` or ``tongues`` (``what``), given as the dict itself or its index."""
+        items = getattr(self, what)
+        if isinstance(item, (int, np.integer)) and not isinstance(item, bool):
+            if not -len(items) <= item < len(items):
+                raise NNMInputError(f"{what[:-1]} {item} is out of range: the branch lists {len(items)} {what}")
+            return items[int(item)]
+        if not isinstance(item, dict):
+            raise NNMInputError(f"give one of branch.{what} (a dict) or its index, got {type(item).__name__}")
+        return item
+
     def check_index(self, i):
         """Validate a point index (negative counts from the end); returns it in 0..N-1."""
         if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not -len(self) <= i < len(self):

@@ -244,13 +244,14 @@ class NNMIterator:
         if t is not None:                       # traversing a tongue: back on the backbone above its entry?
             rising = point.energy > t["last_energy"]
             t["last_energy"] = point.energy
-            if rising and point.energy > t["entry_energy"] and not self._entering_tongue(point, t["backbone"]):
+            trend_ok = (point.frequency_hz - t["entry_frequency_hz"]) * t["trend"] >= -1e-4 * t["entry_frequency_hz"]
+            if rising and trend_ok and point.energy > t["entry_energy"] and not self._entering_tongue(point, t["backbone"]):
                 t.update(exit_energy=point.energy, exit_frequency_hz=point.frequency_hz)
                 self._tongue = None
                 self._prev = None              # no event is located across the tongue
                 return False
             t["hidden_points"] += 1
-            if t["hidden_points"] > 3 * self.max_points:
+            if t["hidden_points"] > self.max_points:
                 self._failed(f"the {t['label']} tongue at {t['entry_energy']:.4g} J could not be passed "
                              f"({t['hidden_points']} points inside it)")
                 raise StopIteration
@@ -258,10 +259,12 @@ class NNMIterator:
         if self._last_backbone is None or not self._entering_tongue(point, self._last_backbone[1]):
             return False
         bpoint = self._last_backbone[1]
+        trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
         if self._skip(cp, point):
             return True
         t = self.tongues[-1]
-        t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint)
+        # the backbone resumes beyond the tongue with its frequency moving the same way as before it
+        t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint, trend=float(trend))
         self._tongue = t
         return True
 
@@ -384,7 +387,7 @@ class NNMIterator:
         """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
         if self.status == "running":
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
-        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy")} for t in self.tongues]
+        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=self.message,
                                   events=self.events if self.locate else None, tongues=tongues)
@@ -508,11 +511,8 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
     branch's own steps_per_period, symmetric and tol are the defaults).
     """
-    if isinstance(tongue, (int, np.integer)) and not isinstance(tongue, bool):
-        if not -len(branch.tongues) <= tongue < len(branch.tongues):
-            raise NNMInputError(f"tongue {tongue} is out of range: the branch lists {len(branch.tongues)} tongues")
-        tongue = branch.tongues[int(tongue)]
-    if not isinstance(tongue, dict) or "entry_x0" not in tongue:
+    tongue = branch.pick("tongues", tongue)
+    if "entry_x0" not in tongue:
         raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
     s = branch.settings
     if s.method != "shooting":

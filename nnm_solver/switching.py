@@ -32,11 +32,8 @@ SWITCHABLE = ("branch_point", "period_doubling")
 
 
 def _event(branch, event):
-    if isinstance(event, (int, np.integer)) and not isinstance(event, bool):
-        if not -len(branch.events) <= event < len(branch.events):
-            raise NNMInputError(f"event {event} is out of range: the branch has {len(branch.events)} events")
-        event = branch.events[int(event)]
-    if not isinstance(event, dict) or "kind" not in event:
+    event = branch.pick("events", event)
+    if "kind" not in event:
         raise NNMInputError("event must be one of branch.events (a dict) or its index")
     if event["kind"] not in SWITCHABLE:
         raise NNMInputError(f"cannot switch branches at a {event['kind']!r} event; only at {', '.join(SWITCHABLE)}")
