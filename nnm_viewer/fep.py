@@ -6,28 +6,128 @@ frequency (Hz).  Stable points are filled, unstable points hollow/red.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import colorsys
+from dataclasses import dataclass, field
 
 import numpy as np
 
 STABLE_RGB = (40, 100, 220)
 UNSTABLE_RGB = (225, 70, 40)
 MARKER_RGB = (255, 200, 0)
-#: line colours of successive branches in the panel plot
-BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#17becf", "#7f7f7f", "#bcbd22", "#e377c2"]
+#: colours of the first branches (no red: failures, branch points; no grey: the file's branches
+#: behind a scaled FEP); the next ones get golden-angle hues (branch_color), never a repeat
+BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2", "#bcbd22"]
+#: how much of white an unstable point's colour is mixed with on the 3D board
+UNSTABLE_PALE = 0.6
+#: events (Branch.events) by kind: legend text
+EVENT_LABELS = {"fold": "fold (energy turns back)", "branch_point": "branch point (multiplier +1)",
+                "period_doubling": "period doubling (multiplier -1)", "torus": "torus (complex multipliers)"}
+#: how a branch ended (Branch.status), marked at its last point: (marker, colour, legend text)
+END_MARKERS = {"failed": ("X", "#d62728", "end: solver failed"), "escape": ("X", "#ff7f0e", "end: escape"),
+               "closed_loop": ("P", "#9467bd", "end: closed loop")}
+
+
+def branch_color(k):
+    """Colour (hex) of the branch at position k (0-based) of the list: BRANCH_COLORS, then hues
+    spaced by the golden angle (distinct for every k)."""
+    if k < len(BRANCH_COLORS):
+        return BRANCH_COLORS[k]
+    j = k - len(BRANCH_COLORS)
+    h = (0.05 + 0.6180339887498949 * j) % 1.0
+    sat, val = ((0.8, 0.7), (0.55, 0.85), (0.9, 0.5))[j % 3]
+    return "#{:02x}{:02x}{:02x}".format(*(int(round(255 * c)) for c in colorsys.hsv_to_rgb(h, sat, val)))
+
+
+def rgb(color):
+    """(r, g, b) 0..255 of a '#rrggbb' colour."""
+    return tuple(int(color[i:i + 2], 16) for i in (1, 3, 5))
+
+
+def pale(color, amount=UNSTABLE_PALE):
+    """'#rrggbb' mixed with white (amount 0: unchanged, 1: white)."""
+    return "#{:02x}{:02x}{:02x}".format(*(int(round(c + amount * (255 - c))) for c in rgb(color)))
+
+
+def event_kind(event):
+    """Kind of an event dict: 'fold', 'branch_point', 'period_doubling', 'torus' (older files say
+    'bifurcation' and name the critical multiplier in the detail)."""
+    kind = str(event.get("kind", ""))
+    if kind == "bifurcation":
+        detail = str(event.get("detail", ""))
+        return "period_doubling" if "through -1" in detail else "torus" if "complex" in detail else "branch_point"
+    return kind
+
+
+def event_style(kind):
+    """(matplotlib marker, colour) of an event kind, as in the solver's FEP plots."""
+    try:
+        from nnm_solver.plotting import EVENT_MARKERS
+    except ImportError:  # pragma: no cover
+        EVENT_MARKERS = {}
+    return EVENT_MARKERS.get(kind, ("o", "k"))
 
 
 @dataclass
 class FepSeries:
-    """One branch as drawn: energy (N,) J, frequency (N,) Hz, stable (N,) bool, label."""
+    """One branch as drawn: energy (N,) J, frequency (N,) Hz, stable (N,) bool, label; events
+    [(kind, energy J, frequency Hz)] and status (Branch.status) of the branch."""
 
     energy: np.ndarray
     frequency: np.ndarray
     stable: np.ndarray
     label: str
+    events: list = field(default_factory=list)
+    status: str = ""
 
     def __len__(self):
         return len(self.energy)
+
+
+def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5, event_ms=7.0, event_mew=1.5):
+    """Draw the branches on a matplotlib Axes in log10(energy) vs frequency: a line per branch in its
+    colour (branch_color of its position), its points (``points``: stable filled, unstable hollow),
+    its events by kind and the end of a branch that failed, escaped or closed a loop.  Returns the
+    legend (handles, labels): the branches, 'unstable', then the event and end kinds drawn."""
+    handles, labels, extra = [], [], {}
+    any_unstable = False
+    for k, s in enumerate(series):
+        if not len(s):
+            continue
+        c = branch_color(k)
+        le = np.log10(np.maximum(np.asarray(s.energy, dtype=float), 1e-300))
+        f = np.asarray(s.frequency, dtype=float)
+        (line,) = ax.plot(le, f, "-", color=c, lw=lw * (1.8 if k == selected_branch else 1.0), zorder=2)
+        handles.append(line)
+        labels.append(s.label)
+        st = np.asarray(s.stable, dtype=bool)
+        any_unstable |= bool((~st).any())
+        if points:
+            ax.plot(le[st], f[st], "o", ms=ms, color=c, zorder=3)
+            if (~st).any():
+                ax.plot(le[~st], f[~st], "o", ms=ms * 1.25, mfc="white", mec=c, mew=1.2, zorder=3)
+        for kind, energy, freq in s.events:
+            marker, colour = event_style(kind)
+            (h,) = ax.plot([np.log10(max(energy, 1e-300))], [freq], marker, ms=event_ms, mfc="none", mec=colour,
+                           color=colour, mew=event_mew, zorder=4)
+            extra.setdefault(("event", kind), h)
+        if s.status in END_MARKERS:
+            marker, colour, _ = END_MARKERS[s.status]
+            (h,) = ax.plot([le[-1]], [f[-1]], marker, ms=event_ms * 1.5, color=colour, mec="white", mew=0.8,
+                           zorder=5)
+            extra.setdefault(("end", s.status), h)
+    if any_unstable:
+        (h,) = ax.plot([], [], "o", ms=ms * 1.25, mfc="white", mec="#555555", mew=1.2) if points else \
+            ax.plot([], [], "o", ms=ms * 1.6, color=pale("#555555"))
+        handles.append(h)
+        labels.append("unstable" if points else "pale: unstable")
+    order = [("event", k) for k in EVENT_LABELS] + [("end", k) for k in END_MARKERS]
+    order += sorted(k for k in extra if k not in order)
+    for key in order:
+        if key in extra:
+            handles.append(extra[key])
+            labels.append(EVENT_LABELS.get(key[1], key[1].replace("_", " ")) if key[0] == "event"
+                          else END_MARKERS[key[1]][2])
+    return handles, labels
 
 
 def energy_to_s(energy, target, s_current=0.0):
@@ -91,6 +191,10 @@ def _hex(rgb):
     return "#{:02x}{:02x}{:02x}".format(*rgb)
 
 
+#: legend entries of the panel image at most
+LEGEND_MAX = 16
+
+
 class FepRenderer:
     """Draws the FEP panel image with matplotlib (Agg).
 
@@ -106,7 +210,7 @@ class FepRenderer:
         dpi = 100
         self.fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
         self.canvas = FigureCanvasAgg(self.fig)
-        self.ax = self.fig.add_axes([0.13, 0.13, 0.84, 0.78])
+        self.ax = self.fig.add_axes([0.13, 1.0 - 0.09 - 0.78 * 350 / size[1], 0.84, 0.78 * 350 / size[1]])
         self._background = None
         (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
                                      zorder=5, animated=True)
@@ -121,29 +225,20 @@ class FepRenderer:
         leg = ax.get_legend()
         if leg is not None:
             leg.remove()
+        handles, labels = [], []
         if any(len(g) for g in ghosts):
             for g in ghosts:
                 if len(g):
                     ax.plot(np.log10(g.energy), g.frequency, "-", color="#c8c8c8", lw=1.0, zorder=1)
-            ax.plot([], [], "-", color="#c8c8c8", label="as in the file (k3 x 1)")
-        drawn = False
-        for k, s in enumerate(series):
-            if not len(s):
-                continue
-            drawn = True
-            c = BRANCH_COLORS[k % len(BRANCH_COLORS)]
-            le = np.log10(s.energy)
-            ax.plot(le, s.frequency, "-", color=c, lw=2.2 if k == selected_branch else 1.2, label=s.label,
-                    zorder=2)
-            st = np.asarray(s.stable, dtype=bool)
-            ax.plot(le[st], s.frequency[st], "o", ms=3.5, color=c, zorder=3)
-            if (~st).any():
-                ax.plot(le[~st], s.frequency[~st], "o", ms=4.5, mfc="white", mec=_hex(UNSTABLE_RGB), mew=1.2,
-                        zorder=3)
+            handles += ax.plot([], [], "-", color="#c8c8c8")
+            labels.append("as in the file (k3 x 1)")
+        h, lab = plot_branches(ax, series, selected_branch)
         set_fep_axes(ax, ranges or axis_ranges(list(series) + list(ghosts)), ticks_size=8, label_size=9)
-        if drawn:
-            ax.plot([], [], "o", mfc="white", mec=_hex(UNSTABLE_RGB), label="unstable")
-            ax.legend(fontsize=7, loc="best", framealpha=0.7)
+        if h:
+            # below the axes, so that it never hides a branch; as many rows as needed (LEGEND_MAX entries)
+            handles, labels = (handles + h)[:LEGEND_MAX], (labels + lab)[:LEGEND_MAX]
+            ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
+                      frameon=False, handlelength=1.6, columnspacing=1.0)
         else:
             ax.text(0.5, 0.5, "no branch yet:\ncompute one in the Compute tab", ha="center", va="center",
                     transform=ax.transAxes, color="grey")

@@ -5,13 +5,62 @@ from __future__ import annotations
 import numpy as np
 
 from . import scene as sc
-from .fep import FepRenderer, interp_at
+from .fep import FepRenderer, branch_color, interp_at
+
+#: size (px) of the FEP image of the panel (the plot, and its legend below)
+PANEL_FEP_SIZE = (480, 470)
 from .worker import one_line
 
 
+#: how a branch ended (Branch.status, nnm_solver/stops.py), as said in the branch dropdown
+STATUS_WORDS = {"failed": "failed", "escape": "escape", "closed_loop": "closed loop", "max_points": "max points",
+                "cancelled": "stopped", "stopped": "stopped"}
+#: ... and in the branch information under the selection
+STATUS_TEXT = {"done": "done", "max_points": "stopped at max_points", "escape": "escape: the NNM family ends",
+               "closed_loop": "closed loop", "failed": "**failed**", "cancelled": "stopped by the user",
+               "stopped": "stopped", "running": "running"}
+#: events by kind, in words (singular)
+EVENT_NAMES = {"fold": "fold", "branch_point": "branch point", "period_doubling": "period doubling",
+               "torus": "torus bifurcation"}
+#: event indices listed per kind at most
+EVENTS_LISTED = 6
+
+
+def branch_status(e):
+    """Branch.status of an entry ('' if unknown)."""
+    return str(getattr(e.branch, "status", "") or "")
+
+
 def entry_option(i, e):
-    """Label of branch entry ``e`` (position ``i``) in the branch dropdown."""
-    return f"{i + 1}: {e.label} ({len(e)} pts)"
+    """Label of branch entry ``e`` (position ``i``) in the branch dropdown, with how it ended unless
+    it reached its end normally or is still running."""
+    word = STATUS_WORDS.get(branch_status(e), "")
+    tag = f", {word}" if word and f"[{word}]" not in e.label else ""
+    return f"{i + 1}: {e.label} ({len(e)} pts{tag})"
+
+
+def branch_markdown(e):
+    """How the branch of entry ``e`` ended (status and the solver's message) and its events by kind
+    with the points next to them (markdown)."""
+    from .fep import EVENT_LABELS, event_kind
+
+    st = branch_status(e)
+    msg = str(getattr(e.branch, "message", "") or "").strip()
+    text = f"**Branch:** {STATUS_TEXT.get(st, st or 'unknown status')}" + (f" — {msg}" if msg else "")
+    by_kind = {}
+    for ev in getattr(e.branch, "events", None) or []:
+        by_kind.setdefault(event_kind(ev), []).append(int(ev.get("index", -1)))
+    if not by_kind:
+        return text + "  \n**Events:** none (no fold, no stability change)" if len(e) > 2 else text
+    parts = []
+    for kind in list(EVENT_LABELS) + sorted(k for k in by_kind if k not in EVENT_LABELS):
+        idx = by_kind.get(kind)
+        if idx:
+            shown = ", ".join(str(i) for i in idx[:EVENTS_LISTED]) + (", …" if len(idx) > EVENTS_LISTED else "")
+            name = EVENT_NAMES.get(kind, kind.replace("_", " "))
+            parts.append(f"{len(idx)} {name}{'s' if len(idx) > 1 else ''} (near point{'s' if len(idx) > 1 else ''} "
+                         f"{shown})")
+    return text + "  \n**Events:** " + "; ".join(parts) + " — marked on the FEP"
 
 
 class FepView:
@@ -21,8 +70,9 @@ class FepView:
         self.session = session
         self.ui = session.layout
         self.board_handles = {}      # uid -> batched-sphere handle (None: hidden)
+        self.board_points = {}       # uid -> world positions (N, 3) of its spheres on the board
         self.ranges = None           # axis ranges of the board
-        self.renderer = FepRenderer(size=(480, 350))
+        self.renderer = FepRenderer(size=PANEL_FEP_SIZE)
 
     def check_selection(self):
         """Select the first branch if the selection vanished.  Returns True if the point shown
@@ -47,11 +97,13 @@ class FepView:
         entries = s.shared.snapshot()
         if not entries:
             ui.set(ui.h_branch, options=("(none)",), value="(none)")
+            ui.set(ui.h_branch_info, content="")
             return
         options = tuple(entry_option(i, e) for i, e in enumerate(entries))
         sel = s.shared.index_of(s.sel_uid)
         ui.set(ui.h_branch, options=options)
         ui.set(ui.h_branch, value=options[sel if sel is not None else 0])
+        ui.set(ui.h_branch_info, content=branch_markdown(entries[sel if sel is not None else 0]))
 
     def draw_board(self):
         s = self.session
@@ -61,27 +113,53 @@ class FepView:
         board = s.geom.board
         if not s.show_board:
             s.scene.remove_by_name("/fep")
-            self.board_handles = {}
+            self.board_handles, self.board_points = {}, {}
             return
         sc.draw_board_frame(s.scene, board, ranges, series)
         live = set()
-        for e, ser in zip(entries, series):
+        for k, (e, ser) in enumerate(zip(entries, series)):
             uid = e.uid
             if s.zoom and uid != s.sel_uid:            # zoomed: only the selected branch
                 ser = ser.__class__(ser.energy[:0], ser.frequency[:0], ser.stable[:0], ser.label)
             live.add(uid)
+            self.board_points[uid] = board.to_world(ser.energy, ser.frequency, ranges) if len(ser) else None
             self.board_handles[uid] = sc.draw_board_points(s.scene, board, ranges, ser, uid,
                                                            on_click=self._click_handler(uid),
-                                                           emphasized=(uid == s.sel_uid))
+                                                           emphasized=(uid == s.sel_uid), color=branch_color(k))
         for uid in list(self.board_handles):
             if uid not in live:
                 s.scene.remove_by_name(f"/fep/b{uid}")
                 del self.board_handles[uid]
+                self.board_points.pop(uid, None)
+
+    def nearest_point(self, origin, direction):
+        """(uid, index) of the board point seen nearest to the ray (origin, direction) of a click,
+        i.e. nearest on the screen (smallest angle from the ray), or None."""
+        o = np.asarray(origin, dtype=float)
+        d = np.asarray(direction, dtype=float)
+        d = d / max(np.linalg.norm(d), 1e-300)
+        best, best_angle = None, np.inf
+        for uid, pos in list(self.board_points.items()):
+            if pos is None or not len(pos):
+                continue
+            v = pos - o
+            along = v @ d
+            perp = np.linalg.norm(v - along[:, None] * d, axis=1)
+            angle = np.where(along > 0, np.arctan2(perp, along), np.inf)
+            i = int(np.argmin(angle))
+            if angle[i] < best_angle:
+                best, best_angle = (uid, i), float(angle[i])
+        return best
 
     def _click_handler(self, uid):
+        """A click on a sphere of branch ``uid``: the point whose centre is nearest to the click on
+        the screen is picked (overlapping spheres: not necessarily the one the ray hit first)."""
         def on_click(event):
             try:
-                self.session.pick(uid, event.instance_index)
+                hit = None
+                if getattr(event, "ray_origin", None) is not None and getattr(event, "ray_direction", None) is not None:
+                    hit = self.nearest_point(event.ray_origin, event.ray_direction)
+                self.session.pick(*(hit or (uid, event.instance_index)))
             except Exception as exc:
                 self.session.show_error(one_line(exc))
         return on_click
@@ -144,6 +222,9 @@ class FepView:
             ui.set(ui.h_along, value=float(round(along, 2)))
         f = interp_at(ser.frequency, along)
         st = "stable" if ser.stable[int(round(along))] else "unstable"
+        labels = getattr(e.branch, "labels", None)
+        if labels is not None and len(labels) == n:
+            st += f", {labels[int(round(along))]}"
         idx = s.shared.index_of(s.sel_uid)
         options = ui.h_branch.options
         if idx is not None and idx < len(options):

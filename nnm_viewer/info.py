@@ -118,6 +118,50 @@ def dof_name(model, d):
     return f"DOF {d}"
 
 
+#: a DOF is named in the harmonic notes when it moves at least this fraction of the largest DOF motion
+DOF_NOTE_FRACTION = 0.01
+#: DOFs named in the harmonic notes at most
+DOF_NOTE_MAX = 3
+
+
+def ordinal(k):
+    """'1st', '2nd', '3rd', '4th', ..., '11th', ..."""
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
+
+
+def dof_harmonic_notes(pd):
+    """DOFs (moving at least DOF_NOTE_FRACTION of the most moving one) whose strongest higher harmonic
+    exceeds their first: [(dof, k, A_k / A_1)], largest ratio first."""
+    h = np.asarray(pd.harmonics, dtype=float)          # (K+1, n) amplitudes per DOF
+    if h.ndim != 2 or h.shape[0] < 3 or not h.size:
+        return []
+    n = h.shape[1]
+    size = h[1:].max(axis=0)
+    k = np.argmax(h[2:], axis=0) + 2
+    ak, a1 = h[k, np.arange(n)], h[1]
+    ratio = ak / np.maximum(a1, 1e-300)
+    idx = np.flatnonzero((size >= DOF_NOTE_FRACTION * size.max()) & (size > 0) & (ak > a1))
+    return [(int(d), int(k[d]), float(ratio[d])) for d in idx[np.argsort(-ratio[idx])]]
+
+
+def orbit_lines(pd, model):
+    """Markdown lines describing the orbit: its harmonic content over all DOFs (the solver's
+    ``describe_orbit``, mass-weighted), and the single DOFs whose higher harmonic exceeds the first
+    (inside a k:1 tongue the DOF of the spring may move mostly at k times the frequency while the
+    mass-weighted content is still dominated by harmonic 1)."""
+    lines = []
+    if pd.description:
+        lines.append(f"- orbit (harmonic content mass-weighted over all {model.n} DOFs, i.e. of the modal "
+                     f"amplitudes): {pd.description}")
+    notes = dof_harmonic_notes(pd)
+    if notes:
+        parts = [f"{dof_name(model, d)}: its {ordinal(k)} harmonic is {r:.3g} x its 1st"
+                 for d, k, r in notes[:DOF_NOTE_MAX]]
+        more = f" (and {len(notes) - DOF_NOTE_MAX} more DOFs)" if len(notes) > DOF_NOTE_MAX else ""
+        lines.append("- single DOFs where a higher harmonic exceeds the 1st: " + "; ".join(parts) + more)
+    return lines
+
+
 def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
     """Markdown summary of the orbit (units: J, Hz, s)."""
     lines = [f"**{where}**" if where else "",
@@ -125,7 +169,7 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
              f"- energy **{pd.energy:.4g} J**",
              f"- k3 factor x{k3_factor:.3g}",
              f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
-             f"- orbit: {pd.description}" if pd.description else ""]
+             *orbit_lines(pd, model)]
     if pd.note:
         lines.append(f"- note: {pd.note}")
     if pd.floquet.size:

@@ -85,6 +85,7 @@ class Layout:
             self.h_along = gui.add_slider("Along branch", min=0.0, max=1.0, step=0.01, initial_value=0.0,
                                           hint="Fractional point index: follows folds and tongues")
             self.h_sel = gui.add_markdown("no point selected")
+            self.h_branch_info = gui.add_markdown("")
         with gui.add_folder("Animation"):
             self.h_play = gui.add_checkbox("Play", initial_value=True)
             self.h_phase = gui.add_slider("Phase (t/T)", min=0.0, max=1.0, step=0.01, initial_value=0.0,
@@ -109,9 +110,10 @@ class Layout:
         panel = gui.add_panel()
         self.panel = panel
         with panel.add_tab("FEP", viser.Icon.CHART_DOTS):
-            self.h_fep = gui.add_image(np.full((350, 480, 3), 255, np.uint8), label=None, format="png")
-            gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view "
-                             "(blue: stable, red: unstable; the yellow sphere is the picked orbit).")
+            self.h_fep = gui.add_image(np.full((470, 480, 3), 255, np.uint8), label=None, format="png")
+            gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view (each branch in its "
+                             "colour, pale spheres: unstable orbits; the yellow sphere is the picked orbit; the "
+                             "markers show the folds, bifurcations and where a branch failed).")
         self.tab_point = panel.add_tab("Point", viser.Icon.INFO_CIRCLE)
         with self.tab_point:
             self.h_info = gui.add_markdown("no point selected")

@@ -9,7 +9,7 @@ import numpy as np
 import nnm_solver
 
 from .glb import build_glb
-from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, BoardLayout, board_layout
+from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, BoardLayout, board_layout, pale, rgb
 
 #: vertical field of view of the initial camera, degrees
 CAMERA_FOV_DEG = 50.0
@@ -113,6 +113,8 @@ def sphere_mesh():
     return _SPHERE
 
 
+#: legend entries of the board picture at most
+BOARD_LEGEND_MAX = 14
 #: margins of the board picture around the plotting area, in fractions of its width/height
 _ML, _MR, _MB, _MT = 0.17, 0.04, 0.2, 0.12
 
@@ -123,7 +125,7 @@ def render_board(board, ranges, series=(), width_px=900):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .fep import BRANCH_COLORS, set_fep_axes
+    from .fep import plot_branches, set_fep_axes
 
     wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
     dpi = 100
@@ -131,12 +133,12 @@ def render_board(board, ranges, series=(), width_px=900):
     FigureCanvasAgg(fig)
     ax = fig.add_axes([_ML / (1 + _ML + _MR), _MB / (1 + _MB + _MT), 1 / (1 + _ML + _MR), 1 / (1 + _MB + _MT)])
     ax.set_facecolor("#ffffff")
-    (elo, ehi), (flo, fhi) = ranges
-    for k, ser in enumerate(series):
-        if len(ser):
-            ax.plot(np.log10(ser.energy), ser.frequency, "-", lw=1.0, color=BRANCH_COLORS[k % len(BRANCH_COLORS)],
-                    alpha=0.6)
+    # thin lines, and event markers large enough to ring the spheres drawn in front of the picture
+    handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0)
     set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3)
+    if handles:
+        ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="best", framealpha=0.85,
+                  markerscale=0.6, handlelength=1.5)
     ax.set_title("FEP: click a point to animate it", fontsize=22)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
@@ -160,6 +162,8 @@ def cached_board(board, ranges, series):
     for ser in series:
         h.update(np.asarray(ser.energy, dtype=float).tobytes())
         h.update(np.asarray(ser.frequency, dtype=float).tobytes())
+        h.update(np.asarray(ser.stable, dtype=bool).tobytes())
+        h.update(repr((ser.label, ser.status, ser.events)).encode())
     key = h.hexdigest()
     img = _BOARD_CACHE.get(key)
     if img is None:
@@ -181,14 +185,17 @@ def draw_board_frame(scene, board, ranges, series=(), name="/fep"):
                            position=tuple(center))
 
 
-def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep"):
-    """One batched-sphere object for a branch: instance i = point i; returns its handle."""
+def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep", color=None):
+    """One batched-sphere object for a branch: instance i = point i, in the branch's ``color``
+    ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; returns
+    its handle."""
     if not len(series):
         scene.remove_by_name(f"{name}/b{uid}")
         return None
     V, F = sphere_mesh()
     pos = board.to_world(series.energy, series.frequency, ranges)
-    colors = np.where(np.asarray(series.stable, dtype=bool)[:, None], STABLE_RGB, UNSTABLE_RGB).astype(np.uint8)
+    stable_rgb, unstable_rgb = (STABLE_RGB, UNSTABLE_RGB) if color is None else (rgb(color), rgb(pale(color)))
+    colors = np.where(np.asarray(series.stable, dtype=bool)[:, None], stable_rgb, unstable_rgb).astype(np.uint8)
     rad = board.point_radius() * (1.0 if emphasized else 0.7)
     if len(pos) > 2:   # dense branches: spheres no bigger than ~half the typical spacing
         gap = float(np.median(np.linalg.norm(np.diff(pos, axis=0), axis=1)))

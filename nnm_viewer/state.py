@@ -15,7 +15,7 @@ import numpy as np
 import nnm_solver
 from nnm_solver import cubic_scaling
 
-from .fep import FepSeries
+from .fep import FepSeries, event_kind
 
 _uids = itertools.count(1)
 
@@ -53,8 +53,11 @@ class BranchEntry:
             z = np.zeros(0)
             return FepSeries(z, z, np.zeros(0, bool), label or self.label)
         law = cubic_scaling(factor / self.k3_factor)
+        events = [(event_kind(e), float(e["energy"]) * law.energy, float(e["frequency_hz"]))
+                  for e in (getattr(b, "events", None) or []) if "energy" in e and "frequency_hz" in e]
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
-                         np.asarray(b.stable, dtype=bool), label or self.label)
+                         np.asarray(b.stable, dtype=bool), label or self.label, events=events,
+                         status=str(getattr(b, "status", "") or ""))
 
 
 def branch_label(branch, k3_factor=1.0, source="file"):

@@ -415,3 +415,108 @@ def test_server_warms_the_solver_in_the_background(demo_file):
     t0 = time.perf_counter()
     warm_kernels()                                        # the real warm-up runs (kernels cached here)
     assert time.perf_counter() - t0 < 60
+
+
+def test_orbit_description_names_its_measure_and_single_dofs(server):
+    """Issue 14, item 7: inside the 3:1 tongue of the 2-DOF model (shipped two_dof.h5, NNM 1 point
+    130) the mass-weighted content is still 'fundamental' (harmonic 1: 89 %) while x1 moves mostly
+    at 3 times the frequency: the Point tab says which measure it uses and names x1."""
+    from nnm_viewer.examples import example_path
+
+    s, shared = make_session(server, example_path("two_dof.h5"))
+    s.pick(shared.entries[0].uid, 130)
+    h = s.current_point.harmonics
+    assert h[3, 0] > 2 * h[1, 0]                                   # x1: 3rd harmonic > 1st
+    text = s.h_info.content
+    assert "mass-weighted over all 2 DOFs" in text and "fundamental NNM motion" in text
+    line = next(l for l in text.splitlines() if "higher harmonic exceeds the 1st" in l)
+    assert "x1" in line and "3rd harmonic is 4." in line and "x2" not in line
+    s.pick(shared.entries[0].uid, 40)                              # below the tongue: no such note
+    assert "higher harmonic exceeds" not in s.h_info.content
+    s.close()
+
+
+def test_branch_status_and_events_are_shown(server, demo_file, monkeypatch):
+    """Issue 14, item 8: how a branch ended (status and the solver's message) and its events (folds,
+    bifurcations) are shown in the branch list and under the selection, and marked by kind on the
+    panel FEP and on the 3D board."""
+    import nnm_viewer.scene as scene
+
+    boards = []
+    real = scene.render_board
+    monkeypatch.setattr(scene, "render_board", lambda board, ranges, series=(), **k:
+                        boards.append(list(series)) or real(board, ranges, series, **k))
+    scene._BOARD_CACHE.clear()
+    model = nnm.load_model(demo_file)
+    b = nnm.load_branches(demo_file)[0].subset(slice(0, 12))
+    b.status, b.message = "failed", "no convergence after point 12 (E = 1 J): try a larger steps_per_period"
+    b.events = [dict(kind="fold", index=4, energy=float(b.energy[4]), frequency_hz=float(b.frequency_hz[4]),
+                     detail="energy maximum"),
+                dict(kind="bifurcation", index=7, energy=float(b.energy[7]), frequency_hz=float(b.frequency_hz[7]),
+                     detail="loss of stability, multiplier through -1"),
+                dict(kind="branch_point", index=9, energy=float(b.energy[9]), frequency_hz=float(b.frequency_hz[9]),
+                     detail="loss of stability, multiplier through +1")]
+    shared = SharedState(model, path=demo_file, branches=[nnm.load_branches(demo_file)[1], b])
+    s = Session(server, shared, sync=True)
+    assert s.h_branch.options[1] == "2: NNM 1 (12 pts, failed)" and s.h_branch.options[0].endswith("pts)")
+    s.pick(shared.entries[1].uid, 3)
+    info = s.h_branch_info.content
+    assert "failed" in info and "try a larger steps_per_period" in info
+    assert "1 fold (near point 4)" in info and "1 period doubling (near point 7)" in info
+    assert "1 branch point (near point 9)" in info
+    # the panel: a marker per event, by kind, and the failed end, with legend entries
+    ax = s.drawing.fep.renderer.ax
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    for text in ("fold (energy turns back)", "period doubling (multiplier -1)", "branch point (multiplier +1)",
+                 "end: solver failed"):
+        assert text in legend
+    marks = {(ln.get_marker(), round(float(ln.get_xdata()[0]), 9)) for ln in ax.lines if len(ln.get_xdata()) == 1}
+    for i, marker in ((4, "x"), (7, "D"), (9, "s"), (11, "X")):
+        assert (marker, round(float(np.log10(b.energy[i])), 9)) in marks
+    # the board picture gets the same events and the status
+    ser = boards[-1][1]
+    assert ser.status == "failed" and [k for k, _, _ in ser.events] == ["fold", "period_doubling", "branch_point"]
+    s.close()
+
+
+def test_branch_colours_are_distinct_with_legends(server, demo_file):
+    """Issue 14, item 9: every branch has its own colour (no repeat after 8 branches) on the board and
+    in the panel, whose legend names them."""
+    from nnm_viewer.fep import BRANCH_COLORS, branch_color
+
+    colours = [branch_color(k) for k in range(40)]
+    assert colours[:8] == BRANCH_COLORS and len(set(colours)) == 40
+    s, shared = make_session(server, demo_file)
+    base = shared.entries[0].branch
+    for k in range(9):                                      # 11 branches in all
+        shared.add(base.subset(slice(k, k + 6)), source="computed", saved=False, notify=False)
+    shared.notify("branches")
+    firsts = [tuple(s._board_handles[e.uid].batched_colors[0]) for e in shared.entries]
+    assert len(set(firsts)) == 11
+    assert firsts[9] == tuple(int(branch_color(9)[i:i + 2], 16) for i in (1, 3, 5))
+    ax = s.drawing.fep.renderer.ax
+    leg = ax.get_legend()
+    names = [t.get_text() for t in leg.get_texts()]
+    assert names[:11] == [e.label for e in shared.entries]
+    assert len({h.get_color() for h in leg.legend_handles[:11]}) == 11
+    s.close()
+
+
+def test_click_picks_the_point_nearest_on_the_screen(server, demo_file):
+    """Issue 14, item 9: a click on overlapping spheres picks the point whose centre is nearest to the
+    click on the screen (from the click's ray), not the sphere the ray met first."""
+    from types import SimpleNamespace
+
+    s, shared = make_session(server, demo_file)
+    fv = s.drawing.fep
+    a, b = shared.entries
+    cam = np.asarray(s.geom.camera_position, dtype=float)
+    target = fv.board_points[b.uid][4]
+    on_a = fv._click_handler(a.uid)                         # the ray met a sphere of branch 1 first ...
+    on_a(SimpleNamespace(ray_origin=tuple(cam), ray_direction=tuple(target - cam), instance_index=0))
+    assert s.sel_uid == b.uid and s.s == 4.0                # ... but it points at point 4 of branch 2
+    near = fv.board_points[a.uid][7] + 0.2 * (fv.board_points[a.uid][8] - fv.board_points[a.uid][7])
+    fv._click_handler(b.uid)(SimpleNamespace(ray_origin=tuple(cam), ray_direction=tuple(near - cam),
+                                             instance_index=4))
+    assert s.sel_uid == a.uid and s.s == 7.0
+    s.close()
