@@ -40,8 +40,8 @@ METHODS = ("shooting", "hb")
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
 
-_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=True, reversible=None)
-_HB_OPTIONS = dict(harmonics=7, samples=None, basis="odd")
+_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None)
+_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None)
 
 
 def check_positive(name, value, integer=False):
@@ -114,12 +114,16 @@ def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
     check_positive("steps_per_period", spp, integer=True)
     if spp < 8:
         raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
-    symmetric = bool(opts["symmetric"])
-    if symmetric and not system.elements.odd:
+    odd = system.elements.odd
+    symmetric = odd if opts["symmetric"] is None else bool(opts["symmetric"])
+    if symmetric and not odd:
         raise NNMInputError("symmetric=True (half-period shooting) needs odd nonlinear forces; "
-                            "use symmetric=False for elements with even powers")
+                            "use symmetric=False (or leave it unset) for elements with even powers")
+    reversible = opts["reversible"]
+    if reversible is None and opts["symmetric"] is None and not symmetric:
+        reversible = True                      # even forces: full period, orbits still start at rest
     problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
-                              reversible=opts["reversible"], max_rel_period_step=opts["max_period_step"])
+                              reversible=reversible, max_rel_period_step=opts["max_period_step"])
     n = system.n
     q0 = np.zeros(n)
     q0[k] = a0
@@ -133,6 +137,8 @@ def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
 
 def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
     basis, harmonics, samples = opts["basis"], opts["harmonics"], opts["samples"]
+    if basis is None:
+        basis = "odd" if system.elements.odd else "full"
     if basis not in BASES:
         raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
     check_positive("harmonics", harmonics, integer=True)
@@ -446,7 +452,7 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
 
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
-                 stop=None, energy_min=None, symmetric=True, floquet=None, step=None, max_angle=0.35,
+                 stop=None, energy_min=None, symmetric=None, floquet=None, step=None, max_angle=0.35,
                  max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
                  method="shooting", tongues="follow", locate_events=True, **hb_options):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
@@ -462,7 +468,9 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     on_point : optional callable(point: Point) called after each converged point.
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
-    symmetric : half-period shooting (valid for odd nonlinear forces; see orbits/shooting.py).
+    symmetric : half-period shooting (valid for odd nonlinear forces; see orbits/shooting.py).  Default:
+        True when every element's force is odd, else full-period shooting (then ``reversible``
+        defaults to True: orbits start at rest).
     reversible : orbits starting at rest (v0 = 0, default with symmetric) or general orbits with a
         phase condition (False); see orbits.shooting.ShootingProblem.
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when

@@ -14,14 +14,14 @@ f_nl (f_nl(-x) = -f_nl(x)): its NNMs are half-wave symmetric, which the shooting
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import NNMInputError
 from .jit import jit_inline
 
-__all__ = ["CubicSpring", "ElementSet", "law_force", "law_force_tangent"]
+__all__ = ["CubicSpring", "PolynomialSpring", "ElementSet", "element_law", "law_force", "law_force_tangent"]
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ class CubicSpring:
     k3: float
     other: int | None = None
 
-    def coefficients(self):
+    def law(self):
         """Force law as {power: coefficient}: g(d) = sum c_p d^p (SI units)."""
         return {3: float(self.k3)}
 
@@ -45,14 +45,62 @@ class CubicSpring:
         return CubicSpring(dof=self.dof, other=self.other, k3=self.k3 * factor)
 
 
+@dataclass(frozen=True)
+class PolynomialSpring:
+    """Polynomial spring with force sum_p k_p d**p (N) on the deformation d (m), integer powers p >= 2.
+
+    Grounded (``other=None``): d = x[dof]; relative: d = x[dof] - x[other].  coefficients: {p: k_p}
+    in N/m^p, e.g. {2: k2, 3: k3} for a quadratic + cubic joint (geometric nonlinearity of beams and
+    plates).  The linear stiffness belongs to K.  Even powers make f_nl not odd: the NNMs then lose the
+    half-wave symmetry x(t + T/2) = -x(t), and the solver shoots over the full period.
+    """
+
+    dof: int
+    other: int | None = None
+    coefficients: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        clean = {}
+        for p, c in dict(self.coefficients).items():
+            if isinstance(p, bool) or not isinstance(p, (int, np.integer)) and not (isinstance(p, str) and p.isdigit()):
+                raise NNMInputError(f"PolynomialSpring power {p!r} is not an integer; use powers >= 2")
+            p = int(p)
+            if p < 2:
+                raise NNMInputError(f"PolynomialSpring power {p} < 2; the linear stiffness belongs in K")
+            try:
+                c = float(c)
+            except (TypeError, ValueError):
+                raise NNMInputError(f"PolynomialSpring coefficient of d^{p} is {c!r}, not a number") from None
+            if not np.isfinite(c):
+                raise NNMInputError(f"PolynomialSpring coefficient of d^{p} is {c}, not finite")
+            clean[p] = c
+        if not clean:
+            raise NNMInputError("PolynomialSpring needs at least one coefficient, e.g. coefficients={3: k3}")
+        object.__setattr__(self, "coefficients", dict(sorted(clean.items())))
+
+    def law(self):
+        """Force law as {power: coefficient} (SI units)."""
+        return dict(self.coefficients)
+
+    def scaled(self, factor):
+        """The same spring with every coefficient multiplied by ``factor``."""
+        return PolynomialSpring(dof=self.dof, other=self.other,
+                                coefficients={p: c * factor for p, c in self.coefficients.items()})
+
 #: element types the models accept (the next element types are added here)
-ELEMENT_TYPES = (CubicSpring,)
+ELEMENT_TYPES = (CubicSpring, PolynomialSpring)
+
+
+def element_law(element):
+    """Force law of an element as {power: coefficient} (SI)."""
+    return element.law()
 
 
 def check_element(i, element, n):
     """One-line NNMInputError if ``element`` (index i) is not a valid element of an n-DOF model."""
     if not isinstance(element, ELEMENT_TYPES):
-        raise NNMInputError(f"spring {i} is {type(element).__name__}, expected nnm_solver.CubicSpring")
+        raise NNMInputError(f"spring {i} is {type(element).__name__}, expected nnm_solver.CubicSpring or "
+                            f"nnm_solver.PolynomialSpring")
     for which, d in (("dof", element.dof), ("other", element.other)):
         if d is None and which == "other":
             continue
@@ -60,7 +108,7 @@ def check_element(i, element, n):
             raise NNMInputError(f"spring {i}: {which}={d} is not a DOF of this model (valid: 0..{n - 1})")
     if element.other is not None and element.other == element.dof:
         raise NNMInputError(f"spring {i}: dof and other are both {element.dof}; a relative spring needs two DOFs")
-    for p, c in element.coefficients().items():
+    for p, c in element_law(element).items():
         if not np.isfinite(c):
             raise NNMInputError(f"spring {i}: coefficient of d^{p} is {c}, not finite")
 
@@ -82,7 +130,7 @@ class ElementSet:
             self.B[s, e.dof] = 1.0
             if e.other is not None:
                 self.B[s, e.other] = -1.0
-        laws = [e.coefficients() for e in self.elements]
+        laws = [element_law(e) for e in self.elements]
         self.powers = np.array(sorted({p for law in laws for p in law}) or [3], dtype=np.int64)
         self.coefficients = np.zeros((ns, len(self.powers)))
         for s, law in enumerate(laws):

@@ -42,7 +42,7 @@ __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion", "HILL_AUTO_SIZE"]
 
 
 def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8, max_points=500, on_point=None,
-                    stop=None, energy_min=None, basis="odd", step=None, max_angle=0.35, max_correction=0.5,
+                    stop=None, energy_min=None, basis=None, step=None, max_angle=0.35, max_correction=0.5,
                     max_rel_step=0.4, floquet=None):
     """NNM branch of linear mode ``mode`` (1-based) by harmonic balance, from low energy to ``energy_max`` (J).
 
@@ -53,7 +53,8 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     harmonics : highest harmonic order kept (``basis="odd"``: orders 1, 3, ..., <= harmonics).
     samples : time samples per period for AFT (default 4*harmonics + 4: exact for cubic springs).
     tol : relative residual tolerance of the harmonic-balance equations.
-    basis : ``"odd"`` (cosines of odd harmonics, symmetric NNMs) or ``"full"`` (see module doc).
+    basis : ``"odd"`` (cosines of odd harmonics, symmetric NNMs) or ``"full"`` (see module doc);
+        default: "odd" when every element's force is odd, else "full".
     max_points, on_point, stop, energy_min, step, max_angle, max_correction : as ``continue_nnm``.
     floquet : Floquet multipliers by Hill's method (True), not (False: NaN, all stable), or when the
         Hill matrix 2 n (2 harmonics + 1) has at most HILL_AUTO_SIZE rows (None); cost O(size^3) a point.

@@ -104,7 +104,7 @@ class Model:
     @property
     def k3(self):
         """Cubic coefficients (n_s,) in N/m^3 (0 for an element without a cubic term)."""
-        return np.array([s.coefficients().get(3, 0.0) for s in self.springs], dtype=float)
+        return np.array([s.law().get(3, 0.0) for s in self.springs], dtype=float)
 
     def nonlinear_force(self, x):
         """f_nl(x) (n,) in N for displacements x (n,) in m (or (k, n) for k states)."""
