@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .branch import Branch
-from .elements import CubicSpring
+from .elements import CubicSpring, PolynomialSpring
 from .errors import NNMFileError, NNMInputError
 from .importers import import_model, is_import_path
 from .h5file import (STR, atomic_h5, open_nnm, read_attrs, read_group_tree, read_matrix, strings, write_attrs,
@@ -19,6 +19,13 @@ from .mesh import DisplayMesh
 from .model import Model
 
 BRANCH_COLUMNS = ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")
+
+
+def spring_from_law(dof, other, law):
+    """The element for a force law {power: coefficient}: a CubicSpring for {3: k3}, else a PolynomialSpring."""
+    if set(law) == {3}:
+        return CubicSpring(dof=dof, other=other, k3=float(law[3]))
+    return PolynomialSpring(dof=dof, other=other, coefficients=law)
 
 
 # ---------------------------------------------------------------------- model
@@ -32,7 +39,9 @@ def write_model_group(f, model, extra=None):
     sg.create_dataset("dof", data=np.array([s.dof for s in model.springs], dtype=np.int64))
     sg.create_dataset("other", data=np.array([-1 if s.other is None else s.other for s in model.springs],
                                              dtype=np.int64))
-    sg.create_dataset("k3", data=np.array([s.k3 for s in model.springs], dtype=float))
+    sg.create_dataset("k3", data=model.k3)
+    # every element's force law {power: coefficient}; k3 alone describes cubic springs (first-release files)
+    sg.attrs["laws_json"] = json.dumps([{str(p): c for p, c in s.law().items()} for s in model.springs])
     if model.dof_labels is not None:
         g.create_dataset("dof_labels", data=np.array(model.dof_labels, dtype=STR))
     if model.mode_labels is not None:
@@ -80,8 +89,11 @@ def read_model_group(f, path):
         raise NNMFileError(f"{path}: missing /model/springs/(dof, other, k3)") from None
     if not (len(dof) == len(other) == len(k3)):
         raise NNMFileError(f"{path}: /model/springs datasets have different lengths")
-    springs = [CubicSpring(dof=int(d), other=None if o < 0 else int(o), k3=float(k))
-               for d, o, k in zip(dof, other, k3)]
+    laws = json.loads(sg.attrs["laws_json"]) if "laws_json" in sg.attrs else [{"3": float(k)} for k in k3]
+    if len(laws) != len(dof):
+        raise NNMFileError(f"{path}: /model/springs/laws_json has {len(laws)} entries for {len(dof)} springs")
+    springs = [spring_from_law(int(d), None if o < 0 else int(o), {int(p): c for p, c in law.items()})
+               for d, o, law in zip(dof, other, laws)]
     dof_labels = strings(g["dof_labels"]) if "dof_labels" in g else None
     mode_labels = strings(g["mode_labels"]) if "mode_labels" in g else None
     info = read_attrs(g["info"]) if "info" in g else {}
@@ -215,9 +227,9 @@ def load_branches(path, model=None):
             except (KeyError, OSError, ValueError) as exc:
                 raise NNMFileError(f"{path}: branch {gname} is incomplete or damaged ({exc})") from None
             m = model
-            if len(k3) == len(model.springs) and not np.array_equal(k3, model.k3):
+            if len(k3) == len(model.springs) and not np.array_equal(k3, model.k3):   # the branch's own k3
                 m = model.with_springs([CubicSpring(dof=s.dof, other=s.other, k3=float(k))
-                                        for s, k in zip(model.springs, k3)])
+                                        if isinstance(s, CubicSpring) else s for s, k in zip(model.springs, k3)])
             try:
                 out.append(Branch(m, int(g.attrs.get("mode", 0)), events=events,
                                   status=str(g.attrs.get("status", "")), message=str(g.attrs.get("message", "")),
