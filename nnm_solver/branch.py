@@ -10,7 +10,7 @@ from .floquet import detect_events
 from .fourier import fourier_amplitudes
 from .reduction import mac
 from .scaling import cubic_scaling
-from .settings import MethodSettings, settings_from_dict
+from .settings import settings_from_dict
 from .stops import STOP_STATUSES
 
 __all__ = ["Branch", "Point", "STATUSES"]

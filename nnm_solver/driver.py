@@ -4,9 +4,9 @@ r"""The NNM driver: one branch from a linear mode at low energy up to a target e
     continue_nnm(...)                                                  the Branch: a loop over iter_nnm
 
 The driver checks the arguments, builds the method's periodic-orbit problem (orbits/) on the modal
-system (modal.py) from a nearly linear first orbit, runs the generic pseudo-arclength engine
-(continuation.py) and turns each converged point into a ``Point`` (energy J, frequency Hz, period s,
-initial state, Floquet multipliers and stability, floquet.py).  A user's own stopping rule is a
+system (modal.py) from a nearly linear first orbit, and hands it to an ``NNMIterator`` (iterator.py),
+which runs the generic pseudo-arclength engine (continuation.py) and turns each converged point into a
+``Point`` (energy J, frequency Hz, period s, initial state, Floquet multipliers and stability).  A user's own stopping rule is a
 ``break`` out of the loop; ``iterator.branch()`` then holds every point seen.
 """
 from __future__ import annotations
@@ -15,19 +15,15 @@ import math
 
 import numpy as np
 
-from .branch import Branch, Point
-from .continuation import ContinuationPoint, ContinuationSettings, CorrectorFailure, _energy_slope, pseudo_arclength
-from .events import Locator, locate_between
+from .branch import Point
+from .continuation import ContinuationSettings, pseudo_arclength
 from .errors import NNMInputError
-from .floquet import STABILITY_TOL, is_stable, sort_multipliers
+from .iterator import NNMIterator
 from .modal import modal_system
 from .model import Model
 from .orbits.harmonic_balance import BASES, HBBasis, HBProblem
 from .orbits.shooting import ShootingProblem, discrete_linear_period
 from .settings import HarmonicBalanceSettings, ShootingSettings
-from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
-from .threads import blas_limited
-from .tongue_skip import SKIP_FRACTION, TongueSkipper, harmonic_label, partner_mode
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
 
@@ -161,242 +157,6 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
     settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
                                        energy_max=energy_max, floquet=bool(floquet))
     return problem, u0, p0, settings
-
-
-class NNMIterator:
-    """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
-
-    Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
-    The iteration ends by itself at energy_max, at max_points, when the branch returns to low
-    energy, escapes, closes a loop, or when the continuation cannot go on; ``status`` and ``message``
-    then say why (stops.py lists the statuses).  ``cancel()`` (or a ``break`` followed by ``branch()``) ends it
-    early ('cancelled' / 'stopped').  ``branch()`` returns the Branch of every point so far.
-    """
-
-    def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True, tongues="follow"):
-        self.model = model
-        self.mode = int(mode)
-        self.settings = settings
-        self.energy_max = float(energy_max)
-        self.max_points = int(max_points)
-        self.points = []
-        self.status = "running"
-        self.message = ""
-        self._problem = problem
-        self._system = system
-        self._engine = engine
-        self._w_r = float(np.sqrt(system.omega2[mode - 1]))
-        self._loops = LoopDetector(mirror=system.elements.odd)
-        self._last = None
-        self._prev = None              # (ContinuationPoint, Point, dE/ds) of the last point
-        self._cs, self._tol = continuation, tol
-        self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
-        self.events = []
-        self._landed = False
-        self.tongue_mode = tongues
-        self.tongues = []
-        self._tongue = None            # the tongue being traversed (skip mode)
-        self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
-        self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
-
-    def __iter__(self):
-        return self
-
-    def __next__(self):
-        if self.status != "running":
-            raise StopIteration
-        N = len(self.points)
-        with blas_limited():
-            while True:
-                try:
-                    cp = next(self._engine)
-                except StopIteration as fin:
-                    self._failed(fin.value)
-                    raise StopIteration from None
-                point, (q0, v0, T) = self._record(cp, self._problem)
-                if self.tongue_mode != "skip" or not self._hidden(cp, point):
-                    break
-            if self.locate:
-                point, (q0, v0, T) = self._locate(cp, point, (q0, v0, T))
-            if self.tongue_mode == "skip":
-                self._last_backbone = (cp, point)
-        loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
-        if loop is not None:
-            p = self.points[loop]
-            self._finish("closed_loop", f"closed loop: from point {N - 1} on the continuation re-traverses points "
-                                        f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
-                                        f"one lap is kept")
-            raise StopIteration
-        self.points.append(point)
-        E, E0 = point.energy, self.points[0].energy
-        ratio = self._turning_ratio(q0, v0)
-        if ratio < ESCAPE_RATIO:
-            self._finish("escape", escape_message(point, ratio))
-        elif E >= self.energy_max or self._landed:
-            self._finish("done", f"reached energy_max = {self.energy_max:g} J")
-        elif N + 1 >= self.max_points:
-            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
-                                       f"raise max_points to go on")
-        elif N + 1 > 3 and E < 0.5 * E0 and self._start_is_low:
-            self._finish("done", "the branch returned to low energy")
-        self._last = (q0, v0)
-        return point
-
-    def _hidden(self, cp, point):
-        """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
-        a tongue, or is traversing one it could not jump over)."""
-        t = self._tongue
-        if t is not None:                       # traversing a tongue: back on the backbone above its entry?
-            rising = point.energy > t["last_energy"]
-            t["last_energy"] = point.energy
-            trend_ok = (point.frequency_hz - t["entry_frequency_hz"]) * t["trend"] >= -1e-4 * t["entry_frequency_hz"]
-            if rising and trend_ok and point.energy > t["entry_energy"] and not self._entering_tongue(point, t["backbone"]):
-                t.update(exit_energy=point.energy, exit_frequency_hz=point.frequency_hz)
-                self._tongue = None
-                self._prev = None              # no event is located across the tongue
-                return False
-            t["hidden_points"] += 1
-            if t["hidden_points"] > self.max_points:
-                self._failed(f"the {t['label']} tongue at {t['entry_energy']:.4g} J could not be passed "
-                             f"({t['hidden_points']} points inside it)")
-                raise StopIteration
-            return True
-        if self._last_backbone is None or not self._entering_tongue(point, self._last_backbone[1]):
-            return False
-        bpoint = self._last_backbone[1]
-        trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
-        if self._skip(cp, point):
-            return True
-        t = self.tongues[-1]
-        # the backbone resumes beyond the tongue with its frequency moving the same way as before it
-        t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint, trend=float(trend))
-        self._tongue = t
-        return True
-
-    def _entering_tongue(self, point, bpoint):
-        """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy
-        turned back (a backbone continued in energy has no fold), or a harmonic k >= 2 carries
-        SKIP_FRACTION of its amplitude and grew by half since the last backbone point."""
-        if point.energy < bpoint.energy:
-            return True
-        k, frac = self._content(point)
-        kb, frac_b = self._content(bpoint)
-        return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
-
-    def _content(self, point):
-        """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (cached on the point)."""
-        if not hasattr(point, "_content"):
-            x = np.asarray(point.x0)
-            sys_ = self._system
-            u = self._problem.pack(sys_.to_modal(x), sys_.to_modal(np.asarray(point.v0)), point.period) \
-                if self.settings.method == "shooting" else None
-            Q = self._problem.modal_orbit(u) if u is not None else None
-            point._content = harmonic_label(Q)[1:3] if Q is not None else (1, 0.0)
-        return point._content
-
-    def _skip(self, cp, point):
-        """Jump over the tongue that ``point`` entered (tongue_skip.py); True if the continuation now
-        restarts beyond it."""
-        bcp, bpoint = self._last_backbone
-        Q = self._problem.modal_orbit(cp.u)
-        k = harmonic_label(Q)[1] if Q is not None else 1
-        mode, mac = partner_mode(self._system, Q, k) if Q is not None else (0, float("nan"))
-        tongue = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
-                      entry_index=len(self.points) - 1, entry_energy=bpoint.energy,
-                      entry_frequency_hz=bpoint.frequency_hz, entry_period=bpoint.period,
-                      entry_x0=np.asarray(bpoint.x0).tolist(), entry_v0=np.asarray(bpoint.v0).tolist(),
-                      inside_x0=np.asarray(point.x0).tolist(), inside_v0=np.asarray(point.v0).tolist(),
-                      inside_period=point.period)
-        self._last_backbone = None
-        E_base = max(bpoint.energy, point.energy)
-        jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
-        self.tongues.append(tongue)
-        if jumped is None:
-            tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
-            return False
-        u, J, delta = jumped
-        tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)))
-        self._engine.close()
-        self._engine = pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol)
-        self._prev = None          # no events are located across the jump
-        return True
-
-    def _turning_ratio(self, q0, v0):
-        """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
-        if np.linalg.norm(v0) > 1e-6 * self._w_r * np.linalg.norm(q0):
-            return 1.0
-        return restoring_ratio(self._system, q0)
-
-    def _failed(self, reason):
-        N = len(self.points)
-        if N and self._turning_ratio(*self._last) < 0.1:
-            p = self.points[-1]
-            self._finish("escape", escape_message(p, self._turning_ratio(*self._last)) +
-                         f" (the continuation could not go further: {reason})")
-            return
-        where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
-                 f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
-        self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
-                               f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
-
-    def _locate(self, cp, point, state):
-        """Locate the events between the previous point and this one (events.py); cut the branch at
-        energy_max.  Returns the (possibly located) end point and its modal state."""
-        slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
-        prev, self._prev = self._prev, (cp, point, slope)
-        if prev is None:
-            return point, state
-        pcp, ppoint, pslope = prev
-        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent)
-
-        def record(sigma):
-            u, J, p = loc.at(sigma)
-            loc.problem.accept(u, J)
-            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem)[0]
-
-        events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
-                                     self.energy_max)
-        self.events.extend(events)
-        if end is not None:
-            u, J, p = loc.at(end[0])
-            self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
-            self._landed = True
-            return end[1], self._problem.state(u)
-        return point, state
-
-    def _record(self, cp, prob):
-        sys_ = self._system
-        q0, vq0, T = prob.state(cp.u)
-        x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
-        if self.settings.floquet:
-            mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
-            stable = is_stable(mu, STABILITY_TOL)
-        else:
-            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
-        A = prob.coefficients(cp.u)
-        label = harmonic_label(prob.modal_orbit(cp.u))[0] if hasattr(prob, "modal_orbit") else "backbone"
-        return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0, v0=v0,
-                     floquet=mu, stable=stable, iterations=cp.iterations,
-                     coefficients=None if A is None else sys_.to_physical(A), label=label), (q0, vq0, T)
-
-    def _finish(self, status, message):
-        self.status, self.message = status, message
-        self._engine.close()
-
-    def cancel(self, message=""):
-        """End the iteration now (status 'cancelled'); the points so far are kept."""
-        if self.status == "running":
-            self._finish("cancelled", message or f"cancelled after {len(self.points)} points")
-
-    def branch(self):
-        """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
-        if self.status == "running":
-            self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
-        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
-        return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
-                                  status=self.status, message=self.message,
-                                  events=self.events if self.locate else None, tongues=tongues)
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,

@@ -12,9 +12,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .elements import ElementSet, check_element
+from .elements import CubicSpring, ElementSet, check_element  # noqa: F401 (CubicSpring: first-release import path)
 from .errors import NNMInputError
-from .mesh import DisplayMesh
+from .mesh import DisplayMesh  # noqa: F401 (first-release import path)
 
 #: Largest model the shooting solver accepts (it works in the full modal basis).
 MAX_DENSE_DOF = 6000
