@@ -4,7 +4,12 @@
     nnm-solve FILE --mode N --energy-max E [--out OUT.h5] [--plot fep.png]
     nnm-solve FILE --modes 10-24 --energy-max E [--sweep SWEEP.toml] [--workers N | --scheduler ADDRESS]
 
-FILE is an nnm HDF5 file or a MATLAB .mat file (M, K, springs = [dof other k3], 1-based).
+    nnm-solve FILE --mode N --energy-max E [--csv T.csv] [--uff S.uff] [--backbone B.csv --backbone-dof DOF]
+    nnm-solve import MODEL.toml --out MODEL.h5      nnm-solve export FILE.h5 [--branch NAME] --csv ...
+
+FILE is an nnm HDF5 file, a MATLAB .mat file (M, K, springs = [dof other k3], 1-based), a model
+description .toml (MatrixMarket / Abaqus / ANSYS / MATLAB matrices, springs, units, display mesh)
+or an ANSYS .full file (docs/import.md).
 Ctrl-C stops the continuation and saves the points computed so far.
 """
 from __future__ import annotations
@@ -20,15 +25,12 @@ from .errors import NNMInputError
 
 
 def _load(path):
+    from .importers import is_import_path
     from .io import load_extra, load_model
-    from .matio import load_mat_model
 
     p = Path(path)
-    if p.suffix.lower() == ".mat":
-        return load_mat_model(p), None
-    model = load_model(p)
-    ref = load_extra(p, "reference")
-    return model, ref
+    model = load_model(p)          # nnm HDF5, or an import by suffix (.mat, .toml, .full)
+    return model, None if is_import_path(p) else load_extra(p, "reference")
 
 
 def list_modes(model, reference=None, count=30, out=sys.stdout):
@@ -100,8 +102,10 @@ def _default_out(path):
     then ``<stem>_branches.h5`` in the current folder."""
     import os
 
+    from .importers import is_import_path
+
     p = Path(path)
-    out = p.with_suffix(".h5") if p.suffix.lower() == ".mat" else p
+    out = p.with_suffix(".h5") if is_import_path(p) else p
     folder = out.parent if str(out.parent) else Path(".")
     if _is_shipped_example(out):
         reason = f"{out.name} is a shipped example"
@@ -113,8 +117,15 @@ def _default_out(path):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="nnm-solve", description=__doc__.split("\n\n")[0])
-    parser.add_argument("file", help="model file (.h5 nnm file or .mat)")
+    from . import cli_exchange
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in cli_exchange.SUBCOMMANDS:     # nnm-solve import ... / nnm-solve export ...
+        return cli_exchange.main(argv)
+    parser = argparse.ArgumentParser(prog="nnm-solve", description=__doc__.split("\n\n")[0],
+                                     epilog="nnm-solve import MODEL --out MODEL.h5 / nnm-solve export FILE.h5 ...: "
+                                     "see nnm-solve import -h, nnm-solve export -h")
+    parser.add_argument("file", help="model file: .h5 nnm file, .mat, .toml model description or ANSYS .full")
     parser.add_argument("--list-modes", action="store_true", help="print the linear natural frequencies")
     parser.add_argument("--count", type=int, default=24, help="number of modes listed (default 24)")
     parser.add_argument("--mode", type=int, help="linear mode to continue (1-based)")
@@ -133,6 +144,7 @@ def main(argv=None):
     where.add_argument("--workers", type=int, help="sweep: local worker processes (default: one per core)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="sweep: address of a running Dask scheduler, "
                        "e.g. tcp://host:8786")
+    cli_exchange.add_export_arguments(parser)
     args = parser.parse_args(argv)
     try:
         return _run_sweep(args, parser) if (args.modes or args.sweep) else _run(args)
@@ -145,6 +157,8 @@ def main(argv=None):
 
 
 def _run(args):
+    from . import cli_exchange
+    from .importers import is_import_path
     from .io import save_branch
     from .jobs import start_branch
 
@@ -156,7 +170,7 @@ def _run(args):
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
     if args.out:
         out = Path(args.out)
-        if out.suffix.lower() == ".mat":
+        if is_import_path(out):
             out = out.with_suffix(".h5")
     else:
         out, reason = _default_out(args.file)
@@ -165,6 +179,7 @@ def _run(args):
                   f"--out chooses another file)", flush=True)
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    cli_exchange.check_exports(args, model)
     job = start_branch(model, args.mode, args.energy_max, steps_per_period=args.steps_per_period, tol=args.tol,
                        max_points=args.max_points, energy_min=args.energy_min)
     t0 = time.perf_counter()
@@ -196,6 +211,7 @@ def _run(args):
             from .plotting import plot_fep
             plot_fep(branch, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM {args.mode}")
             print(f"FEP written to {args.plot}")
+        cli_exchange.write_exports(args, branch)
     return 0 if branch.status in ("done", "max_points", "cancelled") else 1
 
 

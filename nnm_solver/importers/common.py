@@ -96,8 +96,9 @@ class DofMap:
         if key not in self._index:
             nodes = {n for n, _ in self.entries}
             if key[0] not in nodes:
-                raise NNMInputError(f"{where}node {key[0]} is not a node of the model "
-                                    f"({len(nodes)} nodes, e.g. {', '.join(map(str, sort_nodes(nodes)[:4]))})")
+                raise NNMInputError(f"{where}node {key[0]} is not a node of the model ({len(nodes)} nodes with DOFs, "
+                                    f"e.g. {', '.join(map(str, sort_nodes(nodes)[:4]))}; a fully constrained node "
+                                    f"has none)")
             have = [d for n, d in self.entries if n == key[0]]
             raise NNMInputError(f"{where}node {key[0]} has no DOF {key[1]} in the model "
                                 f"(its DOFs: {', '.join(have)}; constrained DOFs are not model DOFs)")

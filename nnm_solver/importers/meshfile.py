@@ -17,6 +17,8 @@ map from the model's DOFs to the mesh points is given by one of:
 """
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 import numpy as np
@@ -110,10 +112,11 @@ def read_recovery(path, rows, n):
 
 
 def read_display_mesh(path, n, dof_map=None, *, nodes=None, first_node=1, dofs_per_node=None, recovery=None,
-                      scale=1.0, where=""):
+                      scale=1.0, file_format=None, where=""):
     """DisplayMesh of the mesh file ``path`` for a model of n DOFs (see the module docstring).
 
-    scale : metres per length unit of the mesh coordinates.
+    scale : metres per length unit of the mesh coordinates; file_format : meshio's name of the
+    format when the suffix is ambiguous (default: from the suffix).
     """
     path = existing(path, where + "display mesh" if where else "display mesh")
     try:
@@ -121,8 +124,15 @@ def read_display_mesh(path, n, dof_map=None, *, nodes=None, first_node=1, dofs_p
     except ImportError:
         raise NNMInputError(f"{path}: display meshes from mesh files need the optional package meshio: "
                             f"{EXTRA}") from None
+    # meshio tries every reader of a suffix, prints their failures and calls sys.exit when none fits
+    chatter = io.StringIO()
     try:
-        mesh = meshio.read(path)
+        with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
+            mesh = meshio.read(path, file_format=file_format)
+    except SystemExit:
+        raise NNMFileError(f"{path}: not a mesh file meshio can read"
+                           f"{' as ' + file_format if file_format else ''} (set [mesh] format to one of "
+                           f"meshio's formats, e.g. gmsh, nastran, abaqus, vtu)") from None
     except Exception as exc:  # meshio raises ReadError, KeyError, ValueError, ... on bad input
         raise NNMFileError(f"{path}: not a mesh file meshio can read ({exc.__class__.__name__}: "
                            f"{str(exc).splitlines()[0] if str(exc) else 'unreadable'})") from None

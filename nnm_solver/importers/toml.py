@@ -13,7 +13,8 @@
     # dof_map = "beam_dofs.txt"          # node and direction of each DOF, for formats without one
 
     [[springs]]                          # one table per nonlinear element
-    type = "cubic"                       # default; the element type (see SPRING_TYPES)
+    type = "cubic"                       # default; the element type (see SPRING_TYPES); "polynomial" takes
+                                         # coefficients = {2 = k2, 3 = k3, ...} (force sum k_p d^p)
     node = 6                             # by node and direction (needs a DOF map) ...
     direction = "uz"
     k3 = 1e9                             # in the description's units (force / length^3)
@@ -22,6 +23,7 @@
     [mesh]                               # optional display mesh (any format meshio reads)
     file = "beam.msh"
     # first_node = 1 | nodes = [...] | dofs_per_node = 6 | recovery = "R.mtx"   (see meshfile.py)
+    # format = "gmsh"                    # meshio's format name, when the suffix is ambiguous
 
 Every number (matrices, k3, mesh coordinates) is in the description's units; the model is built in
 SI.  Relative paths are relative to the description file.  Errors name the file and the table.
@@ -48,7 +50,7 @@ else:  # pragma: no cover - Python 3.10
 FORMATS = ("matrixmarket", "abaqus", "ansys", "matlab")
 TOP_KEYS = {"name", "description", "units", "matrices", "springs", "mesh"}
 MATRIX_KEYS = {"format", "mass", "stiffness", "file", "dof_map"}
-MESH_KEYS = {"file", "nodes", "first_node", "dofs_per_node", "recovery"}
+MESH_KEYS = {"file", "format", "nodes", "first_node", "dofs_per_node", "recovery"}
 LOCATION_KEYS = {"type", "dof", "other", "node", "direction", "other_node", "other_direction"}
 
 
@@ -56,21 +58,42 @@ LOCATION_KEYS = {"type", "dof", "other", "node", "direction", "other_node", "oth
 class SpringType:
     """A nonlinear element type of the ``[[springs]]`` tables.
 
-    parameters : its required keys (numbers, in the description's units);
+    parameters : its required keys (in the description's units);
     build(dof, other, params, scale) -> element, where scale(p) converts the coefficient of d^p
-    of a force law to SI.
+    of a force law to SI;
+    parse(key, value, where) -> the parameter's value (default: a finite number).
     """
 
     parameters: tuple
     build: Callable
+    parse: Callable | None = None
 
 
 def _cubic(dof, other, params, scale):
     return CubicSpring(dof=dof, other=other, k3=params["k3"] * scale(3))
 
 
+def _law_table(key, value, where):
+    """{power: coefficient} from a TOML table such as {2 = 1e5, 3 = 1e9}."""
+    if not isinstance(value, dict) or not value:
+        raise NNMInputError(f"{where}: {key} must be a table of powers and coefficients, e.g. {{2 = 1e5, 3 = 1e9}}")
+    law = {}
+    for p, c in value.items():
+        if not str(p).isdigit() or int(p) < 2:
+            raise NNMInputError(f"{where}: {key}: power {p!r} is not an integer >= 2 (the linear stiffness is in K)")
+        law[int(p)] = _number(c, f"{key}.{p}", where)
+    return law
+
+
+def _polynomial(dof, other, params, scale):
+    from ..elements import PolynomialSpring
+    return PolynomialSpring(dof=dof, other=other, coefficients={p: c * scale(p) for p, c in
+                                                                params["coefficients"].items()})
+
+
 #: element types by name; a new element type registers its builder here (``type = "<name>"``)
-SPRING_TYPES = {"cubic": SpringType(("k3",), _cubic)}
+SPRING_TYPES = {"cubic": SpringType(("k3",), _cubic),
+                "polynomial": SpringType(("coefficients",), _polynomial, _law_table)}
 
 
 def _table(data, key, where, kind=dict, required=False):
@@ -210,7 +233,7 @@ def build_springs(rows, n, dof_map, units, where):
         if missing:
             raise NNMInputError(f"{w}: missing {', '.join(missing)} (a {kind} spring needs "
                                 f"{', '.join(st.parameters)})")
-        params = {k: _number(row[k], k, w) for k in st.parameters}
+        params = {k: st.parse(k, row[k], w) if st.parse else _number(row[k], k, w) for k in st.parameters}
         try:
             element = st.build(dof, other, params, units.coefficient_scale(bool(rotations[dof])))
         except (TypeError, ValueError) as exc:
@@ -257,7 +280,7 @@ def load_toml_model(path, name=None):
             mesh = read_display_mesh(folder / str(ms["file"]), n, dof_map, nodes=ms.get("nodes"),
                                      first_node=ms.get("first_node", 1), dofs_per_node=ms.get("dofs_per_node"),
                                      recovery=None if "recovery" not in ms else folder / str(ms["recovery"]),
-                                     scale=units.L, where=f"{where} [mesh]: ")
+                                     scale=units.L, file_format=ms.get("format"), where=f"{where} [mesh]: ")
             if not units.is_si:  # map from SI model coordinates to vertex displacements in m
                 mesh.displacement_map = units.L * mesh.displacement_map / units.dof_scale(rotations)[None, :]
         info = {"source": path.name, "format": fmt, "units": str(units)}
