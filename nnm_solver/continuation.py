@@ -172,7 +172,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         try:
             u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol, w)
             dist = np.linalg.norm(w * (u_new - u_pred))
-            if dist > settings.max_correction * s:
+            # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
+            if dist > settings.max_correction * s and dist > 10 * tol:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
             if hasattr(problem, "check_step"):
                 reason = problem.check_step(u, u_new)
@@ -183,7 +184,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
             if hasattr(problem, "energy"):
-                reason = _unseen_folds(problem.energy, u, p, u_new, p_new)
+                reason = _unseen_folds(problem.energy, u, p, u_new, p_new, 10 * tol)
                 if reason:
                     raise CorrectorFailure(reason)
         except CorrectorFailure as exc:
@@ -227,12 +228,13 @@ def _energy_slope(energy, u, p, h=1e-6):
     return (energy(u + h * p) - energy(u - h * p)) / (2 * h)
 
 
-def _unseen_folds(energy, u, p, u_new, p_new):
+def _unseen_folds(energy, u, p, u_new, p_new, floor):
     """A reason to refuse the step if the energy changed against its derivative along the tangent at
-    both ends (the step crossed an even number of folds: the branch turned back and forth unseen)."""
+    both ends (the step crossed an even number of folds: the branch turned back and forth unseen).
+    Energy changes below ``floor`` (relative: the corrector's own accuracy) are not judged."""
     E0, E1 = energy(u), energy(u_new)
     dE = E1 - E0
-    if abs(dE) <= 1e-9 * max(abs(E0), abs(E1)):
+    if abs(dE) <= floor * max(abs(E0), abs(E1)):
         return ""
     if dE * _energy_slope(energy, u, p) < 0 and dE * _energy_slope(energy, u_new, p_new) < 0:
         return "the energy changed against its slope at both ends of the step (folds crossed unseen)"
