@@ -239,9 +239,16 @@ def _run_sweep(args, parser):
             if value is not None:
                 options[key] = value
     model, _ = _load(args.file)
-    out = Path(args.out) if args.out else Path(args.file)
-    if out.suffix.lower() == ".mat":
-        out = out.with_suffix(".h5")
+    if args.out:
+        from .importers import is_import_path
+
+        out = Path(args.out)
+        if is_import_path(out):
+            out = out.with_suffix(".h5")
+    else:
+        out, reason = _default_out(args.file)
+        if reason:
+            print(f"nnm-solve: {reason}: the branches will be saved to {out} (--out chooses another file)", flush=True)
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     client = args.scheduler or args.workers

@@ -123,7 +123,7 @@ class SweepProgress:
 # ---------------------------------------------------------------------- on a worker
 def _compute(model, variant, mode, energy_max, options, topic):
     """One branch on a worker: continue_nnm, streamed progress, the columns sent back (not the model)."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.thread_time()
     try:
         from distributed import get_worker
 
@@ -148,7 +148,7 @@ def _compute(model, variant, mode, energy_max, options, topic):
                                               "coefficients", "events", "status", "message", "settings")}
     except Exception as exc:  # reported per branch, never raised on the worker
         payload = {"status": "failed", "message": f"the solver raised {type(exc).__name__}: {exc}"}
-    payload.update(info, seconds=time.perf_counter() - t0)
+    payload.update(info, seconds=time.perf_counter() - t0, cpu_seconds=time.thread_time() - c0)
     return payload
 
 
@@ -320,8 +320,9 @@ def sweep(model, modes, energy_max, variants=None, client=None, out=None, **cont
 
     Returns the list of Branches in (variant, mode) order; each has ``branch.model`` = its variant's
     model and ``branch.sweep_info`` (variant, source 'computed' / 'file' / 'cancelled' / 'lost',
-    worker, seconds).  Bad input raises NNMInputError before any work is sent.  Ctrl-C cancels the
-    branches not finished (the finished ones are in ``out``) and raises KeyboardInterrupt.
+    worker, pid, seconds: wall time of the branch on its worker, cpu_seconds: CPU time of its thread).
+    Bad input raises NNMInputError before any work is sent.  Ctrl-C cancels the branches not finished
+    (the finished ones are in ``out``) and raises KeyboardInterrupt.
     """
     options = dict(continuation_options)
     progress = options.pop("progress", None)
@@ -381,7 +382,8 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
         if fut.status == "finished":
             payload = fut.result()
             b = _branch_from(models[vi], mode, name, payload)
-            info.update(worker=payload.get("worker", ""), pid=payload.get("pid"), seconds=payload.get("seconds"))
+            info.update(worker=payload.get("worker", ""), pid=payload.get("pid"), seconds=payload.get("seconds"),
+                        cpu_seconds=payload.get("cpu_seconds"))
         else:
             exc = fut.exception() if fut.status == "error" else None
             if exc is not None and type(exc).__name__ == "KilledWorker":

@@ -159,9 +159,13 @@ class Variant:
             K = (K + delta).tocsr() if sp.issparse(K) else K + delta.toarray()
         M = model.M
         if self.mass_factor != 1.0:
-            s = np.ones(n)
-            s[list(self.mass_dofs) if self.mass_dofs else slice(None)] = math.sqrt(self.mass_factor)
-            M = (sp.diags(s) @ M @ sp.diags(s)).tocsr() if sp.issparse(M) else M * s[:, None] * s[None, :]
+            f = np.ones(n)
+            f[list(self.mass_dofs) if self.mass_dofs else slice(None)] = self.mass_factor
+            if sp.issparse(M):   # entry (i, j) times sqrt(f_i f_j): exactly f on the diagonal
+                C = M.tocoo()
+                M = sp.csr_matrix((C.data * np.sqrt(f[C.row] * f[C.col]), (C.row, C.col)), shape=C.shape)
+            else:
+                M = M * np.sqrt(np.outer(f, f))
         from .model import Model
 
         info = dict(model.info)

@@ -18,7 +18,7 @@ from conftest import two_dof_model
 sweeps = importlib.import_module("nnm_solver.sweeps")
 
 SHORT = dict(steps_per_period=64, max_points=40)            # ~0.1-0.5 s per branch
-LONG = dict(energy_max=1e4, steps_per_period=200, max_points=400)   # 2-DOF NNM1 through the 3:1 tongue
+LONG = dict(energy_max=1e4, steps_per_period=200, max_points=200)   # 2-DOF NNM1 through the 3:1 tongue (~1 s)
 
 
 def chain(n=5):
@@ -48,7 +48,7 @@ def test_variants_change_the_model():
     mv = v.apply(m)
     np.testing.assert_allclose(mv.k3, 2 * m.k3)
     dK = mv.K - m.K
-    assert dK[1, 1] == 0.3 and dK[2, 2] == 0.5 and dK[4, 4] == 0.5 and dK[2, 4] == dK[4, 2] == -0.5
+    assert mv.K[1, 1] == 2.3 and mv.K[2, 2] == mv.K[4, 4] == 2.5 and dK[2, 4] == dK[4, 2] == -0.5
     assert np.count_nonzero(dK) == 5
     assert mv.M[2, 2] == 4.0 and np.trace(mv.M) == 8.0
     assert nnm.Variant().apply(m) is m and nnm.Variant().name == "base"
@@ -210,30 +210,27 @@ def test_killed_worker_branch_is_retried(client, tmp_path):
     assert sorted(file_names(out)) == ["base:mode1", "base:mode2"]
 
 
-def test_killed_worker_branch_is_reported_then_rerun(tmp_path):
-    distributed = pytest.importorskip("distributed")
-    import dask
+def test_killed_worker_branch_is_reported_then_rerun(client, tmp_path):
+    def allow(dask_scheduler, n):
+        old, dask_scheduler.allowed_failures = dask_scheduler.allowed_failures, n
+        return old
 
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                          "distributed.scheduler.worker-saturation": 1.0}):
-        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                                           env=dict(sweeps.WORKER_ENV))
+    old = client.run_on_scheduler(allow, n=0)     # no retry: the branch is reported lost
     try:
-        with distributed.Client(cluster) as c:
-            m = two_dof_model()
-            out = tmp_path / "reported.h5"
-            progress = _killer("base:mode1")
-            got = nnm.sweep(m, [1, 2], client=c, out=out, progress=progress, **LONG)
-            assert progress.killed
-            assert got[0].status == "failed" and len(got[0]) == 0 and got[0].sweep_info["source"] == "lost"
-            assert "worker computing this branch died" in got[0].message and "run the sweep again" in got[0].message
-            assert got[1].status == "done"
-            assert file_names(out) == ["base:mode2"]              # nothing saved for the lost branch
-            again = nnm.sweep(m, [1, 2], client=c, out=out, **LONG)
-            assert [b.sweep_info["source"] for b in again] == ["computed", "file"]
-            assert_same(nnm.continue_nnm(m, 1, **LONG), again[0])
+        m = two_dof_model()
+        out = tmp_path / "reported.h5"
+        progress = _killer("base:mode1")
+        got = nnm.sweep(m, [1, 2], client=client, out=out, progress=progress, **LONG)
     finally:
-        cluster.close()
+        client.run_on_scheduler(allow, n=old)
+    assert progress.killed
+    assert got[0].status == "failed" and len(got[0]) == 0 and got[0].sweep_info["source"] == "lost"
+    assert "worker computing this branch died" in got[0].message and "run the sweep again" in got[0].message
+    assert got[1].status in ("done", "max_points") and len(got[1])
+    assert file_names(out) == ["base:mode2"]              # nothing saved for the lost branch
+    again = nnm.sweep(m, [1, 2], client=client, out=out, **LONG)
+    assert [b.sweep_info["source"] for b in again] == ["computed", "file"]
+    assert_same(nnm.continue_nnm(m, 1, **LONG), again[0])
 
 
 # ---------------------------------------------------------------------- command line
