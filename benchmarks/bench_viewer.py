@@ -3,13 +3,17 @@
     python benchmarks/bench_viewer.py [FILE.h5] [--starts 3] [--picks 5]
 
 FILE defaults to assets/paris.h5 (the 2-DOF demo, computed on the fly, if it is missing).
+    python benchmarks/bench_viewer.py FILE --cold     # every start with an empty numba cache
+
 Measured (medians):
   * in-process: pick -> GLB ready (orbit integrated by the solver, Fourier fit, morph-target
     GLB built and handed to viser), with its parts, and the GLB size;
   * in Debian's Chromium (headless, software WebGL, Playwright), with `nnm-view` as a
-    subprocess: start of the command -> first frame showing the model (screenshots polled),
-    and mouse click on an in-scene FEP point -> page updated with the new orbit (the GLB is
-    sent before the text, on the same ordered websocket).
+    subprocess, from the start of the command: server ready (URL printed), page populated,
+    first frame showing the model (screenshots polled), solver ready ("preparing the solver"
+    gone); Start in the Compute tab -> first streamed point; mouse click on an in-scene FEP
+    point -> page updated with the new orbit (the GLB is sent before the text, on the same
+    ordered websocket).
 """
 from __future__ import annotations
 
@@ -70,37 +74,84 @@ def blank_fraction(png_bytes, region):
     return float(np.mean(np.abs(sub - sub[0, 0]).sum(axis=2) > 30 / 255))
 
 
-def in_browser(path, model, branches, mesh, starts, picks):
+def in_browser(path, model, branches, mesh, starts, picks, cold=False):
+    """Per start of ``nnm-view`` (seconds from the command): server ready (its URL printed), page
+    populated (the selection text shown), model drawn (screenshots polled), solver ready ('preparing
+    the solver' gone); then Start in the Compute tab -> first streamed point.  Picks on the first
+    start.  cold: each start with an empty numba cache (a fresh install)."""
     from playwright.sync_api import sync_playwright, TimeoutError as PWTimeout
 
     geom = view_geometry(mesh.vertices)
     series = [BranchEntry(b, "").series(1.0) for b in branches]
     ranges = axis_ranges(series)
-    first_frames, pick_times = [], []
+    rows = {k: [] for k in ("server ready", "page populated", "model drawn", "solver ready",
+                            "Start -> first streamed point", "pick")}
     with sync_playwright() as pw:
         browser = launch_chromium(pw)
         try:
             for run in range(starts):
                 port = free_port()
                 page = browser.new_page(viewport=VIEWPORT)
+                env, cache = None, None
+                if cold:
+                    cache = tempfile.mkdtemp(prefix="nnm-numba-")
+                    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
                 t0 = time.perf_counter()
                 try:
-                    with viewer_process(path, port):
+                    with viewer_process(path, port, env=env):
+                        rows["server ready"].append(time.perf_counter() - t0)
                         page.goto(f"http://127.0.0.1:{port}/")
-                        page.wait_for_function("document.querySelectorAll('canvas').length > 0", timeout=60000)
+                        page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=120000)
+                        rows["page populated"].append(time.perf_counter() - t0)
+                        # the page notes (every 0.1 s, its own clock) when "preparing the solver" is gone
+                        page.evaluate(WATCH_SOLVER_JS)
+                        now_js, now = page.evaluate("performance.now()"), time.perf_counter()
                         x0, y0, x1, y1 = screen_box(mesh.vertices, geom, page.locator("canvas").first.bounding_box())
                         while blank_fraction(page.screenshot(), (x0, y0, x1 + 1, y1 + 1)) <= 0.05:
                             if time.perf_counter() - t0 > 120:
                                 raise RuntimeError("the model never appeared")
-                        first_frames.append(time.perf_counter() - t0)
+                        rows["model drawn"].append(time.perf_counter() - t0)
+                        page.wait_for_function("window.__nnmSolverReady !== null", timeout=300000)
+                        ready_js = page.evaluate("window.__nnmSolverReady")
+                        rows["solver ready"].append(now - t0 + (ready_js - now_js) / 1000.0)
                         if run == 0:
-                            pick_times += pick_points(page, series[0], geom, ranges, picks, PWTimeout)
+                            rows["pick"] += pick_points(page, series[0], geom, ranges, picks, PWTimeout)
+                        rows["Start -> first streamed point"].append(first_point(page))
                 finally:
                     page.close()
+                    if cache:
+                        shutil.rmtree(cache, ignore_errors=True)
         finally:
             browser.close()
-    med = (lambda v: statistics.median(v) if v else float("nan"))
-    return med(first_frames), len(first_frames), med(pick_times), len(pick_times)
+    return rows
+
+
+#: JavaScript: note in window.__nnmSolverReady the time (performance.now(), ms) at which the page
+#: no longer says "Preparing the solver" (polled every 0.1 s)
+WATCH_SOLVER_JS = """() => {
+  window.__nnmSolverReady = null;
+  const check = () => {
+    if (!document.body.innerText.includes('Preparing the solver')) window.__nnmSolverReady = performance.now();
+    else setTimeout(check, 100);
+  };
+  check();
+}"""
+
+
+def first_point(page):
+    """Seconds from a click on Start (Compute tab, default mode and energies) to the first point."""
+    page.get_by_role("tab", name="Compute").click()
+    page.get_by_role("button", name="Start").click()
+    t1 = time.perf_counter()
+    page.wait_for_function("/NNM \\d+: [1-9]\\d* points/.test(document.body.innerText)", timeout=300000, polling=50)
+    dt = time.perf_counter() - t1
+    stop = page.get_by_role("button", name="Stop (keep points)")
+    if stop.is_enabled():             # a short branch may have ended already
+        try:
+            stop.click(timeout=5000)
+        except Exception:
+            pass
+    return dt
 
 
 def pick_points(page, series, geom, ranges, picks, timeout_error):
@@ -130,6 +181,7 @@ def main():
     ap.add_argument("file", nargs="?", default=str(ROOT / "assets" / "paris.h5"))
     ap.add_argument("--starts", type=int, default=3)
     ap.add_argument("--picks", type=int, default=5)
+    ap.add_argument("--cold", action="store_true", help="every start with an empty numba cache (fresh install)")
     args = ap.parse_args()
     path = Path(args.file)
     tmp = None
@@ -149,15 +201,19 @@ def main():
     parts, size = in_process(model, branches[0], mesh, args.picks)
     rows = [(f"pick -> GLB ready, in-process: {k}", v, args.picks) for k, v in parts.items()]
     if os.path.exists(CHROMIUM):
-        ff, nff, pk, npk = in_browser(path, model, branches, mesh, args.starts, args.picks)
-        rows += [("start -> first rendered frame (Chromium)", ff, nff),
-                 ("pick (click) -> page updated (Chromium)", pk, npk)]
+        med = (lambda v: statistics.median(v) if v else float("nan"))
+        cache = "cold numba cache" if args.cold else "warm cache"
+        for name, v in in_browser(path, model, branches, mesh, args.starts, args.picks, cold=args.cold).items():
+            what = "pick (click) -> page updated" if name == "pick" else \
+                name if name.startswith("Start") else f"start -> {name}"
+            rows.append((f"{what} (Chromium, {cache})", med(v), len(v)))
     else:
         print("no /usr/bin/chromium: browser timings skipped")
     print(f"\nGLB size: {size / 1e6:.2f} MB")
-    print(f"{'measure':58s} {'median (s)':>10s} {'n':>3s}")
+    print(f"{'measure':68s} {'median (s)':>10s} {'n':>3s}")
     for name, v, n in rows:
-        print(f"{name:58s} {v:10.3f} {n:3d}")
+        print(f"{name:68s} {v:10.3f} {n:3d}")
+    print(f"load average at the end: {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     if tmp:
         shutil.rmtree(tmp, ignore_errors=True)
 

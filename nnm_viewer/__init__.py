@@ -1,6 +1,8 @@
 """nnm_viewer: explore nonlinear normal modes in the browser (viser + trimesh).
 
-Run ``nnm-view FILE.h5`` and open the printed address.  Modules: ``app`` (CLI, server),
+Run ``nnm-view FILE.h5`` (or ``nnm-view paris.h5`` / ``two_dof.h5``, the shipped examples, from
+any folder) and open the printed address.  Modules: ``app`` (CLI, server), ``examples`` (the
+shipped examples), ``warmup`` (the solver's kernels compiled in the background),
 ``controls`` (``Session``: one tab's state and callbacks), ``layout`` (its GUI handles),
 ``drawing`` (coalesced redraws, control panel), ``fep_view`` (branch list, clickable FEP,
 sliders), ``point_view`` (picked orbit: animation, Point tab), ``scene`` (mesh, camera, the 3D

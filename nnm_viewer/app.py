@@ -1,7 +1,9 @@
 """``nnm-view FILE.h5``: explore the NNMs of a model in the browser.
 
-Loads the model and every branch stored in FILE.h5, serves a viser page (one
-independent session per browser tab), prints the URL and runs until Ctrl-C.
+Loads the model and every branch stored in FILE.h5 (a shipped example when FILE is the name of
+one and no such file exists; the aircraft without FILE), serves a viser page (one independent
+session per browser tab) at once while the solver's kernels are compiled in the background,
+prints the URL and runs until Ctrl-C.
 """
 from __future__ import annotations
 

@@ -41,15 +41,25 @@ def viewer_command(path, port):
 
 
 @contextlib.contextmanager
-def viewer_process(path, port, cwd=None):
+def viewer_process(path, port, cwd=None, env=None):
     """Run ``nnm-view`` on ``path`` (a file or a shipped example's name) in a subprocess, in folder
-    ``cwd``; yields (process, the line it printed when ready).  The process is terminated (killed
-    after 10 s) on exit."""
-    proc = subprocess.Popen(viewer_command(path, port), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=cwd)
+    ``cwd`` with environment ``env`` (default: this one); yields (process, the line it printed when
+    ready).  The process is terminated (killed after 10 s) on exit; RuntimeError with its stderr if it
+    does not start."""
+    import tempfile
+
+    err = tempfile.TemporaryFile(mode="w+")    # a pipe nobody reads could fill up and stall the server
+    proc = subprocess.Popen(viewer_command(path, port), stdout=subprocess.PIPE, stderr=err, text=True,
+                            cwd=cwd, env=env)
     try:
-        yield proc, proc.stdout.readline()
+        line = proc.stdout.readline()
+        if not line:
+            proc.wait(10)
+            err.seek(0)
+            raise RuntimeError(f"nnm-view did not start: {err.read().strip()}")
+        yield proc, line
     finally:
+        err.close()
         proc.terminate()
         try:
             proc.wait(10)

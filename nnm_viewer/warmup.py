@@ -27,7 +27,7 @@ def warm_kernels():
                       name="warm-up")
     branch = nnm.continue_nnm(model, mode=1, energy_max=1.0, max_points=2)
     branch.motion(0, samples=16)
-    import matplotlib.backends.backend_agg  # noqa: F401  (the FEP images)
+    import matplotlib.backends.backend_agg  # noqa: F401 (the FEP images)
 
 
 class SolverWarmUp:

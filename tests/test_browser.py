@@ -192,17 +192,6 @@ def board_screen_box(geom, box):
     return max(x0, 0), max(y0, 0), x1, y1
 
 
-
-def board_screen_box(geom, box):
-    """Screen rectangle (x0, y0, x1, y1) of the FEP board's plotting area, seen by the initial camera."""
-    b = geom.board
-    corners = np.array([b.origin + a * b.width * b.right + c * b.height * b.up for a in (0, 1) for c in (0, 1)])
-    xy = project_points(corners, geom, box)
-    x0, y0 = np.floor(xy.min(axis=0)).astype(int)
-    x1, y1 = np.ceil(xy.max(axis=0)).astype(int)
-    return max(x0, 0), max(y0, 0), x1, y1
-
-
 def board_change_on_arrow_keys(page, geom, box, shot):
     """Fraction of the FEP board's screen pixels changed by holding the arrow keys on the focused
     Speed slider (which changes nothing on the board); asserts that the slider moved."""
