@@ -17,8 +17,6 @@ and renamed over it when complete: bad input writes nothing.
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 from typing import NamedTuple
@@ -28,6 +26,7 @@ import numpy as np
 from .branch import Branch
 from .errors import NNMInputError
 from .fourier import fourier_coefficients, resample_periodic
+from .h5file import atomic_file
 from .importers.common import DofMap, direction_name
 
 __all__ = ["export_csv", "export_uff", "export_uff_orbit", "amplitude_backbone", "export_backbone_csv",
@@ -49,24 +48,10 @@ def _check_branch(branch):
 
 @contextmanager
 def _atomic_text(path, newline=None):
-    """A text file opened next to ``path``, renamed over it when the block completes."""
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise NNMInputError(f"cannot write {path}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    os.close(fd)
-    try:
+    """A text file opened next to ``path``, renamed over it when the block completes (h5file.atomic_file)."""
+    with atomic_file(path) as tmp:
         with open(tmp, "w", newline=newline) as fh:
             yield fh, tmp
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def _labels(branch):

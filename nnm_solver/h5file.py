@@ -24,16 +24,18 @@ STR = h5py.string_dtype("utf-8")
 
 
 @contextmanager
-def atomic_h5(path, copy_existing=False):
-    """Open a temporary HDF5 file next to ``path``; rename it over ``path`` on success."""
+def atomic_file(path):
+    """A temporary path next to ``path`` (same folder), renamed over ``path`` when the block completes.
+
+    The file gets the permissions of the file it replaces, or the default ones for a new file (mkstemp
+    alone would make it private); on any error the temporary file is removed and ``path`` is untouched.
+    """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise NNMInputError(f"cannot write {path}: folder {folder} does not exist")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     os.close(fd)
-    # mkstemp creates the file private (0600): give it the mode of the file it replaces, or the
-    # default mode for new files
     if path.exists():
         mode_bits = path.stat().st_mode & 0o777
     else:
@@ -42,6 +44,21 @@ def atomic_h5(path, copy_existing=False):
         mode_bits = 0o666 & ~umask
     os.chmod(tmp, mode_bits)
     try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+@contextmanager
+def atomic_h5(path, copy_existing=False):
+    """Open a temporary HDF5 file next to ``path``; rename it over ``path`` on success."""
+    path = Path(path)
+    with atomic_file(path) as tmp:
         if copy_existing and path.exists():
             shutil.copyfile(path, tmp)
             mode = "r+"
@@ -52,13 +69,6 @@ def atomic_h5(path, copy_existing=False):
                 f.attrs["format"] = FORMAT
                 f.attrs["format_version"] = FORMAT_VERSION
             yield f
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 @contextmanager
