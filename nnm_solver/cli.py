@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import NNMInputError
+from .errors import NNMInputError, run_reporting_errors
 
 
 def _load(path):
@@ -146,14 +146,9 @@ def main(argv=None):
                        "e.g. tcp://host:8786")
     cli_exchange.add_export_arguments(parser)
     args = parser.parse_args(argv)
-    try:
-        return _run_sweep(args, parser) if (args.modes or args.sweep) else _run(args)
-    except NNMInputError as exc:
-        print(f"nnm-solve: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"nnm-solve: error: {exc}", file=sys.stderr)
-        return 2
+    if args.modes or args.sweep:
+        return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
+    return run_reporting_errors("nnm-solve", _run, args)
 
 
 def _run(args):

@@ -15,7 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import NNMInputError
+from .errors import NNMInputError, run_reporting_errors
 
 SUBCOMMANDS = ("import", "export")
 
@@ -152,11 +152,5 @@ def main_export(argv):
 
 def main(argv):
     """Run ``nnm-solve import|export ...`` (argv without the program name); exit code 2 on bad input."""
-    try:
-        return (main_import if argv[0] == "import" else main_export)(argv[1:])
-    except NNMInputError as exc:
-        print(f"nnm-solve {argv[0]}: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"nnm-solve {argv[0]}: error: {exc}", file=sys.stderr)
-        return 2
+    return run_reporting_errors(f"nnm-solve {argv[0]}", main_import if argv[0] == "import" else main_export,
+                                argv[1:])

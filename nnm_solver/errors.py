@@ -10,3 +10,15 @@ class NNMInputError(ValueError):
 
 class NNMFileError(NNMInputError):
     """A model/branch file that is missing, not HDF5, or not in the nnm format."""
+
+
+def run_reporting_errors(prog, fn, *args):
+    """Run ``fn(*args)`` for a command-line program: bad input (NNMInputError) or an unreadable or
+    unwritable file (OSError) prints one line ``<prog>: error: ...`` and returns exit code 2."""
+    import sys
+
+    try:
+        return fn(*args)
+    except (NNMInputError, OSError) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
