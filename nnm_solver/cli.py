@@ -151,9 +151,22 @@ def main(argv=None):
     return run_reporting_errors("nnm-solve", _run, args)
 
 
+def _output_file(args, notice):
+    """The HDF5 file results go to: --out (an importable model path becomes <stem>.h5), else FILE, or
+    ./<stem>_branches.h5 when FILE is a shipped example or cannot be written (``notice`` says so)."""
+    from .importers import is_import_path
+
+    if args.out:
+        out = Path(args.out)
+        return out.with_suffix(".h5") if is_import_path(out) else out
+    out, reason = _default_out(args.file)
+    if reason:
+        print(f"nnm-solve: {reason}: " + notice.format(out=out), flush=True)
+    return out
+
+
 def _run(args):
     from . import cli_exchange
-    from .importers import is_import_path
     from .io import save_branch
     from .jobs import start_branch
 
@@ -163,15 +176,7 @@ def _run(args):
         return 0
     if args.mode is None or args.energy_max is None:
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
-    if args.out:
-        out = Path(args.out)
-        if is_import_path(out):
-            out = out.with_suffix(".h5")
-    else:
-        out, reason = _default_out(args.file)
-        if reason:
-            print(f"nnm-solve: {reason}: the branch will be saved to {out} (the model and the branch; "
-                  f"--out chooses another file)", flush=True)
+    out = _output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     cli_exchange.check_exports(args, model)
@@ -234,16 +239,7 @@ def _run_sweep(args, parser):
             if value is not None:
                 options[key] = value
     model, _ = _load(args.file)
-    if args.out:
-        from .importers import is_import_path
-
-        out = Path(args.out)
-        if is_import_path(out):
-            out = out.with_suffix(".h5")
-    else:
-        out, reason = _default_out(args.file)
-        if reason:
-            print(f"nnm-solve: {reason}: the branches will be saved to {out} (--out chooses another file)", flush=True)
+    out = _output_file(args, "the branches will be saved to {out} (--out chooses another file)")
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     client = args.scheduler or args.workers
