@@ -32,14 +32,9 @@ worker processes are spawned and import the main module).
 """
 from __future__ import annotations
 
-import json
-import math
 import os
-import re
-import sys
 import time
 import uuid
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +43,9 @@ from .branch import Branch
 from .driver import continue_nnm
 from .errors import NNMInputError
 from .model import Model
-from .variants import Variant, as_variants, parse_modes
+from .sweep_progress import SweepProgress, reporter
+from .sweep_files import branch_name, load_sweep, parse_branch_name, prepare_file  # noqa: F401
+from .variants import as_variants, parse_modes
 
 __all__ = ["sweep", "load_sweep", "SweepProgress", "branch_name", "parse_branch_name", "WORKER_ENV"]
 
@@ -63,64 +60,6 @@ EVENT_INTERVAL = 0.25
 #: seconds to wait for a scheduler given by address
 CONNECT_TIMEOUT = 10.0
 
-_NAME = re.compile(r"^(?P<variant>[^/:]+):mode(?P<mode>\d+)$")
-
-
-def branch_name(variant, mode):
-    """Name of a sweep's branch in its file: ``<variant>:mode<N>``."""
-    return f"{variant.name if isinstance(variant, Variant) else variant}:mode{int(mode)}"
-
-
-def parse_branch_name(name):
-    """(variant name, mode) of a sweep branch name, or None for another name."""
-    m = _NAME.match(str(name))
-    return (m["variant"], int(m["mode"])) if m else None
-
-
-@dataclass
-class SweepProgress:
-    """State of a running sweep, passed to the ``progress`` callable.
-
-    total : branches in the sweep;  skipped : found in ``out`` (not computed again);
-    finished : computed (including failed ones);  failed : finished with status 'failed';
-    cancelled : not computed because the sweep was stopped;  points : points of the finished branches;
-    running : branch name -> points converged so far, for branches a worker has started;
-    workers : branch name -> {"worker": address, "pid": process id} of the worker computing it.
-    """
-
-    total: int
-    skipped: int = 0
-    finished: int = 0
-    failed: int = 0
-    cancelled: int = 0
-    points: int = 0
-    running: dict = field(default_factory=dict)
-    workers: dict = field(default_factory=dict)
-    started: float = field(default_factory=time.perf_counter)
-
-    @property
-    def remaining(self):
-        return self.total - self.skipped - self.finished - self.cancelled
-
-    @property
-    def all_points(self):
-        """Converged points so far: finished branches plus running ones."""
-        return self.points + sum(self.running.values())
-
-    @property
-    def elapsed(self):
-        return time.perf_counter() - self.started
-
-    def line(self, width=24):
-        done = self.skipped + self.finished + self.cancelled
-        f = done / self.total if self.total else 1.0
-        bar = "#" * int(width * f) + "-" * (width - int(width * f))
-        return (f"[{bar}] {done}/{self.total} branches ({len(self.running)} running, {self.failed} failed"
-                f"{f', {self.skipped} in file' if self.skipped else ''}), {self.all_points} points, "
-                f"{self.elapsed:.0f} s")
-
-
-# ---------------------------------------------------------------------- on a worker
 def _compute(model, variant, mode, energy_max, options, topic):
     """One branch on a worker: continue_nnm, streamed progress, the columns sent back (not the model)."""
     t0, c0 = time.perf_counter(), time.thread_time()
@@ -229,79 +168,6 @@ def _connect(client, n_tasks):
                         f"a number of local workers or None, got {client!r}")
 
 
-def _same_model(a, b):
-    def dense(A):
-        return A.toarray() if hasattr(A, "toarray") else np.asarray(A)
-
-    if a.n != b.n or len(a.springs) != len(b.springs):
-        return False
-    if any((s.dof, s.other) != (t.dof, t.other) for s, t in zip(a.springs, b.springs)):
-        return False
-    return (np.allclose(dense(a.M), dense(b.M), rtol=1e-12, atol=0) and np.allclose(dense(a.K), dense(b.K), rtol=1e-12,
-                                                                                     atol=0)
-            and np.allclose(a.k3, b.k3, rtol=1e-12, atol=0))
-
-
-def _recorded_variants(f):
-    if "sweeps" not in f:
-        return {}
-    return {k: Variant.from_dict(v) for k, v in json.loads(f["sweeps"].attrs.get("variants_json", "{}")).items()}
-
-
-def _prepare_file(out, model, variants, energy_max, names):
-    """Create ``out`` with the base model, record the variants; return {name: Branch} of the sweep's saved branches."""
-    from .h5file import atomic_h5, open_nnm
-    from .io import load_branches, load_model, write_model_group
-
-    wanted = {v.name: v.as_dict() for v in variants}
-    if not out.exists():
-        with atomic_h5(out) as f:
-            write_model_group(f, model)
-            f.create_group("sweeps").attrs["variants_json"] = json.dumps(wanted)
-        return {}
-    file_model = load_model(out)
-    if not _same_model(file_model, model):
-        raise NNMInputError(f"{out} holds another model ({file_model.n} DOFs, {len(file_model.springs)} springs) "
-                            f"than the sweep's; write the sweep to another file")
-    with open_nnm(out) as f:
-        recorded = {k: v.as_dict() for k, v in _recorded_variants(f).items()}
-        saved = {str(f["branches"][g].attrs.get("name", g)) for g in f["branches"]} if "branches" in f else set()
-    for name, d in wanted.items():
-        if name in recorded and recorded[name] != d:
-            raise NNMInputError(f"{out} already defines variant {name!r} differently ({recorded[name]}); "
-                                f"rename the variant or write to another file")
-    if any(name not in recorded for name in wanted):
-        with atomic_h5(out, copy_existing=True) as f:
-            g = f.require_group("sweeps")
-            g.attrs["variants_json"] = json.dumps({**recorded, **wanted})
-    if not saved & set(names):
-        return {}
-    found = {b.name: b for b in load_branches(out, file_model) if b.name in names}
-    for name, b in found.items():
-        e = b.settings.energy_max
-        if math.isfinite(e) and not math.isclose(e, energy_max, rel_tol=1e-9):
-            raise NNMInputError(f"{out} already holds branch {name} computed up to energy_max = {e:g} J (this sweep: "
-                                f"{energy_max:g} J); write this sweep to another file or remove that branch")
-    return found
-
-
-def _reporter(progress):
-    if progress is None or progress is False:
-        return lambda state, final=False: None
-    if callable(progress):
-        return lambda state, final=False: progress(state)
-
-    shown = [""]
-
-    def bar(state, final=False):
-        line = state.line()
-        if line != shown[0] or final:
-            shown[0] = line
-            sys.stderr.write("\r" + line + " " + ("\n" if final else ""))
-            sys.stderr.flush()
-    return bar
-
-
 def sweep(model, modes, energy_max, variants=None, client=None, out=None, **continuation_options):
     """Compute the NNM branches of ``modes`` for every model variant, in parallel on Dask.
 
@@ -339,10 +205,10 @@ def sweep(model, modes, energy_max, variants=None, client=None, out=None, **cont
     tasks = [(vi, mode, branch_name(v, mode)) for vi, v in enumerate(variants) for mode in modes]
     results = [None] * len(tasks)
     state = SweepProgress(total=len(tasks))
-    report = _reporter(progress)
+    report = reporter(progress)
     if out is not None:
         out = Path(out)
-        found = _prepare_file(out, model, variants, energy_max, {t[2] for t in tasks})
+        found = prepare_file(out, model, variants, energy_max, {t[2] for t in tasks})
         for i, (vi, mode, name) in enumerate(tasks):
             if name in found:
                 b = found[name]
@@ -451,31 +317,3 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
             client.close()
             if owned != "client":
                 owned.close()
-
-
-def load_sweep(path):
-    """The sweep branches (names ``<variant>:mode<N>``) of an nnm file, each with its variant's model.
-
-    ``load_branches`` gives every branch the file's model (with the branch's spring coefficients); this
-    also applies the added stiffness and mass of the variants recorded in the file by ``sweep``.
-    """
-    from .h5file import open_nnm
-    from .io import load_branches, load_model
-
-    model = load_model(path)
-    with open_nnm(path) as f:
-        recorded = _recorded_variants(f)
-    cache, out = {}, []
-    for b in load_branches(path, model):
-        parsed = parse_branch_name(b.name)
-        if parsed is None:
-            continue
-        vname = parsed[0]
-        v = recorded.get(vname, Variant() if vname == "base" else None)
-        if v is not None:
-            if vname not in cache:
-                cache[vname] = v.apply(model)
-            b.model = cache[vname]
-        b.sweep_info = {"variant": vname, "source": "file"}
-        out.append(b)
-    return out
