@@ -15,10 +15,12 @@ import numpy as np
 
 from nnm_solver import cubic_scaling
 
+from . import downloads
 from . import scene as sc
+from .downloads import file_stem
 from .drawing import ALL_KINDS, Drawing
 from .fep import axis_ranges, energy_to_s
-from .fep_view import entry_option
+from .fep_view import branch_options
 from .layout import Layout
 from .state import branch_label
 from .worker import JobRunner, one_line
@@ -73,6 +75,7 @@ class Session:
         self.current_uid = None      # uid of the branch it belongs to
         self.ratio = 1.0             # k3 factor of the view / k3 factor of that branch
         self.last_runner = None      # the JobRunner started from this tab
+        self.last_download = None    # (file name, bytes) last offered to the browser
         self.layout = Layout(api.gui, self.model, shared.linear_freqs)
         self.drawing = Drawing(self, sync=sync)
         self.layout.connect(self._callbacks())
@@ -166,7 +169,8 @@ class Session:
         cbs = {name: self._set_field(name) for name in SIMPLE_CONTROLS}
         cbs.update(h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
                    h_recompute=self._on_recompute, h_start=self._on_start, h_stop=self._on_stop,
-                   h_save=self._on_save, h_dismiss=self._dismiss_error)
+                   h_save=self._on_save, h_dismiss=self._dismiss_error, h_csv_fep=self._on_csv_fep,
+                   h_csv_orbit=self._on_csv_orbit)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
     def _set_field(self, name):
@@ -180,9 +184,10 @@ class Session:
         return on_update
 
     def _on_branch(self, _):
-        for i, e in enumerate(self.shared.snapshot()):
-            if entry_option(i, e) == self.layout.h_branch.value:
-                self._select_uid(e.uid, 0.0)
+        entries = self.shared.snapshot()
+        for i, option in branch_options(entries):
+            if option == self.layout.h_branch.value:
+                self._select_uid(entries[i].uid, 0.0)
                 return
 
     def select(self, index, s):
@@ -264,6 +269,45 @@ class Session:
         self.show_status(f"saved {name} ({len(e)} points) to {target}"
                          + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
                             if reason else ""))
+
+    # ================================================================== downloads
+    def download(self, filename, content):
+        """Offer ``content`` (bytes) to the browser as file ``filename`` (kept as ``last_download``)."""
+        with self.lock:
+            self.last_download = (filename, content)
+        send = getattr(self.api, "send_file_download", None)
+        if send is not None:
+            send(filename, content, save_immediately=True)
+        self.show_status(f"download: {filename} ({len(content)} bytes)")
+
+    def _download_stem(self, e):
+        idx = self.shared.index_of(e.uid)
+        k3 = f"_k3x{self.factor:.3g}" if abs(self.factor_log) > 1e-9 else ""
+        return file_stem(f"{self.model.name or 'model'}_branch{(idx or 0) + 1}_{e.label}{k3}")
+
+    def fep_csv(self):
+        """(file name, CSV bytes) of the selected branch's FEP, at the current k3 factor."""
+        e = self.selected_entry()
+        if e is None or not len(e):
+            raise ValueError("select a branch with points first")
+        ratio = self.factor / e.k3_factor
+        branch = e.branch if abs(ratio - 1.0) < 1e-12 else e.branch.scaled(ratio)
+        return f"{self._download_stem(e)}_fep.csv", downloads.fep_csv(branch)
+
+    def orbit_csv(self):
+        """(file name, CSV bytes) of the picked orbit (as shown: at the current k3 factor)."""
+        e = self.selected_entry()
+        with self.lock:
+            pd, uid, along = self.current_point, self.current_uid, self.s
+        if e is None or pd is None or uid != e.uid:
+            raise ValueError("no orbit shown: pick a point of the FEP first")
+        return f"{self._download_stem(e)}_point{along:.2f}_orbit.csv", downloads.orbit_csv(pd, self.model)
+
+    def _on_csv_fep(self, _):
+        self.download(*self.fep_csv())
+
+    def _on_csv_orbit(self, _):
+        self.download(*self.orbit_csv())
 
     def _dismiss_error(self, _):
         with self.shared.lock:

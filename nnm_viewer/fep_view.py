@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nnm_solver.sweeps import parse_branch_name
+
 from . import scene as sc
 from .fep import FepRenderer, branch_color, interp_at
 
@@ -31,12 +33,43 @@ def branch_status(e):
     return str(getattr(e.branch, "status", "") or "")
 
 
-def entry_option(i, e):
+def entry_option(i, e, label=None):
     """Label of branch entry ``e`` (position ``i``) in the branch dropdown, with how it ended unless
-    it reached its end normally or is still running."""
+    it reached its end normally or is still running (``label``: instead of ``e.label``)."""
+    label = e.label if label is None else label
     word = STATUS_WORDS.get(branch_status(e), "")
-    tag = f", {word}" if word and f"[{word}]" not in e.label else ""
-    return f"{i + 1}: {e.label} ({len(e)} pts{tag})"
+    tag = f", {word}" if word and f"[{word}]" not in label else ""
+    return f"{i + 1}: {label} ({len(e)} pts{tag})"
+
+
+def sweep_key(e):
+    """(variant, mode) of an entry whose branch is named ``<variant>:mode<N>`` (a sweep's, see
+    nnm_solver.sweeps.parse_branch_name), or None."""
+    return parse_branch_name(str(getattr(e.branch, "name", "") or ""))
+
+
+def branch_options(entries):
+    """[(position in ``entries``, dropdown option)] in the order of the branch list: the branches
+    that are not a sweep's as they come, then the sweep branches grouped by variant (ordered by
+    variant, then mode), each option prefixed with its variant: 'stiff › 3: mode 5 (40 pts)'.
+    The number is the branch's position (its colour), as in the FEP legend."""
+    plain, swept = [], []
+    for i, e in enumerate(entries):
+        key = sweep_key(e)
+        if key is None:
+            plain.append((i, entry_option(i, e)))
+        else:
+            variant, mode = key
+            name = f"{variant}:mode{mode}"
+            label = f"mode {mode}" + (e.label[len(name):] if e.label.startswith(name) else f" ({e.label})")
+            swept.append(((variant, mode, i), (i, f"{variant} \u203a {entry_option(i, e, label)}")))
+    return plain + [opt for _, opt in sorted(swept, key=lambda t: t[0])]
+
+
+def sweep_markdown(e):
+    """'**Sweep:** variant ..., mode N' for a sweep's branch, else ''."""
+    key = sweep_key(e)
+    return "" if key is None else f"**Sweep:** variant {key[0]}, mode {key[1]}  \n"
 
 
 def branch_markdown(e):
@@ -99,11 +132,13 @@ class FepView:
             ui.set(ui.h_branch, options=("(none)",), value="(none)")
             ui.set(ui.h_branch_info, content="")
             return
-        options = tuple(entry_option(i, e) for i, e in enumerate(entries))
+        listed = branch_options(entries)
+        options = tuple(opt for _, opt in listed)
         sel = s.shared.index_of(s.sel_uid)
+        sel = sel if sel is not None else 0
         ui.set(ui.h_branch, options=options)
-        ui.set(ui.h_branch, value=options[sel if sel is not None else 0])
-        ui.set(ui.h_branch_info, content=branch_markdown(entries[sel if sel is not None else 0]))
+        ui.set(ui.h_branch, value=dict(listed)[sel])
+        ui.set(ui.h_branch_info, content=sweep_markdown(entries[sel]) + branch_markdown(entries[sel]))
 
     def draw_board(self):
         s = self.session
@@ -226,9 +261,9 @@ class FepView:
         if labels is not None and len(labels) == n:
             st += f", {labels[int(round(along))]}"
         idx = s.shared.index_of(s.sel_uid)
-        options = ui.h_branch.options
-        if idx is not None and idx < len(options):
-            ui.set(ui.h_branch, value=options[idx])
+        option = dict(branch_options(s.shared.snapshot())).get(idx)
+        if option is not None and option in ui.h_branch.options:
+            ui.set(ui.h_branch, value=option)
         ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, point {along:.2f} of {n - 1}  \n"
                                  f"E = {10 ** cur_le:.4g} J, f = {f:.5g} Hz, {st}")
         ui.set(ui.h_recompute, disabled=abs(s.factor / e.k3_factor - 1.0) < 1e-9)

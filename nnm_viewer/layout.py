@@ -19,7 +19,7 @@ MAX_MODES_LISTED = 60
 #: modes listed in the Modes tab
 MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
-BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save")
+BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit")
 
 
 #: shown while the solver's kernels are being compiled (nnm_viewer/warmup.py)
@@ -119,6 +119,12 @@ class Layout:
             self.h_info = gui.add_markdown("no point selected")
             self.h_dofs = gui.add_text("DOFs (0-based)", initial_value="auto",
                                        hint="comma-separated DOF indices, or 'auto'")
+            self.h_csv_fep = gui.add_button("Download branch FEP (CSV)", icon=viser.Icon.DOWNLOAD,
+                                            hint="energy, frequency, period, stability and label of every "
+                                                 "point of the selected branch, at the current k3 factor")
+            self.h_csv_orbit = gui.add_button("Download orbit (CSV)", icon=viser.Icon.DOWNLOAD,
+                                              hint="time (s) and the displacement of every DOF over one "
+                                                   "period of the picked orbit")
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
             options = tuple(mode_label(model, linear_freqs, k) for k in range(1, min(model.n, MAX_MODES_LISTED) + 1))
             self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])

@@ -520,3 +520,82 @@ def test_click_picks_the_point_nearest_on_the_screen(server, demo_file):
                                              instance_index=4))
     assert s.sel_uid == a.uid and s.s == 7.0
     s.close()
+
+
+def test_sweep_branches_are_listed_by_variant(server, demo_file):
+    """Issue 16: branches named <variant>:mode<N> (a sweep's) are listed under their variant, ordered by
+    variant then mode, after the other branches; numbers and colours stay per branch."""
+    from nnm_viewer.fep import branch_color
+
+    model = nnm.load_model(demo_file)
+    b1, b2 = nnm.load_branches(demo_file)
+
+    def named(b, name):
+        c = b.subset(slice(0, 8))
+        c.name = name
+        return c
+
+    branches = [b1, named(b2, "stiff:mode2"), named(b2, "base:mode2"), named(b1, "base:mode1"),
+                named(b1, "stiff:mode1")]
+    shared = SharedState(model, path=demo_file, branches=branches)
+    s = Session(server, shared, sync=True)
+    opts = s.h_branch.options
+    assert opts[0].startswith("1: NNM 1 (")
+    assert [o.split(" (")[0] for o in opts[1:]] == ["base \u203a 4: mode 1", "base \u203a 3: mode 2",
+                                                     "stiff \u203a 5: mode 1", "stiff \u203a 2: mode 2"]
+    # the dropdown selects the branch of the option; a pick shows the branch's grouped option
+    s.h_branch.value = opts[3]
+    assert s.sel_uid == shared.entries[4].uid
+    assert "**Sweep:** variant stiff, mode 1" in s.h_branch_info.content and "branch 5" in s.h_sel.content
+    s.pick(shared.entries[2].uid, 3)
+    assert s.h_branch.value == opts[2] and "variant base, mode 2" in s.h_branch_info.content
+    s.pick(shared.entries[0].uid, 1)
+    assert s.h_branch.value == opts[0] and "Sweep" not in s.h_branch_info.content
+    # colours stay per branch (position in the file), legend names the branches
+    for k, e in enumerate(shared.entries):
+        assert tuple(s._board_handles[e.uid].batched_colors[0]) == tuple(
+            int(branch_color(k)[i:i + 2], 16) for i in (1, 3, 5))
+    s.close()
+
+
+def test_fep_and_orbit_csv_downloads(server, demo_file):
+    """Issue 14, item 11: the Point tab offers the selected branch's FEP (nnm_solver.export_csv) and
+    the picked orbit over one period as CSV downloads, both at the k3 factor shown."""
+    import csv
+    import io
+
+    from nnm_solver.exports import CSV_COLUMNS
+    from nnm_viewer.downloads import orbit_csv
+
+    s, shared = make_session(server, demo_file)
+    e = shared.entries[1]
+    s.pick(e.uid, 3)
+    name, data = s.fep_csv()
+    rows = list(csv.reader(io.StringIO(data.decode())))
+    assert name.endswith("_fep.csv") and "branch2" in name and " " not in name
+    assert tuple(rows[0]) == CSV_COLUMNS and len(rows) == len(e) + 1
+    np.testing.assert_array_equal([float(r[0]) for r in rows[1:]], e.branch.energy)
+    np.testing.assert_array_equal([float(r[1]) for r in rows[1:]], e.branch.frequency_hz)
+    # the orbit: t_s and the DOF labels, one row per sample over one period
+    s._on_csv_orbit(None)                                  # the button's callback
+    name, data = s.last_download
+    rows = list(csv.reader(io.StringIO(data.decode())))
+    pd = s.current_point
+    assert name.endswith("_point3.00_orbit.csv")
+    assert rows[0] == ["t_s", "x1", "x2"] and len(rows) == len(pd.t) + 1
+    table = np.array(rows[1:], dtype=float)
+    np.testing.assert_array_equal(table[:, 0], pd.t)
+    np.testing.assert_array_equal(table[:, 1:], pd.x)
+    assert table[0, 0] == 0.0 and table[-1, 0] == pytest.approx(pd.period, rel=0.05)
+    # at k3 x 10: energies / 10, displacements / sqrt(10) (exact scaling law), as shown
+    s.h_k3.value = 1.0
+    name, data = s.fep_csv()
+    energies = [float(r[0]) for r in list(csv.reader(io.StringIO(data.decode())))[1:]]
+    assert "k3x10" in name and np.allclose(energies, e.branch.energy / 10, rtol=1e-12)
+    _, data = s.orbit_csv()
+    scaled = np.array(list(csv.reader(io.StringIO(data.decode())))[1:], dtype=float)
+    np.testing.assert_allclose(scaled[:, 1:], table[:, 1:] / np.sqrt(10), rtol=1e-12)
+    # a model without DOF labels: x0..x{n-1}
+    unlabelled = nnm.Model(s.model.M, s.model.K)
+    assert orbit_csv(pd, unlabelled).decode().splitlines()[0] == "t_s,x0,x1"
+    s.close()
