@@ -10,15 +10,42 @@ from pathlib import Path
 import numpy as np
 
 from .branch import Branch
-from .elements import CubicSpring, PolynomialSpring
+from .elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring
 from .errors import NNMFileError, NNMInputError
 from .importers import import_model, is_import_path
 from .h5file import (STR, atomic_h5, open_nnm, read_attrs, read_group_tree, read_matrix, strings, write_attrs,
                      write_group_tree, write_matrix)
 from .mesh import DisplayMesh
+from .sweep_files import with_variant_models
 from .model import Model
 
 BRANCH_COLUMNS = ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")
+
+
+def spring_law_json(spring):
+    """One entry of /model/springs laws_json: {power: coefficient} for polynomial laws (first form), or
+    {"type": "piecewise_linear", "stiffnesses": [...], "breakpoints": [...], "eps": eps}."""
+    if isinstance(spring, PiecewiseLinearSpring):
+        return {"type": "piecewise_linear", "stiffnesses": list(spring.stiffnesses),
+                "breakpoints": list(spring.breakpoints), "eps": spring.eps}
+    return {str(p): c for p, c in spring.law().items()}
+
+
+def spring_from_json(dof, other, law, path="file"):
+    """The element of one laws_json entry (see spring_law_json)."""
+    if not isinstance(law, dict):
+        raise NNMFileError(f"{path}: /model/springs/laws_json entry {law!r} is not an object")
+    kind = law.get("type", "polynomial")
+    if kind == "piecewise_linear":
+        try:
+            return PiecewiseLinearSpring(dof=dof, other=other, stiffnesses=law["stiffnesses"],
+                                         breakpoints=law["breakpoints"], **({"eps": law["eps"]} if "eps" in law else {}))
+        except KeyError as exc:
+            raise NNMFileError(f"{path}: piecewise_linear spring without {exc}") from None
+    if kind != "polynomial":
+        raise NNMFileError(f"{path}: unknown spring type {kind!r} in /model/springs/laws_json "
+                           f"(this nnm reads 'polynomial' and 'piecewise_linear')")
+    return spring_from_law(dof, other, {int(p): c for p, c in law.items() if p != "type"})
 
 
 def spring_from_law(dof, other, law):
@@ -40,8 +67,9 @@ def write_model_group(f, model, extra=None):
     sg.create_dataset("other", data=np.array([-1 if s.other is None else s.other for s in model.springs],
                                              dtype=np.int64))
     sg.create_dataset("k3", data=model.k3)
-    # every element's force law {power: coefficient}; k3 alone describes cubic springs (first-release files)
-    sg.attrs["laws_json"] = json.dumps([{str(p): c for p, c in s.law().items()} for s in model.springs])
+    # every element's force law ({power: coefficient}, or a typed object); k3 alone describes cubic springs
+    # (first-release files)
+    sg.attrs["laws_json"] = json.dumps([spring_law_json(s) for s in model.springs])
     if model.dof_labels is not None:
         g.create_dataset("dof_labels", data=np.array(model.dof_labels, dtype=STR))
     if model.mode_labels is not None:
@@ -92,8 +120,7 @@ def read_model_group(f, path):
     laws = json.loads(sg.attrs["laws_json"]) if "laws_json" in sg.attrs else [{"3": float(k)} for k in k3]
     if len(laws) != len(dof):
         raise NNMFileError(f"{path}: /model/springs/laws_json has {len(laws)} entries for {len(dof)} springs")
-    springs = [spring_from_law(int(d), None if o < 0 else int(o), {int(p): c for p, c in law.items()})
-               for d, o, law in zip(dof, other, laws)]
+    springs = [spring_from_json(int(d), None if o < 0 else int(o), law, path) for d, o, law in zip(dof, other, laws)]
     dof_labels = strings(g["dof_labels"]) if "dof_labels" in g else None
     mode_labels = strings(g["mode_labels"]) if "mode_labels" in g else None
     info = read_attrs(g["info"]) if "info" in g else {}
@@ -201,6 +228,8 @@ def _jsonable(obj):
 def load_branches(path, model=None):
     """All branches stored in the nnm file at ``path`` (list of Branch, in file order).
 
+    Branches of a sweep (``<variant>:mode<N>``, docs/sweep.md) come with their variant's model.
+
     model : the file's model if already loaded (saves reading it again).  Imported model files
     (.mat, .toml, .full) hold no branches: [].
     """
@@ -236,4 +265,6 @@ def load_branches(path, model=None):
                                   settings=settings, name=str(g.attrs.get("name", gname)), **cols))
             except (ValueError, TypeError) as exc:
                 raise NNMFileError(f"{path}: branch {gname} has inconsistent shapes or settings ({exc})") from None
+        if "sweeps" in f:                       # branches of a sweep get their variant's model
+            with_variant_models(out, model, f)
         return out

@@ -84,20 +84,13 @@ def prepare_file(out, model, variants, energy_max, names):
     return found
 
 
-def load_sweep(path):
-    """The sweep branches (names ``<variant>:mode<N>``) of an nnm file, each with its variant's model.
-
-    ``load_branches`` gives every branch the file's model (with the branch's spring coefficients); this
-    also applies the added stiffness and mass of the variants recorded in the file by ``sweep``.
-    """
-    from .h5file import open_nnm
-    from .io import load_branches, load_model
-
-    model = load_model(path)
-    with open_nnm(path) as f:
-        recorded = _recorded_variants(f)
+def with_variant_models(branches, model, f):
+    """Give each sweep branch (name ``<variant>:mode<N>``) of the open nnm file ``f`` the model of its
+    variant recorded in ``/sweeps`` (added stiffness, mass, spring factors applied to ``model``);
+    other branches are left as they are.  Returns the sweep branches."""
+    recorded = _recorded_variants(f)
     cache, out = {}, []
-    for b in load_branches(path, model):
+    for b in branches:
         parsed = parse_branch_name(b.name)
         if parsed is None:
             continue
@@ -110,3 +103,11 @@ def load_sweep(path):
         b.sweep_info = {"variant": vname, "source": "file"}
         out.append(b)
     return out
+
+
+def load_sweep(path):
+    """The sweep branches (names ``<variant>:mode<N>``) of an nnm file, each with its variant's model
+    (``load_branches`` gives them those models too; this keeps only the sweep's branches)."""
+    from .io import load_branches
+
+    return [b for b in load_branches(path) if parse_branch_name(b.name) is not None]
