@@ -140,7 +140,9 @@ def test_atlas_equals_serial_point_for_point(client, tmp_path):
     # the file holds every branch once, under its name; load_sweep gives each its variant's model
     assert sorted(file_names(out)) == sorted(names)
     loaded = {b.name: b for b in nnm.load_sweep(out)}
+    plain = {b.name: b for b in nnm.load_branches(out)}        # so does load_branches (the viewer's loader)
     for a, name in zip(want, names):
+        np.testing.assert_array_equal(plain[name].model.M, a.model.M)
         np.testing.assert_array_equal(loaded[name].x0, a.x0)
         np.testing.assert_array_equal(loaded[name].model.M, a.model.M)
         np.testing.assert_array_equal(loaded[name].model.K, a.model.K)
