@@ -10,7 +10,7 @@ Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
     nnm.save_branch("file.h5", branch); nnm.load_branches("file.h5")
 """
 from .errors import NNMFileError, NNMInputError
-from .elements import CubicSpring, ElementSet, PolynomialSpring
+from .elements import CubicSpring, ElementSet, PiecewiseLinearSpring, PolynomialSpring
 from .mesh import DisplayMesh
 from .model import Model
 from .modal import ModalSystem, modal_system
@@ -38,7 +38,7 @@ from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmoni
 
 __all__ = [
     # models
-    "Model", "CubicSpring", "PolynomialSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
+    "Model", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
     "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
     "continue_tongue",

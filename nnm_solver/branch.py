@@ -275,7 +275,7 @@ class Branch:
         """
         sc = cubic_scaling(factor)
         el = self.model.elements
-        if len(el) and set(el.powers[np.any(el.coefficients != 0, axis=0)].tolist()) - {3}:
+        if len(el) and not el.cubic_only:
             raise NNMInputError("the scaling law holds for cubic springs only; compute the branch of the scaled model")
         events = [dict(e, energy=e["energy"] * sc.energy) for e in self.events]
         settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio)
@@ -293,6 +293,8 @@ def _match_energy(model, x, v, energy):
     element laws), solved for c by Newton from c = 1; (x, v) unchanged if no positive root is found.
     """
     el = model.elements
+    if el.kinks.shape[1]:
+        return _match_energy_generic(model, x, v, energy)
     e_tot = model.energy(x, v)
     d = el.B @ x
     terms = {int(p) + 1: float(np.sum(el.coefficients[:, j] * d ** (p + 1) / (p + 1)))
@@ -314,3 +316,23 @@ def _match_energy(model, x, v, energy):
     if not abs(sum(e * c ** k for k, e in terms.items()) - energy) <= 1e-9 * energy:
         return x, v
     return c * x, c * v
+
+
+def _match_energy_generic(model, x, v, energy):
+    """_match_energy for any element law (piecewise-linear kinks): secant iteration on E(c x, c v) = energy."""
+    if energy <= 0 or not model.energy(x, v) > 0:
+        return x, v
+    f = lambda c: float(model.energy(c * x, c * v)) - energy
+    c0, c1 = 1.0, 1.0 + 1e-3
+    f0, f1 = f(c0), f(c1)
+    for _ in range(60):
+        if f1 == f0:
+            break
+        c2 = c1 - f1 * (c1 - c0) / (f1 - f0)
+        c2 = c2 if c2 > 0 else 0.5 * c1
+        c0, f0, c1, f1 = c1, f1, c2, f(c2)
+        if abs(f1) <= 1e-12 * energy:
+            break
+    if not abs(f1) <= 1e-9 * energy:
+        return x, v
+    return c1 * x, c1 * v

@@ -73,12 +73,13 @@ def start_amplitude(system, k, energy_max, energy_min=None):
     a_cap = math.sqrt(2.0 * energy_max * 1e-2 / w2)
     b = np.abs(system.Bq[:, k])
     C = np.abs(system.coefficients)
-    p = system.powers.astype(float)
-    if not np.any(C * (b[:, None] > 0)):
+    touched = b > 0
+    if not np.any(C * touched[:, None]) and not np.any((system.kinks[..., 0] != 0) * touched[:, None]):
         return math.sqrt(2.0 * energy_max * 1e-6 / w2)
+    elements = system.elements
 
     def share(a):  # bound on (nonlinear potential) / (linear potential) at amplitude a; grows with a
-        return float(np.sum(C * (b[:, None] * a) ** (p + 1) / (p + 1))) / (0.5 * w2 * a * a)
+        return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
 
     lo, hi = 1e-30, a_cap
     if share(hi) <= START_NONLINEARITY:

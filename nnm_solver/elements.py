@@ -6,11 +6,28 @@ deformation; the model force is  f_nl(x) = B^T g(B x)  and the potential  V(x) =
 P' = g.  The time integrators, harmonic balance, Hill's method and the model's energy all evaluate
 the elements through ``ElementSet``, so a new element is added here and nowhere else.
 
-Force laws are polynomial, g(d) = sum_p c_p d^p with integer powers p >= 2 (the cubic spring is
-c_3 = k3).  ``ElementSet`` stores them as a (powers (P,), coefficients (n_s, P)) table that the
-numba-compiled kernels ``law_force`` / ``law_force_tangent`` evaluate; numpy callers use
-``ElementSet.force``, ``tangent`` and ``potential``.  A set whose powers are all odd gives an odd
-f_nl (f_nl(-x) = -f_nl(x)): its NNMs are half-wave symmetric, which the shooting exploits.
+Two law families, summed per element (an element uses one of them, the table holds both):
+
+* polynomial, g(d) = sum_p c_p d^p with integer powers p >= 2 (the cubic spring is c_3 = k3);
+* regularised kinks, g(d) = sum_j dk_j [r_w(d - b_j) - r_w(-d - b_j)]  (odd), with the smooth ramp
+  r_w(x) = w log(1 + exp(x / w))  (softplus; r_w -> max(x, 0) as w -> 0).  A
+  ``PiecewiseLinearSpring`` with slopes k0, k1, ... and breakpoints d1 < d2 < ... has one kink per
+  breakpoint, dk_j = k_j - k_{j-1}, b_j = d_j, width w = eps * d1: its exact force
+  f(d) = k0 d + sum_j dk_j sign(d) max(|d| - d_j, 0) is split into the linear slope k0, which
+  belongs to the linear model (``Model.K_linear`` = K + sum k0 b^T b, used by the linear modes and
+  the energy), and the nonlinear part g(d) = f(d) - k0 d, regularised, which vanishes below d1 (up
+  to ~dk exp(-1 / eps)).  The element's potential is the exact integral of the regularised g,
+  P(d) = sum_j dk_j [R(d - b_j) + R(-d - b_j) - 2 R(-b_j)],  R(x) = -w^2 Li2(-exp(x / w)),
+  so the model's energy is conserved exactly by the regularised dynamics.  The regularisation
+  error of periods is O(eps^2) (tests/test_elements.py: single-DOF bilinear oscillator against the
+  closed-form period).
+
+``ElementSet`` stores the laws as a table (powers (P,), coefficients (n_s, P), kinks (n_s, J, 3)),
+kinks[s, j] = (dk, b, w) (dk = 0: unused row; J = 0 when no element has kinks, so the polynomial
+path costs what it did) that the numba-compiled kernels ``law_force`` / ``law_force_tangent``
+evaluate; numpy callers use ``ElementSet.force``, ``tangent`` and ``potential``.  A set whose
+powers are all odd gives an odd f_nl (f_nl(-x) = -f_nl(x); kinks are odd): its NNMs are half-wave
+symmetric, which the shooting exploits.
 """
 from __future__ import annotations
 
@@ -18,10 +35,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import math
+
 from .errors import NNMInputError
 from .jit import jit_inline
 
-__all__ = ["CubicSpring", "PolynomialSpring", "ElementSet", "element_law", "law_force", "law_force_tangent"]
+__all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "element_law", "law_force",
+           "law_force_tangent"]
+
+#: default regularisation of PiecewiseLinearSpring: kink width eps * d1
+PWL_EPS = 1e-3
 
 
 @dataclass(frozen=True)
@@ -87,8 +110,87 @@ class PolynomialSpring:
         return PolynomialSpring(dof=self.dof, other=self.other,
                                 coefficients={p: c * factor for p, c in self.coefficients.items()})
 
+def _numbers(name, values):
+    try:
+        out = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        raise NNMInputError(f"PiecewiseLinearSpring {name} must be a list of numbers, got {values!r}") from None
+    if not all(math.isfinite(v) for v in out):
+        raise NNMInputError(f"PiecewiseLinearSpring {name} {list(out)} contains NaN or infinite values")
+    return out
+
+
+@dataclass(frozen=True)
+class PiecewiseLinearSpring:
+    """Odd piecewise-linear spring: slope k0 for |d| < d1, k1 for d1 <= |d| < d2, ... (N/m), d (m).
+
+    Grounded (``other=None``): d = x[dof]; relative: d = x[dof] - x[other].  stiffnesses [k0, k1, ...]
+    (one more than breakpoints), breakpoints [d1, d2, ...] > 0 strictly increasing (m).  Bilinear
+    joints, softening (k1 < k0) or hardening past a threshold, clearances (k0 = 0).  The element acts
+    in addition to K: the linear modes use K plus k0 along d (``Model.K_linear``), the nonlinear force
+    is the rest, f(d) - k0 d, with each kink smoothed over a width eps * d1 (module doc).
+    """
+
+    dof: int
+    other: int | None = None
+    stiffnesses: tuple = ()
+    breakpoints: tuple = ()
+    eps: float = PWL_EPS
+
+    def __post_init__(self):
+        k = _numbers("stiffnesses", self.stiffnesses)
+        b = _numbers("breakpoints", self.breakpoints)
+        if not b:
+            raise NNMInputError("PiecewiseLinearSpring needs at least one breakpoint (stiffnesses=[k0, k1], "
+                                "breakpoints=[d1])")
+        if len(k) != len(b) + 1:
+            raise NNMInputError(f"PiecewiseLinearSpring has {len(k)} stiffnesses for {len(b)} breakpoints; "
+                                f"it needs one more stiffness than breakpoints")
+        if b[0] <= 0:
+            raise NNMInputError(f"PiecewiseLinearSpring breakpoint {b[0]} is not positive; breakpoints are "
+                                f"distances |d| > 0 (the law is odd)")
+        if any(b2 <= b1 for b1, b2 in zip(b, b[1:])):
+            raise NNMInputError(f"PiecewiseLinearSpring breakpoints {list(b)} are not strictly increasing")
+        try:
+            eps = float(self.eps)
+        except (TypeError, ValueError):
+            raise NNMInputError(f"PiecewiseLinearSpring eps={self.eps!r} is not a number") from None
+        if not 0 < eps < 0.5:
+            raise NNMInputError(f"PiecewiseLinearSpring eps={eps} must be in (0, 0.5) (kink width eps * d1)")
+        object.__setattr__(self, "stiffnesses", k)
+        object.__setattr__(self, "breakpoints", b)
+        object.__setattr__(self, "eps", eps)
+
+    def law(self):
+        """Polynomial part of the force law: none ({}); the kinks are in ``kinks()``."""
+        return {}
+
+    @property
+    def linear_stiffness(self):
+        """k0 (N/m): the slope at d = 0, which the linear model adds to K."""
+        return self.stiffnesses[0]
+
+    def kinks(self):
+        """[(dk_j, b_j, w)]: slope jumps (N/m), breakpoints (m) and smoothing width w = eps * d1 (m)."""
+        w = self.eps * self.breakpoints[0]
+        return [(k1 - k0, b, w) for k0, k1, b in zip(self.stiffnesses, self.stiffnesses[1:], self.breakpoints)]
+
+    def exact_force(self, d):
+        """The unregularised force f(d) (N), including k0 d (reference for tests and plots)."""
+        d = np.asarray(d, dtype=float)
+        f = self.stiffnesses[0] * d
+        for dk, b, _ in self.kinks():
+            f = f + dk * np.sign(d) * np.maximum(np.abs(d) - b, 0.0)
+        return f
+
+    def scaled(self, factor):
+        """The same spring with every stiffness multiplied by ``factor``."""
+        return PiecewiseLinearSpring(dof=self.dof, other=self.other, stiffnesses=[k * factor for k in self.stiffnesses],
+                                     breakpoints=self.breakpoints, eps=self.eps)
+
+
 #: element types the models accept (the next element types are added here)
-ELEMENT_TYPES = (CubicSpring, PolynomialSpring)
+ELEMENT_TYPES = (CubicSpring, PolynomialSpring, PiecewiseLinearSpring)
 
 
 def element_law(element):
@@ -99,8 +201,8 @@ def element_law(element):
 def check_element(i, element, n):
     """One-line NNMInputError if ``element`` (index i) is not a valid element of an n-DOF model."""
     if not isinstance(element, ELEMENT_TYPES):
-        raise NNMInputError(f"spring {i} is {type(element).__name__}, expected nnm_solver.CubicSpring or "
-                            f"nnm_solver.PolynomialSpring")
+        raise NNMInputError(f"spring {i} is {type(element).__name__}, expected nnm_solver.CubicSpring, "
+                            f"nnm_solver.PolynomialSpring or nnm_solver.PiecewiseLinearSpring")
     for which, d in (("dof", element.dof), ("other", element.other)):
         if d is None and which == "other":
             continue
@@ -117,8 +219,9 @@ class ElementSet:
     """The nonlinear elements of a model, evaluated together on their deformations d = B x.
 
     B (n_s, n) selection matrix; powers (P,) int64 and coefficients (n_s, P) float of the polynomial
-    force laws.  ``force``, ``tangent`` and ``potential`` take d (..., n_s) and return (..., n_s) in
-    N, N/m and J.
+    force laws; kinks (n_s, J, 3) float (dk, b, w) of the regularised piecewise-linear laws; k0 (n_s,)
+    the elements' linear stiffnesses (part of the linear model, not of g).  ``force``, ``tangent`` and
+    ``potential`` take d (..., n_s) and return (..., n_s) in N, N/m and J.
     """
 
     def __init__(self, elements, n):
@@ -136,6 +239,18 @@ class ElementSet:
         for s, law in enumerate(laws):
             for p, c in law.items():
                 self.coefficients[s, int(np.flatnonzero(self.powers == p)[0])] = c
+        kinks = [e.kinks() if hasattr(e, "kinks") else [] for e in self.elements]
+        self.kinks = np.zeros((ns, max((len(k) for k in kinks), default=0), 3))
+        for s, ks in enumerate(kinks):
+            for j, row in enumerate(ks):
+                self.kinks[s, j] = row
+        self.k0 = np.array([getattr(e, "linear_stiffness", 0.0) for e in self.elements], dtype=float)
+
+    @property
+    def cubic_only(self):
+        """True when every force law is a pure cubic (the exact scaling law applies)."""
+        used = np.any(self.coefficients != 0.0, axis=0)
+        return not np.any(self.kinks[..., 0] != 0.0) and set(self.powers[used].tolist()) <= {3}
 
     def __len__(self):
         return len(self.elements)
@@ -148,20 +263,68 @@ class ElementSet:
 
     def force(self, d):
         d = np.asarray(d, dtype=float)
-        return sum(self.coefficients[:, j] * d ** p for j, p in enumerate(self.powers))
+        g = sum(self.coefficients[:, j] * d ** p for j, p in enumerate(self.powers))
+        for dk, b, w in self._kink_columns():
+            g = g + dk * (_softplus(d - b, w) - _softplus(-d - b, w))
+        return g
 
     def tangent(self, d):
         d = np.asarray(d, dtype=float)
-        return sum(p * self.coefficients[:, j] * d ** (p - 1) for j, p in enumerate(self.powers))
+        t = sum(p * self.coefficients[:, j] * d ** (p - 1) for j, p in enumerate(self.powers))
+        for dk, b, w in self._kink_columns():
+            t = t + dk * (_sigmoid(d - b, w) + _sigmoid(-d - b, w))
+        return t
 
     def potential(self, d):
         d = np.asarray(d, dtype=float)
-        return sum(self.coefficients[:, j] * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
+        P = sum(self.coefficients[:, j] * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
+        for dk, b, w in self._kink_columns():
+            P = P + dk * (_ramp_integral(d - b, w) + _ramp_integral(-d - b, w) - 2.0 * _ramp_integral(-b, w))
+        return P
+
+    def abs_potential(self, d):
+        """Bound on |potential| (..., n_s): every coefficient and slope jump taken positive."""
+        d = np.abs(np.asarray(d, dtype=float))
+        P = sum(np.abs(self.coefficients[:, j]) * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
+        for dk, b, w in self._kink_columns():
+            P = P + np.abs(dk) * (_ramp_integral(d - b, w) + _ramp_integral(-d - b, w) - 2.0 * _ramp_integral(-b, w))
+        return P
+
+    def _kink_columns(self):
+        """(dk, b, w) (n_s,) each, per kink column j (unused rows: dk = 0, w = 1)."""
+        for j in range(self.kinks.shape[1]):
+            dk, b, w = self.kinks[:, j].T
+            yield dk, b, np.where(w > 0, w, 1.0)
 
     def in_basis(self, Phi):
-        """(B Phi, powers, coefficients): the table for coordinates q with x = Phi q (kernels' input)."""
+        """(B Phi, powers, coefficients, kinks): the table for coordinates q with x = Phi q (kernels' input)."""
         return (np.ascontiguousarray(self.B @ Phi), np.ascontiguousarray(self.powers),
-                np.ascontiguousarray(self.coefficients))
+                np.ascontiguousarray(self.coefficients), np.ascontiguousarray(self.kinks))
+
+
+def _softplus(x, w):
+    """r_w(x) = w log(1 + exp(x / w)), evaluated without overflow."""
+    u = x / w
+    return np.maximum(x, 0.0) + w * np.log1p(np.exp(-np.abs(u)))
+
+
+def _sigmoid(x, w):
+    """r_w'(x) = 1 / (1 + exp(-x / w))."""
+    u = x / w
+    e = np.exp(-np.abs(u))
+    return np.where(u >= 0, 1.0 / (1.0 + e), e / (1.0 + e))
+
+
+def _ramp_integral(x, w):
+    """R(x) = int_{-inf}^x r_w = -w^2 Li2(-exp(x / w)) (Li2(z) = scipy.special.spence(1 - z)); for x > 0
+    the reflection Li2(-e^u) = -pi^2/6 - u^2/2 - Li2(-e^-u) keeps the argument bounded."""
+    from scipy.special import spence
+
+    u = np.asarray(x / w, dtype=float)
+    e = np.exp(-np.abs(u))
+    neg = -w * w * spence(1.0 + e)                                    # u <= 0
+    pos = 0.5 * x * x + w * w * (np.pi ** 2 / 6.0 + spence(1.0 + e))  # u > 0
+    return np.where(u > 0, pos, neg)
 
 
 @jit_inline
@@ -177,8 +340,25 @@ def _ipow(x, p):
 
 
 @jit_inline
-def law_force(d, powers, coeffs):
-    """g(d) (n_s,) of the polynomial laws (numba kernel; see ElementSet)."""
+def _softplus1(x, w):
+    """r_w(x) = w log(1 + exp(x / w)) for one number (numba kernel)."""
+    if x > 0.0:
+        return x + w * math.log1p(math.exp(-x / w))
+    return w * math.log1p(math.exp(x / w))
+
+
+@jit_inline
+def _sigmoid1(x, w):
+    """r_w'(x) for one number (numba kernel)."""
+    if x > 0.0:
+        return 1.0 / (1.0 + math.exp(-x / w))
+    e = math.exp(x / w)
+    return e / (1.0 + e)
+
+
+@jit_inline
+def law_force(d, powers, coeffs, kinks):
+    """g(d) (n_s,) of the element laws (numba kernel; see ElementSet)."""
     ns = d.shape[0]
     g = np.empty(ns)
     for s in range(ns):
@@ -188,13 +368,19 @@ def law_force(d, powers, coeffs):
             c = coeffs[s, j]
             if c != 0.0:
                 acc += c * x ** powers[j]
+        for j in range(kinks.shape[1]):
+            dk = kinks[s, j, 0]
+            if dk != 0.0:
+                b = kinks[s, j, 1]
+                w = kinks[s, j, 2]
+                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
         g[s] = acc
     return g
 
 
 @jit_inline
-def law_force_tangent(d, powers, coeffs):
-    """(g(d), g'(d)) (n_s,) each, of the polynomial laws (numba kernel)."""
+def law_force_tangent(d, powers, coeffs, kinks):
+    """(g(d), g'(d)) (n_s,) each, of the element laws (numba kernel)."""
     ns = d.shape[0]
     g = np.empty(ns)
     t = np.empty(ns)
@@ -209,6 +395,13 @@ def law_force_tangent(d, powers, coeffs):
                 xp1 = x ** (p - 1)
                 acc += c * xp1 * x
                 dacc += p * c * xp1
+        for j in range(kinks.shape[1]):
+            dk = kinks[s, j, 0]
+            if dk != 0.0:
+                b = kinks[s, j, 1]
+                w = kinks[s, j, 2]
+                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
+                dacc += dk * (_sigmoid1(x - b, w) + _sigmoid1(-x - b, w))
         g[s] = acc
         t[s] = dacc
     return g, t

@@ -22,8 +22,9 @@ class ModalSystem:
     """A Model in mass-normalised modal coordinates:  q'' + Omega^2 q + Bq^T g(Bq q) = 0.
 
     omega2 (n,) rad^2/s^2; Phi (n, n) mode shapes (x = Phi q); PhiT_M (n, n) (q = Phi^T M x);
-    Bq (n_s, n); powers, coefficients: the element force laws (elements.ElementSet);
-    kernel = (omega2, Bq, powers, coefficients): the arguments of the Newmark kernels.
+    Bq (n_s, n); powers, coefficients, kinks: the element force laws (elements.ElementSet);
+    kernel = (omega2, Bq, powers, coefficients, kinks): the arguments of the Newmark kernels.
+    Omega^2 are the eigenvalues of the linear model (M, Model.K_linear).
     """
 
     def __init__(self, model):
@@ -34,8 +35,8 @@ class ModalSystem:
         self.omega2 = np.ascontiguousarray(lam, dtype=float)
         self.Phi = np.ascontiguousarray(Phi)
         self.PhiT_M = np.ascontiguousarray(np.asarray(model.M @ Phi).T)
-        self.Bq, self.powers, self.coefficients = self.elements.in_basis(Phi)
-        self.kernel = (self.omega2, self.Bq, self.powers, self.coefficients)
+        self.Bq, self.powers, self.coefficients, self.kinks = self.elements.in_basis(Phi)
+        self.kernel = (self.omega2, self.Bq, self.powers, self.coefficients, self.kinks)
 
     def to_modal(self, x):
         """Modal coordinates of x: (n,) -> (n,), or (k, n) -> (k, n) (complex rows allowed)."""

@@ -58,7 +58,9 @@ class Model:
     ----------
     M, K : (n, n) dense arrays or scipy.sparse matrices (SI units). M symmetric positive
         definite, K symmetric positive semi-definite.  Stored as float (sparse: CSR).
-    springs : list of nonlinear elements (CubicSpring).
+    springs : list of nonlinear elements (CubicSpring, PolynomialSpring, PiecewiseLinearSpring).
+        A PiecewiseLinearSpring's slope k0 is part of the linear model: ``K_linear`` = K + k0 b^T b
+        (K itself is kept as given and saved as given).
     dof_labels : optional list of n strings (e.g. "node 12 uz").
     mode_labels : optional list of strings, label of linear mode k at index k-1.
     mesh : optional DisplayMesh for viewing.
@@ -106,6 +108,16 @@ class Model:
         """Cubic coefficients (n_s,) in N/m^3 (0 for an element without a cubic term)."""
         return np.array([s.law().get(3, 0.0) for s in self.springs], dtype=float)
 
+    @cached_property
+    def K_linear(self):
+        """Stiffness of the linear model: K plus the elements' linear slopes k0 B_s^T B_s
+        (PiecewiseLinearSpring); K itself when no element has one."""
+        el = self.elements
+        if not np.any(el.k0 != 0.0):
+            return self.K
+        delta = el.B.T @ (el.k0[:, None] * el.B)
+        return (self.K + sp.csr_matrix(delta)).tocsr() if sp.issparse(self.K) else self.K + delta
+
     def nonlinear_force(self, x):
         """f_nl(x) (n,) in N for displacements x (n,) in m (or (k, n) for k states)."""
         el = self.elements
@@ -131,21 +143,21 @@ class Model:
         if x.shape[-1] != self.n or v.shape != x.shape:
             raise NNMInputError(f"x and v must both have last dimension {self.n}, got {x.shape} and {v.shape}")
         kin = 0.5 * np.sum(v * _apply(self.M, v), axis=-1)
-        pot = 0.5 * np.sum(x * _apply(self.K, x), axis=-1)
+        pot = 0.5 * np.sum(x * _apply(self.K_linear, x), axis=-1)
         el = self.elements
         return kin + pot + np.sum(el.potential(x @ el.B.T), axis=-1)
 
     # ------------------------------------------------------------------ linear modes
     @cached_property
     def eigensolution(self):
-        """(lam (n,), Phi (n, n)): K Phi = M Phi diag(lam), Phi^T M Phi = I, ascending (rad^2/s^2).
+        """(lam (n,), Phi (n, n)): K_linear Phi = M Phi diag(lam), Phi^T M Phi = I, ascending (rad^2/s^2).
 
         Computed once; shared, do not modify (``linear_modes`` returns copies)."""
         if self.n > MAX_DENSE_DOF:
             raise NNMInputError(
                 f"the model has {self.n} DOFs; the NNM solver works in the full modal basis and accepts at most "
                 f"{MAX_DENSE_DOF}: reduce it first (nnm_solver.craig_bampton)")
-        Md, Kd = _dense(self.M), _dense(self.K)
+        Md, Kd = _dense(self.M), _dense(self.K_linear)
         try:
             lam, Phi = sla.eigh(Kd, Md)
         except np.linalg.LinAlgError:

@@ -26,7 +26,7 @@ every step.  The derivative with respect to the step h is carried as one extra c
 sweep, which gives the exact dH/dT of the discrete shooting function.
 
 The kernels are compiled with numba when it is installed (same source runs in plain Python).
-Their model arguments are ``ModalSystem.kernel`` = (omega2, Bq, powers, coeffs).
+Their model arguments are ``ModalSystem.kernel`` = (omega2, Bq, powers, coeffs, kinks).
 """
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ NEWTON_RTOL = 1e-13
 
 
 @_jit
-def _solve_springs(dlin, G, powers, coeffs, dguess):
+def _solve_springs(dlin, G, powers, coeffs, kinks, dguess):
     """Solve d + G g(d) = dlin (n_s unknowns) by damped Newton; returns (d, J, g, D, ok), J = I + G diag(g'),
     g = g(d) and D = g'(d) at the solution.
 
@@ -50,7 +50,7 @@ def _solve_springs(dlin, G, powers, coeffs, dguess):
     ns = dlin.shape[0]
     d = dguess.copy()
     scale = np.sqrt(np.sum(dlin * dlin)) + 1e-300
-    g, D = law_force_tangent(d, powers, coeffs)
+    g, D = law_force_tangent(d, powers, coeffs, kinks)
     F = d + G @ g - dlin
     nF = np.sqrt(np.sum(F * F))
     J = np.eye(ns) + G * D[None, :]
@@ -61,7 +61,7 @@ def _solve_springs(dlin, G, powers, coeffs, dguess):
         lam = 1.0
         for _ in range(30):
             d_try = d - lam * delta
-            g_try, D_try = law_force_tangent(d_try, powers, coeffs)
+            g_try, D_try = law_force_tangent(d_try, powers, coeffs, kinks)
             F_try = d_try + G @ g_try - dlin
             n_try = np.sqrt(np.sum(F_try * F_try))
             if n_try < nF or lam < 1e-8:
@@ -73,7 +73,7 @@ def _solve_springs(dlin, G, powers, coeffs, dguess):
 
 
 @_jit
-def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S):
+def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
     """One Newmark step; returns (q1, v1, a1, d1, J, D1, ok), D1 = g'(d1)."""
     r = (4.0 / h ** 2) * q + (4.0 / h) * v + a
     y = r / S
@@ -83,7 +83,7 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S):
         return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
     dlin = Bq @ y
     dguess = Bq @ (q + h * v + 0.5 * h * h * a)
-    d1, J, g1, D1, ok = _solve_springs(dlin, G, powers, coeffs, dguess)
+    d1, J, g1, D1, ok = _solve_springs(dlin, G, powers, coeffs, kinks, dguess)
     fnl = Bq.T @ g1
     q1 = (r - fnl) / S
     a1 = -omega2 * q1 - fnl
@@ -92,40 +92,40 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S):
 
 
 @_jit
-def _start(q0, omega2, Bq, powers, coeffs, h):
+def _start(q0, omega2, Bq, powers, coeffs, kinks, h):
     S = 4.0 / h ** 2 + omega2
     G = (Bq / S[None, :]) @ Bq.T
     d = Bq @ q0
-    a = -omega2 * q0 - Bq.T @ law_force(d, powers, coeffs)
+    a = -omega2 * q0 - Bq.T @ law_force(d, powers, coeffs, kinks)
     return S, G, d, a
 
 
 @_jit
-def sweep_state(q0, v0, h, nsteps, omega2, Bq, powers, coeffs):
+def sweep_state(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
     """Integrate nsteps of size h from (q0, v0). Returns (q, v, ok)."""
-    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
     q = q0.copy()
     v = v0.copy()
     for _ in range(nsteps):
-        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
+        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
         if not ok:
             return q, v, False
     return q, v, True
 
 
 @_jit
-def sweep_record(q0, v0, h, nsteps, omega2, Bq, powers, coeffs):
+def sweep_record(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
     """Integrate and keep every state: (Q (nsteps+1, n), V (nsteps+1, n), ok)."""
     n = q0.shape[0]
     Q = np.empty((nsteps + 1, n))
     V = np.empty((nsteps + 1, n))
-    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
     q = q0.copy()
     v = v0.copy()
     Q[0] = q
     V[0] = v
     for k in range(nsteps):
-        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
+        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
         if not ok:
             return Q[: k + 1], V[: k + 1], False
         Q[k + 1] = q
@@ -243,7 +243,7 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
 
 
 @_jit
-def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, all_columns=True):
+def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_columns=True):
     """Integrate with the sensitivity of the final state.
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n), Sv = dv_N/d[q0; v0],
@@ -253,11 +253,11 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, all_columns
     n = q0.shape[0]
     ns = Bq.shape[0]
     ncols = 2 * n if all_columns else n
-    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, h)
+    S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
     q = q0.copy()
     v = v0.copy()
     Dseq = np.empty((nsteps + 1, ns))
-    Dseq[0] = law_force_tangent(d, powers, coeffs)[1]
+    Dseq[0] = law_force_tangent(d, powers, coeffs, kinks)[1]
     sq_h = np.zeros(n)
     sv_h = np.zeros(n)
     sa_h = np.zeros(n)
@@ -267,7 +267,7 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, all_columns
     c2p = -4.0 / h ** 2
     invS = 1.0 / S
     for k in range(nsteps):
-        q1, v1, a1, d1, J, D1, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, G, S)
+        q1, v1, a1, d1, J, D1, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
         if not ok:
             return q1, v1, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
         Dseq[k + 1] = D1

@@ -63,3 +63,124 @@ def test_polynomial_springs_survive_the_file(tmp_path):
     b = nnm.continue_nnm(m, 1, 1.0, max_points=8)
     with pytest.raises(nnm.NNMInputError, match="cubic springs only"):
         b.scaled(2.0)
+
+
+# ---------------------------------------------------------------------- PiecewiseLinearSpring (issue 18)
+def _bilinear_period(A, k, k0, k1, d1):
+    """Exact period of x'' + k x + f(x) = 0, f bilinear (slope k0 for |x| < d1, k1 beyond), amplitude A.
+
+    |x| < d1: harmonic with w0^2 = k + k0.  x >= d1: the restoring force (k + k0) d1 + (k + k1)(x - d1)
+    = (k + k1)(x - c), harmonic with w1^2 = k + k1 about the shifted centre c = d1 (k1 - k0) / (k + k1).
+    From rest at A: t1 = arccos((d1 - c) / (A - c)) / w1 to reach d1 with speed v = w1 sqrt((A - c)^2
+    - (d1 - c)^2); then the inner arc of amplitude B = sqrt(d1^2 + v^2 / w0^2) takes t0 = arcsin(d1 / B)
+    / w0 to reach 0.  By symmetry T = 4 (t0 + t1).
+    """
+    w0, w1 = np.sqrt(k + k0), np.sqrt(k + k1)
+    if A <= d1:
+        return 2 * np.pi / w0
+    c = d1 * (k1 - k0) / (k + k1)
+    t1 = np.arccos((d1 - c) / (A - c)) / w1
+    B = np.sqrt(d1 ** 2 + (w1 / w0) ** 2 * ((A - c) ** 2 - (d1 - c) ** 2))
+    return 4 * (np.arcsin(d1 / B) / w0 + t1)
+
+
+def test_piecewise_force_tangent_potential_and_kernels():
+    from nnm_solver.elements import law_force, law_force_tangent
+    pw = nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[2.0, 0.5, 3.0], breakpoints=[0.1, 0.25], eps=0.05)
+    m = nnm.Model(np.eye(3), np.diag([1.0, 2.0, 3.0]),
+                  [nnm.PolynomialSpring(dof=0, coefficients={3: 0.4}), pw,
+                   nnm.PiecewiseLinearSpring(dof=2, stiffnesses=[0.0, 1.0], breakpoints=[0.05])])
+    el, h = m.elements, 1e-7
+    assert el.kinks.shape == (3, 2, 3) and el.odd and not el.cubic_only
+    d = np.random.default_rng(5).normal(scale=0.2, size=(200, 3))
+    np.testing.assert_allclose(el.tangent(d), (el.force(d + h) - el.force(d - h)) / (2 * h), rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(el.force(d), (el.potential(d + h) - el.potential(d - h)) / (2 * h), rtol=1e-6,
+                               atol=1e-8)
+    np.testing.assert_allclose(el.force(-d), -el.force(d), atol=1e-15)                     # odd
+    for row in d[:20]:                                                                    # numba kernels
+        np.testing.assert_allclose(law_force(row, el.powers, el.coefficients, el.kinks), el.force(row), rtol=1e-12,
+                                   atol=1e-15)
+        g, t = law_force_tangent(row, el.powers, el.coefficients, el.kinks)
+        np.testing.assert_allclose(g, el.force(row), rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(t, el.tangent(row), rtol=1e-12, atol=1e-15)
+    # the regularised nonlinear part + k0 d is the exact law away from the kinks (within ~w = eps d1)
+    s = np.array([0.03, -0.05, 0.2, -0.4, 1.0])
+    exact = pw.exact_force(s)
+    np.testing.assert_allclose(el.force(np.c_[0 * s, s, 0 * s])[:, 1] + 2.0 * s, exact, atol=1e-6)
+    assert pw.exact_force(0.3) == pytest.approx(2.0 * 0.1 + 0.5 * 0.15 + 3.0 * 0.05)
+    # the linear model carries k0: K_linear = K + k0 b^T b; the energy is exact (potential of the whole force)
+    np.testing.assert_allclose(m.K_linear, np.diag([1.0, 2.0, 3.0]) + 2.0 * np.array([[1, -1, 0], [-1, 1, 0], [0, 0, 0]]))
+    x = np.array([0.02, -0.03, 0.3])
+    P_exact = 0.5 * x @ np.diag([1.0, 2.0, 3.0]) @ x + 0.1 * 0.02 ** 4 + 0.5 * 2.0 * 0.05 ** 2 + 0.5 * 0.25 ** 2
+    assert m.energy(x, np.zeros(3)) == pytest.approx(P_exact, rel=1e-5)
+    one = nnm.Model(np.eye(1), np.eye(1), [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.5, 2.0], breakpoints=[0.1])])
+    assert one.linear_modes()[0][0] == pytest.approx(np.sqrt(1.5) / (2 * np.pi), rel=1e-14)
+    assert one.elements.tangent(np.zeros(1))[0] == 0.0                                  # nothing below d1
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(stiffnesses=[1.0, 2.0, 3.0], breakpoints=[0.2, 0.1]), "not strictly increasing"),
+    (dict(stiffnesses=[1.0, 2.0], breakpoints=[-0.1]), "not positive"),
+    (dict(stiffnesses=[1.0, 2.0], breakpoints=[0.0]), "not positive"),
+    (dict(stiffnesses=[1.0, 2.0], breakpoints=[0.1, 0.2]), "one more stiffness"),
+    (dict(stiffnesses=[1.0, float("nan")], breakpoints=[0.1]), "NaN"),
+    (dict(stiffnesses=[1.0, 2.0], breakpoints=[float("nan")]), "NaN"),
+    (dict(stiffnesses=[1.0], breakpoints=[]), "at least one breakpoint"),
+    (dict(stiffnesses=[1.0, 2.0], breakpoints=[0.1], eps=0.0), "eps"),
+])
+def test_piecewise_bad_input(kw, match):
+    with pytest.raises(nnm.NNMInputError, match=match) as exc:
+        nnm.PiecewiseLinearSpring(dof=0, **kw)
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("k1", [2.0, -0.5])                       # hardening, softening past d1
+def test_bilinear_oscillator_period_converges_with_the_regularisation(k1):
+    """x'' + x + f(x) = 0 with a bilinear spring (k0 = 0.5, k1, d1 = 0.1) against the closed-form period:
+    the regularisation error falls as eps^2 (3e-4, 3e-5, <1e-6 at eps = 3e-2, 1e-2, 1e-3), and at the
+    smallest eps the remaining error is Newmark's O(h^2)."""
+    k, k0, d1 = 1.0, 0.5, 0.1
+
+    def max_error(eps, spp):
+        m = nnm.Model(np.eye(1), k * np.eye(1),
+                      [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[k0, k1], breakpoints=[d1], eps=eps)])
+        b = nnm.continue_nnm(m, 1, 0.2, energy_min=0.5 * (k + k0) * (1.5 * d1) ** 2, steps_per_period=spp,
+                             max_points=12)
+        assert len(b) >= 8 and b.settings.symmetric
+        A = np.abs(b.x0[:, 0])
+        assert A.min() > d1
+        T = np.array([_bilinear_period(a, k, k0, k1, d1) for a in A])
+        t, x, v = b.orbit(len(b) - 1, 128)                               # energy conserved along an orbit
+        E = m.energy(x, v)
+        assert np.ptp(E) < 1e-4 * E.mean()                               # O(h^2): ~2e-5
+        return np.max(np.abs(b.period / T - 1))
+
+    errors = [max_error(eps, 2000) for eps in (3e-2, 1e-2, 1e-3)]
+    assert errors[0] > 3 * errors[1] > 3 * errors[2]
+    assert errors[2] < 1e-5
+    assert max_error(1e-3, 500) > 5 * errors[2]                          # the rest is the time step's
+
+
+def test_piecewise_springs_survive_the_file_and_refuse_the_scaling_law(tmp_path):
+    springs = [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.5, -0.2, 1.0], breakpoints=[0.1, 0.3], eps=2e-3),
+               nnm.CubicSpring(dof=1, other=0, k3=2.0), nnm.PolynomialSpring(dof=1, coefficients={3: 0.1, 5: 0.2})]
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs)
+    nnm.save_model(tmp_path / "m.h5", m)
+    back = nnm.load_model(tmp_path / "m.h5")
+    assert back.springs == springs
+    np.testing.assert_array_equal(back.K, m.K)                            # K is saved as given, without k0
+    b = nnm.continue_nnm(m, 1, 0.5, max_points=6)
+    assert b.status in ("done", "max_points")
+    with pytest.raises(nnm.NNMInputError, match="cubic springs only"):
+        b.scaled(2.0)
+
+
+def test_piecewise_shooting_agrees_with_harmonic_balance_on_the_2dof():
+    pw = nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.5, 2.0], breakpoints=[0.1], eps=1e-2)
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [pw])
+    b = nnm.continue_nnm(m, 1, 0.3, steps_per_period=400, max_points=40)
+    hb = nnm.continue_nnm(m, 1, 0.3, method="hb", harmonics=25, max_points=60)
+    assert b.status == hb.status == "done" and hb.settings.basis == "odd"
+    assert b.frequency_hz[-1] > 1.05 * b.frequency_hz[0]                # hardening past the kink (~10 %)
+    sel = b.energy <= hb.energy.max()
+    np.testing.assert_allclose(np.interp(b.energy[sel], hb.energy, hb.frequency_hz), b.frequency_hz[sel], rtol=1e-4)
