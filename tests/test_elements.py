@@ -184,3 +184,24 @@ def test_piecewise_shooting_agrees_with_harmonic_balance_on_the_2dof():
     assert b.frequency_hz[-1] > 1.05 * b.frequency_hz[0]                # hardening past the kink (~10 %)
     sel = b.energy <= hb.energy.max()
     np.testing.assert_allclose(np.interp(b.energy[sel], hb.energy, hb.frequency_hz), b.frequency_hz[sel], rtol=1e-4)
+
+
+def test_laws_json_type_key(tmp_path):
+    import h5py
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]),
+                  [nnm.PolynomialSpring(dof=0, coefficients={2: 0.3, 3: 0.5}),
+                   nnm.PiecewiseLinearSpring(dof=1, stiffnesses=[1.0, 0.2], breakpoints=[0.1])])
+    path = tmp_path / "m.h5"
+    nnm.save_model(path, m)
+    with h5py.File(path, "r+") as f:
+        a = f["model/springs"].attrs
+        laws = __import__("json").loads(a["laws_json"])
+        assert laws[1]["type"] == "piecewise_linear" and "type" not in laws[0]    # polynomial entries unchanged
+        laws[0]["type"] = "polynomial"
+        del laws[1]["eps"]                                                        # optional: default 1e-3
+        a["laws_json"] = __import__("json").dumps(laws)
+    assert nnm.load_model(path).springs == m.springs
+    with h5py.File(path, "r+") as f:
+        f["model/springs"].attrs["laws_json"] = '[{"3": 1.0}, {"type": "gap"}]'
+    with pytest.raises(nnm.NNMFileError, match="unknown spring type 'gap'"):
+        nnm.load_model(path)
