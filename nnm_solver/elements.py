@@ -38,7 +38,7 @@ import numpy as np
 import math
 
 from .errors import NNMInputError
-from .jit import jit_inline
+from .laws import law_force, law_force_tangent, ramp_integral, sigmoid, softplus  # noqa: F401 (kernels)
 
 __all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "element_law", "law_force",
            "law_force_tangent"]
@@ -265,21 +265,21 @@ class ElementSet:
         d = np.asarray(d, dtype=float)
         g = sum(self.coefficients[:, j] * d ** p for j, p in enumerate(self.powers))
         for dk, b, w in self._kink_columns():
-            g = g + dk * (_softplus(d - b, w) - _softplus(-d - b, w))
+            g = g + dk * (softplus(d - b, w) - softplus(-d - b, w))
         return g
 
     def tangent(self, d):
         d = np.asarray(d, dtype=float)
         t = sum(p * self.coefficients[:, j] * d ** (p - 1) for j, p in enumerate(self.powers))
         for dk, b, w in self._kink_columns():
-            t = t + dk * (_sigmoid(d - b, w) + _sigmoid(-d - b, w))
+            t = t + dk * (sigmoid(d - b, w) + sigmoid(-d - b, w))
         return t
 
     def potential(self, d):
         d = np.asarray(d, dtype=float)
         P = sum(self.coefficients[:, j] * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
         for dk, b, w in self._kink_columns():
-            P = P + dk * (_ramp_integral(d - b, w) + _ramp_integral(-d - b, w) - 2.0 * _ramp_integral(-b, w))
+            P = P + dk * (ramp_integral(d - b, w) + ramp_integral(-d - b, w) - 2.0 * ramp_integral(-b, w))
         return P
 
     def abs_potential(self, d):
@@ -287,7 +287,7 @@ class ElementSet:
         d = np.abs(np.asarray(d, dtype=float))
         P = sum(np.abs(self.coefficients[:, j]) * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
         for dk, b, w in self._kink_columns():
-            P = P + np.abs(dk) * (_ramp_integral(d - b, w) + _ramp_integral(-d - b, w) - 2.0 * _ramp_integral(-b, w))
+            P = P + np.abs(dk) * (ramp_integral(d - b, w) + ramp_integral(-d - b, w) - 2.0 * ramp_integral(-b, w))
         return P
 
     def _kink_columns(self):
@@ -300,108 +300,3 @@ class ElementSet:
         """(B Phi, powers, coefficients, kinks): the table for coordinates q with x = Phi q (kernels' input)."""
         return (np.ascontiguousarray(self.B @ Phi), np.ascontiguousarray(self.powers),
                 np.ascontiguousarray(self.coefficients), np.ascontiguousarray(self.kinks))
-
-
-def _softplus(x, w):
-    """r_w(x) = w log(1 + exp(x / w)), evaluated without overflow."""
-    u = x / w
-    return np.maximum(x, 0.0) + w * np.log1p(np.exp(-np.abs(u)))
-
-
-def _sigmoid(x, w):
-    """r_w'(x) = 1 / (1 + exp(-x / w))."""
-    u = x / w
-    e = np.exp(-np.abs(u))
-    return np.where(u >= 0, 1.0 / (1.0 + e), e / (1.0 + e))
-
-
-def _ramp_integral(x, w):
-    """R(x) = int_{-inf}^x r_w = -w^2 Li2(-exp(x / w)) (Li2(z) = scipy.special.spence(1 - z)); for x > 0
-    the reflection Li2(-e^u) = -pi^2/6 - u^2/2 - Li2(-e^-u) keeps the argument bounded."""
-    from scipy.special import spence
-
-    u = np.asarray(x / w, dtype=float)
-    e = np.exp(-np.abs(u))
-    neg = -w * w * spence(1.0 + e)                                    # u <= 0
-    pos = 0.5 * x * x + w * w * (np.pi ** 2 / 6.0 + spence(1.0 + e))  # u > 0
-    return np.where(u > 0, pos, neg)
-
-
-@jit_inline
-def _ipow(x, p):
-    """x ** p for an integer p >= 0 by repeated squaring (faster than pow for the small powers here)."""
-    r = 1.0
-    while p > 0:
-        if p & 1:
-            r *= x
-        x *= x
-        p >>= 1
-    return r
-
-
-@jit_inline
-def _softplus1(x, w):
-    """r_w(x) = w log(1 + exp(x / w)) for one number (numba kernel)."""
-    if x > 0.0:
-        return x + w * math.log1p(math.exp(-x / w))
-    return w * math.log1p(math.exp(x / w))
-
-
-@jit_inline
-def _sigmoid1(x, w):
-    """r_w'(x) for one number (numba kernel)."""
-    if x > 0.0:
-        return 1.0 / (1.0 + math.exp(-x / w))
-    e = math.exp(x / w)
-    return e / (1.0 + e)
-
-
-@jit_inline
-def law_force(d, powers, coeffs, kinks):
-    """g(d) (n_s,) of the element laws (numba kernel; see ElementSet)."""
-    ns = d.shape[0]
-    g = np.empty(ns)
-    for s in range(ns):
-        x = d[s]
-        acc = 0.0
-        for j in range(powers.shape[0]):
-            c = coeffs[s, j]
-            if c != 0.0:
-                acc += c * x ** powers[j]
-        for j in range(kinks.shape[1]):
-            dk = kinks[s, j, 0]
-            if dk != 0.0:
-                b = kinks[s, j, 1]
-                w = kinks[s, j, 2]
-                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
-        g[s] = acc
-    return g
-
-
-@jit_inline
-def law_force_tangent(d, powers, coeffs, kinks):
-    """(g(d), g'(d)) (n_s,) each, of the element laws (numba kernel)."""
-    ns = d.shape[0]
-    g = np.empty(ns)
-    t = np.empty(ns)
-    for s in range(ns):
-        x = d[s]
-        acc = 0.0
-        dacc = 0.0
-        for j in range(powers.shape[0]):
-            c = coeffs[s, j]
-            if c != 0.0:
-                p = powers[j]
-                xp1 = x ** (p - 1)
-                acc += c * xp1 * x
-                dacc += p * c * xp1
-        for j in range(kinks.shape[1]):
-            dk = kinks[s, j, 0]
-            if dk != 0.0:
-                b = kinks[s, j, 1]
-                w = kinks[s, j, 2]
-                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
-                dacc += dk * (_sigmoid1(x - b, w) + _sigmoid1(-x - b, w))
-        g[s] = acc
-        t[s] = dacc
-    return g, t

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .elements import law_force, law_force_tangent
+from .laws import law_force, law_force_tangent
 from .jit import jit as _jit
 
 NEWTON_MAX = 40

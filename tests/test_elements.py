@@ -85,7 +85,7 @@ def _bilinear_period(A, k, k0, k1, d1):
 
 
 def test_piecewise_force_tangent_potential_and_kernels():
-    from nnm_solver.elements import law_force, law_force_tangent
+    from nnm_solver.laws import law_force, law_force_tangent
     pw = nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[2.0, 0.5, 3.0], breakpoints=[0.1, 0.25], eps=0.05)
     m = nnm.Model(np.eye(3), np.diag([1.0, 2.0, 3.0]),
                   [nnm.PolynomialSpring(dof=0, coefficients={3: 0.4}), pw,
