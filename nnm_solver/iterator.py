@@ -142,16 +142,10 @@ class NNMIterator:
         kb, frac_b = self._content(bpoint)
         return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
 
-    def _content(self, point):
-        """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (cached on the point)."""
-        if not hasattr(point, "_content"):
-            x = np.asarray(point.x0)
-            sys_ = self._system
-            u = self._problem.pack(sys_.to_modal(x), sys_.to_modal(np.asarray(point.v0)), point.period) \
-                if self.settings.method == "shooting" else None
-            Q = self._problem.modal_orbit(u) if u is not None else None
-            point._content = harmonic_label(Q)[1:3] if Q is not None else (1, 0.0)
-        return point._content
+    @staticmethod
+    def _content(point):
+        """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (measured when it was recorded)."""
+        return getattr(point, "_content", (1, 0.0))
 
     def _skip(self, cp, point):
         """Jump over the tongue that ``point`` entered (tongue_skip.py); True if the continuation now
@@ -233,10 +227,12 @@ class NNMIterator:
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
-        label = harmonic_label(prob.modal_orbit(cp.u))[0] if hasattr(prob, "modal_orbit") else "backbone"
-        return Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0, v0=v0,
-                     floquet=mu, stable=stable, iterations=cp.iterations,
-                     coefficients=None if A is None else sys_.to_physical(A), label=label), (q0, vq0, T)
+        label, k, frac, _ = harmonic_label(prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None)
+        point = Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0,
+                      v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
+                      coefficients=None if A is None else sys_.to_physical(A), label=label)
+        point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
+        return point, (q0, vq0, T)
 
     def _finish(self, status, message):
         self.status, self.message = status, message
