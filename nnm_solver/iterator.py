@@ -88,7 +88,7 @@ class NNMIterator:
             raise StopIteration
         self.points.append(point)
         E, E0 = point.energy, self.points[0].energy
-        ratio = self._turning_ratio(q0, v0)
+        ratio = min(self._turning_ratio(q0, v0), getattr(point, "_restoring", 1.0))
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
@@ -182,9 +182,9 @@ class NNMIterator:
 
     def _failed(self, reason):
         N = len(self.points)
-        if N and self._turning_ratio(*self._last) < 0.1:
-            p = self.points[-1]
-            self._finish("escape", escape_message(p, self._turning_ratio(*self._last)) +
+        ratio = min(self._turning_ratio(*self._last), getattr(self.points[-1], "_restoring", 1.0)) if N else 1.0
+        if ratio < 0.1:
+            self._finish("escape", escape_message(self.points[-1], ratio) +
                          f" (the continuation could not go further: {reason})")
             return
         where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
@@ -227,11 +227,13 @@ class NNMIterator:
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
-        label, k, frac, _ = harmonic_label(prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None)
+        Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
+        label, k, frac, _ = harmonic_label(Q)
         point = Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0,
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
+        point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)
 
     def _finish(self, status, message):

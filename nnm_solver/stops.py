@@ -16,8 +16,9 @@ where there is one, the remedy:
                   iteration (a ``break``)
 * ``running``     a snapshot of a job in progress
 
-Escape test.  At the turning point x0 of a reversible orbit (v0 = 0) the restoring force
-K x0 + f_nl(x0) vanishes only at an equilibrium.  In modal coordinates its size relative to the linear
+Escape test.  At the turning point x0 of a reversible orbit (v0 = 0) -- or at any configuration of
+the orbit with at least half its largest amplitude -- the restoring force K x + f_nl(x) vanishes only
+at an equilibrium.  In modal coordinates its size relative to the linear
 force, r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0|, is 1 for a linear motion and falls to 0 as the
 family approaches a saddle (a homoclinic orbit, whose period tends to infinity).  r < ESCAPE_RATIO
 stops the branch with status ``escape``; so does a failure of the continuation where r < 0.1.
@@ -33,9 +34,16 @@ ESCAPE_RATIO = 1e-2
 
 
 def restoring_ratio(system, q0):
-    """r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0| at the modal displacement q0 (1: linear, 0: equilibrium)."""
-    lin = system.omega2 * q0
-    return float(np.linalg.norm(lin + system.Bq.T @ system.force(system.Bq @ q0)) / max(np.linalg.norm(lin), 1e-300))
+    """r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0| at the modal displacement q0 (1: linear, 0: equilibrium).
+
+    q0 may also be (samples, n): the smallest r over those configurations (an orbit that passes near a
+    saddle during its period, not only at t = 0)."""
+    q = np.atleast_2d(q0)
+    lin = q * system.omega2
+    res = lin + system.force(q @ system.Bq.T) @ system.Bq
+    r = np.linalg.norm(res, axis=1) / np.maximum(np.linalg.norm(lin, axis=1), 1e-300)
+    big = np.linalg.norm(q, axis=1) >= 0.5 * np.max(np.linalg.norm(q, axis=1))   # not the passages through 0
+    return float(np.min(r[big]))
 
 
 def escape_message(point, ratio):

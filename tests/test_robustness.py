@@ -158,3 +158,16 @@ def test_loop_detector_on_a_circle_and_on_a_fold():
     det = LoopDetector(mirror=False)                           # up to a fold and back down: no loop
     for k in list(range(20)) + list(range(19, -1, -1)):
         assert det.add(np.array([1.0 + 0.1 * k, 0.5]), np.zeros(2), 1.0, 1.0 + 0.01 * k + 1e-4 * (k > 19), T_r) is None
+
+
+def test_restoring_ratio_along_an_orbit():
+    """r = |q + g(q)| / |q| for x'' + x - x^3 = 0 is 1 - q^2; over an orbit, the smallest value among the
+    configurations with at least half the largest amplitude (passages through 0 do not count)."""
+    from nnm_solver.modal import modal_system
+    from nnm_solver.stops import restoring_ratio
+
+    ms = modal_system(duffing_model(-1.0))
+    assert restoring_ratio(ms, np.array([0.5])) == pytest.approx(0.75)
+    Q = np.array([[0.01], [0.2], [0.99], [0.6], [-0.7]])
+    assert restoring_ratio(ms, Q) == pytest.approx(1 - 0.99 ** 2)
+    assert restoring_ratio(ms, Q[[0, 1, 3, 4]]) == pytest.approx(1 - 0.7 ** 2)
