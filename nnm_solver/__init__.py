@@ -34,7 +34,7 @@ from .variants import Variant, load_sweep_file, variant_grid
 from .sweeps import SweepProgress, load_sweep, sweep
 from . import analysis, hb
 from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmonic, find_tongues, mac_orbits,
-                       orbit_shape)
+                       mass_mac, orbit_shape)
 
 __all__ = [
     # models
@@ -54,7 +54,7 @@ __all__ = [
     "export_csv", "export_uff", "export_uff_orbit", "amplitude_backbone", "export_backbone_csv", "Backbone",
     # reading branches
     "analysis", "HarmonicContent", "Tongue", "describe_orbit", "dominant_harmonic", "find_tongues",
-    "mac_orbits", "orbit_shape",
+    "mac_orbits", "mass_mac", "orbit_shape",
     # errors
     "NNMInputError", "NNMFileError",
 ]

@@ -1,11 +1,12 @@
 """Tools to read a computed NNM branch: harmonic content of its orbits (harmonics.py),
-internal-resonance tongues (tongues.py), and the shapes of orbits and their MAC (shapes.py).
+internal-resonance tongues (tongues.py), and the shapes of orbits and their MAC (shapes.py: ``mass_mac(model, a, b)``, the
+mass-weighted MAC used everywhere).
 """
 from .harmonics import (DISTORTION_FRACTION, RESONANCE_FRACTION, HarmonicContent, describe_orbit,
                         dominant_harmonic, harmonic_coefficients, harmonic_fractions, harmonic_shape, orbit_samples)
-from .shapes import mac_orbits, orbit_shape
+from .shapes import mac_orbits, mass_mac, orbit_shape
 from .tongues import Tongue, find_tongues
 
 __all__ = ["HarmonicContent", "Tongue", "harmonic_coefficients", "dominant_harmonic", "harmonic_fractions",
-           "harmonic_shape", "orbit_samples", "describe_orbit", "find_tongues", "orbit_shape", "mac_orbits",
+           "harmonic_shape", "orbit_samples", "describe_orbit", "find_tongues", "orbit_shape", "mac_orbits", "mass_mac",
            "RESONANCE_FRACTION", "DISTORTION_FRACTION"]

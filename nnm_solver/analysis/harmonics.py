@@ -152,8 +152,9 @@ def harmonic_shape(branch, i, k, n=None):
 
 
 def closest_mode(branch, shape):
+    from .shapes import mass_mac   # shapes.py imports this module
     _, Phi = branch.model.linear_modes()
-    m = mac(shape, Phi)[0]
+    m = mass_mac(branch.model, shape, Phi)[0]
     r = int(np.argmax(m))
     return r + 1, float(m[r])
 

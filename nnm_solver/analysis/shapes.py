@@ -1,12 +1,41 @@
-"""Shapes of orbits and the MAC between them (seed eq. 19)."""
+"""Shapes of orbits and the MAC between them (seed eq. 19).
+
+``mass_mac(model, a, b)`` is the one MAC to compare shapes of a model: mass-weighted, so that two
+distinct linear modes give exactly 0 whatever the coordinates (Craig-Bampton coordinates mix physical
+boundary DOFs with fixed-interface modal amplitudes, and the plain dot product of such vectors is
+meaningless: on assets/paris.h5 the mass-orthogonal linear modes 19 and 513 have a raw MAC of 0.96).
+"""
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import NNMInputError
 from ..modal import modal_system
 from ..reduction import mac
 from .harmonics import check_branch, harmonic_shape, orbit_samples
+
+def mass_mac(model, a, b):
+    """Mass-weighted modal assurance criterion between shapes of ``model`` (seed eq. 19 with M):
+
+        MAC(a, b) = (a^T M b)^2 / ((a^T M a) (b^T M b)),   in [0, 1].
+
+    model : an nnm Model (its mass matrix ``model.M`` is used) or a mass matrix (n, n), dense or
+        scipy.sparse (e.g. a full FE mass matrix, to compare recovered physical displacements).
+    a, b : two shapes (n,) -> a float; or sets of shapes (n, na), (n, nb) (columns) -> the MAC matrix
+        (na, nb); a 1-D and a 2-D argument -> (1, nb) or (na, 1).
+    Distinct linear modes of the model give 0, a shape and any multiple of it give 1.
+    """
+    M = getattr(model, "M", model)
+    if M is None or not (sp.issparse(M) or np.ndim(M) == 2):
+        raise NNMInputError("mass_mac needs a Model or a mass matrix (n, n) as its first argument")
+    n = M.shape[0]
+    for name, v in (("a", a), ("b", b)):
+        if np.shape(v)[:1] != (n,):
+            raise NNMInputError(f"mass_mac: {name} has shape {np.shape(v)}, expected ({n},) or ({n}, k) rows "
+                                f"matching the mass matrix")
+    return mac(a, b, M)
+
 
 def orbit_shape(branch, i, kind="peak", samples=None):
     """Shape (n_dof,) of the orbit of point i.
@@ -32,8 +61,9 @@ def orbit_shape(branch, i, kind="peak", samples=None):
 
 
 def mac_orbits(branch_a, i, branch_b=None, j=None, kind="peak"):
-    """MAC between the shapes of orbit i of branch_a and orbit j of branch_b (default: the same
-    branch).  kind: see ``orbit_shape``.  Returns a float in 0..1."""
+    """Mass-weighted MAC (``mass_mac``) between the shapes of orbit i of branch_a and orbit j of
+    branch_b (default: the same branch; both of the same model size).  kind: see ``orbit_shape``.
+    Returns a float in 0..1."""
     if branch_b is None:
         branch_b = branch_a
     if j is None:
@@ -41,4 +71,4 @@ def mac_orbits(branch_a, i, branch_b=None, j=None, kind="peak"):
     if branch_a.model.n != branch_b.model.n:
         raise NNMInputError(f"the branches have {branch_a.model.n} and {branch_b.model.n} DOFs; "
                             f"MAC needs shapes of the same size")
-    return mac(orbit_shape(branch_a, i, kind), orbit_shape(branch_b, j, kind))
+    return mass_mac(branch_a.model, orbit_shape(branch_a, i, kind), orbit_shape(branch_b, j, kind))
