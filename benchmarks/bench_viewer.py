@@ -143,7 +143,8 @@ def first_point(page):
     page.get_by_role("tab", name="Compute").click()
     page.get_by_role("button", name="Start").click()
     t1 = time.perf_counter()
-    page.wait_for_function("/NNM \\d+: [1-9]\\d* points/.test(document.body.innerText)", timeout=300000, polling=50)
+    page.wait_for_function("/\\b[1-9]\\d* (of at most \\d+ points|points in)/.test(document.body.innerText)",
+                           timeout=300000, polling=50)
     dt = time.perf_counter() - t1
     stop = page.get_by_role("button", name="Stop (keep points)")
     if stop.is_enabled():             # a short branch may have ended already

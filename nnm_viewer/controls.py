@@ -264,9 +264,9 @@ class Session:
             raise ValueError("the branch is still being computed: stop it or wait, then save")
         if e.saved:
             raise ValueError("this branch is already in the file")
-        name = branch_label(e.branch, e.k3_factor, source="file")
+        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model)
         target, reason = self.shared.save(e)
-        self.show_status(f"saved {name} ({len(e)} points) to {target}"
+        self.show_status(f"saved {name}, {len(e)} points, to {target}"
                          + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
                             if reason else ""))
 

@@ -51,7 +51,7 @@ def sweep_key(e):
 def branch_options(entries):
     """[(position in ``entries``, dropdown option)] in the order of the branch list: the branches
     that are not a sweep's as they come, then the sweep branches grouped by variant (ordered by
-    variant, then mode), each option prefixed with its variant: 'stiff › 3: mode 5 (40 pts)'.
+    variant, then mode), each option prefixed with its variant: 'stiff › 3: NNM 5 (40 pts)'.
     The number is the branch's position (its colour), as in the FEP legend."""
     plain, swept = [], []
     for i, e in enumerate(entries):
@@ -60,8 +60,7 @@ def branch_options(entries):
             plain.append((i, entry_option(i, e)))
         else:
             variant, mode = key
-            name = f"{variant}:mode{mode}"
-            label = f"mode {mode}" + (e.label[len(name):] if e.label.startswith(name) else f" ({e.label})")
+            label = e.label.replace(f" \u00b7 variant {variant}", "", 1)     # the variant leads the option
             swept.append(((variant, mode, i), (i, f"{variant} \u203a {entry_option(i, e, label)}")))
     return plain + [opt for _, opt in sorted(swept, key=lambda t: t[0])]
 

@@ -14,8 +14,6 @@ import viser
 #: widths (px) of the docked control panel (left) and information panel (right)
 CONTROL_WIDTH = 340
 PANEL_WIDTH = 500
-#: modes offered in the Compute tab
-MAX_MODES_LISTED = 60
 #: modes listed in the Modes tab
 MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
@@ -126,7 +124,7 @@ class Layout:
                                               hint="time (s) and the displacement of every DOF over one "
                                                    "period of the picked orbit")
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
-            options = tuple(mode_label(model, linear_freqs, k) for k in range(1, min(model.n, MAX_MODES_LISTED) + 1))
+            options = tuple(mode_label(model, linear_freqs, k) for k in range(1, model.n + 1))    # every mode
             self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
             self.h_emin = gui.add_number("Min energy (J), 0 = auto", initial_value=0.0, min=0.0, step=1e-6)
             self.h_emax = gui.add_number("Max energy (J)", initial_value=100.0, min=1e-12, step=1e-6)

@@ -7,6 +7,7 @@ Everything here is plain Python, usable and testable without a browser.
 from __future__ import annotations
 
 import itertools
+import re
 import threading
 from dataclasses import dataclass, field
 
@@ -60,12 +61,47 @@ class BranchEntry:
                          status=str(getattr(b, "status", "") or ""))
 
 
-def branch_label(branch, k3_factor=1.0, source="file"):
-    """Short label such as 'NNM 1', the branch's name, or 'NNM 2 (k3 x 10) [running]'."""
+def mode_name(model, mode):
+    """The model's label of linear mode ``mode`` (1-based), or ''."""
+    labels = getattr(model, "mode_labels", None) or []
+    try:
+        k = int(mode)
+    except (TypeError, ValueError):
+        return ""
+    return str(labels[k - 1]).strip() if 1 <= k <= len(labels) else ""
+
+
+def name_remainder(name, mode):
+    """What a branch's stored ``name`` adds to 'NNM <mode>': '' for 'NNM1', 'mode 14', a sweep's
+    'variant <variant>' for a sweep's '<variant>:mode<N>'; 'paper mode 13' for
+    'mode14 (paper mode 13)'; 'harmonic balance H15' for 'NNM1 harmonic balance H15'."""
+    from nnm_solver.sweeps import parse_branch_name
+
+    name = str(name or "").strip()
+    swept = parse_branch_name(name)
+    if swept is not None:
+        return f"variant {swept[0]}"
+    if not name:
+        return ""
+    m = re.match(rf"^\s*(?:nnm|mode)\s*{re.escape(str(mode))}(?![0-9])\s*(.*)$", name, flags=re.IGNORECASE)
+    rest = m.group(1) if m else name
+    rest = rest.strip().strip(":,-;").strip()
+    if rest.startswith("(") and rest.endswith(")") and rest.count("(") == 1:
+        rest = rest[1:-1].strip()
+    return rest
+
+
+def branch_label(branch, k3_factor=1.0, source="file", model=None):
+    """The branch's name in every list and legend: 'NNM <k> (<the model's label of mode k>)', then
+    what its stored name adds (' · harmonic balance H15'), the k3 factor if not 1 and, for a branch
+    of this session, its state: 'NNM 2 (out-of-phase mode) (k3 x 10) [running]'.  ``model``: whose
+    mode labels to use when the branch carries no model of its own."""
     mode = getattr(branch, "mode", "?")
-    name = str(getattr(branch, "name", "") or "")
-    text = name if name and name.replace(" ", "").lower() not in (f"nnm{mode}", f"mode{mode}") \
-        else f"NNM {mode}"
+    label = mode_name(getattr(branch, "model", None) or model, mode) or mode_name(model, mode)
+    text = f"NNM {mode}" + (f" ({label})" if label else "")
+    extra = name_remainder(getattr(branch, "name", ""), mode)
+    if extra:
+        text += f" \u00b7 {extra}"
     if abs(k3_factor - 1.0) > 1e-12:
         text += f" (k3 x {k3_factor:.3g})"
     if source in ("running", "stopped", "failed"):
@@ -112,7 +148,7 @@ class SharedState:
 
     # ------------------------------------------------------------------ entries
     def add(self, branch, k3_factor=1.0, source="file", saved=True, notify=True):
-        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source),
+        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source, self.model),
                             k3_factor=k3_factor, source=source, saved=saved)
         with self.lock:
             self.entries.append(entry)
@@ -128,7 +164,7 @@ class SharedState:
                 entry.source = source
             if status is not None:
                 entry.status = status
-            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source)
+            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source, self.model)
         if notify:
             self.notify("branches")
 

@@ -2,10 +2,16 @@
 state, keep the points on Stop, and report solver errors without stopping the server."""
 from __future__ import annotations
 
+import math
 import queue
 import threading
+import time
+from dataclasses import dataclass
 
 import nnm_solver
+
+#: the solver's default max_points (nnm_solver.iter_nnm), used when a job is started without one
+DEFAULT_MAX_POINTS = 500
 
 
 def one_line(exc):
@@ -15,6 +21,73 @@ def one_line(exc):
     if isinstance(exc, ValueError):
         return msg or type(exc).__name__
     return f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
+
+
+def duration_text(seconds):
+    """'42 s', '3 min 05 s', '1 h 02 min'."""
+    s = max(0, int(round(float(seconds))))
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {(s % 3600) // 60:02d} min"
+
+
+@dataclass
+class JobProgress:
+    """How far a job is: ``points`` converged of at most ``max_points``, ``energy_fraction`` (0..1,
+    the solver's ``Job.progress``: the way in log energy from the first point to energy_max) and
+    ``elapsed`` seconds since Start.  A branch ends at max_points or at energy_max, whichever comes
+    first, so the progress is the further of the two fractions."""
+
+    points: int
+    max_points: int
+    energy_fraction: float
+    elapsed: float
+    done: bool = False
+
+    @property
+    def points_fraction(self):
+        return min(1.0, self.points / self.max_points) if self.max_points > 0 else 0.0
+
+    @property
+    def fraction(self):
+        return 1.0 if self.done else max(self.points_fraction, float(min(max(self.energy_fraction, 0.0), 1.0)))
+
+    @property
+    def by(self):
+        """Which measure gives the progress: 'points' or 'energy'."""
+        return "points" if self.points_fraction >= self.energy_fraction else "energy"
+
+    @property
+    def rate_per_min(self):
+        """Points per minute since Start (None before the first point)."""
+        return 60.0 * self.points / self.elapsed if self.points and self.elapsed > 0 else None
+
+    @property
+    def eta(self):
+        """Seconds left, at the pace so far, to whichever end comes first (max_points or energy_max);
+        None before two points."""
+        if self.done or self.points < 2 or self.elapsed <= 0:
+            return None
+        etas = []
+        if self.max_points > self.points:
+            etas.append((self.max_points - self.points) * self.elapsed / self.points)
+        if 0.0 < self.energy_fraction < 1.0:
+            etas.append(self.elapsed * (1.0 - self.energy_fraction) / self.energy_fraction)
+        return min(etas) if etas else 0.0
+
+    def text(self):
+        """One line: progress and the measure it is by, elapsed time, rate and time left."""
+        parts = [f"{self.points} of at most {self.max_points} points",
+                 f"{100 * self.fraction:.0f} % (by {self.by}; by energy {100 * self.energy_fraction:.0f} %)",
+                 f"elapsed {duration_text(self.elapsed)}"]
+        if self.rate_per_min is not None:
+            parts.append(f"{self.rate_per_min:.3g} points/min")
+        eta = self.eta
+        if eta is not None:
+            parts.append(f"about {duration_text(eta)} left")
+        return " · ".join(parts)
 
 
 class JobRunner:
@@ -42,6 +115,10 @@ class JobRunner:
         self.entry = None
         self.job = None
         self.branch = None           # the rows received so far (extended in place)
+        self.max_points = int(options.get("max_points") or DEFAULT_MAX_POINTS)
+        self.t_start = None          # time.monotonic() at Start
+        self.t_end = None            # ... when the job ended
+        self._energy = 0.0           # the job's energy fraction, last read while it ran
         self.thread = None
         self.finished = threading.Event()
 
@@ -51,6 +128,7 @@ class JobRunner:
         if abs(self.k3_factor - 1.0) > 1e-12:
             model = model.scaled(self.k3_factor)
         start = self._start or nnm_solver.start_branch
+        self.t_start = time.monotonic()
         self.job = start(model, mode=self.mode, energy_max=self.energy_max, **self.options)
         self.branch = nnm_solver.Branch.from_points(model, self.mode, [], settings=self.job.settings,
                                                     status="running")
@@ -58,10 +136,38 @@ class JobRunner:
         with self.shared.lock:
             self.shared.job = self
             self.shared.error = ""
-        self.shared.set_progress(0.0, f"computing NNM {self.mode} up to {self.energy_max:.3g} J ...")
+        self.shared.set_progress(0.0, self.status_text())
         self.thread = threading.Thread(target=self._run, name=f"nnm-job-mode{self.mode}", daemon=True)
         self.thread.start()
         return self
+
+    @property
+    def name(self):
+        """The branch's name in the lists ('NNM 2 (out-of-phase mode)')."""
+        return self.entry.label.split(" [")[0] if self.entry is not None else f"NNM {self.mode}"
+
+    def progress(self):
+        """JobProgress now (frozen once the job has ended: a cancelled solver job reports 1)."""
+        if self.t_end is None and self.job is not None and not self.cancelled:
+            try:
+                energy = float(getattr(self.job, "progress", 0.0) or 0.0)
+            except (TypeError, ValueError):
+                energy = 0.0
+            self._energy = energy if math.isfinite(energy) else self._energy
+        energy = self._energy
+        end = self.t_end if self.t_end is not None else time.monotonic()
+        n = 0 if self.branch is None else len(self.branch)
+        return JobProgress(points=n, max_points=self.max_points, energy_fraction=energy,
+                           elapsed=end - (self.t_start or end))
+
+    def status_text(self, p=None, ended=""):
+        """Markdown of the Compute tab's job line."""
+        p = p or self.progress()
+        head = f"**{self.name}** up to {self.energy_max:.3g} J"
+        if ended:
+            rate = f" ({p.rate_per_min:.3g} points/min)" if p.rate_per_min is not None else ""
+            return f"{head}: {p.points} points in {duration_text(p.elapsed)}{rate}, {ended}"
+        return f"{head}  \n{p.text()}"
 
     def _snapshot(self):
         """The rows received so far, as a Branch of its own (no copy of the columns)."""
@@ -87,10 +193,11 @@ class JobRunner:
                 if points:
                     self.branch.extend(points)
                     self.shared.update(self.entry, branch=self._snapshot())
-                self.shared.set_progress(float(getattr(self.job, "progress", 0.0) or 0.0),
-                                         f"NNM {self.mode}: {len(self.branch)} points")
+                p = self.progress()
+                self.shared.set_progress(p.fraction, self.status_text(p))
             self._finish()
         except Exception as exc:  # never let the thread die silently
+            self.t_end = self.t_end or time.monotonic()
             self.shared.update(self.entry, source="failed", status=one_line(exc))
             self.shared.set_error(f"solver job failed: {one_line(exc)}")
         finally:
@@ -108,10 +215,11 @@ class JobRunner:
         return snap
 
     def _finish(self):
+        self.t_end = time.monotonic()
         err = getattr(self.job, "error", None)
         if err is not None:
             snap = self._failed(err)
-            self.shared.set_progress(self.shared.progress, f"NNM {self.mode}: failed after {len(snap)} points")
+            self.shared.set_progress(self.shared.progress, self.status_text(ended="failed"))
             self.shared.set_error(f"solver error: {one_line(err)} ({len(snap)} points kept)")
             return
         try:
@@ -125,9 +233,10 @@ class JobRunner:
         message = getattr(branch, "message", "") or ""
         self.shared.update(self.entry, branch=branch, source="stopped" if cancelled else "computed",
                            status=f"{status}: {message}".strip(": "))
-        self.shared.set_progress(1.0 if not cancelled else self.shared.progress,
-                                 f"NNM {self.mode}: {len(branch)} points, "
-                                 f"{'stopped' if cancelled else 'done'}" + (f" ({message})" if message else ""))
+        p = self.progress()
+        self.shared.set_progress(p.fraction if cancelled else 1.0,
+                                 self.status_text(p, ended=("stopped" if cancelled else "done")
+                                                  + (f" ({message})" if message else "")))
 
     cancelled = False
 

@@ -458,7 +458,7 @@ def test_branch_status_and_events_are_shown(server, demo_file, monkeypatch):
                      detail="loss of stability, multiplier through +1")]
     shared = SharedState(model, path=demo_file, branches=[nnm.load_branches(demo_file)[1], b])
     s = Session(server, shared, sync=True)
-    assert s.h_branch.options[1] == "2: NNM 1 (12 pts, failed)" and s.h_branch.options[0].endswith("pts)")
+    assert s.h_branch.options[1] == "2: NNM 1 (in phase) (12 pts, failed)" and s.h_branch.options[0].endswith("pts)")
     s.pick(shared.entries[1].uid, 3)
     info = s.h_branch_info.content
     assert "failed" in info and "try a larger steps_per_period" in info
@@ -541,8 +541,9 @@ def test_sweep_branches_are_listed_by_variant(server, demo_file):
     s = Session(server, shared, sync=True)
     opts = s.h_branch.options
     assert opts[0].startswith("1: NNM 1 (")
-    assert [o.split(" (")[0] for o in opts[1:]] == ["base \u203a 4: mode 1", "base \u203a 3: mode 2",
-                                                     "stiff \u203a 5: mode 1", "stiff \u203a 2: mode 2"]
+    assert [o.split(" (")[0] for o in opts[1:]] == ["base \u203a 4: NNM 1", "base \u203a 3: NNM 2",
+                                                     "stiff \u203a 5: NNM 1", "stiff \u203a 2: NNM 2"]
+    assert "variant" not in " ".join(opts)                # the variant leads the option, once
     # the dropdown selects the branch of the option; a pick shows the branch's grouped option
     s.h_branch.value = opts[3]
     assert s.sel_uid == shared.entries[4].uid
@@ -598,4 +599,87 @@ def test_fep_and_orbit_csv_downloads(server, demo_file):
     # a model without DOF labels: x0..x{n-1}
     unlabelled = nnm.Model(s.model.M, s.model.K)
     assert orbit_csv(pd, unlabelled).decode().splitlines()[0] == "t_s,x0,x1"
+    s.close()
+
+
+def test_job_progress_is_the_further_of_points_and_energy():
+    """Issue 14, item 10: progress by points (of max_points) or by energy, whichever is further; rate
+    and time left at the pace so far, to whichever end comes first."""
+    from nnm_viewer.worker import JobProgress, duration_text
+
+    p = JobProgress(points=60, max_points=80, energy_fraction=0.957, elapsed=120.0)
+    assert p.fraction == pytest.approx(0.957) and p.by == "energy"
+    assert p.rate_per_min == pytest.approx(30.0)
+    assert p.eta == pytest.approx(min(20 * 2.0, 120.0 * 0.043 / 0.957))
+    q = JobProgress(points=60, max_points=80, energy_fraction=0.3, elapsed=120.0)   # energy lags: by points
+    assert q.fraction == pytest.approx(0.75) and q.by == "points" and q.eta == pytest.approx(40.0)
+    assert JobProgress(points=60, max_points=80, energy_fraction=0.957, elapsed=1.0, done=True).fraction == 1.0
+    assert JobProgress(points=1, max_points=80, energy_fraction=0.0, elapsed=3.0).eta is None
+    text = q.text()
+    assert "60 of at most 80 points" in text and "75 % (by points" in text and "30 points/min" in text
+    assert "about 40 s left" in text
+    assert [duration_text(x) for x in (42, 185, 3720)] == ["42 s", "3 min 05 s", "1 h 02 min"]
+
+
+def test_compute_tab_shows_elapsed_rate_eta_and_points_progress(server, demo_file):
+    """Issue 14, item 10: the Compute tab's progress follows the points when they are further than the
+    energy (not stuck), with elapsed time, rate and time left; the end says how long it took."""
+    full = nnm.load_branches(demo_file)[0]
+    fake = FakeJob(full)                                  # its energy progress: n / 277, far behind
+    s, shared = make_session(server, demo_file, start_job=lambda m, mode, energy_max, **kw: fake)
+    s.h_maxpts.value = 10
+    s._cb(s._on_start)(None)
+    runner = shared.job
+    runner.poll = 0.01
+    fake.release(4)
+    wait_for(lambda: len(runner.entry) == 4)
+    wait_for(lambda: abs(s.h_progress.value - 40.0) < 0.5)
+    text = s.h_job.content
+    assert "NNM 1 (in phase)" in text and "4 of at most 10 points" in text and "(by points" in text
+    assert "elapsed" in text and "points/min" in text and "left" in text
+    fake.release(2)
+    wait_for(lambda: abs(s.h_progress.value - 60.0) < 0.5)
+    s._cb(s._on_stop)(None)
+    runner.finished.wait(5)
+    wait_for(lambda: "stopped" in s.h_job.content)
+    assert "6 points in" in s.h_job.content and "points/min" in s.h_job.content
+    assert s.h_progress.value == pytest.approx(60.0, abs=0.5)   # a cancelled job keeps its progress
+    s.close()
+
+
+def test_every_mode_is_offered_and_branch_names_are_consistent(server, tmp_path):
+    """Issue 14, item 10: the Compute tab lists every mode (not 60); branches are named
+    'NNM <k> (<mode label>)' whatever name they were stored with; the save message names it once."""
+    from nnm_viewer.state import branch_label
+
+    n = 75
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    chain = nnm.Model(np.eye(n), K, [nnm.CubicSpring(dof=0, k3=1.0)],
+                      mode_labels=[f"chain mode {k + 1}" for k in range(n)])
+    shared = SharedState(chain)
+    s = Session(server, shared, sync=True)
+    assert len(s.h_mode.options) == n and s.h_mode.options[-1].startswith(f"{n}: ")
+    assert s.h_mode.options[-1].endswith(f"chain mode {n}")
+    s.close()
+    path = tmp_path / "two.h5"
+    write_demo_file(path, energy_max=1.0, max_points=8)
+    b1 = nnm.load_branches(path)[0]
+    cases = {"NNM1": "NNM 1 (in phase)", "mode1": "NNM 1 (in phase)", "NNM 1": "NNM 1 (in phase)",
+             "mode1 (paper mode 13)": "NNM 1 (in phase) \u00b7 paper mode 13",
+             "NNM1 harmonic balance H15": "NNM 1 (in phase) \u00b7 harmonic balance H15",
+             "stiff:mode1": "NNM 1 (in phase) \u00b7 variant stiff", "": "NNM 1 (in phase)"}
+    for name, want in cases.items():
+        b1.name = name
+        assert branch_label(b1) == want, name
+    assert branch_label(b1, 10.0, "saved") == "NNM 1 (in phase) (k3 x 10) [saved]"
+    bare = nnm.Model(np.eye(2), np.eye(2))                 # no mode labels: 'NNM k' alone
+    b1.name = "mode1"
+    assert branch_label(nnm.Branch.from_points(bare, 1, [])) == "NNM 1"
+    # the save message names the branch once, without the list's state tag
+    s, shared = make_session(server, path)
+    shared.add(shared.entries[0].branch.subset(slice(0, 5)), source="computed", saved=False)
+    s.select(len(shared.entries) - 1, 0)
+    s._cb(s._on_save)(None)
+    msg = s.h_status.content
+    assert msg.startswith("saved NNM 1 (in phase), 5 points, to ") and "[" not in msg and msg.count("NNM") == 1
     s.close()
