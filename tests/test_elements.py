@@ -205,3 +205,96 @@ def test_laws_json_type_key(tmp_path):
         f["model/springs"].attrs["laws_json"] = '[{"3": 1.0}, {"type": "gap"}]'
     with pytest.raises(nnm.NNMFileError, match="unknown spring type 'gap'"):
         nnm.load_model(path)
+
+
+# ------------------------------------------- monodromy, energy and periods across the kinks (issue 18)
+def _monodromy_and_fd(model, branch, i, mode=1, delta=1e-7):
+    """Exact monodromy (2n, 2n) of point i (ShootingProblem: square of the half-period sensitivity
+    of newmark.sweep_sensitivity) and central finite differences of the full-period discrete map, in
+    modal coordinates [q; v]."""
+    from nnm_solver.modal import modal_system
+    from nnm_solver.newmark import sweep_state
+    from nnm_solver.orbits.shooting import ShootingProblem
+    ms = modal_system(model)
+    N = branch.settings.steps_per_period
+    q0, v0, T = ms.to_modal(branch.x0[i]), ms.to_modal(branch.v0[i]), branch.period[i]
+    prob = ShootingProblem(ms, mode - 1, N, symmetric=True)
+    prob.all_columns = True
+    u = prob.pack(q0, v0, T)
+    prob.jacobian(u)
+    prob.accept(u, None)
+    z0, n = np.concatenate([q0, v0]), len(q0)
+    cols = []
+    for dz in delta * np.eye(2 * n):
+        qp, vp, okp = sweep_state(*np.split(z0 + dz, 2), T / N, N, *ms.kernel)
+        qm, vm, okm = sweep_state(*np.split(z0 - dz, 2), T / N, N, *ms.kernel)
+        assert okp and okm
+        cols.append(np.concatenate([qp - qm, vp - vm]) / (2 * delta))
+    return prob.monodromy(), np.column_stack(cols)
+
+
+@pytest.mark.parametrize("eps, rel", [(1e-2, 1e-3), (1e-3, 1e-4)])
+def test_monodromy_across_a_kink_single_dof(eps, rel):
+    """x'' + x + f(x) = 0, bilinear f (k0 = 0.5, k1 = 2, d1 = 0.1), an orbit of amplitude A ~ 1.65 d1
+    that crosses the kink four times per period.  (i) The exact monodromy of the discrete map equals
+    its central finite differences (step 1e-7 < kink width eps d1).  (ii) Independent physics: the
+    bilinear force is continuous, so the switching instants carry no saltation jump and the monodromy
+    of the nonsmooth flow is [[1, 0], [T'(A) F(A), 1]] for an orbit from rest at x = A (F(A) = A +
+    f(A) the restoring force, T(A) the closed-form period); the regularised one converges to it."""
+    k, k0, k1, d1 = 1.0, 0.5, 2.0, 0.1
+    pw = nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[k0, k1], breakpoints=[d1], eps=eps)
+    m = nnm.Model(np.eye(1), k * np.eye(1), [pw])
+    b = nnm.continue_nnm(m, 1, 0.2, energy_min=0.5 * (k + k0) * (1.5 * d1) ** 2, steps_per_period=2000,
+                         max_points=12)
+    i = len(b) // 2
+    A = b.x0[i, 0]
+    assert 1.5 * d1 < A < 2 * d1
+    Mo, fd = _monodromy_and_fd(m, b, i)
+    np.testing.assert_allclose(Mo, fd, rtol=1e-6, atol=1e-6 * np.abs(Mo).max())
+    dT = (_bilinear_period(A + 1e-6, k, k0, k1, d1) - _bilinear_period(A - 1e-6, k, k0, k1, d1)) / 2e-6
+    assert Mo[1, 0] == pytest.approx(dT * (k * A + float(pw.exact_force(A))), rel=rel)   # eps=1e-2: 4.5e-4
+    np.testing.assert_allclose([Mo[0, 0], Mo[1, 1], Mo[0, 1]], [1.0, 1.0, 0.0], atol=1e-3)
+
+
+def test_monodromy_and_energy_across_kinks_two_dof():
+    """2-DOF benchmark (M = I, K = [[2, -1], [-1, 2]]) with a relative three-slope spring (k = 1, 0.2, 3;
+    breakpoints 0.1, 0.3 m) between the masses and a grounded clearance (k0 = 0, gap 0.05 m) on DOF 0:
+    an NNM2 orbit that crosses all three kinks.  Exact monodromy vs finite differences of the
+    discrete map; its non-trivial multipliers are the stored ones; energy conserved along the orbit."""
+    K = np.array([[2.0, -1.0], [-1.0, 2.0]])
+    springs = [nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[1.0, 0.2, 3.0], breakpoints=[0.1, 0.3]),
+               nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.0, 2.0], breakpoints=[0.05])]
+    m = nnm.Model(np.eye(2), K, springs)
+    b = nnm.continue_nnm(m, 2, 1.0, steps_per_period=400, max_points=30)
+    i = len(b) - 1
+    t, x, v = b.orbit(i, 256)
+    assert np.abs(x[:, 1] - x[:, 0]).max() > 0.4 and np.abs(x[:, 0]).max() > 0.2      # past every breakpoint
+    Mo, fd = _monodromy_and_fd(m, b, i, mode=2)
+    np.testing.assert_allclose(Mo, fd, rtol=1e-6, atol=1e-6 * np.abs(Mo).max())
+    mu = np.linalg.eigvals(Mo)
+    nontrivial = np.sort_complex(mu[np.abs(mu.imag) > 1e-2])             # the trivial pair is real near 1
+    stored = np.sort_complex(b.floquet[i][np.abs(b.floquet[i] - 1) > 1e-2])
+    assert len(nontrivial) == 2 and np.allclose(nontrivial, stored, atol=1e-3)
+    E = m.energy(x, v)
+    assert np.ptp(E) < 1e-4 * E.mean()                                    # O(h^2): ~3e-5
+
+
+def test_gap_oscillator_period_against_closed_form():
+    """Clearance: x'' + x + f(x) = 0 with f = 0 for |x| < 0.1 m and slope 3 N/m beyond (k0 = 0): the
+    linear frequency is K's alone and the period follows the closed form (harmonic arcs of w0 = 1
+    inside the gap and w1 = 2 about the shifted centre outside) to Newmark's O(h^2)."""
+    k, k1, d1 = 1.0, 3.0, 0.1
+    m = nnm.Model(np.eye(1), k * np.eye(1), [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.0, k1],
+                                                                        breakpoints=[d1])])
+    assert m.linear_modes()[0][0] == pytest.approx(1 / (2 * np.pi), rel=1e-14)
+    b = nnm.continue_nnm(m, 1, 0.5, energy_min=0.5 * k * (1.2 * d1) ** 2, steps_per_period=2000, max_points=15,
+                         max_period_step=0.05)
+    assert len(b) >= 8 and b.settings.symmetric
+    A = np.abs(b.x0[:, 0])
+    assert A.min() > d1 and A.max() > 5 * d1
+    T = np.array([_bilinear_period(a, k, 0.0, k1, d1) for a in A])
+    np.testing.assert_allclose(b.period, T, rtol=5e-6)
+    assert T[-1] < 0.7 * 2 * np.pi                                       # far into the stiff side
+    t, x, v = b.orbit(len(b) - 1, 128)
+    E = m.energy(x, v)
+    assert np.ptp(E) < 1e-4 * E.mean()
