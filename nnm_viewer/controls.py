@@ -40,6 +40,7 @@ SIMPLE_CONTROLS = {
     "h_zoom": ("zoom", bool, ("branches",)),
     "h_k3": ("factor_log", float, ("branches", "point", "controls")),
     "h_dofs": ("dofs_text", str, ("info",)),
+    "h_ghost": ("show_ghost", bool, ("ghost",)),
 }
 
 
@@ -68,6 +69,8 @@ class Session:
         self.show_board = True
         self.zoom = False            # FEP axes fitted to the selected branch only
         self.dofs_text = "auto"
+        self.show_ghost = False      # the undeformed shape, translucent
+        self.view = "Iso"            # last camera preset
         self.message = ""            # last status line for this tab
         # ---- the point shown (written by the drawing, under self.lock)
         self.current_point = None    # PointData shown (scaled to the current k3), or None
@@ -170,7 +173,7 @@ class Session:
         cbs.update(h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
                    h_recompute=self._on_recompute, h_start=self._on_start, h_stop=self._on_stop,
                    h_save=self._on_save, h_dismiss=self._dismiss_error, h_csv_fep=self._on_csv_fep,
-                   h_csv_orbit=self._on_csv_orbit)
+                   h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif, h_view=self._on_view)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
     def _set_field(self, name):
@@ -223,6 +226,29 @@ class Session:
         if cam is not None:
             cam.position = tuple(self.geom.camera_position)
             cam.look_at = tuple(self.geom.camera_look_at)
+
+    def _on_view(self, event):
+        """A view preset (Iso, Top, Side, Front): the camera of this tab frames the model from there."""
+        name = getattr(getattr(event, "target", None), "value", None) or self.layout.h_view.value
+        position, look_at = sc.preset_camera(self.mesh.vertices, name, self.geom.fov_deg)
+        cam = getattr(self.api, "camera", None)        # a tab (ClientHandle); the server has none
+        if cam is not None:
+            cam.position = tuple(position)
+            cam.look_at = tuple(look_at)
+        with self.lock:
+            self.view = name
+
+    def view_direction(self):
+        """Direction the tab's camera looks along (world): from its camera if it has one, else the
+        last preset's, else the initial camera's."""
+        cam = getattr(self.api, "camera", None)
+        try:
+            d = np.asarray(cam.look_at, dtype=float) - np.asarray(cam.position, dtype=float)
+            if np.linalg.norm(d) > 0:
+                return d
+        except Exception:
+            pass
+        return -sc.PRESET_DIRECTIONS.get(getattr(self, "view", "Iso"), sc.CAMERA_DIR)
 
     def _on_recompute(self, _):
         e = self.selected_entry()
@@ -302,6 +328,26 @@ class Session:
         if e is None or pd is None or uid != e.uid:
             raise ValueError("no orbit shown: pick a point of the FEP first")
         return f"{self._download_stem(e)}_point{along:.2f}_orbit.csv", downloads.orbit_csv(pd, self.model)
+
+    def animation_gif(self):
+        """(file name, GIF bytes) of the picked orbit over one period, as shown (amplification, k3
+        factor), seen along the tab's camera direction."""
+        from .gif import gif_title, orbit_gif
+
+        e = self.selected_entry()
+        with self.lock:
+            pd, anim, uid, along = self.current_point, self.current_anim, self.current_uid, self.s
+        if e is None or pd is None or anim is None or uid != e.uid:
+            raise ValueError("no orbit shown: pick a point of the FEP first")
+        amp, peak = self.amplification()
+        idx = self.shared.index_of(e.uid)
+        title = gif_title(f"Branch {(idx or 0) + 1}: {e.label}, point {along:.2f}", pd, peak)
+        data = orbit_gif(anim, amp * cubic_scaling(self.ratio).amplitude, self.view_direction(), title=title)
+        return f"{self._download_stem(e)}_point{along:.2f}.gif", data
+
+    def _on_gif(self, _):
+        self.show_status("drawing the animation (GIF) …")
+        self.download(*self.animation_gif())
 
     def _on_csv_fep(self, _):
         self.download(*self.fep_csv())

@@ -22,7 +22,7 @@ from .worker import one_line
 log = logging.getLogger("nnm_viewer")
 
 #: everything a new tab draws
-ALL_KINDS = ("branches", "controls", "fep", "sliders", "point", "glb", "info", "progress", "error", "solver")
+ALL_KINDS = ("branches", "controls", "fep", "sliders", "point", "glb", "info", "progress", "error", "solver", "ghost")
 
 
 class Drawing:
@@ -38,6 +38,7 @@ class Drawing:
         self._wake = threading.Event()
         self._draw_lock = threading.RLock()
         self._closed = False
+        self.ghost_handle = None
 
     def start(self):
         """Start the per-tab draw thread (not with sync=True: requests are drawn by the caller)."""
@@ -104,6 +105,8 @@ class Drawing:
             kinds |= {"glb", "info"}
         if "glb" in kinds:            # first: the animation is what the user waits for
             step(self.point.draw_glb)
+        if "ghost" in kinds:
+            step(self.draw_ghost)
         if "branches" in kinds:
             step(self.fep.draw_branch_list)
             step(self.fep.draw_board)
@@ -130,6 +133,12 @@ class Drawing:
         ui.set(ui.h_phase, visible=not s.playing)
         ui.set(ui.h_amp, disabled=s.auto_amp)
         ui.set(ui.h_k3_text, content=k3_text(s.factor))
+
+    def draw_ghost(self):
+        """The undeformed shape, translucent, when asked for."""
+        from .scene import draw_ghost
+
+        self.ghost_handle = draw_ghost(self.session.scene, self.session.mesh, self.session.show_ghost)
 
     def draw_solver(self):
         """'Preparing the solver' while its kernels are being compiled (warmup.py)."""

@@ -11,13 +11,18 @@ import threading
 import numpy as np
 import viser
 
+from .help import HELP_MARKDOWN
+
 #: widths (px) of the docked control panel (left) and information panel (right)
 CONTROL_WIDTH = 340
 PANEL_WIDTH = 500
 #: modes listed in the Modes tab
 MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
-BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit")
+BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit",
+           "h_gif", "h_view")
+#: view presets of the camera (scene.preset_camera)
+VIEW_PRESETS = ("Iso", "Top", "Side", "Front")
 
 
 #: shown while the solver's kernels are being compiled (nnm_viewer/warmup.py)
@@ -93,8 +98,15 @@ class Layout:
                                         disabled=True)
             self.h_speed = gui.add_slider("Speed (cycles/s)", min=0.05, max=3.0, step=0.05, initial_value=0.5)
             self.h_peak = gui.add_markdown("")
+            self.h_colorbar = gui.add_image(np.full((74, 320, 3), 255, np.uint8), label=None, format="png",
+                                            visible=False)
+            self.h_ghost = gui.add_checkbox("Show undeformed shape (ghost)", initial_value=False,
+                                            hint="The structure at rest, translucent, behind the moving one")
             self.h_board = gui.add_checkbox("Show FEP in scene", initial_value=True)
             self.h_zoom = gui.add_checkbox("FEP: zoom on selected branch", initial_value=False)
+            self.h_view = gui.add_button_group("View", options=VIEW_PRESETS,
+                                               hint="Camera presets on the model: iso, from above (+z), "
+                                                    "from the side (-y), from the front (-x)")
             self.h_reset = gui.add_button("Reset camera")
         with gui.add_folder("Nonlinear stiffness"):
             self.h_k3 = gui.add_slider("k3 factor log10", min=-2.0, max=2.0, step=0.05, initial_value=0.0,
@@ -123,6 +135,9 @@ class Layout:
             self.h_csv_orbit = gui.add_button("Download orbit (CSV)", icon=viser.Icon.DOWNLOAD,
                                               hint="time (s) and the displacement of every DOF over one "
                                                    "period of the picked orbit")
+            self.h_gif = gui.add_button("Download animation (GIF)", icon=viser.Icon.DOWNLOAD,
+                                        hint="the deformed structure over one period, seen as in the 3D view, "
+                                             "with its colour bar (a few seconds to draw)")
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
             options = tuple(mode_label(model, linear_freqs, k) for k in range(1, model.n + 1))    # every mode
             self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
@@ -136,6 +151,8 @@ class Layout:
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):
             gui.add_markdown(modes_markdown(model, linear_freqs))
+        with panel.add_tab("Help", viser.Icon.HELP):
+            self.h_help = gui.add_markdown(HELP_MARKDOWN)
         panel.dock_right()
         panel.set_width(PANEL_WIDTH)
         main = gui.main_panel

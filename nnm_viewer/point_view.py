@@ -9,6 +9,7 @@ from nnm_solver import cubic_scaling
 
 from . import scene as sc
 from .animation import orbit_animation
+from .colorbar import colorbar_image
 from .info import auto_dofs, info_markdown, parse_dofs, peak_text, point_data, uplot_harmonics, uplot_time_series
 
 #: cached orbits / animations per tab (cleared when full)
@@ -27,6 +28,7 @@ class PointView:
         self._anim_cache: dict = {}
         self.charts = {}             # uPlot handles of the Point tab: name -> (handle, n_series)
         self.last_glb = None         # bytes of the last GLB sent (tests, benchmark)
+        self.colorbar_peak = None    # peak (m) of the colour bar shown
 
     def compute(self):
         """Orbit and animation of the selection (None if the branch has no point); True."""
@@ -71,6 +73,7 @@ class PointView:
         if anim is None:
             glb = sc.static_glb(s.mesh)
             ui.set(ui.h_peak, content="")
+            ui.set(ui.h_colorbar, visible=False)
         else:
             amp, peak = s.amplification()
             shown = 1.0 / max(s.speed, 1e-3)
@@ -80,8 +83,18 @@ class PointView:
                 ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
             ui.set(ui.h_peak, content=peak_text(peak, amp, s.auto_amp)
                    + f"  \nreal period {anim.period:.4g} s, shown in {shown:.3g} s")
+            self.draw_colorbar(peak)
         s.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
         self.last_glb = glb
+
+    def draw_colorbar(self, peak):
+        """The colour bar of the displacement colours, 0 .. the true peak displacement (redrawn when
+        the peak changes)."""
+        ui = self.ui
+        if self.colorbar_peak is None or abs(peak - self.colorbar_peak) > 1e-9 * max(peak, 1e-300):
+            ui.h_colorbar.image = colorbar_image(peak)
+            self.colorbar_peak = peak
+        ui.set(ui.h_colorbar, visible=True)
 
     def draw_info(self):
         """The Point tab: numbers, MAC table, time series and Fourier amplitudes of chosen DOFs."""

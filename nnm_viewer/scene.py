@@ -76,6 +76,26 @@ def view_geometry(vertices, aspect=0.85, fill=0.92):
                         camera_look_at=look_at)
 
 
+#: view presets: direction from the model's centre to the camera (z up); 'Top' leans a little toward -y
+#: so that the camera's up direction (z) stays defined
+PRESET_DIRECTIONS = {"Iso": CAMERA_DIR, "Top": np.array([0.0, -0.02, 1.0]), "Side": np.array([0.0, -1.0, 0.0]),
+                     "Front": np.array([-1.0, 0.0, 0.0])}
+
+
+def preset_camera(vertices, name, fov_deg=CAMERA_FOV_DEG, fill=0.85):
+    """(position, look_at) of the camera preset ``name`` ('Iso', 'Top', 'Side', 'Front') framing the
+    mesh ``vertices`` (V, 3) m: its bounding sphere fills ``fill`` of the vertical field of view."""
+    if name not in PRESET_DIRECTIONS:
+        raise ValueError(f"unknown view {name!r}; choose one of {', '.join(PRESET_DIRECTIONS)}")
+    v = np.asarray(vertices, dtype=float)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    center = 0.5 * (lo + hi)
+    radius = max(0.5 * float(np.linalg.norm(hi - lo)), 1e-9)
+    d = PRESET_DIRECTIONS[name] / np.linalg.norm(PRESET_DIRECTIONS[name])
+    dist = radius / (fill * np.sin(np.radians(fov_deg) / 2))
+    return center + d * dist, center
+
+
 def static_glb(mesh):
     """GLB of the undeformed mesh in light grey (before any orbit is picked)."""
     return build_glb(mesh.vertices, mesh.faces)
@@ -206,6 +226,16 @@ def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=Fa
         batched_colors=colors, lod="off", cast_shadow=False, receive_shadow=False)
     h.on_click(on_click)
     return h
+
+
+def draw_ghost(scene, mesh, visible, name="/ghost"):
+    """The undeformed structure, translucent grey (not clickable); removed when not ``visible``."""
+    if not visible:
+        scene.remove_by_name(name)
+        return None
+    return scene.add_mesh_simple(name, vertices=np.asarray(mesh.vertices, dtype=np.float32),
+                                 faces=np.asarray(mesh.faces, dtype=np.uint32), color=(150, 150, 150), opacity=0.3,
+                                 flat_shading=True, side="double", cast_shadow=False, receive_shadow=False)
 
 
 def draw_marker(scene, position, radius, name="/fep/marker"):

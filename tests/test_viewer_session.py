@@ -683,3 +683,92 @@ def test_every_mode_is_offered_and_branch_names_are_consistent(server, tmp_path)
     msg = s.h_status.content
     assert msg.startswith("saved NNM 1 (in phase), 5 points, to ") and "[" not in msg and msg.count("NNM") == 1
     s.close()
+
+
+class TabWithCamera:
+    """The server's gui and scene with a camera, as a tab (ClientHandle) has."""
+
+    def __init__(self, server):
+        from types import SimpleNamespace
+
+        self.gui, self.scene = server.gui, server.scene
+        self.camera = SimpleNamespace(position=(1.0, -1.0, 1.0), look_at=(0.0, 0.0, 0.0))
+
+
+def test_animation_gif_download(server, demo_file):
+    """Issue 14, item 11: the picked orbit as an animated GIF (matplotlib's Pillow writer): one period,
+    the structure moving, seen along the tab's camera."""
+    import io
+
+    from PIL import Image
+
+    from nnm_viewer.gif import GIF_FRAMES
+
+    s, shared = make_session(server, demo_file)
+    with s.lock:
+        s.current_point = s.current_anim = None               # no orbit shown (e.g. solver not ready)
+    with pytest.raises(ValueError, match="pick a point"):
+        s.animation_gif()
+    s.pick(shared.entries[0].uid, 20)
+    s._on_gif(None)                                          # the button's callback
+    name, data = s.last_download
+    assert name.endswith("_point20.00.gif") and data[:6] == b"GIF89a"
+    im = Image.open(io.BytesIO(data))
+    assert im.n_frames == GIF_FRAMES
+    frames = []
+    for k in (0, GIF_FRAMES // 4):
+        im.seek(k)
+        frames.append(np.asarray(im.convert("RGB"), dtype=float))
+    assert np.mean(np.abs(frames[0] - frames[1]).sum(axis=2) > 30) > 0.002    # the structure moves
+    colourful = frames[0][..., 0] - frames[0][..., 2]
+    assert (colourful > 80).any() and (colourful < -80).any()             # red and blue: colour map and bar
+    s.close()
+
+
+def test_view_presets_ghost_colour_bar_and_help(server, demo_file):
+    """Issue 14, item 11: view presets frame the model from above, the side, the front; the undeformed
+    shape as a ghost; a colour bar of the displacement colours in physical units; the Help tab."""
+    from types import SimpleNamespace
+
+    from nnm_viewer.scene import preset_camera
+
+    model = nnm.load_model(demo_file)
+    shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file))
+    tab = TabWithCamera(server)
+    s = Session(tab, shared, sync=True)
+    v = s.mesh.vertices
+    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    for name, axis, sign in (("Top", 2, 1), ("Side", 1, -1), ("Front", 0, -1)):
+        s.h_view.value = name
+        s._cb(s._on_view)(SimpleNamespace(target=s.h_view))
+        d = np.asarray(tab.camera.position) - np.asarray(tab.camera.look_at)
+        np.testing.assert_allclose(tab.camera.look_at, centre)
+        assert sign * d[axis] > 0.99 * np.linalg.norm(d), name
+        pos, _ = preset_camera(v, name)
+        rel = v - pos                                        # every vertex inside the field of view
+        angle = np.degrees(np.arccos(np.clip(rel @ -d / np.linalg.norm(rel, axis=1) / np.linalg.norm(d), -1, 1)))
+        assert angle.max() < s.geom.fov_deg / 2, name
+        assert np.allclose(-s.view_direction() / np.linalg.norm(d), d / np.linalg.norm(d))
+    with pytest.raises(ValueError, match="unknown view"):
+        preset_camera(v, "Below")
+    # ghost
+    assert s.drawing.ghost_handle is None
+    s.h_ghost.value = True
+    g = s.drawing.ghost_handle
+    assert g is not None and g.opacity == pytest.approx(0.3) and len(g.vertices) == len(v)
+    s.h_ghost.value = False
+    assert s.drawing.ghost_handle is None
+    # colour bar: shown with the orbit, from 0 to the true peak (follows the k3 scaling law)
+    s.pick(shared.entries[0].uid, 20)
+    peak = s.amplification()[1]
+    assert s.h_colorbar.visible and s.drawing.point.colorbar_peak == pytest.approx(peak)
+    img = np.asarray(s.h_colorbar.image)
+    assert img.shape[1] > 200 and (img[..., 0].astype(int) - img[..., 2] > 100).any()   # red end of the map
+    s.h_k3.value = 1.0
+    assert s.drawing.point.colorbar_peak == pytest.approx(peak / np.sqrt(10))
+    # help
+    text = s.h_help.content
+    for words in ("Frequency-energy plot", "Floquet multipliers", "unstable", "period doubling", "torus",
+                  "tongue k:1", "backbone"):
+        assert words in text, words
+    s.close()
