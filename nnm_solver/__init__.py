@@ -23,6 +23,7 @@ from .exports import Backbone, amplitude_backbone, export_backbone_csv, export_c
 from .branch import STATUSES, Branch, Point
 from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
 from .floquet import STABILITY_TOL
+from .integrators import INTEGRATORS
 from .driver import METHODS, NNMIterator, continue_nnm, continue_tongue, iter_nnm
 from .switching import switch_branch
 from .jobs import Job, start_branch
@@ -41,7 +42,7 @@ __all__ = [
     "Model", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
     "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
-    "continue_tongue",
+    "continue_tongue", "INTEGRATORS",
     # sweeps and atlases (Dask, imported only when a sweep runs)
     "sweep", "Variant", "variant_grid", "load_sweep_file", "load_sweep", "SweepProgress", "plot_atlas",
     # results

@@ -26,8 +26,10 @@ class Point:
     energy J; frequency_hz Hz; period s; x0, v0 (n,) initial state (m, m/s, t = 0 at the phase
     condition); floquet (2n,) complex multipliers, largest modulus first (NaN if not computed);
     stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
-    for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py).
-    ``point["energy"]`` works too (first-release rows).
+    for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py);
+    freq_error: estimated relative error of frequency_hz from the discretisation (NaN: not estimated;
+    see ShootingProblem.frequency_error); steps: time steps per period this point was computed with
+    (0: the branch settings' steps_per_period).  ``point["energy"]`` works too (first-release rows).
     """
 
     energy: float
@@ -40,6 +42,8 @@ class Point:
     iterations: int = 0
     coefficients: np.ndarray | None = field(default=None, repr=False)
     label: str = "backbone"
+    freq_error: float = float("nan")
+    steps: int = 0
 
     def __getitem__(self, key):
         try:
@@ -57,26 +61,30 @@ class Branch:
     branches (None otherwise), labels (N,) str ("backbone" / "tongue k:1"), events: list of dicts
     (kind, index, energy, frequency_hz, detail; located events also x0, v0, period), tongues: the
     tongues passed by a ``tongues="skip"`` continuation (dicts: ratio, order, partner_mode, entry_energy,
-    entry_frequency_hz, ...).
+    entry_frequency_hz, ...).  freq_error (N,) estimated relative frequency error of each point (NaN where
+    not estimated, e.g. files written before it existed); steps (N,) int, the time steps per period of each
+    shooting point (0: settings.steps_per_period; a branch refined with freq_tol has several).
     status: one of STATUSES; message: why it stopped.
     settings: the method's typed settings (settings.py; a plain dict is converted).
     """
 
     def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
                  events=None, status="done", message="", settings=None, name="", coefficients=None, labels=None,
-                 tongues=None):
+                 tongues=None, freq_error=None, steps=None):
         self.model = model
         self.mode = int(mode)
         self.settings = settings_from_dict(settings)
         self.status = str(status)
         self.message = str(message)
         self.name = str(name)
-        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels)
+        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels, freq_error,
+                          steps)
         self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
                            if events is None else events)
         self.tongues = list(tongues or [])
 
-    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None):
+    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None,
+                     freq_error=None, steps=None):
         n = self.model.n
         self.energy = np.asarray(energy, dtype=float).reshape(-1)
         N = len(self.energy)
@@ -90,6 +98,9 @@ class Branch:
         self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
         self.labels = (np.full(N, "backbone", dtype=object) if labels is None
                        else np.asarray([str(x) for x in np.asarray(labels, dtype=object).reshape(N)], dtype=object))
+        self.freq_error = (np.full(N, np.nan) if freq_error is None
+                           else np.asarray(freq_error, dtype=float).reshape(N))
+        self.steps = np.zeros(N, dtype=int) if steps is None else np.asarray(steps, dtype=int).reshape(N)
 
     # ------------------------------------------------------------------ building from points
     @classmethod
@@ -123,7 +134,8 @@ class Branch:
                           np.vstack([self.v0, col("v0", (n,))]),
                           np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
                           np.r_[self.stable, col("stable", dtype=bool)], coeffs,
-                          np.r_[self.labels, col("label", dtype=object)])
+                          np.r_[self.labels, col("label", dtype=object)], np.r_[self.freq_error, col("freq_error")],
+                          np.r_[self.steps, col("steps", dtype=int)])
         self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         return self
 
@@ -133,7 +145,7 @@ class Branch:
         return Point(float(self.energy[i]), float(self.frequency_hz[i]), float(self.period[i]), self.x0[i].copy(),
                      self.v0[i].copy(), self.floquet[i].copy(), bool(self.stable[i]),
                      coefficients=None if self.coefficients is None else self.coefficients[i].copy(),
-                     label=str(self.labels[i]))
+                     label=str(self.labels[i]), freq_error=float(self.freq_error[i]), steps=int(self.steps[i]))
 
     @property
     def hb_coefficients(self):
@@ -173,7 +185,7 @@ class Branch:
                       self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
                       self.message, self.settings, self.name,
                       None if self.coefficients is None else self.coefficients[index], self.labels[index],
-                      self.tongues)
+                      self.tongues, self.freq_error[index], self.steps[index])
 
     def interpolate(self, s):
         """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
@@ -196,7 +208,7 @@ class Branch:
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
                       [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
                       self.name, None if self.coefficients is None else lerp(self.coefficients)[None],
-                      [self.labels[near]])
+                      [self.labels[near]], None, [lerp(self.freq_error)], [self.steps[near]])
 
     def at_energy(self, energy):
         """One-point Branch at energy (J): the first crossing of that energy along the branch."""
@@ -283,7 +295,8 @@ class Branch:
                       self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
                       self.status, self.message, settings, self.name,
                       None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
-                      [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues])
+                      [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues], self.freq_error,
+                      self.steps)
 
 
 def _match_energy(model, x, v, energy):

@@ -22,7 +22,8 @@ from .iterator import NNMIterator
 from .modal import modal_system
 from .model import Model
 from .orbits.harmonic_balance import BASES, HBBasis, HBProblem
-from .orbits.shooting import ShootingProblem, discrete_linear_period
+from .integrators import INTEGRATORS, get_integrator
+from .orbits.shooting import ShootingProblem
 from .settings import HarmonicBalanceSettings, ShootingSettings
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
@@ -36,7 +37,7 @@ METHODS = ("shooting", "hb")
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
 
-_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None)
+_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None, integrator="newmark")
 _HB_OPTIONS = dict(harmonics=7, samples=None, basis=None)
 
 
@@ -119,15 +120,17 @@ def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
     reversible = opts["reversible"]
     if reversible is None and opts["symmetric"] is None and not symmetric:
         reversible = True                      # even forces: full period, orbits still start at rest
+    integrator = get_integrator(opts["integrator"])
     problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
-                              reversible=reversible, max_rel_period_step=opts["max_period_step"])
+                              reversible=reversible, max_rel_period_step=opts["max_period_step"],
+                              integrator=integrator)
     n = system.n
     q0 = np.zeros(n)
     q0[k] = a0
-    u0 = problem.pack(q0, np.zeros(n), discrete_linear_period(math.sqrt(system.omega2[k]), problem.spp))
+    u0 = problem.pack(q0, np.zeros(n), integrator.linear_period(math.sqrt(system.omega2[k]), problem.spp))
     p0 = problem.pack(q0 / a0, np.zeros(n), 0.0)
     settings = ShootingSettings(steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
-                                reversible=problem.reversible, energy_max=energy_max,
+                                reversible=problem.reversible, energy_max=energy_max, integrator=integrator.name,
                                 floquet=True if floquet is None else bool(floquet))
     return problem, u0, p0, settings
 
@@ -162,7 +165,7 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
              floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
-             locate_events=True, tongues="follow", _start=None, **method_options):
+             locate_events=True, tongues="follow", error_estimate=True, freq_tol=None, _start=None, **method_options):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
     Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
@@ -193,6 +196,11 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
         check_positive(name, value)
     if step is not None:
         check_positive("step", step)
+    if freq_tol is not None:
+        check_positive("freq_tol", freq_tol)
+        if method != "shooting":
+            raise NNMInputError("freq_tol refines the time step of shooting; harmonic balance has none "
+                                "(raise harmonics instead)")
     system = modal_system(model)
     a0 = start_amplitude(system, k, energy_max, energy_min)
     build = _shooting_problem if method == "shooting" else _hb_problem
@@ -206,8 +214,10 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
                               max_angle=max_angle, max_correction=max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
+    if freq_tol is not None:
+        settings = settings.replace(freq_tol=float(freq_tol))
     it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
-                     locate=locate_events, tongues=tongues)
+                     locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol)
     it._start_is_low = _start is None
     return it
 
@@ -215,14 +225,19 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
                  stop=None, energy_min=None, symmetric=None, floquet=None, step=None, max_angle=0.35,
                  max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
-                 method="shooting", tongues="follow", locate_events=True, **hb_options):
+                 method="shooting", tongues="follow", locate_events=True, integrator="newmark", error_estimate=True,
+                 freq_tol=None, **hb_options):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
 
     Parameters
     ----------
     method : "shooting" (Newmark shooting, the seed paper's method; default) or "hb" (harmonic
         balance; options ``harmonics``, ``samples``, ``basis``, see ``nnm_solver.hb``).
-    steps_per_period : Newmark steps per period (the error in frequency is O(steps^-2)); shooting.
+    steps_per_period : time steps per period; shooting.  The frequency error is O(steps^-order) (order 2
+        for Newmark), largest for orbits with strong higher harmonics (branch.freq_error estimates it).
+    integrator : the shooting's time integrator, one of ``INTEGRATORS``: "newmark" (default; the seed
+        paper's average-acceleration scheme, order 2), "gauss4" / "gauss6" (Gauss-Legendre collocation,
+        orders 4 and 6, about 2x / 3x Newmark's cost per step; see integrators.py).
     tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11); default 1e-6 (HB: 1e-8 on
         the relative residual).
     max_points : largest number of points kept.
@@ -247,18 +262,25 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
         each computable with ``continue_tongue``).
     locate_events : locate folds and stability changes between points (default True).
+    error_estimate : estimate each point's relative frequency error from the time discretisation
+        (branch.freq_error; shooting, by step doubling: about 2 residual evaluations per point).
+    freq_tol : if given (e.g. 1e-6), the steps per period are raised wherever a point's estimated
+        frequency error exceeds it, and the point is computed again (branch.steps has each point's).
 
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
     """
     if method == "shooting":
-        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible, **hb_options)
+        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible,
+                    integrator=integrator, **hb_options)
+    elif integrator != "newmark":
+        raise NNMInputError("integrator= belongs to method='shooting' (harmonic balance has no time steps)")
     else:
         opts = dict(hb_options)
     it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
                   floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
                   max_rel_step=max_rel_step, max_period_step=max_period_step, tongues=tongues,
-                  locate_events=locate_events, **opts)
+                  locate_events=locate_events, error_estimate=error_estimate, freq_tol=freq_tol, **opts)
     while True:
         if stop is not None and stop.is_set():
             it.cancel()
@@ -286,7 +308,7 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     s = branch.settings
     if s.method != "shooting":
         raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
-    for key in ("steps_per_period", "symmetric", "tol"):
+    for key in ("steps_per_period", "symmetric", "tol", "integrator"):
         options.setdefault(key, getattr(s, key))
     E_in = float(tongue["entry_energy"])
     energy_max = 100 * E_in if energy_max is None else energy_max

@@ -22,12 +22,24 @@ from .model import Model
 BRANCH_COLUMNS = ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")
 
 
+PWL_KEYS = {"type", "stiffnesses", "breakpoints", "eps"}
+PWL_NEGATIVE_KEYS = {"stiffnesses_negative", "breakpoints_negative"}
+
+
 def spring_law_json(spring):
-    """One entry of /model/springs laws_json: {power: coefficient} for polynomial laws (first form), or
-    {"type": "piecewise_linear", "stiffnesses": [...], "breakpoints": [...], "eps": eps}."""
+    """One entry of /model/springs laws_json: {power: coefficient} for polynomial laws (first form),
+    {"type": "piecewise_linear", "stiffnesses": [...], "breakpoints": [...], "eps": eps} for an odd
+    piecewise-linear law, or {"type": "piecewise_linear_asymmetric", ... the same keys,
+    "stiffnesses_negative": [...], "breakpoints_negative": [...]} for one whose compression side has its
+    own law (a type of its own, so that readers which do not know it refuse the file instead of reading
+    an odd law)."""
     if isinstance(spring, PiecewiseLinearSpring):
-        return {"type": "piecewise_linear", "stiffnesses": list(spring.stiffnesses),
-                "breakpoints": list(spring.breakpoints), "eps": spring.eps}
+        out = {"type": "piecewise_linear", "stiffnesses": list(spring.stiffnesses),
+               "breakpoints": list(spring.breakpoints), "eps": spring.eps}
+        if not spring.symmetric:
+            out.update(type="piecewise_linear_asymmetric", stiffnesses_negative=list(spring.stiffnesses_negative),
+                       breakpoints_negative=list(spring.breakpoints_negative))
+        return out
     return {str(p): c for p, c in spring.law().items()}
 
 
@@ -36,15 +48,21 @@ def spring_from_json(dof, other, law, path="file"):
     if not isinstance(law, dict):
         raise NNMFileError(f"{path}: /model/springs/laws_json entry {law!r} is not an object")
     kind = law.get("type", "polynomial")
-    if kind == "piecewise_linear":
+    if kind in ("piecewise_linear", "piecewise_linear_asymmetric"):
+        allowed = PWL_KEYS | (PWL_NEGATIVE_KEYS if kind == "piecewise_linear_asymmetric" else set())
+        extra = sorted(set(law) - allowed)
+        if extra:
+            raise NNMFileError(f"{path}: {kind} spring with unknown key(s) {', '.join(extra)}")
         try:
+            neg = {k: law[k] for k in PWL_NEGATIVE_KEYS} if kind == "piecewise_linear_asymmetric" else {}
             return PiecewiseLinearSpring(dof=dof, other=other, stiffnesses=law["stiffnesses"],
-                                         breakpoints=law["breakpoints"], **({"eps": law["eps"]} if "eps" in law else {}))
+                                         breakpoints=law["breakpoints"], **({"eps": law["eps"]} if "eps" in law else {}),
+                                         **neg)
         except KeyError as exc:
-            raise NNMFileError(f"{path}: piecewise_linear spring without {exc}") from None
+            raise NNMFileError(f"{path}: {kind} spring without {exc}") from None
     if kind != "polynomial":
         raise NNMFileError(f"{path}: unknown spring type {kind!r} in /model/springs/laws_json "
-                           f"(this nnm reads 'polynomial' and 'piecewise_linear')")
+                           f"(this nnm reads 'polynomial', 'piecewise_linear' and 'piecewise_linear_asymmetric')")
     return spring_from_law(dof, other, {int(p): c for p, c in law.items() if p != "type"})
 
 
@@ -205,6 +223,9 @@ def save_branch(path, branch, name=None):
         g.attrs["events_json"] = json.dumps(_jsonable(branch.events))
         g.attrs["tongues_json"] = json.dumps(_jsonable(branch.tongues))
         g.create_dataset("labels", data=np.array([str(x) for x in branch.labels], dtype=STR))
+        g.create_dataset("freq_error", data=branch.freq_error)
+        if np.any(branch.steps):
+            g.create_dataset("steps", data=branch.steps)
         columns = BRANCH_COLUMNS + (("coefficients",) if branch.coefficients is not None else ())
         for key in columns:
             data = getattr(branch, key)
@@ -250,6 +271,9 @@ def load_branches(path, model=None):
                 k3 = g["k3"][()] if "k3" in g else model.k3
                 if "labels" in g:
                     cols["labels"] = strings(g["labels"])
+                for key in ("freq_error", "steps"):
+                    if key in g:
+                        cols[key] = g[key][()]
                 settings = json.loads(g.attrs.get("settings_json", "{}"))
                 events = json.loads(g.attrs.get("events_json", "[]"))
                 cols["tongues"] = json.loads(g.attrs.get("tongues_json", "[]"))

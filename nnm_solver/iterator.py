@@ -18,6 +18,9 @@ from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
 from .tongue_skip import SKIP_FRACTION, TongueSkipper, harmonic_label, partner_mode
 
+#: the most steps per period the freq_tol refinement goes to
+MAX_STEPS_PER_PERIOD = 20000
+
 __all__ = ["NNMIterator"]
 
 
@@ -32,8 +35,10 @@ class NNMIterator:
     """
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True, tongues="follow"):
+                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None):
         self.model = model
+        self.freq_tol = None if not freq_tol else float(freq_tol)
+        self.error_estimate = bool(error_estimate) or self.freq_tol is not None
         self.mode = int(mode)
         self.settings = settings
         self.energy_max = float(energy_max)
@@ -73,6 +78,8 @@ class NNMIterator:
                     self._failed(fin.value)
                     raise StopIteration from None
                 point, (q0, v0, T) = self._record(cp, self._problem)
+                if self._refined(cp, point):
+                    continue
                 if self.tongue_mode != "skip" or not self._hidden(cp, point):
                     break
             if self.locate:
@@ -86,6 +93,7 @@ class NNMIterator:
                                         f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
                                         f"one lap is kept")
             raise StopIteration
+        self._estimate_error(point)
         self.points.append(point)
         E, E0 = point.energy, self.points[0].energy
         ratio = min(self._turning_ratio(q0, v0), getattr(point, "_restoring", 1.0))
@@ -100,6 +108,31 @@ class NNMIterator:
             self._finish("done", "the branch returned to low energy")
         self._last = (q0, v0)
         return point
+
+    def _refined(self, cp, point):
+        """freq_tol: if the point's estimated frequency error exceeds it, raise the steps per period (to
+        about half the tolerance, by the scheme's order) and restart the continuation from this orbit, so
+        that the point is computed again with the finer step.  False if nothing was done."""
+        prob = self._problem
+        if not self.freq_tol or not hasattr(prob, "set_steps"):
+            return False
+        self._estimate_error(point)
+        est = point.freq_error
+        if not est > self.freq_tol or prob.spp >= MAX_STEPS_PER_PERIOD:
+            return False
+        factor = min(max((est / (0.5 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
+        prob.set_steps(min(int(np.ceil(prob.spp * factor)), MAX_STEPS_PER_PERIOD))
+        self._engine.close()
+        self._engine = pseudo_arclength(prob, cp.u, cp.tangent, self._cs, self._tol)
+        self._prev = None                       # no event is located across a change of time step
+        return True
+
+    def _estimate_error(self, point):
+        """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
+        prob, u, J = getattr(point, "_solution", (None, None, None))
+        if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
+            if not np.isfinite(point.freq_error):
+                point.freq_error = prob.frequency_error(u, J)
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
@@ -232,6 +265,8 @@ class NNMIterator:
         point = Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0,
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
+        point.steps = int(getattr(prob, "spp", 0))
+        point._solution = (prob, cp.u, cp.jacobian)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)

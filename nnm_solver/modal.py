@@ -57,11 +57,12 @@ class ModalSystem:
         """Energy (J) of the modal state (q0, v0): |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + element potentials."""
         return float(0.5 * v0 @ v0 + 0.5 * q0 @ (self.omega2 * q0) + np.sum(self.elements.potential(self.Bq @ q0)))
 
-    def orbit(self, q0, v0, duration, nsteps):
-        """Newmark states at nsteps + 1 equally spaced times over ``duration`` (s): (Q, V, ok)."""
-        from .newmark import sweep_record
-        return sweep_record(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float),
-                            duration / nsteps, int(nsteps), *self.kernel)
+    def orbit(self, q0, v0, duration, nsteps, integrator="newmark"):
+        """States at nsteps + 1 equally spaced times over ``duration`` (s), integrated with ``integrator``
+        (integrators.INTEGRATORS; default Newmark): (Q, V, ok)."""
+        from .integrators import get_integrator
+        return get_integrator(integrator).record(self, np.ascontiguousarray(q0, dtype=float),
+                                                 np.ascontiguousarray(v0, dtype=float), duration / nsteps, int(nsteps))
 
 
 _cache = weakref.WeakKeyDictionary()

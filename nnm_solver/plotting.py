@@ -83,7 +83,7 @@ def plot_atlas(branches, ax=None, path=None, title=None):
         spp = b.settings.get("steps_per_period") if getattr(b.settings, "method", "") == "shooting" else None
         if spp:
             from .orbits.shooting import discrete_linear_period
-            f = 1.0 / discrete_linear_period(2 * np.pi * f, int(spp))
+            f = 1.0 / discrete_linear_period(2 * np.pi * f, int(spp), b.settings.get("integrator", "newmark"))
         return f
 
     modes = sorted({b.mode for b in branches})

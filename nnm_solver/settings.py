@@ -71,19 +71,23 @@ class MethodSettings:
 
 @dataclass(frozen=True)
 class ShootingSettings(MethodSettings):
-    """Shooting with Newmark (orbits/shooting.py): steps_per_period, half-period ``symmetric``
-    shooting, ``reversible`` orbits (v0 = 0)."""
+    """Shooting (orbits/shooting.py): steps_per_period, half-period ``symmetric`` shooting,
+    ``reversible`` orbits (v0 = 0), the time ``integrator`` (integrators.INTEGRATORS; files written
+    before it existed used Newmark)."""
 
     method: ClassVar[str] = "shooting"
     steps_per_period: int = 200
     symmetric: bool = True
     reversible: bool = True
+    integrator: str = "newmark"
+    freq_tol: float = 0.0
 
     def orbit(self, branch, i, samples):
         from .modal import modal_system
         from .orbits.shooting import shooting_orbit
+        steps = int(branch.steps[i]) if getattr(branch, "steps", None) is not None and branch.steps[i] else 0
         return shooting_orbit(modal_system(branch.model), branch.x0[i], branch.v0[i], branch.period[i],
-                              self.steps_per_period, self.symmetric, samples)
+                              steps or self.steps_per_period, self.symmetric, samples, self.integrator)
 
 
 @dataclass(frozen=True)

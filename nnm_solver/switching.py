@@ -75,8 +75,9 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     model = branch.model
     system = modal_system(model)
     k = branch.mode - 1
+    integrator = getattr(s, "integrator", "newmark")
     problem = ShootingProblem(system, k, spp * factor, symmetric=False, reversible=False, max_rel_step=max_rel_step,
-                              max_rel_period_step=max_period_step)
+                              max_rel_period_step=max_period_step, integrator=integrator)
     q0 = system.to_modal(np.asarray(event["x0"], dtype=float))
     v0 = system.to_modal(np.asarray(event["v0"], dtype=float))
     problem.q_ref = q0 / np.linalg.norm(q0)
@@ -93,7 +94,7 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     cs = ContinuationSettings(step=float(step), step_min=1e-8, step_max=np.inf, max_angle=max_angle,
                               max_correction=max_correction)
     settings = ShootingSettings(steps_per_period=spp * factor, tol=tol, symmetric=False, reversible=False,
-                                energy_max=float(energy_max), floquet=bool(floquet))
+                                energy_max=float(energy_max), floquet=bool(floquet), integrator=integrator)
     engine = pseudo_arclength(problem, u_e + step * d, d, cs, tol)
     it = NNMIterator(model, branch.mode, problem, system, engine, settings, energy_max, max_points, cs, tol)
     others = [e for e in branch.events if e["kind"] in SWITCHABLE and "x0" in e]

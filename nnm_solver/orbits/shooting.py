@@ -33,7 +33,7 @@ import scipy.linalg as sla
 
 from ..floquet import nontrivial_multipliers, reversible_multipliers
 from ..fourier import resample_periodic
-from ..newmark import sweep_sensitivity, sweep_state
+from ..integrators import get_integrator
 
 
 def balanced_max_step(wp, max_rel_state, max_rel_period):
@@ -44,14 +44,13 @@ def balanced_max_step(wp, max_rel_state, max_rel_period):
     return min(max_rel_state / max(np.linalg.norm(wp[:-1]), 1e-300), 0.8 * max_rel_period / max(abs(wp[-1]), 1e-300))
 
 
-def discrete_linear_period(omega, nsteps_per_period):
-    """Period T (s) whose Newmark discretisation with N steps closes exactly for frequency omega (rad/s).
+def discrete_linear_period(omega, nsteps_per_period, integrator="newmark"):
+    """Period T (s) whose discretisation with N steps closes exactly for frequency omega (rad/s).
 
     Average-acceleration Newmark rotates by 2 atan(omega h / 2) per step, so N steps close
-    when omega T / (2N) = tan(pi / N).
+    when omega T / (2N) = tan(pi / N); Gauss collocation by 2 arg P(i omega h) (gauss.rotation).
     """
-    N = nsteps_per_period
-    return 2.0 * N / omega * np.tan(np.pi / N)
+    return get_integrator(integrator).linear_period(omega, nsteps_per_period)
 
 
 class ShootingProblem:
@@ -67,19 +66,17 @@ class ShootingProblem:
     """
 
     def __init__(self, system, mode_index, steps_per_period=200, symmetric=True, max_rel_step=0.4,
-                 reversible=None, max_rel_period_step=np.inf):
+                 reversible=None, max_rel_period_step=np.inf, integrator="newmark"):
         if steps_per_period < 8:
             raise ValueError("steps_per_period must be at least 8")
-        if symmetric and steps_per_period % 2:
-            steps_per_period += 1
         self.sys = system
+        self.integrator = get_integrator(integrator)
         self.n = n = system.n
         self.k = mode_index
-        self.spp = int(steps_per_period)
         self.symmetric = bool(symmetric)
         self.reversible = self.symmetric if reversible is None else bool(reversible)
-        self.nsteps = self.spp // 2 if self.symmetric else self.spp
         self.frac = 0.5 if self.symmetric else 1.0
+        self.set_steps(steps_per_period)
         self.w_r = float(np.sqrt(system.omega2[mode_index]))
         self.T_r = 2 * np.pi / self.w_r
         self.q_ref = np.zeros(n)
@@ -94,6 +91,15 @@ class ShootingProblem:
         self.all_columns = not (self.reversible and self.symmetric)
         self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
         self.accepted_map = None  # ... at the last accepted point
+
+    def set_steps(self, steps_per_period):
+        """Use steps_per_period time steps per period from now on (rounded up to even for half-period
+        shooting)."""
+        spp = int(steps_per_period)
+        if self.symmetric and spp % 2:
+            spp += 1
+        self.spp = spp
+        self.nsteps = spp // 2 if self.symmetric else spp
 
     # --------------------------------------------------------------- packing
     def pack(self, q0, v0, T):
@@ -115,7 +121,7 @@ class ShootingProblem:
         q0, v0, T = self.unpack(u)
         if not T > 0:
             return np.full(self.rows, np.nan)
-        q, v, ok = sweep_state(q0, v0, self._h(T), self.nsteps, *self.sys.kernel)
+        q, v, ok = self.integrator.state(self.sys, q0, v0, self._h(T), self.nsteps)
         if not ok:
             return np.full(self.rows, np.nan)
         return self._assemble(q, v, q0, v0)
@@ -132,8 +138,8 @@ class ShootingProblem:
         if not T > 0:
             return bad
         h = self._h(T)
-        q, v, Sq, Sv, sq_h, sv_h, ok = sweep_sensitivity(q0, v0, h, self.nsteps, *self.sys.kernel,
-                                                         self.all_columns)
+        q, v, Sq, Sv, sq_h, sv_h, ok = self.integrator.sensitivity(self.sys, q0, v0, h, self.nsteps,
+                                                                   self.all_columns)
         if not ok:
             return bad
         r = self._assemble(q, v, q0, v0)
@@ -210,6 +216,40 @@ class ShootingProblem:
         q0, v0, _ = self.unpack(u)
         return self.sys.energy(q0, v0)
 
+    def frequency_error(self, u, J):
+        """Estimated relative error of the frequency of the converged orbit u from the time discretisation
+        (the discrete orbit's frequency minus the exact one, over the exact one, at the same energy).
+
+        Step doubling: the shooting residual r of u with half the step (2N steps per period) is corrected
+        by one Newton step at fixed energy with the Jacobian J of the converged point,
+        min |J du + r| subject to dE/du . du = 0, which moves the period by dT = T_N/2 - T_N to first order;
+        with the scheme's order p, T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson).  Cost: one state sweep
+        at twice the steps and a least-squares solve of the Jacobian's size.  Returns NaN if the finer
+        integration fails.
+        """
+        q0, v0, T = self.unpack(u)
+        q, v, ok = self.integrator.state(self.sys, q0, v0, 0.5 * self._h(T), 2 * self.nsteps)
+        if not ok:
+            return float("nan")
+        r = self._assemble(q, v, q0, v0)
+        g = self.energy_gradient(u)
+        w = self.scale(u)
+        Js = J / w[None, :]                      # balanced units y = w u
+        gs = g / w
+        gs = gs / max(np.linalg.norm(gs), 1e-300)
+        # du = Z y with Z an orthonormal basis of the fixed-energy directions (Householder reflection of gs)
+        e = np.zeros_like(gs)
+        e[0] = 1.0
+        v_h = gs + np.copysign(1.0, gs[0]) * e
+        v_h /= np.linalg.norm(v_h)
+        JZ = Js - np.outer(Js @ v_h, 2.0 * v_h)  # J (I - 2 v v^T): its columns 1.. span gs-perp
+        y = sla.lstsq(JZ[:, 1:], -r, lapack_driver="gelsy", check_finite=False)[0]
+        dy = np.concatenate([[0.0], y])
+        dy = dy - 2.0 * v_h * (v_h @ dy)
+        dT_rel = (dy[-1] / w[-1]) * self.T_r / T
+        p = self.integrator.order
+        return float(abs(dT_rel) * 2 ** p / (2 ** p - 1))
+
     # --------------------------------------------------------------- results (driver protocol)
     def state(self, u):
         """(q0, v0, T) of the orbit u: modal initial state and period (s)."""
@@ -227,7 +267,7 @@ class ShootingProblem:
     def modal_orbit(self, u):
         """Modal displacements (N, n) of the orbit u at its N = steps_per_period time steps over a period."""
         q0, v0, T = self.unpack(u)
-        Q, _, ok = self.sys.orbit(q0, v0, self.frac * T, self.nsteps)
+        Q, _, ok = self.sys.orbit(q0, v0, self.frac * T, self.nsteps, self.integrator.name)
         if not ok:
             return None
         Q = Q[:-1]
@@ -267,7 +307,7 @@ class ShootingProblem:
         return nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
 
 
-def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples):
+def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples, integrator="newmark"):
     """Orbit of a converged shooting point: (x, v) (samples, n) at t = k T / samples (m, m/s).
 
     The discrete orbit is re-integrated with the step it converged with (T / steps_per_period), over
@@ -278,7 +318,7 @@ def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples)
     spp = int(steps_per_period)
     symmetric = bool(symmetric) and spp % 2 == 0
     nsteps = spp // 2 if symmetric else spp
-    Q, V, ok = system.orbit(system.to_modal(x0), system.to_modal(v0), period * nsteps / spp, nsteps)
+    Q, V, ok = system.orbit(system.to_modal(x0), system.to_modal(v0), period * nsteps / spp, nsteps, integrator)
     if not ok:
         raise RuntimeError("time integration of the orbit failed")
     Q, V = Q[:-1], V[:-1]
