@@ -19,7 +19,7 @@ from . import downloads
 from . import scene as sc
 from .downloads import file_stem
 from .drawing import ALL_KINDS, Drawing
-from .fep import axis_ranges, energy_to_s
+from .fep import Y_LABELS, axis_ranges, energy_to_s, should_zoom
 from .fep_view import branch_options
 from .layout import Layout
 from .state import branch_label
@@ -37,7 +37,7 @@ SIMPLE_CONTROLS = {
     "h_amp": ("amp_log", float, ("glb",)),
     "h_speed": ("speed", float, ("glb",)),
     "h_board": ("show_board", bool, ("branches",)),
-    "h_zoom": ("zoom", bool, ("branches",)),
+    "h_relative": ("relative", bool, ("branches",)),
     "h_k3": ("factor_log", float, ("branches", "point", "controls")),
     "h_dofs": ("dofs_text", str, ("info",)),
     "h_ghost": ("show_ghost", bool, ("ghost",)),
@@ -67,7 +67,9 @@ class Session:
         self.amp_log = 0.0           # log10 of the manual amplification
         self.speed = 0.5             # displayed cycles per second
         self.show_board = True
-        self.zoom = False            # FEP axes fitted to the selected branch only
+        self.zoom = False            # FEP axes fitted to the selected branch only (when not zoom_auto)
+        self.zoom_auto = True        # until the user ticks or unticks zoom: zoom when fep.should_zoom
+        self.relative = False        # FEP frequency axis relative to each branch's linear frequency (%)
         self.dofs_text = "auto"
         self.show_ghost = False      # the undeformed shape, translucent
         self.view = "Iso"            # last camera preset
@@ -130,14 +132,36 @@ class Session:
                 return e
         return None
 
+    def fep_series(self, e, factor=None):
+        """FEP series of entry ``e`` at the k3 factor ``factor`` (default: the one in use), on the
+        frequency axis chosen (Hz, or relative to the branch's linear frequency, %)."""
+        ser = e.series(self.factor if factor is None else factor)
+        if self.relative:
+            f_lin = e.linear_frequency(self.shared.linear_freqs)
+            if f_lin:
+                ser = ser.relative(f_lin)
+        return ser
+
+    @property
+    def ylabel(self):
+        return Y_LABELS[bool(self.relative)]
+
     def _series(self):
-        """(entries, their FEP series at the current k3)."""
+        """(entries, their FEP series at the current k3, on the chosen frequency axis)."""
         entries = self.shared.snapshot()
-        return entries, [e.series(self.factor) for e in entries]
+        return entries, [self.fep_series(e) for e in entries]
+
+    def zoomed(self, entries, series):
+        """Whether the FEP is zoomed on the selected branch: the user's choice once made, else by
+        default when the selected branch spans a small part of the frequency range (fep.should_zoom)."""
+        if not self.zoom_auto:
+            return self.zoom
+        sel = next((k for k, e in enumerate(entries) if e.uid == self.sel_uid), None)
+        return should_zoom(series, sel)
 
     def _view_ranges(self, entries, series):
         """FEP axis ranges: all branches, or the selected one when zoomed."""
-        if self.zoom:
+        if self.zoomed(entries, series):
             sel = [s for e, s in zip(entries, series) if e.uid == self.sel_uid and len(s)]
             if sel:
                 return axis_ranges(sel)
@@ -170,7 +194,7 @@ class Session:
     def _callbacks(self):
         """The callback of every control, by handle name (wired by Layout.connect)."""
         cbs = {name: self._set_field(name) for name in SIMPLE_CONTROLS}
-        cbs.update(h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
+        cbs.update(h_zoom=self._on_zoom, h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
                    h_recompute=self._on_recompute, h_start=self._on_start, h_stop=self._on_stop,
                    h_save=self._on_save, h_dismiss=self._dismiss_error, h_csv_fep=self._on_csv_fep,
                    h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif, h_view=self._on_view)
@@ -185,6 +209,12 @@ class Session:
                 setattr(self, field, kind(getattr(self.layout, name).value))
             self.request(*redraws)
         return on_update
+
+    def _on_zoom(self, _):
+        """The user's zoom choice, kept from now on (no more automatic zoom)."""
+        with self.lock:
+            self.zoom, self.zoom_auto = bool(self.layout.h_zoom.value), False
+        self.request("branches")
 
     def _on_branch(self, _):
         entries = self.shared.snapshot()

@@ -82,6 +82,38 @@ class FepSeries:
     def __len__(self):
         return len(self.energy)
 
+    def relative(self, f_linear):
+        """The same branch on the relative frequency axis: 100 (f / f_linear - 1) (%), events too."""
+        f_linear = float(f_linear)
+        if not f_linear > 0:
+            raise ValueError(f"relative frequency axis: the linear frequency is {f_linear}")
+
+        def rel(f):
+            return 100.0 * (np.asarray(f, dtype=float) / f_linear - 1.0)
+
+        return FepSeries(self.energy, rel(self.frequency), self.stable, self.label,
+                         events=[(k, e, float(rel(f))) for k, e, f in self.events], status=self.status)
+
+
+#: y-axis labels of the FEP: absolute (Hz) or relative to the branch's linear frequency (%)
+Y_LABELS = {False: "frequency (Hz)", True: "f / f_linear \u2212 1 (%)"}
+#: the FEP zooms on the selected branch by default when its frequency span is below this fraction of
+#: the span of all branches (and there are other branches)
+AUTO_ZOOM_FRACTION = 0.1
+
+
+def should_zoom(series, selected):
+    """True when the FEP should zoom on series ``selected`` (index) by default: it spans less than
+    AUTO_ZOOM_FRACTION of the frequency range of all branches (others would flatten it)."""
+    if selected is None or not 0 <= selected < len(series) or not len(series[selected]):
+        return False
+    others = [s for k, s in enumerate(series) if k != selected and len(s)]
+    if not others:
+        return False
+    every = np.concatenate([np.asarray(s.frequency, dtype=float) for s in series if len(s)])
+    span_all = float(np.ptp(every))
+    return span_all > 0 and float(np.ptp(series[selected].frequency)) < AUTO_ZOOM_FRACTION * span_all
+
 
 def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5, event_ms=7.0, event_mew=1.5):
     """Draw the branches on a matplotlib Axes in log10(energy) vs frequency: a line per branch in its
@@ -215,7 +247,7 @@ class FepRenderer:
         (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
                                      zorder=5, animated=True)
 
-    def set_series(self, series, selected_branch=None, title=None, ghosts=(), ranges=None):
+    def set_series(self, series, selected_branch=None, title=None, ghosts=(), ranges=None, ylabel=Y_LABELS[False]):
         """Draw all branches (series: list of FepSeries); ghosts in light grey; ranges: axis
         ranges ((log10 E lo, hi), (f lo, hi)), default: fitted to everything drawn."""
         ax = self.ax
@@ -233,7 +265,7 @@ class FepRenderer:
             handles += ax.plot([], [], "-", color="#c8c8c8")
             labels.append("as in the file (k3 x 1)")
         h, lab = plot_branches(ax, series, selected_branch)
-        set_fep_axes(ax, ranges or axis_ranges(list(series) + list(ghosts)), ticks_size=8, label_size=9)
+        set_fep_axes(ax, ranges or axis_ranges(list(series) + list(ghosts)), ticks_size=8, label_size=9, ylabel=ylabel)
         if h:
             # below the axes, so that it never hides a branch; as many rows as needed (LEGEND_MAX entries)
             handles, labels = (handles + h)[:LEGEND_MAX], (labels + lab)[:LEGEND_MAX]
@@ -317,7 +349,7 @@ def board_layout(bounds_min, bounds_max, view_dir, place="above"):
     return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-f)
 
 
-def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25):
+def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25, ylabel=Y_LABELS[False]):
     """Limits, decade ticks of log10(energy) ("1e-2", ...) and labels of a FEP drawn in log10(E)."""
     (elo, ehi), (flo, fhi) = ranges
     ax.set_xlim(elo, ehi)
@@ -329,5 +361,5 @@ def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25):
     ax.set_xticklabels([f"1e{int(t)}" for t in ticks], fontsize=ticks_size)
     ax.tick_params(labelsize=ticks_size)
     ax.set_xlabel("energy (J)", fontsize=label_size)
-    ax.set_ylabel("frequency (Hz)", fontsize=label_size)
+    ax.set_ylabel(ylabel, fontsize=label_size)
     ax.grid(True, alpha=grid_alpha)

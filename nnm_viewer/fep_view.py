@@ -95,6 +95,43 @@ def branch_markdown(e):
     return text + "  \n**Events:** " + "; ".join(parts) + " — marked on the FEP"
 
 
+def point_facts(e, along):
+    """Words about point ``along`` (fractional index; the nearest computed point) of entry ``e``:
+    [stability, label ('backbone', 'tongue 3:1'; if the branch has labels), estimated frequency
+    error (if the branch has ``freq_error``: the solver's per-point relative error estimate)]."""
+    b = e.branch
+    n = len(b)
+    i = int(np.clip(round(float(along)), 0, n - 1))
+    facts = ["stable" if bool(np.asarray(b.stable)[i]) else "unstable"]
+    labels = getattr(b, "labels", None)
+    if labels is not None and len(labels) == n:
+        facts.append(str(labels[i]))
+    err = getattr(b, "freq_error", None)
+    if err is not None:
+        try:
+            value = float(np.asarray(err, dtype=float).reshape(-1)[i]) if len(err) == n else None
+        except (TypeError, ValueError, IndexError):
+            value = None
+        if value is not None and np.isfinite(value):
+            facts.append(f"estimated frequency error {value:.1e} (relative)")
+    return facts
+
+
+def readout_markdown(s, e):
+    """The picked point's readout under the panel FEP: branch, point, energy, frequency (and relative
+    to the branch's linear frequency), stability, label and accuracy estimate."""
+    ser = e.series(s.factor)
+    n = len(ser)
+    along = float(np.clip(s.s, 0, n - 1))
+    energy = 10 ** interp_at(np.log10(ser.energy), along)
+    f = interp_at(ser.frequency, along)
+    f_lin = e.linear_frequency(s.shared.linear_freqs)
+    rel = f" ({100 * (f / f_lin - 1):+.3g} % from its linear {f_lin:.5g} Hz)" if f_lin else ""
+    idx = s.shared.index_of(e.uid)
+    return (f"**Picked:** branch {(idx or 0) + 1}, {e.label}, point {along:.2f} of {n - 1}  \n"
+            f"E = {energy:.4g} J, f = {f:.6g} Hz{rel}  \n" + " · ".join(point_facts(e, along)))
+
+
 class FepView:
     """The FEP of one tab: dropdown, board of clickable spheres, panel image, sliders."""
 
@@ -146,14 +183,17 @@ class FepView:
         self.ranges = ranges
         board = s.geom.board
         if not s.show_board:
+            self.ui.set(self.ui.h_zoom, value=bool(s.zoomed(entries, series)))
             s.scene.remove_by_name("/fep")
             self.board_handles, self.board_points = {}, {}
             return
-        sc.draw_board_frame(s.scene, board, ranges, series)
+        zoomed = s.zoomed(entries, series)
+        self.ui.set(self.ui.h_zoom, value=bool(zoomed))
+        sc.draw_board_frame(s.scene, board, ranges, series, ylabel=s.ylabel)
         live = set()
         for k, (e, ser) in enumerate(zip(entries, series)):
             uid = e.uid
-            if s.zoom and uid != s.sel_uid:            # zoomed: only the selected branch
+            if zoomed and uid != s.sel_uid:            # zoomed: only the selected branch
                 ser = ser.__class__(ser.energy[:0], ser.frequency[:0], ser.stable[:0], ser.label)
             live.add(uid)
             self.board_points[uid] = board.to_world(ser.energy, ser.frequency, ranges) if len(ser) else None
@@ -202,19 +242,20 @@ class FepView:
         """The branches of the panel image (redrawn when branches or the k3 factor change)."""
         s = self.session
         entries, series = s._series()
-        ghost = [e.series(e.k3_factor) for e in entries] if abs(s.factor_log) > 1e-9 else []
-        self.renderer.set_series(series, s.shared.index_of(s.sel_uid), ghosts=ghost,
-                                 title=f"Frequency-energy plot (k3 x {s.factor:.3g})",
-                                 ranges=s._view_ranges(entries, series) if s.zoom else None)
+        ghost = [s.fep_series(e, e.k3_factor) for e in entries] if abs(s.factor_log) > 1e-9 else []
+        zoomed = s.zoomed(entries, series)
+        title = f"Frequency-energy plot (k3 x {s.factor:.3g})" + (", zoomed on the selected branch" if zoomed else "")
+        self.renderer.set_series(series, s.shared.index_of(s.sel_uid), ghosts=ghost, title=title,
+                                 ranges=s._view_ranges(entries, series) if zoomed else None, ylabel=s.ylabel)
 
     def selected_point(self):
-        """(energy J, frequency Hz) of the selection at the current k3 factor, or None
-        (interpolated linearly in log energy, like the energy slider)."""
+        """(energy J, frequency on the FEP's axis: Hz or %) of the selection at the current k3 factor,
+        or None (interpolated linearly in log energy, like the energy slider)."""
         s = self.session
         e = s.selected_entry()
         if e is None or not len(e):
             return None
-        ser = e.series(s.factor)
+        ser = s.fep_series(e)
         return 10 ** interp_at(np.log10(ser.energy), s.s), interp_at(ser.frequency, s.s)
 
     def draw_image(self):
@@ -222,6 +263,8 @@ class FepView:
         s, ui = self.session, self.ui
         sel = self.selected_point()
         ui.h_fep.image = self.renderer.image(sel)
+        e = s.selected_entry()
+        ui.set(ui.h_readout, content=readout_markdown(s, e) if e is not None and len(e) else "no point picked")
         board = s.geom.board
         if s.show_board and self.ranges is not None and sel is not None:
             pos = board.to_world([sel[0]], [sel[1]], self.ranges)[0]
@@ -255,10 +298,7 @@ class FepView:
             ui.set(ui.h_along, min=0.0, max=float(max(n - 1, 0.01)), disabled=n < 2)
             ui.set(ui.h_along, value=float(round(along, 2)))
         f = interp_at(ser.frequency, along)
-        st = "stable" if ser.stable[int(round(along))] else "unstable"
-        labels = getattr(e.branch, "labels", None)
-        if labels is not None and len(labels) == n:
-            st += f", {labels[int(round(along))]}"
+        st = ", ".join(point_facts(e, along)[:2])
         idx = s.shared.index_of(s.sel_uid)
         option = dict(branch_options(s.shared.snapshot())).get(idx)
         if option is not None and option in ui.h_branch.options:

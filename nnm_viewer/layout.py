@@ -103,7 +103,11 @@ class Layout:
             self.h_ghost = gui.add_checkbox("Show undeformed shape (ghost)", initial_value=False,
                                             hint="The structure at rest, translucent, behind the moving one")
             self.h_board = gui.add_checkbox("Show FEP in scene", initial_value=True)
-            self.h_zoom = gui.add_checkbox("FEP: zoom on selected branch", initial_value=False)
+            self.h_zoom = gui.add_checkbox("FEP: zoom on selected branch", initial_value=False,
+                                           hint="On by default when the selected branch spans a small part "
+                                                "of the frequency range")
+            self.h_relative = gui.add_checkbox("FEP: relative frequency (f/f_lin - 1, %)", initial_value=False,
+                                               hint="Frequency of each branch relative to its linear mode's")
             self.h_view = gui.add_button_group("View", options=VIEW_PRESETS,
                                                hint="Camera presets on the model: iso, from above (+z), "
                                                     "from the side (-y), from the front (-x)")
@@ -121,6 +125,7 @@ class Layout:
         self.panel = panel
         with panel.add_tab("FEP", viser.Icon.CHART_DOTS):
             self.h_fep = gui.add_image(np.full((470, 480, 3), 255, np.uint8), label=None, format="png")
+            self.h_readout = gui.add_markdown("no point picked")
             gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view (each branch in its "
                              "colour, pale spheres: unstable orbits; the yellow sphere is the picked orbit; the "
                              "markers show the folds, bifurcations and where a branch failed).")

@@ -139,13 +139,13 @@ BOARD_LEGEND_MAX = 14
 _ML, _MR, _MB, _MT = 0.17, 0.04, 0.2, 0.12
 
 
-def render_board(board, ranges, series=(), width_px=900):
+def render_board(board, ranges, series=(), width_px=900, ylabel=None):
     """The board picture (RGB uint8): axes, ticks, labels and thin branch lines; the plotting
     area maps exactly onto the rectangle of ``board`` so that the spheres sit on the curves."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .fep import plot_branches, set_fep_axes
+    from .fep import Y_LABELS, plot_branches, set_fep_axes
 
     wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
     dpi = 100
@@ -155,7 +155,7 @@ def render_board(board, ranges, series=(), width_px=900):
     ax.set_facecolor("#ffffff")
     # thin lines, and event markers large enough to ring the spheres drawn in front of the picture
     handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0)
-    set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3)
+    set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3, ylabel=ylabel or Y_LABELS[False])
     if handles:
         ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="best", framealpha=0.85,
                   markerscale=0.6, handlelength=1.5)
@@ -175,10 +175,10 @@ def board_rotation(board):
 _BOARD_CACHE: dict = {}
 
 
-def cached_board(board, ranges, series):
+def cached_board(board, ranges, series, ylabel=None):
     """render_board with a small cache (the same picture is drawn for every tab)."""
     import hashlib
-    h = hashlib.sha1(repr((ranges, board.width, board.height)).encode())
+    h = hashlib.sha1(repr((ranges, board.width, board.height, ylabel)).encode())
     for ser in series:
         h.update(np.asarray(ser.energy, dtype=float).tobytes())
         h.update(np.asarray(ser.frequency, dtype=float).tobytes())
@@ -187,16 +187,16 @@ def cached_board(board, ranges, series):
     key = h.hexdigest()
     img = _BOARD_CACHE.get(key)
     if img is None:
-        img = render_board(board, ranges, series)
+        img = render_board(board, ranges, series, ylabel=ylabel)
         if len(_BOARD_CACHE) > 8:
             _BOARD_CACHE.clear()
         _BOARD_CACHE[key] = img
     return img
 
 
-def draw_board_frame(scene, board, ranges, series=(), name="/fep"):
+def draw_board_frame(scene, board, ranges, series=(), name="/fep", ylabel=None):
     """The FEP board picture (axes, ticks, labels, curves) as one textured quad, not clickable."""
-    img = cached_board(board, ranges, series)
+    img = cached_board(board, ranges, series, ylabel)
     wq, hq = board.width * (1 + _ML + _MR), board.height * (1 + _MB + _MT)
     center = (board.origin + board.right * board.width * (1 + _MR - _ML) / 2
               + board.up * board.height * (1 + _MT - _MB) / 2 - 0.01 * board.height * board.normal)

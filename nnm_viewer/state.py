@@ -46,6 +46,25 @@ class BranchEntry:
     def mode(self):
         return getattr(self.branch, "mode", None)
 
+    def linear_frequency(self, fallback=None):
+        """Linear frequency (Hz) of the branch's mode in the branch's own model (a sweep variant's, a
+        scaled model's), cached; ``fallback`` (the file model's linear frequencies) if it has none."""
+        model = getattr(self.branch, "model", None)
+        cache = self.__dict__.setdefault("_flin", {})
+        key = id(model)
+        if key not in cache:
+            f = None
+            try:
+                if model is not None:
+                    f = float(model.linear_modes()[0][int(self.mode) - 1])
+            except Exception:
+                f = None
+            if f is None and fallback is not None and self.mode is not None and 1 <= int(self.mode) <= len(fallback):
+                f = float(fallback[int(self.mode) - 1])
+            cache.clear()
+            cache[key] = f
+        return cache[key]
+
     def series(self, factor=1.0, label=None):
         """FEP arrays when every k3 is ``factor`` x the file's: exact scaling law
         (frequency unchanged, energy / ratio), ratio = factor / k3_factor."""

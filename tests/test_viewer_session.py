@@ -1,6 +1,7 @@
 """App logic in-process: a Session on a real viser server (no browser), driven by setting
 handle values like a user would; background jobs streamed into the shared state."""
 import queue
+from pathlib import Path
 import time
 
 import numpy as np
@@ -771,4 +772,60 @@ def test_view_presets_ghost_colour_bar_and_help(server, demo_file):
     for words in ("Frequency-energy plot", "Floquet multipliers", "unstable", "period doubling", "torus",
                   "tongue k:1", "backbone"):
         assert words in text, words
+    s.close()
+
+
+ASSETS = Path(__file__).resolve().parents[1] / "assets"
+
+
+def test_fep_zooms_on_a_narrow_branch_by_default_and_relative_axis(server):
+    """Issue 14, item 9: on two_dof.h5 NNM 1 spans 2 % of the frequency range (NNM 2 climbs to 3.8 Hz):
+    the FEP zooms on it by default (its tongues are visible), not on the wide NNM 2; the user's choice
+    then wins.  The relative axis shows f/f_linear - 1 in % on both FEPs.  The picked point's readout
+    is under the panel FEP (no hover events reach Python in viser 1.1)."""
+    from nnm_viewer.fep import FepSeries, should_zoom
+
+    z = np.zeros(3, bool)
+    narrow = FepSeries(np.array([1.0, 2, 3]), np.array([1.0, 1.01, 1.02]), z, "a")
+    wide = FepSeries(np.array([1.0, 2, 3]), np.array([2.0, 3.0, 4.0]), z, "b")
+    assert should_zoom([narrow, wide], 0) and not should_zoom([narrow, wide], 1)
+    assert not should_zoom([narrow], 0) and not should_zoom([narrow, wide], None)
+
+    path = ASSETS / "two_dof.h5"
+    if not path.exists():
+        pytest.skip("assets/two_dof.h5 is missing")
+    s, shared = make_session(server, path)
+    nnm1, nnm2 = shared.entries[0], shared.entries[1]
+    assert s.sel_uid == nnm1.uid and s.h_zoom.value
+    (_, _), (flo, fhi) = s._view_ranges(*s._series())
+    f1 = nnm1.branch.frequency_hz
+    assert flo < f1.min() and fhi < f1.max() + 0.1 * np.ptp(f1)           # fitted to NNM 1
+    assert s._board_handles[nnm2.uid] is None and "zoomed" in s.drawing.fep.renderer.ax.get_title()
+    s.pick(nnm2.uid, 3)                                                   # a wide branch: no zoom
+    assert not s.h_zoom.value and s._view_ranges(*s._series())[1][1] > nnm2.branch.frequency_hz.max()
+    s.h_branch.value = s.h_branch.options[0]
+    assert s.h_zoom.value
+    s.h_zoom.value = False                                                # the user's choice is kept
+    s.pick(nnm2.uid, 3)
+    s.pick(nnm1.uid, 3)
+    assert not s.h_zoom.value and s._board_handles[nnm2.uid] is not None
+    # relative axis: 100 (f / f_linear - 1) per branch, on both FEPs
+    s.h_relative.value = True
+    f_lin = shared.linear_freqs
+    _, series = s._series()
+    np.testing.assert_allclose(series[1].frequency, 100 * (nnm2.branch.frequency_hz / f_lin[1] - 1))
+    assert abs(series[0].frequency[0]) < 0.1                              # starts at the linear frequency
+    ax = s.drawing.fep.renderer.ax
+    assert ax.get_ylabel() == "f / f_linear \u2212 1 (%)"
+    assert ax.get_ylim()[1] > 100 * (nnm2.branch.frequency_hz.max() / f_lin[1] - 1)
+    star = s.drawing.fep.renderer._star.get_ydata()[0]
+    assert star == pytest.approx(100 * (f1[3] / f_lin[0] - 1))
+    pos = s.drawing.fep.board_points[nnm1.uid][3]                         # the board in % too
+    ranges = s.drawing.fep.ranges
+    assert pos == pytest.approx(s.geom.board.to_world([nnm1.branch.energy[3]], [series[0].frequency[3]],
+                                                      ranges)[0])
+    # the readout of the picked point
+    text = s.h_readout.content
+    assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 3.00 of" in text
+    assert f"f = {f1[3]:.6g} Hz" in text and "% from its linear" in text and "stable" in text and "backbone" in text
     s.close()
