@@ -22,12 +22,14 @@ Two law families, summed per element (an element uses one of them, the table hol
   error of periods is O(eps^2) (tests/test_elements.py: single-DOF bilinear oscillator against the
   closed-form period).
 
-``ElementSet`` stores the laws as a table (powers (P,), coefficients (n_s, P), kinks (n_s, J, 3)),
-kinks[s, j] = (dk, b, w) (dk = 0: unused row; J = 0 when no element has kinks, so the polynomial
-path costs what it did) that the numba-compiled kernels ``law_force`` / ``law_force_tangent``
+``ElementSet`` stores the laws as a table (powers (P,), coefficients (n_s, P), kinks (n_s, J, 3 or 4)),
+kinks[s, j] = (dk, b, w[, side]) (dk = 0: unused row; J = 0 when no element has kinks, so the polynomial
+path costs what it did; the fourth column only when some kink is one-sided, laws.py) that the numba-compiled kernels ``law_force`` / ``law_force_tangent``
 evaluate; numpy callers use ``ElementSet.force``, ``tangent`` and ``potential``.  A set whose
-powers are all odd gives an odd f_nl (f_nl(-x) = -f_nl(x); kinks are odd): its NNMs are half-wave
-symmetric, which the shooting exploits.
+powers are all odd and no one-sided kink gives an odd f_nl (f_nl(-x) = -f_nl(x)): its NNMs are
+half-wave symmetric, which the shooting exploits.  An asymmetric ``PiecewiseLinearSpring`` (tension
+!= compression) has one-sided kinks, kinks[s, j] = (dk, b, w, +1) for d > 0 and (dk, b, w, -1) for
+d < 0: each side's law is that of an odd spring restricted to that side.
 """
 from __future__ import annotations
 
@@ -120,15 +122,43 @@ def _numbers(name, values):
     return out
 
 
+def _side(k, b, suffix=""):
+    """Check one side's law (stiffnesses k, breakpoints b); ``suffix`` names the arguments."""
+    if not b:
+        raise NNMInputError(f"PiecewiseLinearSpring needs at least one breakpoint{suffix} (stiffnesses{suffix}=[k0, k1], "
+                            f"breakpoints{suffix}=[d1])")
+    if len(k) != len(b) + 1:
+        raise NNMInputError(f"PiecewiseLinearSpring has {len(k)} stiffnesses{suffix} for {len(b)} breakpoints{suffix}; "
+                            f"it needs one more stiffness than breakpoints")
+    if b[0] <= 0:
+        raise NNMInputError(f"PiecewiseLinearSpring breakpoint{suffix} {b[0]} is not positive; breakpoints are "
+                            f"distances |d| > 0 from the rest position")
+    if any(b2 <= b1 for b1, b2 in zip(b, b[1:])):
+        raise NNMInputError(f"PiecewiseLinearSpring breakpoints{suffix} {list(b)} are not strictly increasing")
+
+
+def _kink_rows(k, b, w, side=None):
+    """(dk_j, b_j, w[, side]) rows of one side's law: slope jumps k_j - k_{j-1} at b_j."""
+    tail = () if side is None else (float(side),)
+    return [(k1 - k0, bj, w) + tail for k0, k1, bj in zip(k, k[1:], b)]
+
+
 @dataclass(frozen=True)
 class PiecewiseLinearSpring:
-    """Odd piecewise-linear spring: slope k0 for |d| < d1, k1 for d1 <= |d| < d2, ... (N/m), d (m).
+    """Piecewise-linear spring: slope k0 for |d| < d1, k1 for d1 <= |d| < d2, ... (N/m), d (m).
 
     Grounded (``other=None``): d = x[dof]; relative: d = x[dof] - x[other].  stiffnesses [k0, k1, ...]
     (one more than breakpoints), breakpoints [d1, d2, ...] > 0 strictly increasing (m).  Bilinear
     joints, softening (k1 < k0) or hardening past a threshold, clearances (k0 = 0).  The element acts
     in addition to K: the linear modes use K plus k0 along d (``Model.K_linear``), the nonlinear force
     is the rest, f(d) - k0 d, with each kink smoothed over a width eps * d1 (module doc).
+
+    By default the law is odd (the same in tension d > 0 and compression d < 0).  An asymmetric joint
+    gives the compression side its own law: ``stiffnesses_negative = [k0, k1', ...]`` and
+    ``breakpoints_negative = [d1', ...]`` (distances |d| > 0, m), applied for d < 0; the slope k0 at
+    d = 0 is shared (the linear modes need one), so stiffnesses_negative[0] must equal k0.  Its kinks
+    are smoothed over eps * d1'.  An asymmetric force is not odd: the NNMs lose the half-wave symmetry
+    and the solver shoots over the full period, as for even polynomial powers.
     """
 
     dof: int
@@ -136,21 +166,26 @@ class PiecewiseLinearSpring:
     stiffnesses: tuple = ()
     breakpoints: tuple = ()
     eps: float = PWL_EPS
+    stiffnesses_negative: tuple | None = None
+    breakpoints_negative: tuple | None = None
 
     def __post_init__(self):
         k = _numbers("stiffnesses", self.stiffnesses)
         b = _numbers("breakpoints", self.breakpoints)
-        if not b:
-            raise NNMInputError("PiecewiseLinearSpring needs at least one breakpoint (stiffnesses=[k0, k1], "
-                                "breakpoints=[d1])")
-        if len(k) != len(b) + 1:
-            raise NNMInputError(f"PiecewiseLinearSpring has {len(k)} stiffnesses for {len(b)} breakpoints; "
-                                f"it needs one more stiffness than breakpoints")
-        if b[0] <= 0:
-            raise NNMInputError(f"PiecewiseLinearSpring breakpoint {b[0]} is not positive; breakpoints are "
-                                f"distances |d| > 0 (the law is odd)")
-        if any(b2 <= b1 for b1, b2 in zip(b, b[1:])):
-            raise NNMInputError(f"PiecewiseLinearSpring breakpoints {list(b)} are not strictly increasing")
+        _side(k, b)
+        kn = bn = None
+        if (self.stiffnesses_negative is None) != (self.breakpoints_negative is None):
+            raise NNMInputError("PiecewiseLinearSpring: give both stiffnesses_negative and breakpoints_negative "
+                                "(the compression side's law) or neither (odd law)")
+        if self.stiffnesses_negative is not None:
+            kn = _numbers("stiffnesses_negative", self.stiffnesses_negative)
+            bn = _numbers("breakpoints_negative", self.breakpoints_negative)
+            _side(kn, bn, "_negative")
+            if kn[0] != k[0]:
+                raise NNMInputError(f"PiecewiseLinearSpring stiffnesses_negative[0] = {kn[0]} differs from "
+                                    f"stiffnesses[0] = {k[0]}; the slope k0 at d = 0 is shared by both sides")
+            if kn == k and bn == b:
+                kn = bn = None                          # the odd law, stored as such
         try:
             eps = float(self.eps)
         except (TypeError, ValueError):
@@ -160,6 +195,8 @@ class PiecewiseLinearSpring:
         object.__setattr__(self, "stiffnesses", k)
         object.__setattr__(self, "breakpoints", b)
         object.__setattr__(self, "eps", eps)
+        object.__setattr__(self, "stiffnesses_negative", kn)
+        object.__setattr__(self, "breakpoints_negative", bn)
 
     def law(self):
         """Polynomial part of the force law: none ({}); the kinks are in ``kinks()``."""
@@ -170,23 +207,37 @@ class PiecewiseLinearSpring:
         """k0 (N/m): the slope at d = 0, which the linear model adds to K."""
         return self.stiffnesses[0]
 
+    @property
+    def symmetric(self):
+        """True for the odd law (the same in tension and compression)."""
+        return self.stiffnesses_negative is None
+
     def kinks(self):
-        """[(dk_j, b_j, w)]: slope jumps (N/m), breakpoints (m) and smoothing width w = eps * d1 (m)."""
-        w = self.eps * self.breakpoints[0]
-        return [(k1 - k0, b, w) for k0, k1, b in zip(self.stiffnesses, self.stiffnesses[1:], self.breakpoints)]
+        """Kink rows of the law table (laws.py): odd law [(dk_j, b_j, w)], slope jumps (N/m), breakpoints
+        (m) and smoothing width w = eps * d1 (m); asymmetric law [(dk_j, b_j, w, +1)] for tension
+        followed by [(dk'_j, b'_j, w', -1)] for compression (w' = eps * d1')."""
+        if self.symmetric:
+            return _kink_rows(self.stiffnesses, self.breakpoints, self.eps * self.breakpoints[0])
+        return (_kink_rows(self.stiffnesses, self.breakpoints, self.eps * self.breakpoints[0], +1)
+                + _kink_rows(self.stiffnesses_negative, self.breakpoints_negative,
+                             self.eps * self.breakpoints_negative[0], -1))
 
     def exact_force(self, d):
         """The unregularised force f(d) (N), including k0 d (reference for tests and plots)."""
         d = np.asarray(d, dtype=float)
         f = self.stiffnesses[0] * d
-        for dk, b, _ in self.kinks():
-            f = f + dk * np.sign(d) * np.maximum(np.abs(d) - b, 0.0)
+        for dk, b, _, *side in self.kinks():
+            side = side[0] if side else 0.0
+            reach = np.maximum(np.abs(d) - b, 0.0) * (1.0 if side == 0 else (np.sign(d) == side))
+            f = f + dk * np.sign(d) * reach
         return f
 
     def scaled(self, factor):
         """The same spring with every stiffness multiplied by ``factor``."""
+        neg = {} if self.symmetric else dict(stiffnesses_negative=[k * factor for k in self.stiffnesses_negative],
+                                             breakpoints_negative=self.breakpoints_negative)
         return PiecewiseLinearSpring(dof=self.dof, other=self.other, stiffnesses=[k * factor for k in self.stiffnesses],
-                                     breakpoints=self.breakpoints, eps=self.eps)
+                                     breakpoints=self.breakpoints, eps=self.eps, **neg)
 
 
 #: element types the models accept (the next element types are added here)
@@ -219,7 +270,7 @@ class ElementSet:
     """The nonlinear elements of a model, evaluated together on their deformations d = B x.
 
     B (n_s, n) selection matrix; powers (P,) int64 and coefficients (n_s, P) float of the polynomial
-    force laws; kinks (n_s, J, 3) float (dk, b, w) of the regularised piecewise-linear laws; k0 (n_s,)
+    force laws; kinks (n_s, J, 3 or 4) float (dk, b, w[, side]) of the regularised piecewise-linear laws; k0 (n_s,)
     the elements' linear stiffnesses (part of the linear model, not of g).  ``force``, ``tangent`` and
     ``potential`` take d (..., n_s) and return (..., n_s) in N, N/m and J.
     """
@@ -240,10 +291,11 @@ class ElementSet:
             for p, c in law.items():
                 self.coefficients[s, int(np.flatnonzero(self.powers == p)[0])] = c
         kinks = [e.kinks() if hasattr(e, "kinks") else [] for e in self.elements]
-        self.kinks = np.zeros((ns, max((len(k) for k in kinks), default=0), 3))
+        cols = 4 if any(len(row) > 3 for ks in kinks for row in ks) else 3     # side column: one-sided kinks only
+        self.kinks = np.zeros((ns, max((len(k) for k in kinks), default=0), cols))
         for s, ks in enumerate(kinks):
             for j, row in enumerate(ks):
-                self.kinks[s, j] = row
+                self.kinks[s, j, :len(row)] = row
         self.k0 = np.array([getattr(e, "linear_stiffness", 0.0) for e in self.elements], dtype=float)
 
     @property
@@ -257,44 +309,48 @@ class ElementSet:
 
     @property
     def odd(self):
-        """True when every force law is odd (only odd powers): f_nl(-x) = -f_nl(x)."""
+        """True when every force law is odd (only odd powers, no one-sided kink): f_nl(-x) = -f_nl(x)."""
         used = np.any(self.coefficients != 0.0, axis=0)
-        return bool(np.all(self.powers[used] % 2 == 1))
+        one_sided = self.kinks.shape[2] > 3 and np.any((self.kinks[..., 0] != 0.0) & (self.kinks[..., 3] != 0.0))
+        return bool(np.all(self.powers[used] % 2 == 1)) and not one_sided
 
     def force(self, d):
         d = np.asarray(d, dtype=float)
         g = sum(self.coefficients[:, j] * d ** p for j, p in enumerate(self.powers))
-        for dk, b, w in self._kink_columns():
-            g = g + dk * (softplus(d - b, w) - softplus(-d - b, w))
+        for dk, b, w, up, down in self._kink_columns():
+            g = g + dk * (up * softplus(d - b, w) - down * softplus(-d - b, w))
         return g
 
     def tangent(self, d):
         d = np.asarray(d, dtype=float)
         t = sum(p * self.coefficients[:, j] * d ** (p - 1) for j, p in enumerate(self.powers))
-        for dk, b, w in self._kink_columns():
-            t = t + dk * (sigmoid(d - b, w) + sigmoid(-d - b, w))
+        for dk, b, w, up, down in self._kink_columns():
+            t = t + dk * (up * sigmoid(d - b, w) + down * sigmoid(-d - b, w))
         return t
 
     def potential(self, d):
         d = np.asarray(d, dtype=float)
         P = sum(self.coefficients[:, j] * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
-        for dk, b, w in self._kink_columns():
-            P = P + dk * (ramp_integral(d - b, w) + ramp_integral(-d - b, w) - 2.0 * ramp_integral(-b, w))
+        for dk, b, w, up, down in self._kink_columns():
+            R0 = ramp_integral(-b, w)
+            P = P + dk * (up * (ramp_integral(d - b, w) - R0) + down * (ramp_integral(-d - b, w) - R0))
         return P
 
     def abs_potential(self, d):
-        """Bound on |potential| (..., n_s): every coefficient and slope jump taken positive."""
+        """Bound on |potential| (..., n_s): every coefficient and slope jump taken positive, kinks on both sides."""
         d = np.abs(np.asarray(d, dtype=float))
         P = sum(np.abs(self.coefficients[:, j]) * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
-        for dk, b, w in self._kink_columns():
+        for dk, b, w, _, _ in self._kink_columns():
             P = P + np.abs(dk) * (ramp_integral(d - b, w) + ramp_integral(-d - b, w) - 2.0 * ramp_integral(-b, w))
         return P
 
     def _kink_columns(self):
-        """(dk, b, w) (n_s,) each, per kink column j (unused rows: dk = 0, w = 1)."""
+        """(dk, b, w, up, down) (n_s,) each, per kink column j: up/down = 1.0 where the kink acts for
+        d > 0 / d < 0 (side >= 0 / side <= 0), else 0.0 (unused rows: dk = 0, w = 1)."""
         for j in range(self.kinks.shape[1]):
-            dk, b, w = self.kinks[:, j].T
-            yield dk, b, np.where(w > 0, w, 1.0)
+            dk, b, w = self.kinks[:, j, :3].T
+            side = self.kinks[:, j, 3] if self.kinks.shape[2] > 3 else np.zeros_like(dk)
+            yield dk, b, np.where(w > 0, w, 1.0), (side >= 0).astype(float), (side <= 0).astype(float)
 
     def in_basis(self, Phi):
         """(B Phi, powers, coefficients, kinks): the table for coordinates q with x = Phi q (kernels' input)."""

@@ -3,8 +3,12 @@
 element table (powers, coefficients, kinks) of ``elements.ElementSet`` inside the time integrator.
 
 Table: g_s(d) = sum_p coefficients[s, p] d^powers[p] + sum_j dk [r_w(d - b) - r_w(-d - b)], with
-kinks[s, j] = (dk, b, w): a slope change dk at |d| = b smoothed over a width w by the softplus ramp
-r_w(x) = w log(1 + exp(x / w)).  The kernels are inlined into their callers (jit.py).
+kinks[s, j] = (dk, b, w[, side]): a slope change dk (N/m) at |d| = b (m) smoothed over a width w (m)
+by the softplus ramp r_w(x) = w log(1 + exp(x / w)).  The optional fourth column ``side`` makes a
+kink one-sided (asymmetric springs, tension != compression): side = 0 (or a 3-column table) both
+signs of d, the odd pair above; side = +1 only d = +b, the term dk r_w(d - b); side = -1 only
+d = -b, the term -dk r_w(-d - b).  In every case the slope of g grows by dk as |d| passes b on the
+kink's side.  The kernels are inlined into their callers (jit.py).
 """
 from __future__ import annotations
 
@@ -75,6 +79,7 @@ def _sigmoid1(x, w):
 def law_force(d, powers, coeffs, kinks):
     """g(d) (n_s,) of the element laws (numba kernel; see ElementSet)."""
     ns = d.shape[0]
+    sided = kinks.shape[2] > 3
     g = np.empty(ns)
     for s in range(ns):
         x = d[s]
@@ -88,7 +93,11 @@ def law_force(d, powers, coeffs, kinks):
             if dk != 0.0:
                 b = kinks[s, j, 1]
                 w = kinks[s, j, 2]
-                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
+                side = kinks[s, j, 3] if sided else 0.0
+                if side >= 0.0:
+                    acc += dk * _softplus1(x - b, w)
+                if side <= 0.0:
+                    acc -= dk * _softplus1(-x - b, w)
         g[s] = acc
     return g
 
@@ -97,6 +106,7 @@ def law_force(d, powers, coeffs, kinks):
 def law_force_tangent(d, powers, coeffs, kinks):
     """(g(d), g'(d)) (n_s,) each, of the element laws (numba kernel)."""
     ns = d.shape[0]
+    sided = kinks.shape[2] > 3
     g = np.empty(ns)
     t = np.empty(ns)
     for s in range(ns):
@@ -115,8 +125,13 @@ def law_force_tangent(d, powers, coeffs, kinks):
             if dk != 0.0:
                 b = kinks[s, j, 1]
                 w = kinks[s, j, 2]
-                acc += dk * (_softplus1(x - b, w) - _softplus1(-x - b, w))
-                dacc += dk * (_sigmoid1(x - b, w) + _sigmoid1(-x - b, w))
+                side = kinks[s, j, 3] if sided else 0.0
+                if side >= 0.0:
+                    acc += dk * _softplus1(x - b, w)
+                    dacc += dk * _sigmoid1(x - b, w)
+                if side <= 0.0:
+                    acc -= dk * _softplus1(-x - b, w)
+                    dacc += dk * _sigmoid1(-x - b, w)
         g[s] = acc
         t[s] = dacc
     return g, t
