@@ -99,21 +99,16 @@ def point_facts(e, along):
     """Words about point ``along`` (fractional index; the nearest computed point) of entry ``e``:
     [stability, label ('backbone', 'tongue 3:1'; if the branch has labels), estimated frequency
     error (if the branch has ``freq_error``: the solver's per-point relative error estimate)]."""
+    from .point_view import point_label_and_error
+
     b = e.branch
-    n = len(b)
-    i = int(np.clip(round(float(along)), 0, n - 1))
+    i = int(np.clip(round(float(along)), 0, len(b) - 1))
     facts = ["stable" if bool(np.asarray(b.stable)[i]) else "unstable"]
-    labels = getattr(b, "labels", None)
-    if labels is not None and len(labels) == n:
-        facts.append(str(labels[i]))
-    err = getattr(b, "freq_error", None)
+    label, err = point_label_and_error(b, along)
+    if label:
+        facts.append(label)
     if err is not None:
-        try:
-            value = float(np.asarray(err, dtype=float).reshape(-1)[i]) if len(err) == n else None
-        except (TypeError, ValueError, IndexError):
-            value = None
-        if value is not None and np.isfinite(value):
-            facts.append(f"estimated frequency error {value:.1e} (relative)")
+        facts.append(f"estimated frequency error {err:.1e} (relative)")
     return facts
 
 

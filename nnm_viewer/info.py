@@ -162,13 +162,20 @@ def orbit_lines(pd, model):
     return lines
 
 
-def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5):
-    """Markdown summary of the orbit (units: J, Hz, s)."""
+def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label=None, freq_error=None):
+    """Markdown summary of the orbit (units: J, Hz, s).  label: the point's label ('backbone',
+    'tongue 3:1'); freq_error: its estimated relative frequency error (the solver's, if the branch
+    has one)."""
     lines = [f"**{where}**" if where else "",
-             f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)",
+             f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)"
+             + (f", estimated relative error {freq_error:.1e} (± {abs(freq_error) * pd.frequency:.2g} Hz)"
+                if freq_error is not None else ""),
              f"- energy **{pd.energy:.4g} J**",
              f"- k3 factor x{k3_factor:.3g}",
              f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
+             *( [f"- label: **{label}**" + (" (the fundamental NNM family)" if label == "backbone" else
+                                              " (inside an internal-resonance tongue)" if str(label).startswith("tongue")
+                                              else "")] if label else []),
              *orbit_lines(pd, model)]
     if pd.note:
         lines.append(f"- note: {pd.note}")

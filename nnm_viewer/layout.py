@@ -12,6 +12,7 @@ import numpy as np
 import viser
 
 from .help import HELP_MARKDOWN
+from .model_info import elements_summary, model_markdown
 
 #: widths (px) of the docked control panel (left) and information panel (right)
 CONTROL_WIDTH = 340
@@ -76,8 +77,7 @@ class Layout:
         self._tl = threading.local()
         name = model.name or "model"
         gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
-        self.h_title = gui.add_markdown(f"**nnm-view** · {name} · {model.n} DOFs · "
-                                        f"{len(model.springs)} cubic springs")
+        self.h_title = gui.add_markdown(f"**nnm-view** · {name} · {model.n} DOFs · {elements_summary(model)}")
         self.h_solver = gui.add_markdown(SOLVER_PREPARING, visible=False)
         self.h_error = gui.add_markdown("", visible=False)
         self.h_dismiss = gui.add_button("Dismiss error", visible=False, color="red")
@@ -155,6 +155,7 @@ class Layout:
             self.h_progress = gui.add_progress_bar(0.0, animated=False)
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):
+            self.h_model = gui.add_markdown(model_markdown(model))
             gui.add_markdown(modes_markdown(model, linear_freqs))
         with panel.add_tab("Help", viser.Icon.HELP):
             self.h_help = gui.add_markdown(HELP_MARKDOWN)

@@ -17,6 +17,24 @@ POINT_CACHE = 64
 ANIM_CACHE = 32
 
 
+def point_label_and_error(branch, along):
+    """(label, estimated relative frequency error) of the computed point nearest to ``along``: the
+    branch's ``labels`` and ``freq_error`` (None where the branch, e.g. from an older file, has none)."""
+    n = len(branch)
+    i = int(np.clip(round(float(along)), 0, max(n - 1, 0)))
+    labels = getattr(branch, "labels", None)
+    label = str(labels[i]) if labels is not None and len(labels) == n else None
+    err = getattr(branch, "freq_error", None)
+    value = None
+    if err is not None:
+        try:
+            arr = np.asarray(err, dtype=float).reshape(-1)
+            value = float(arr[i]) if len(arr) == n and np.isfinite(arr[i]) else None
+        except (TypeError, ValueError):
+            value = None
+    return label, value
+
+
 class PointView:
     """The orbit shown by one tab: ``compute`` sets the session's ``current_*``, the draw steps
     show it."""
@@ -107,7 +125,9 @@ class PointView:
         idx = s.shared.index_of(s.sel_uid)
         e = s.selected_entry()
         where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
-        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.factor, where=where))
+        label, err = point_label_and_error(e.branch, s.s)
+        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.factor, where=where,
+                                                label=label, freq_error=err))
         try:
             dofs = parse_dofs(s.dofs_text, s.model.n, auto_dofs(s.model, pd.x))
         except ValueError as exc:

@@ -829,3 +829,57 @@ def test_fep_zooms_on_a_narrow_branch_by_default_and_relative_axis(server):
     assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 3.00 of" in text
     assert f"f = {f1[3]:.6g} Hz" in text and "% from its linear" in text and "stable" in text and "backbone" in text
     s.close()
+
+
+def test_point_label_and_accuracy_estimate_are_shown(server, demo_file):
+    """Issue 14: each point's label (backbone / tongue k:1) and, when the branch has one, its estimated
+    relative frequency error (``Branch.freq_error``; None or absent in older files) in the Point tab,
+    the readout and the selection text."""
+    s, shared = make_session(server, demo_file)
+    e = shared.entries[0]
+    b = e.branch
+    b.freq_error = None                                                 # as a branch of an older file
+    s.pick(e.uid, 6)
+    assert "label: **backbone** (the fundamental NNM family)" in s.h_info.content
+    assert "estimated" not in s.h_info.content and "estimated" not in s.h_readout.content
+    labels = np.array(b.labels, dtype=object)
+    labels[7] = "tongue 3:1"
+    b.labels = labels
+    b.freq_error = np.full(len(b), 3e-7)
+    b.freq_error[7] = 2.0e-6
+    s.pick(e.uid, 7)
+    assert "label: **tongue 3:1** (inside an internal-resonance tongue)" in s.h_info.content
+    f7 = b.frequency_hz[7]
+    assert f"estimated relative error 2.0e-06 (± {2e-6 * f7:.2g} Hz)" in s.h_info.content
+    assert "tongue 3:1 · estimated frequency error 2.0e-06 (relative)" in s.h_readout.content
+    assert "tongue 3:1" in s.h_sel.content
+    b.freq_error = np.full(len(b) - 1, 1e-6)                            # wrong length: not shown
+    s.pick(e.uid, 6)
+    assert "estimated" not in s.h_info.content
+    b.freq_error = np.full(len(b), np.nan)                              # not estimated: not shown
+    s.pick(e.uid, 5)
+    assert "estimated" not in s.h_readout.content
+    s.close()
+
+
+def test_model_panel_lists_the_nonlinear_elements(server, tmp_path):
+    """Issue 14: the model's nonlinear elements (cubic, polynomial, piecewise-linear springs) with their
+    DOFs (and labels) and parameters, in the Modes tab; the title counts them by kind."""
+    from nnm_viewer.model_info import elements_markdown, elements_summary
+
+    n = 4
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    els = [nnm.CubicSpring(dof=0, k3=2.5e4), nnm.PolynomialSpring(dof=1, other=2, coefficients={2: 3.0, 3: 1e5}),
+           nnm.PiecewiseLinearSpring(dof=3, stiffnesses=[1e3, 5e3], breakpoints=[1e-3])]
+    model = nnm.Model(np.eye(n), K, els, dof_labels=["a", "b", "c", "d"], name="chain")
+    assert elements_summary(model) == "1 cubic spring, 1 polynomial spring, 1 piecewise-linear spring"
+    rows = elements_markdown(model).splitlines()[4:]
+    assert rows[0] == "| 1 | cubic spring | x[0 (a)] | k3 = 2.5e+04 N/m³ |"
+    assert rows[1] == "| 2 | polynomial spring | x[1 (b)] − x[2 (c)] | k2 = 3 N/m^2, k3 = 1e+05 N/m^3 |"
+    assert rows[2].startswith("| 3 | piecewise-linear spring | x[3 (d)] | slopes [1000, 5000] N/m at "
+                              "breakpoints [0.001] m")
+    assert elements_summary(nnm.Model(np.eye(n), K)) == "no nonlinear element"
+    s = Session(server, SharedState(model), sync=True)
+    assert "1 cubic spring, 1 polynomial spring, 1 piecewise-linear spring" in s.h_title.content
+    assert "**Model:** chain, 4 DOFs" in s.h_model.content and "piecewise-linear spring" in s.h_model.content
+    s.close()
