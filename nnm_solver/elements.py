@@ -122,15 +122,18 @@ def _numbers(name, values):
     return out
 
 
-def _side(k, b, suffix=""):
-    """Check one side's law (stiffnesses k, breakpoints b); ``suffix`` names the arguments."""
-    if not b:
+def _side(k, b, suffix="", linear_ok=False):
+    """Check one side's law (stiffnesses k, breakpoints b); ``suffix`` names the arguments.  linear_ok:
+    the side may have no breakpoint (stiffnesses = [k0]: linear on that side of an asymmetric law)."""
+    if not k:
+        raise NNMInputError(f"PiecewiseLinearSpring needs stiffnesses{suffix} = [k0, ...] (N/m)")
+    if not b and not linear_ok:
         raise NNMInputError(f"PiecewiseLinearSpring needs at least one breakpoint{suffix} (stiffnesses{suffix}=[k0, k1], "
                             f"breakpoints{suffix}=[d1])")
     if len(k) != len(b) + 1:
         raise NNMInputError(f"PiecewiseLinearSpring has {len(k)} stiffnesses{suffix} for {len(b)} breakpoints{suffix}; "
                             f"it needs one more stiffness than breakpoints")
-    if b[0] <= 0:
+    if b and b[0] <= 0:
         raise NNMInputError(f"PiecewiseLinearSpring breakpoint{suffix} {b[0]} is not positive; breakpoints are "
                             f"distances |d| > 0 from the rest position")
     if any(b2 <= b1 for b1, b2 in zip(b, b[1:])):
@@ -156,7 +159,9 @@ class PiecewiseLinearSpring:
     By default the law is odd (the same in tension d > 0 and compression d < 0).  An asymmetric joint
     gives the compression side its own law: ``stiffnesses_negative = [k0, k1', ...]`` and
     ``breakpoints_negative = [d1', ...]`` (distances |d| > 0, m), applied for d < 0; the slope k0 at
-    d = 0 is shared (the linear modes need one), so stiffnesses_negative[0] must equal k0.  Its kinks
+    d = 0 is shared (the linear modes need one), so stiffnesses_negative[0] must equal k0.  One side
+    may be linear (no breakpoints: stiffnesses [k0], breakpoints []), e.g. a contact that engages in
+    compression only.  Its kinks
     are smoothed over eps * d1'.  An asymmetric force is not odd: the NNMs lose the half-wave symmetry
     and the solver shoots over the full period, as for even polynomial powers.
     """
@@ -172,15 +177,19 @@ class PiecewiseLinearSpring:
     def __post_init__(self):
         k = _numbers("stiffnesses", self.stiffnesses)
         b = _numbers("breakpoints", self.breakpoints)
-        _side(k, b)
         kn = bn = None
         if (self.stiffnesses_negative is None) != (self.breakpoints_negative is None):
             raise NNMInputError("PiecewiseLinearSpring: give both stiffnesses_negative and breakpoints_negative "
                                 "(the compression side's law) or neither (odd law)")
-        if self.stiffnesses_negative is not None:
+        if self.stiffnesses_negative is None:
+            _side(k, b)
+        else:
             kn = _numbers("stiffnesses_negative", self.stiffnesses_negative)
             bn = _numbers("breakpoints_negative", self.breakpoints_negative)
-            _side(kn, bn, "_negative")
+            _side(k, b, linear_ok=True)
+            _side(kn, bn, "_negative", linear_ok=True)
+            if not b and not bn:
+                raise NNMInputError("PiecewiseLinearSpring needs at least one breakpoint (on either side)")
             if kn[0] != k[0]:
                 raise NNMInputError(f"PiecewiseLinearSpring stiffnesses_negative[0] = {kn[0]} differs from "
                                     f"stiffnesses[0] = {k[0]}; the slope k0 at d = 0 is shared by both sides")
@@ -218,9 +227,12 @@ class PiecewiseLinearSpring:
         followed by [(dk'_j, b'_j, w', -1)] for compression (w' = eps * d1')."""
         if self.symmetric:
             return _kink_rows(self.stiffnesses, self.breakpoints, self.eps * self.breakpoints[0])
-        return (_kink_rows(self.stiffnesses, self.breakpoints, self.eps * self.breakpoints[0], +1)
-                + _kink_rows(self.stiffnesses_negative, self.breakpoints_negative,
-                             self.eps * self.breakpoints_negative[0], -1))
+        rows = []
+        for k, b, side in ((self.stiffnesses, self.breakpoints, +1),
+                           (self.stiffnesses_negative, self.breakpoints_negative, -1)):
+            if b:                                      # a side without breakpoints is linear (slope k0)
+                rows += _kink_rows(k, b, self.eps * b[0], side)
+        return rows
 
     def exact_force(self, d):
         """The unregularised force f(d) (N), including k0 d (reference for tests and plots)."""

@@ -342,6 +342,13 @@ def test_asymmetric_piecewise_force_tangent_potential_and_kernels():
                                      stiffnesses_negative=[1.0, 2.0], breakpoints_negative=[0.1])
     assert same == nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1.0, 2.0], breakpoints=[0.1]) and same.symmetric
     assert asym.scaled(2.0).exact_force(-0.3) == pytest.approx(2 * asym.exact_force(-0.3))
+    # a contact engaging in compression only: linear (k0) in tension, no breakpoint on that side
+    contact = nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1.0], breakpoints=[], stiffnesses_negative=[1.0, 5.0],
+                                        breakpoints_negative=[0.1])
+    one = nnm.Model(np.eye(1), np.eye(1), [contact])
+    assert one.elements.kinks.tolist() == [[[4.0, 0.1, 1e-4, -1.0]]] and not one.elements.odd
+    np.testing.assert_allclose(contact.exact_force([0.5, -0.5]), [0.5, -(0.1 + 5.0 * 0.4)])
+    np.testing.assert_allclose(one.elements.force(np.array([[0.5], [-0.5]]))[:, 0], [0.0, -4.0 * 0.4], atol=1e-12)
 
 
 @pytest.mark.parametrize("kw, match", [
@@ -352,10 +359,13 @@ def test_asymmetric_piecewise_force_tangent_potential_and_kernels():
     (dict(stiffnesses_negative=[1.0, 3.0], breakpoints_negative=[-0.1]), "breakpoint_negative -0.1 is not positive"),
     (dict(stiffnesses_negative=[1.0, 3.0], breakpoints_negative=[0.1, 0.2]), "stiffnesses_negative for 2"),
     (dict(stiffnesses_negative=[1.0, float("nan")], breakpoints_negative=[0.1]), "NaN"),
+    (dict(stiffnesses=[1.0], breakpoints=[], stiffnesses_negative=[1.0], breakpoints_negative=[]),
+     "at least one breakpoint \\(on either side\\)"),
 ])
 def test_asymmetric_piecewise_bad_input(kw, match):
+    kw = {"stiffnesses": [1.0, 2.0], "breakpoints": [0.1], **kw}
     with pytest.raises(nnm.NNMInputError, match=match) as exc:
-        nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1.0, 2.0], breakpoints=[0.1], **kw)
+        nnm.PiecewiseLinearSpring(dof=0, **kw)
     assert "\n" not in str(exc.value)
 
 
@@ -408,7 +418,9 @@ def test_asymmetric_springs_survive_the_file(tmp_path):
     import h5py
     springs = [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.5, 2.0], breakpoints=[0.1], eps=2e-3,
                                          stiffnesses_negative=[0.5, 0.1, 1.0], breakpoints_negative=[0.05, 0.2]),
-               nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[1.0, 0.2], breakpoints=[0.1])]
+               nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[1.0, 0.2], breakpoints=[0.1]),
+               nnm.PiecewiseLinearSpring(dof=1, stiffnesses=[0.3], breakpoints=[], stiffnesses_negative=[0.3, 4.0],
+                                         breakpoints_negative=[0.02])]
     m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs)
     path = tmp_path / "m.h5"
     nnm.save_model(path, m)

@@ -14,7 +14,10 @@
 
     [[springs]]                          # one table per nonlinear element
     type = "cubic"                       # default; the element type (see SPRING_TYPES); "polynomial" takes
-                                         # coefficients = {2 = k2, 3 = k3, ...} (force sum k_p d^p)
+                                         # coefficients = {2 = k2, 3 = k3, ...} (force sum k_p d^p);
+                                         # "piecewise_linear" takes stiffnesses = [k0, k1, ...] (force /
+                                         # length), breakpoints = [d1, ...] (length), optional eps and, for
+                                         # an asymmetric law, stiffnesses_negative + breakpoints_negative
     node = 6                             # by node and direction (needs a DOF map) ...
     direction = "uz"
     k3 = 1e9                             # in the description's units (force / length^3)
@@ -61,12 +64,14 @@ class SpringType:
     parameters : its required keys (in the description's units);
     build(dof, other, params, scale) -> element, where scale(p) converts the coefficient of d^p
     of a force law to SI;
-    parse(key, value, where) -> the parameter's value (default: a finite number).
+    parse(key, value, where) -> the parameter's value (default: a finite number);
+    optional : keys that may be given (passed to build only when present).
     """
 
     parameters: tuple
     build: Callable
     parse: Callable | None = None
+    optional: tuple = ()
 
 
 def _cubic(dof, other, params, scale):
@@ -91,9 +96,48 @@ def _polynomial(dof, other, params, scale):
                                                                 params["coefficients"].items()})
 
 
+def _pwl_parse(key, value, where):
+    """A list of numbers (stiffnesses, breakpoints) or one number (eps)."""
+    if key == "eps":
+        return _number(value, key, where)
+    if not isinstance(value, list):
+        raise NNMInputError(f"{where}: {key} must be a list of numbers, e.g. {key} = [1e5, 2e4]")
+    return [_number(v, f"{key}[{i}]", where) for i, v in enumerate(value)]
+
+
+def _piecewise(dof, other, params, scale):
+    """PiecewiseLinearSpring: stiffnesses are coefficients of d^1 (force / length), breakpoints lengths."""
+    from ..elements import PiecewiseLinearSpring
+    law = {k: params[k] for k in ("stiffnesses", "breakpoints", "stiffnesses_negative", "breakpoints_negative", "eps")
+           if k in params}
+    return to_si(PiecewiseLinearSpring(dof=dof, other=other, **law), scale)
+
+
+def to_si(spring, scale):
+    """The element ``spring`` given in file units, in SI; scale(p) converts the coefficient of d^p (E / s^(p+1),
+    s the DOF's unit), so a stiffness scales by scale(1) and a length (breakpoint) by scale(0) / scale(1) = s."""
+    from ..elements import PiecewiseLinearSpring, PolynomialSpring
+    if isinstance(spring, CubicSpring):
+        return spring.scaled(scale(3))
+    if isinstance(spring, PolynomialSpring):
+        return PolynomialSpring(dof=spring.dof, other=spring.other,
+                                coefficients={p: c * scale(p) for p, c in spring.coefficients.items()})
+    if isinstance(spring, PiecewiseLinearSpring):
+        k, s = scale(1), scale(0) / scale(1)
+        if k == 1.0 and s == 1.0:
+            return spring
+        neg = {} if spring.symmetric else dict(stiffnesses_negative=[c * k for c in spring.stiffnesses_negative],
+                                               breakpoints_negative=[b * s for b in spring.breakpoints_negative])
+        return PiecewiseLinearSpring(dof=spring.dof, other=spring.other, stiffnesses=[c * k for c in spring.stiffnesses],
+                                     breakpoints=[b * s for b in spring.breakpoints], eps=spring.eps, **neg)
+    raise NNMInputError(f"no unit conversion for {type(spring).__name__}")
+
+
 #: element types by name; a new element type registers its builder here (``type = "<name>"``)
 SPRING_TYPES = {"cubic": SpringType(("k3",), _cubic),
-                "polynomial": SpringType(("coefficients",), _polynomial, _law_table)}
+                "polynomial": SpringType(("coefficients",), _polynomial, _law_table),
+                "piecewise_linear": SpringType(("stiffnesses", "breakpoints"), _piecewise, _pwl_parse,
+                                               ("eps", "stiffnesses_negative", "breakpoints_negative"))}
 
 
 def _table(data, key, where, kind=dict, required=False):
@@ -157,15 +201,14 @@ def read_matrices(mt, folder, where):
         from .ansys import read_full
         M, K, dof_map = read_full(f)
     else:
-        from .matlab import read_mat, springs_from_table
-        data = read_mat(f, ["M", "K", "springs"])
+        from .matlab import SPRING_VARIABLES, read_mat, springs_from_mat
+        data = read_mat(f, ["M", "K", "springs_version", *SPRING_VARIABLES])
         for key in ("M", "K"):
             if key not in data:
                 raise NNMFileError(f"{f}: no variable '{key}'")
         M, K = data["M"], data["K"]
         dof_map = None
-        if "springs" in data:
-            springs = springs_from_table(data["springs"], M.shape[0], f)
+        springs = springs_from_mat(data, M.shape[0], f)
     if M.shape != K.shape:
         raise NNMFileError(f"{where}: M is {M.shape[0]}x{M.shape[1]} but K is {K.shape[0]}x{K.shape[1]}; "
                            f"they must have the same size")
@@ -220,7 +263,7 @@ def build_springs(rows, n, dof_map, units, where):
         if kind not in SPRING_TYPES:
             raise NNMInputError(f"{w}: unknown type {row.get('type')!r}; known: {', '.join(SPRING_TYPES)}")
         st = SPRING_TYPES[kind]
-        _unknown(row, LOCATION_KEYS | set(st.parameters), w)
+        _unknown(row, LOCATION_KEYS | set(st.parameters) | set(st.optional), w)
         if "direction" in row:
             direction_name(row["direction"], f"{w}: ")
         dof = _dof(row, "", n, dof_map, w)
@@ -233,7 +276,8 @@ def build_springs(rows, n, dof_map, units, where):
         if missing:
             raise NNMInputError(f"{w}: missing {', '.join(missing)} (a {kind} spring needs "
                                 f"{', '.join(st.parameters)})")
-        params = {k: st.parse(k, row[k], w) if st.parse else _number(row[k], k, w) for k in st.parameters}
+        params = {k: st.parse(k, row[k], w) if st.parse else _number(row[k], k, w)
+                  for k in (*st.parameters, *st.optional) if k in row}
         try:
             element = st.build(dof, other, params, units.coefficient_scale(bool(rotations[dof])))
         except (TypeError, ValueError) as exc:
@@ -268,7 +312,7 @@ def load_toml_model(path, name=None):
         n = M.shape[0]
         rotations = dof_map.rotations() if dof_map is not None else np.zeros(n, bool)
         M, K = units.to_si(M, K, rotations)
-        springs = [s.scaled(units.coefficient_scale(bool(rotations[s.dof]))(3)) for s in springs]
+        springs = [to_si(s, units.coefficient_scale(bool(rotations[s.dof]))) for s in springs]
         springs += build_springs(_table(data, "springs", where, list) or [], n, dof_map, units, where)
         mesh = None
         ms = _table(data, "mesh", where)
