@@ -61,6 +61,13 @@ class CubicSpring:
     k3: float
     other: int | None = None
 
+    def __post_init__(self):
+        try:
+            k3 = float(self.k3)
+        except (TypeError, ValueError):
+            raise NNMInputError(f"CubicSpring k3={self.k3!r} is not a number (N/m^3)") from None
+        object.__setattr__(self, "k3", k3)           # finiteness is checked by the Model (one line)
+
     def law(self):
         """Force law as {power: coefficient}: g(d) = sum c_p d^p (SI units)."""
         return {3: float(self.k3)}
@@ -85,6 +92,9 @@ class PolynomialSpring:
     coefficients: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        if not hasattr(self.coefficients, "items"):
+            raise NNMInputError(f"PolynomialSpring coefficients must be a dict {{power: coefficient}}, e.g. "
+                                f"{{2: k2, 3: k3}}; got {self.coefficients!r}")
         clean = {}
         for p, c in dict(self.coefficients).items():
             if isinstance(p, bool) or not isinstance(p, (int, np.integer)) and not (isinstance(p, str) and p.isdigit()):

@@ -165,8 +165,9 @@ class Model:
                 "M is not positive definite (Cholesky failed); check for massless DOFs or a sign error") from None
         scale = max(np.max(np.abs(lam)), 1e-300)
         if lam[0] < -1e-9 * scale:
+            k0 = " plus the piecewise-linear springs' slopes k0" if np.any(self.elements.k0 != 0.0) else ""
             raise NNMInputError(
-                f"K is not positive semi-definite (eigenvalue {lam[0]:.3g} of K x = w^2 M x); "
+                f"K{k0} is not positive semi-definite (eigenvalue {lam[0]:.3g} of K x = w^2 M x); "
                 f"the linear structure is unstable")
         lam = np.maximum(lam, 0.0)
         # fix the sign of each shape: largest-magnitude component positive

@@ -432,3 +432,24 @@ def test_asymmetric_springs_survive_the_file(tmp_path):
         f["model/springs"].attrs["laws_json"] = json.dumps(laws)
     with pytest.raises(nnm.NNMFileError, match="piecewise_linear spring with unknown key"):
         nnm.load_model(path)
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: nnm.CubicSpring(dof=0, k3="stiff"), "CubicSpring k3='stiff' is not a number"),
+    (lambda: nnm.CubicSpring(dof=0, k3=None), "CubicSpring k3=None is not a number"),
+    (lambda: nnm.Model(np.eye(1), np.eye(1), [nnm.CubicSpring(dof=0, k3=float("nan"))]), "d\\^3 is nan, not finite"),
+    (lambda: nnm.PolynomialSpring(dof=0, coefficients=[3, 1.0]), "coefficients must be a dict"),
+    (lambda: nnm.PolynomialSpring(dof=0, coefficients={0: 1.0}), "power 0 < 2"),
+    (lambda: nnm.PolynomialSpring(dof=0, coefficients={3: None}), "d\\^3 is None, not a number"),
+    (lambda: nnm.PiecewiseLinearSpring(dof=0, stiffnesses=None, breakpoints=[0.1]), "must be a list of numbers"),
+    (lambda: nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1, float("inf")], breakpoints=[0.1]), "infinite"),
+    (lambda: nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1, 2, 3], breakpoints=[0.1, 0.1]), "not strictly"),
+    (lambda: nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[1, 2], breakpoints=[0.1], eps=float("nan")), "eps=nan"),
+    (lambda: nnm.Model(np.eye(1), np.eye(1), [nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[-2, 2], breakpoints=[0.1])])
+     .linear_modes(), "K plus the piecewise-linear springs' slopes k0 is not positive semi-definite"),
+])
+def test_bad_element_input_is_one_line(make, match):
+    """Every malformed element gives one NNMInputError line (no TypeError/ValueError from deep inside)."""
+    with pytest.raises(nnm.NNMInputError, match=match) as exc:
+        make()
+    assert "\n" not in str(exc.value)
