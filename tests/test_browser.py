@@ -212,3 +212,61 @@ def board_change_on_arrow_keys(page, geom, box, shot):
     time.sleep(0.5)
     assert slider.get_attribute("aria-valuenow") != value, "the slider did not move"
     return float(np.mean(np.abs(board() - before).sum(axis=2) > 30))
+
+
+@pytest.mark.slow
+def test_five_clients_at_once(tmp_path):
+    """Issue 14: five browser tabs on one server at once: each gets its own session (its own selection),
+    a branch computed from one tab streams into all of them, and every tab stays responsive."""
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian chromium is not installed (/usr/bin/chromium); apt-get install chromium")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    from nnm_viewer.browser import launch_chromium, viewer_process, wait_selection_change
+    from nnm_viewer.demo import write_demo_file
+
+    t_start = time.time()
+    path = tmp_path / "two.h5"
+    write_demo_file(path, energy_max=10.0, max_points=30)
+    nnm.load_branches(path)[0].motion(0, samples=16)      # the solver's kernels compiled (disk cache)
+    _phase(t_start, "demo file written")
+    port = free_port()
+    with viewer_process(path, port) as (_, line), sync_api.sync_playwright() as pw:
+        assert f":{port}" in line, line
+        browser = launch_chromium(pw)
+        try:
+            # small windows: five software-WebGL renderers share the machine's cores
+            pages = [browser.new_page(viewport={"width": 1100, "height": 640}) for _ in range(5)]
+            for page in pages:                              # five tabs connect at the same time
+                page.goto(f"http://127.0.0.1:{port}/", wait_until="commit")
+            for page in pages:
+                page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=120000)
+            _phase(t_start, "5 tabs populated")
+            texts = [selected_text(p) for p in pages]
+            assert all("branch 1, point 0.00" in t for t in texts), texts
+            # tab 0 moves its selection: the other tabs keep theirs
+            pages[0].get_by_role("slider").first.focus()
+            pages[0].keyboard.press("End")
+            wait_selection_change(pages[0], texts[0], timeout_ms=30000)
+            assert "point 0.00" not in selected_text(pages[0])
+            time.sleep(1.0)
+            assert all("branch 1, point 0.00" in selected_text(p) for p in pages[1:])
+            _phase(t_start, "tab 0 moved its selection alone")
+            # tab 1 computes a branch: it selects it; every tab sees the job in its Compute tab
+            pages[1].get_by_role("tab", name="Compute").click()
+            pages[1].get_by_role("button", name="Start").click()
+            pages[1].wait_for_function("document.body.innerText.includes('Selected: branch 3')", timeout=120000)
+            for page in pages[2:] + pages[:1]:
+                page.get_by_role("tab", name="Compute").click()
+                page.wait_for_function("/\\b[1-9]\\d* (of at most \\d+ points|points in)/.test(document.body.innerText)",
+                                       timeout=60000)
+            _phase(t_start, "the branch computed from tab 1 reached every tab")
+            stop = pages[1].get_by_role("button", name="Stop (keep points)")
+            if stop.is_enabled():
+                stop.click()
+            for page in pages:
+                page.wait_for_function("document.body.innerText.includes('points in')", timeout=60000)
+            assert "branch 3" in selected_text(pages[1]) and "branch 3" not in selected_text(pages[2])
+            pages[4].screenshot(path=str(ARTIFACTS / "browser_five_tabs_tab5.png"))
+        finally:
+            browser.close()
+    print(f"five tabs: {time.time() - t_start:.1f} s")
