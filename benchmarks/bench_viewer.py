@@ -36,7 +36,7 @@ import nnm_solver as nnm  # noqa: E402
 from nnm_viewer.animation import MeshMapper, orbit_animation  # noqa: E402
 from nnm_viewer.browser import (CHROMIUM, VIEWPORT, free_port, launch_chromium, screen_box,  # noqa: E402
                                 selected_text, viewer_process, wait_selection_change)
-from nnm_viewer.fep import axis_ranges  # noqa: E402
+from nnm_viewer.browser import board_view  # noqa: E402
 from nnm_viewer.info import point_data  # noqa: E402
 from nnm_viewer.scene import fallback_mesh, project_points as project, view_geometry  # noqa: E402
 from nnm_viewer.state import BranchEntry  # noqa: E402
@@ -83,7 +83,7 @@ def in_browser(path, model, branches, mesh, starts, picks, cold=False):
 
     geom = view_geometry(mesh.vertices)
     series = [BranchEntry(b, "").series(1.0) for b in branches]
-    ranges = axis_ranges(series)
+    ranges, _ = board_view(series, 0)          # the board as a new tab shows it (zoomed on branch 1 if narrow)
     rows = {k: [] for k in ("server ready", "page populated", "model drawn", "solver ready",
                             "Start -> first streamed point", "pick")}
     with sync_playwright() as pw:

@@ -91,6 +91,21 @@ def wait_selection_change(page, before, timeout_ms=60000):
     page.wait_for_function(f"(old) => ({SELECTED_JS})() != old", arg=before, timeout=timeout_ms)
 
 
+def board_view(series, selected=0):
+    """(axis ranges, indices of the branches drawn) of the FEP board as a new tab shows it with branch
+    ``selected`` picked: zoomed on that branch when it spans a small part of the frequency range
+    (fep.should_zoom; the other branches are then hidden), else every branch."""
+    from .fep import axis_ranges, should_zoom
+
+    if should_zoom(series, selected):
+        return axis_ranges([series[selected]]), [selected]
+    return axis_ranges(series), [k for k, s in enumerate(series) if len(s)]
+
+
+#: label of the checkbox "FEP: zoom on selected branch" (the screenshot unticks it to show every branch)
+ZOOM_CHECKBOX_LABEL = "FEP: zoom on selected branch"
+
+
 def screen_box(points, geom, box, viewport=VIEWPORT):
     """Integer screen rectangle (x0, y0, x1, y1), clipped to the viewport, of world points seen by
     the initial camera in the canvas ``box`` (Playwright bounding box)."""

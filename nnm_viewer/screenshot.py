@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from .browser import CLOSE_NOTIFICATIONS_JS, free_port, launch_chromium, open_page, selected_text, \
-    viewer_process, wait_selection_change
+from .browser import (CLOSE_NOTIFICATIONS_JS, ZOOM_CHECKBOX_LABEL, free_port, launch_chromium, open_page,
+                      selected_text, viewer_process, wait_selection_change)
 
 
 def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
@@ -25,7 +25,7 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
     import nnm_solver as nnm
     from playwright.sync_api import sync_playwright
 
-    from .fep import axis_ranges
+    from .fep import axis_ranges, should_zoom
     from .scene import fallback_mesh, project_points, view_geometry
     from .state import BranchEntry
 
@@ -44,6 +44,9 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
         try:
             page = open_page(browser, port, viewport={"width": size[0], "height": size[1]})
             time.sleep(3.0)
+            if should_zoom(series, 0):        # zoomed on branch 1 by default: show every branch
+                page.get_by_text(ZOOM_CHECKBOX_LABEL).click()
+                time.sleep(3.0)
             box = page.locator("canvas").first.bounding_box()
             p3 = geom.board.to_world(series[branch].energy[[target]], series[branch].frequency[[target]], ranges)
             (px, py), = project_points(p3, geom, box)

@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-from nnm_viewer.browser import CHROMIUM, FLAGS, VIEWPORT, free_port, selected_text
-from nnm_viewer.fep import axis_ranges
+from nnm_viewer.browser import CHROMIUM, FLAGS, VIEWPORT, board_view, free_port, selected_text
 from nnm_viewer.scene import fallback_mesh, project_points, view_geometry
 from nnm_viewer.state import BranchEntry
 
@@ -46,12 +45,13 @@ def viewer_file(tmp_path):
     return path, ASSET.stem
 
 
-def well_separated_point(series, geom, ranges, box, exclude):
+def well_separated_point(series, geom, ranges, box, exclude, shown=None):
     """(branch index, point index) of the FEP point farthest on screen from every other point
-    (dense branches put spheres on top of each other), other than ``exclude``."""
+    (dense branches put spheres on top of each other), other than ``exclude``, among the branches
+    ``shown`` on the board (default: all)."""
     pts, ids = [], []
     for bi, ser in enumerate(series):
-        if len(ser):
+        if len(ser) and (shown is None or bi in shown):
             pts.append(project_points(geom.board.to_world(ser.energy, ser.frequency, ranges), geom, box))
             ids += [(bi, i) for i in range(len(ser))]
     xy = np.concatenate(pts)
@@ -135,8 +135,8 @@ def test_viewer_in_chromium(tmp_path):
                 # 3) pick a point of the in-scene FEP with the mouse
                 entries = [BranchEntry(b, "") for b in branches]
                 series = [e.series(1.0) for e in entries]
-                ranges = axis_ranges(series)
-                bi, target = well_separated_point(series, geom, ranges, box, exclude=(0, top))
+                ranges, shown = board_view(series, 0)     # zoomed on branch 1 when it is narrow
+                bi, target = well_separated_point(series, geom, ranges, box, exclude=(0, top), shown=shown)
                 p3 = geom.board.to_world(series[bi].energy[[target]], series[bi].frequency[[target]], ranges)
                 (px, py), = project_points(p3, geom, box)
                 picked = False
