@@ -10,9 +10,23 @@ from .info import length_unit
 COLORBAR_SIZE = (320, 74)
 
 
+_CACHE: dict = {}
+
+
 def colorbar_image(peak, cmap="jet", size=COLORBAR_SIZE):
     """RGB image (H, W, 3) uint8 of a horizontal colour bar from 0 to ``peak`` m (the true peak
-    displacement of the shown orbit, not amplified), labelled in m, mm, µm or nm."""
+    displacement of the shown orbit, not amplified), labelled in m, mm, µm or nm (cached: every tab
+    showing the same orbit shares the picture)."""
+    key = (float(f"{peak:.6g}"), cmap, tuple(size))
+    img = _CACHE.get(key)
+    if img is None:
+        if len(_CACHE) > 64:
+            _CACHE.clear()
+        img = _CACHE[key] = _render(key[0], cmap, size)
+    return img
+
+
+def _render(peak, cmap, size):
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -101,9 +101,10 @@ class PointView:
                 ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
             ui.set(ui.h_peak, content=peak_text(peak, amp, s.auto_amp)
                    + f"  \nreal period {anim.period:.4g} s, shown in {shown:.3g} s")
-            self.draw_colorbar(peak)
         s.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
         self.last_glb = glb
+        if anim is not None:             # after the animation, which the user waits for
+            self.draw_colorbar(s.amplification()[1])
 
     def draw_colorbar(self, peak):
         """The colour bar of the displacement colours, 0 .. the true peak displacement (redrawn when
