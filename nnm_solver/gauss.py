@@ -100,8 +100,10 @@ class GaussConstants:
         self.C1 = np.ascontiguousarray(Minv.sum(axis=2))
         self.Cc = np.ascontiguousarray(Minv @ c)
         self.F = np.ascontiguousarray((h * h) * Minv @ Abar)
-        G4 = np.einsum("mlj,rm,tm->lrjt", self.F, Bq, Bq) if ns else np.zeros((s, 0, s, 0))
+        BB = (Bq[:, None, :] * Bq[None, :, :]).reshape(ns * ns, n)           # b_m b_m^T per mode
+        G4 = (self.F.reshape(n, s * s).T @ BB.T).reshape(s, s, ns, ns).transpose(0, 2, 1, 3)
         self.G = np.ascontiguousarray(G4.reshape(s * ns, s * ns))
+        self.BB = BB
         # per-mode linear step: z1 = L z + U fQ, fQ = -w^2 Q + p, Q = C z + F p
         C = np.empty((n, s, 2))
         C[:, :, 0] = self.C1
@@ -111,9 +113,9 @@ class GaussConstants:
         U[1] = h * b
         L = np.array([[1.0, h], [0.0, 1.0]])
         self.C = C
-        self.A_lin = L[None] - omega2[:, None, None] * np.einsum("as,msk->mak", U, C)
+        self.A_lin = L[None] - omega2[:, None, None] * (U[None] @ C)
         IwF = np.eye(s)[None] - omega2[:, None, None] * self.F
-        self.E = np.einsum("as,msj->maj", U, IwF)
+        self.E = U[None] @ IwF
 
     def kernel_args(self):
         return (self.C1, self.Cc, self.F, self.G, self.b, self.bbar, self.c, self.Abar, self.Minv)
@@ -340,8 +342,10 @@ def _monodromy(k, Bq, nsteps, Dseq, ncols):
     # per-mode powers A^r, r = 0..N
     P = np.empty((N + 1, n, 2, 2))
     P[0] = np.eye(2)[None]
+    a = k.A_lin
     for r in range(N):
-        P[r + 1] = np.einsum("mab,mbc->mac", k.A_lin, P[r])
+        P[r + 1, :, :, 0] = a[:, :, 0] * P[r, :, 0, 0][:, None] + a[:, :, 1] * P[r, :, 1, 0][:, None]
+        P[r + 1, :, :, 1] = a[:, :, 0] * P[r, :, 0, 1][:, None] + a[:, :, 1] * P[r, :, 1, 1][:, None]
     diag_q = P[N, :, 0, :]   # (n, 2): dq_N / (dq0_m, dv0_m)
     diag_v = P[N, :, 1, :]
     cols = np.arange(n)
@@ -354,19 +358,19 @@ def _monodromy(k, Bq, nsteps, Dseq, ncols):
         Sv[cols, n + cols] = diag_v[:, 1]
     if ns == 0:
         return Sq, Sv
-    CA = np.einsum("mla,rmab->rmlb", k.C, P[:N])          # (N, n, s, 2): C A^r
-    CAE = np.einsum("rmla,maj->rmlj", CA[:max(N - 1, 0)], k.E)   # (N-1, n, s, s): C A^r E
-    BB = (Bq[:, None, :] * Bq[None, :, :]).reshape(ns * ns, n)           # (ns^2, n)
+    CA = k.C[None] @ P[:N]                                # (N, n, s, 2): C A^r
     R = max(N - 1, 0)
+    CAE = CA[:R] @ k.E[None]                              # (N-1, n, s, s): C A^r E
+    BB = k.BB                                             # (ns^2, n)
     H = (np.ascontiguousarray(CAE.transpose(0, 2, 3, 1)).reshape(R * s * s, n) @ BB.T)   # (r, l, j, x, y)
     H = H.reshape(R, s, s, ns, ns).transpose(0, 1, 3, 2, 4).reshape(R, m, m)
     Hom = np.ascontiguousarray((CA.transpose(0, 2, 3, 1)[:, :, None, :, :] * Bq[None, None, :, None, :])
                                .reshape(N, m, 2, n))                  # Bq C A^k per mode, rows (l, r)
     W = _volterra(Hom, np.ascontiguousarray(H), k.G, Dseq, ncols).reshape(N * m, ncols)
     # final state: - sum_j A^(N-1-j) E Bq^T w_j
-    AE = np.einsum("rmab,mbj->rmaj", P[:N][::-1], k.E)    # AE[j] = A^(N-1-j) E, (N, n, 2, s)
-    Uq = np.einsum("jml,rm->mjlr", AE[:, :, 0, :], Bq).reshape(n, N * m)
-    Uv = np.einsum("jml,rm->mjlr", AE[:, :, 1, :], Bq).reshape(n, N * m)
+    AE = P[:N][::-1] @ k.E[None]                          # AE[j] = A^(N-1-j) E, (N, n, 2, s)
+    Uq = (AE[:, :, 0, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m)
+    Uv = (AE[:, :, 1, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m)
     Sq -= Uq @ W
     Sv -= Uv @ W
     return Sq, Sv

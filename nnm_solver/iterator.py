@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .branch import Branch, Point
-from .continuation import ContinuationPoint, _energy_slope, pseudo_arclength
+from .continuation import ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
 from .events import Locator, locate_between
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
@@ -38,6 +38,8 @@ class NNMIterator:
                  tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None):
         self.model = model
         self.freq_tol = None if not freq_tol else float(freq_tol)
+        self._refine_pause = 0
+        self.refine_failures = 0
         self.error_estimate = bool(error_estimate) or self.freq_tol is not None
         self.mode = int(mode)
         self.settings = settings
@@ -86,6 +88,7 @@ class NNMIterator:
                 point, (q0, v0, T) = self._locate(cp, point, (q0, v0, T))
             if self.tongue_mode == "skip":
                 self._last_backbone = (cp, point)
+            self._estimate_error(point)
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
             p = self.points[loop]
@@ -93,7 +96,6 @@ class NNMIterator:
                                         f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
                                         f"one lap is kept")
             raise StopIteration
-        self._estimate_error(point)
         self.points.append(point)
         E, E0 = point.energy, self.points[0].energy
         ratio = min(self._turning_ratio(q0, v0), getattr(point, "_restoring", 1.0))
@@ -120,8 +122,19 @@ class NNMIterator:
         est = point.freq_error
         if not est > self.freq_tol or prob.spp >= MAX_STEPS_PER_PERIOD:
             return False
-        factor = min(max((est / (0.5 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
+        if self._refine_pause > 0:
+            self._refine_pause -= 1
+            return False
+        factor = min(max((est / (0.25 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
+        old = prob.spp
         prob.set_steps(min(int(np.ceil(prob.spp * factor)), MAX_STEPS_PER_PERIOD))
+        try:                                    # the orbit with the finer step, near this one
+            correct(prob, cp.u, cp.tangent, self._cs, self._tol, prob.scale(cp.u))
+        except CorrectorFailure:                # e.g. next to a fold that the finer step moves: keep the
+            prob.set_steps(old)                 # coarse point and try again a few points later
+            self._refine_pause = 3
+            self.refine_failures += 1
+            return False
         self._engine.close()
         self._engine = pseudo_arclength(prob, cp.u, cp.tangent, self._cs, self._tol)
         self._prev = None                       # no event is located across a change of time step
@@ -129,10 +142,10 @@ class NNMIterator:
 
     def _estimate_error(self, point):
         """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
-        prob, u, J = getattr(point, "_solution", (None, None, None))
+        prob, u, J, p = getattr(point, "_solution", (None, None, None, None))
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
             if not np.isfinite(point.freq_error):
-                point.freq_error = prob.frequency_error(u, J)
+                point.freq_error = prob.frequency_error(u, J, p)
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
@@ -266,7 +279,7 @@ class NNMIterator:
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point.steps = int(getattr(prob, "spp", 0))
-        point._solution = (prob, cp.u, cp.jacobian)   # for the error estimate of the points that are kept
+        point._solution = (prob, cp.u, cp.jacobian, cp.tangent)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)
@@ -285,6 +298,12 @@ class NNMIterator:
         if self.status == "running":
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
         tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
+        message = self.message
+        if self.freq_tol:
+            over = sum(1 for p in self.points if p.freq_error > self.freq_tol)
+            if over:
+                message += (f"; {over} points exceed freq_tol = {self.freq_tol:g} (the finer step did not converge "
+                            f"next to them, e.g. near a fold: see freq_error)")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
-                                  status=self.status, message=self.message,
+                                  status=self.status, message=message,
                                   events=self.events if self.locate else None, tongues=tongues)

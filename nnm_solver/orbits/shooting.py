@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from ..continuation import LeastSquares
 from ..floquet import nontrivial_multipliers, reversible_multipliers
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
@@ -51,6 +52,11 @@ def discrete_linear_period(omega, nsteps_per_period, integrator="newmark"):
     when omega T / (2N) = tan(pi / N); Gauss collocation by 2 arg P(i omega h) (gauss.rotation).
     """
     return get_integrator(integrator).linear_period(omega, nsteps_per_period)
+
+
+#: next to an energy fold (|cos| between the branch tangent and the energy gradient, balanced norm, below
+#: this) the frequency error estimate is not taken at a fixed energy (ShootingProblem.frequency_error)
+FOLD_COSINE = 0.05
 
 
 class ShootingProblem:
@@ -216,37 +222,34 @@ class ShootingProblem:
         q0, v0, _ = self.unpack(u)
         return self.sys.energy(q0, v0)
 
-    def frequency_error(self, u, J):
+    def frequency_error(self, u, J, tangent):
         """Estimated relative error of the frequency of the converged orbit u from the time discretisation
-        (the discrete orbit's frequency minus the exact one, over the exact one, at the same energy).
+        (the discrete orbit's frequency minus the exact one, relative; 0 for an exact integration).
 
         Step doubling: the shooting residual r of u with half the step (2N steps per period) is corrected
-        by one Newton step at fixed energy with the Jacobian J of the converged point,
-        min |J du + r| subject to dE/du . du = 0, which moves the period by dT = T_N/2 - T_N to first order;
-        with the scheme's order p, T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson).  Cost: one state sweep
-        at twice the steps and a least-squares solve of the Jacobian's size.  Returns NaN if the finer
-        integration fails.
+        by one Newton step with the Jacobian J of the converged point, orthogonal to the branch tangent in
+        the balanced norm (as the corrector does), which moves the period by dT = T_N/2 - T_N to first
+        order; the step is then moved along the branch back to the point's energy, so that the estimate is
+        the frequency error at a fixed energy (what the FEP shows); with the scheme's order p,
+        T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson).  Next to an energy fold (the tangent within
+        FOLD_COSINE of the fixed-energy directions), where the frequency at a fixed energy is not defined,
+        the correction orthogonal to the tangent is used: the distance between the two branches.  Cost:
+        one state sweep at twice the steps and one factorisation of the corrector's size.  NaN if the
+        finer integration fails.
         """
         q0, v0, T = self.unpack(u)
         q, v, ok = self.integrator.state(self.sys, q0, v0, 0.5 * self._h(T), 2 * self.nsteps)
         if not ok:
             return float("nan")
         r = self._assemble(q, v, q0, v0)
-        g = self.energy_gradient(u)
         w = self.scale(u)
-        Js = J / w[None, :]                      # balanced units y = w u
-        gs = g / w
-        gs = gs / max(np.linalg.norm(gs), 1e-300)
-        # du = Z y with Z an orthonormal basis of the fixed-energy directions (Householder reflection of gs)
-        e = np.zeros_like(gs)
-        e[0] = 1.0
-        v_h = gs + np.copysign(1.0, gs[0]) * e
-        v_h /= np.linalg.norm(v_h)
-        JZ = Js - np.outer(Js @ v_h, 2.0 * v_h)  # J (I - 2 v v^T): its columns 1.. span gs-perp
-        y = sla.lstsq(JZ[:, 1:], -r, lapack_driver="gelsy", check_finite=False)[0]
-        dy = np.concatenate([[0.0], y])
-        dy = dy - 2.0 * v_h * (v_h @ dy)
-        dT_rel = (dy[-1] / w[-1]) * self.T_r / T
+        du = LeastSquares(np.vstack([J, (w * w * tangent)[None, :]])).solve(np.r_[-r, 0.0])
+        g = self.energy_gradient(u)
+        gp = g @ tangent
+        cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
+        if cos >= FOLD_COSINE:                   # move along the branch back to the point's energy
+            du = du - (g @ du) / gp * tangent
+        dT_rel = du[-1] * self.T_r / T
         p = self.integrator.order
         return float(abs(dT_rel) * 2 ** p / (2 ** p - 1))
 
