@@ -33,6 +33,20 @@ def _load(path):
     return model, None if is_import_path(p) else load_extra(p, "reference")
 
 
+def accuracy_line(branch):
+    """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator."""
+    s = branch.settings
+    err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
+    ok = np.isfinite(err)
+    if s.method != "shooting" or not ok.any():
+        return "  accuracy: no per-point error estimate"
+    i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
+    steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
+    more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
+    return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "
+            f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
+
+
 def list_modes(model, reference=None, count=30, out=sys.stdout):
     freqs, _ = model.linear_modes()
     labels = model.mode_labels or []
@@ -132,6 +146,10 @@ def main(argv=None):
     parser.add_argument("--energy-max", type=float, help="energy (J) where the continuation stops")
     parser.add_argument("--energy-min", type=float, default=None, help="energy (J) of the first point")
     parser.add_argument("--steps-per-period", type=int, default=200)
+    parser.add_argument("--integrator", default="newmark", help="time integrator of the shooting: newmark "
+                        "(default, order 2), gauss4 or gauss6 (Gauss-Legendre, orders 4 and 6)")
+    parser.add_argument("--freq-tol", type=float, default=None, help="raise the steps per period where a "
+                        "point's estimated relative frequency error exceeds this (e.g. 1e-6)")
     parser.add_argument("--tol", type=float, default=1e-6, help="relative periodicity tolerance")
     parser.add_argument("--max-points", type=int, default=500)
     parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat; "
@@ -181,7 +199,8 @@ def _run(args):
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     cli_exchange.check_exports(args, model)
     job = start_branch(model, args.mode, args.energy_max, steps_per_period=args.steps_per_period, tol=args.tol,
-                       max_points=args.max_points, energy_min=args.energy_min)
+                       max_points=args.max_points, energy_min=args.energy_min, integrator=args.integrator,
+                       freq_tol=args.freq_tol)
     t0 = time.perf_counter()
     try:
         _progress(job, sys.stderr)
@@ -204,6 +223,7 @@ def _run(args):
     for e in branch.events:
         print(f"  {e['kind']:<12} at point {e['index']:>4}: E = {e['energy']:.4e} J, f = {e['frequency_hz']:.5f} Hz"
               f"  ({e['detail']})")
+    print(accuracy_line(branch))
     if len(branch):
         name = save_branch(out, branch)
         print(f"saved as /branches/{name} in {out}")

@@ -119,7 +119,7 @@ class NNMIterator:
         if not self.freq_tol or not hasattr(prob, "set_steps"):
             return False
         self._estimate_error(point)
-        est = point.freq_error
+        est = getattr(point, "_disc_error", point.freq_error)   # what finer steps can reduce
         if not est > self.freq_tol or prob.spp >= MAX_STEPS_PER_PERIOD:
             return False
         if self._refine_pause > 0:
@@ -145,7 +145,7 @@ class NNMIterator:
         prob, u, J, p = getattr(point, "_solution", (None, None, None, None))
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
             if not np.isfinite(point.freq_error):
-                point.freq_error = prob.frequency_error(u, J, p)
+                point.freq_error, point._disc_error = prob.frequency_error(u, J, p)
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
@@ -300,10 +300,14 @@ class NNMIterator:
         tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
         message = self.message
         if self.freq_tol:
-            over = sum(1 for p in self.points if p.freq_error > self.freq_tol)
-            if over:
-                message += (f"; {over} points exceed freq_tol = {self.freq_tol:g} (the finer step did not converge "
-                            f"next to them, e.g. near a fold: see freq_error)")
+            over = [p for p in self.points if p.freq_error > self.freq_tol]
+            steps = [p for p in over if getattr(p, "_disc_error", 0.0) > self.freq_tol]
+            if steps:
+                message += (f"; {len(steps)} points exceed freq_tol = {self.freq_tol:g} (the finer step did not "
+                            f"converge next to them, e.g. near a fold: see freq_error)")
+            if len(over) > len(steps):
+                message += (f"; {len(over) - len(steps)} points exceed freq_tol = {self.freq_tol:g} because of the "
+                            f"corrector's tolerance: lower tol (now {self._tol:g})")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=message,
                                   events=self.events if self.locate else None, tongues=tongues)

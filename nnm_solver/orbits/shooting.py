@@ -223,35 +223,44 @@ class ShootingProblem:
         return self.sys.energy(q0, v0)
 
     def frequency_error(self, u, J, tangent):
-        """Estimated relative error of the frequency of the converged orbit u from the time discretisation
-        (the discrete orbit's frequency minus the exact one, relative; 0 for an exact integration).
+        """Estimated relative error of the frequency of the converged orbit u: (total, discretisation).
 
-        Step doubling: the shooting residual r of u with half the step (2N steps per period) is corrected
-        by one Newton step with the Jacobian J of the converged point, orthogonal to the branch tangent in
-        the balanced norm (as the corrector does), which moves the period by dT = T_N/2 - T_N to first
-        order; the step is then moved along the branch back to the point's energy, so that the estimate is
-        the frequency error at a fixed energy (what the FEP shows); with the scheme's order p,
-        T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson).  Next to an energy fold (the tangent within
-        FOLD_COSINE of the fixed-energy directions), where the frequency at a fixed energy is not defined,
-        the correction orthogonal to the tangent is used: the distance between the two branches.  Cost:
-        one state sweep at twice the steps and one factorisation of the corrector's size.  NaN if the
-        finer integration fails.
+        The discrete orbit's frequency minus the exact one, relative.  Two parts, both from one Newton
+        step with the Jacobian J of the converged point:
+        - the time discretisation, by step doubling: the shooting residual with half the step (2N steps
+          per period) minus the residual with N steps moves the period by dT = T_N/2 - T_N to first order,
+          and with the scheme's order p, T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson);
+        - the corrector's tolerance: the step that the residual left at convergence would still make.
+        The step is taken orthogonal to the branch tangent (as the corrector does), then moved along the
+        branch back to the point's energy, so that the estimate is the frequency error at a fixed energy,
+        what the FEP shows.  Next to an energy fold (the tangent within FOLD_COSINE of the fixed-energy
+        directions), where the frequency at a fixed energy is not defined, the orthogonal step is kept:
+        the distance between the discrete and the exact branch.  Cost: two state sweeps (N and 2N steps)
+        and one factorisation of the corrector's size.  NaN if an integration fails.
         """
         q0, v0, T = self.unpack(u)
         q, v, ok = self.integrator.state(self.sys, q0, v0, 0.5 * self._h(T), 2 * self.nsteps)
-        if not ok:
-            return float("nan")
-        r = self._assemble(q, v, q0, v0)
+        qc, vc, okc = self.integrator.state(self.sys, q0, v0, self._h(T), self.nsteps)
+        if not (ok and okc):
+            return float("nan"), float("nan")
+        r_c = self._assemble(qc, vc, q0, v0)
+        r_f = self._assemble(q, v, q0, v0)
         w = self.scale(u)
-        du = LeastSquares(np.vstack([J, (w * w * tangent)[None, :]])).solve(np.r_[-r, 0.0])
+        A = LeastSquares(np.vstack([J, (w * w * tangent)[None, :]]))
         g = self.energy_gradient(u)
         gp = g @ tangent
         cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
-        if cos >= FOLD_COSINE:                   # move along the branch back to the point's energy
-            du = du - (g @ du) / gp * tangent
-        dT_rel = du[-1] * self.T_r / T
+
+        def period_step(r):
+            du = A.solve(np.r_[-r, 0.0])
+            if cos >= FOLD_COSINE:               # move along the branch back to the point's energy
+                du = du - (g @ du) / gp * tangent
+            return du[-1] * self.T_r / T
+
         p = self.integrator.order
-        return float(abs(dT_rel) * 2 ** p / (2 ** p - 1))
+        disc = period_step(r_f - r_c) * 2 ** p / (2 ** p - 1)
+        conv = period_step(r_c)
+        return float(abs(disc + conv)), float(abs(disc))
 
     # --------------------------------------------------------------- results (driver protocol)
     def state(self, u):
