@@ -76,3 +76,29 @@ def test_paris_fast(tmp_path):
     assert len(nnm.load_branches(out)) == 2
     for png in tmp_path.glob("*.png"):
         assert png.stat().st_size < 150_000, png
+
+
+def test_bilinear_attachment_two_dof(tmp_path):
+    """examples/bilinear_attachment.py, 2-DOF part: the bilinear law has the cubic's force and energy at the
+    representative deformation, is linear below d1 (backbone at the linear frequency), and softens past
+    it to within a few tenths of a percent of the cubic backbone at the top energy."""
+    ex = load_example("bilinear_attachment")
+    summary = tmp_path / "summary.json"
+    assert ex.main(["--two-dof-only", "--out-dir", str(tmp_path), "--summary", str(summary)]) == 0
+    r = json.loads(summary.read_text())["two_dof"]
+    d_r, d1, k1, k3 = r["d_r"], r["d1"], r["k1"], r["k3"]
+    assert d1 == pytest.approx(d_r / 2) and k1 == pytest.approx(2 * k3 * d_r ** 2) and k1 < 0
+    pw = nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.0, k1], breakpoints=[d1])
+    assert float(pw.exact_force(d_r)) == pytest.approx(k3 * d_r ** 3, rel=1e-12)
+    m = nnm.Model(np.eye(1), np.eye(1), [pw])
+    assert m.energy(np.array([d_r]), np.zeros(1)) - 0.5 * d_r ** 2 == pytest.approx(k3 * d_r ** 4 / 4, rel=1e-4)
+    c, b = r["cubic"], r["bilinear"]
+    assert c["status"] == b["status"] == "done" and c["stable"] and b["stable"]
+    assert c["energy"][1] == pytest.approx(2.0, rel=1e-5) and b["energy"][1] == pytest.approx(2.0, rel=1e-5)
+    assert c["peak_d"] == pytest.approx(d_r) and b["peak_d"] == pytest.approx(d_r, rel=0.02)
+    assert b["linear_below_d1"] < 1e-7                       # nothing happens below the breakpoint
+    assert -2.5 < c["drop_percent"] < -1.5 and -2.5 < b["drop_percent"] < -1.5
+    assert abs(b["drop_percent"] - c["drop_percent"]) < 0.3
+    low = r["table"][0]
+    assert low["bilinear_percent"] == pytest.approx(0.0, abs=1e-5) and low["cubic_percent"] < -0.01
+    assert (tmp_path / "bilinear_two_dof.png").stat().st_size < 150_000
