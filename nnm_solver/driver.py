@@ -116,7 +116,8 @@ def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
     symmetric = odd if opts["symmetric"] is None else bool(opts["symmetric"])
     if symmetric and not odd:
         raise NNMInputError("symmetric=True (half-period shooting) needs odd nonlinear forces; "
-                            "use symmetric=False (or leave it unset) for elements with even powers")
+                            "use symmetric=False (or leave it unset) for elements with even powers or an asymmetric "
+                            "piecewise-linear law")
     reversible = opts["reversible"]
     if reversible is None and opts["symmetric"] is None and not symmetric:
         reversible = True                      # even forces: full period, orbits still start at rest
@@ -148,7 +149,8 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
             raise NNMInputError(f"samples={samples} is too few for {harmonics} harmonics; use at least "
                                 f"{2 * harmonics + 1} (more than {4 * harmonics} avoids aliasing of the cubic)")
     if basis == "odd" and not system.elements.odd:
-        raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers")
+        raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers "
+                            "or an asymmetric piecewise-linear law")
     hb = HBBasis(harmonics, basis, samples)
     problem = HBProblem(system, k, hb, max_rel_step=opts["max_rel_step"], max_rel_period_step=opts["max_period_step"])
     A0 = np.zeros((len(hb), system.n))
