@@ -71,6 +71,7 @@ class ContinuationPoint:
     iterations: int
     step: float
     error: float
+    factor: object = None       # LeastSquares of [jacobian; previous tangent] (reusable for other solves)
 
 
 class LeastSquares:
@@ -87,13 +88,20 @@ class LeastSquares:
 
 def tangent(J, previous, w=None):
     """Tangent p of F(u) = 0 from J = dF/du (eq. 8), |w * p| = 1, oriented along ``previous``."""
+    return tangent_factored(J, previous, w)[0]
+
+
+def tangent_factored(J, previous, w=None):
+    """(p, factor): the tangent, and the factorisation of [J; previous^T] it was solved with (any solve
+    J du = b with previous . du = 0 can reuse it)."""
     w = np.ones(J.shape[1]) if w is None else w
     A = np.vstack([J, previous[None, :]])
     b = np.zeros(A.shape[0])
     b[-1] = 1.0
-    p = LeastSquares(A).solve(b)
+    factor = LeastSquares(A)
+    p = factor.solve(b)
     p /= np.linalg.norm(w * p)
-    return p if (w * p) @ (w * previous) >= 0 else -p
+    return (p if (w * p) @ (w * previous) >= 0 else -p), factor
 
 
 class CorrectorFailure(Exception):
@@ -161,10 +169,10 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
     w = _scale(problem, u)
-    p = tangent(J, p0, w)
+    p, factor = tangent_factored(J, p0, w)
     problem.accept(u, J)
     s = settings.step
-    yield ContinuationPoint(u, p, J, it, 0.0, err)
+    yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
     failures = 0
     s_clean = s_before_jump = s
     while True:
@@ -179,7 +187,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
                 reason = problem.check_step(u, u_new)
                 if reason:
                     raise CorrectorFailure(reason)
-            p_new = tangent(J_new, p, w)
+            p_new, factor = tangent_factored(J_new, p, w)
             cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
@@ -209,7 +217,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         w = _scale(problem, u_new)
         u, J, p = u_new, J_new, p_new / np.linalg.norm(w * p_new)
         problem.accept(u, J)
-        yield ContinuationPoint(u, p, J, it, s, err)
+        yield ContinuationPoint(u, p, J, it, s, err, factor)
         # step control from the number of corrector iterations
         if it <= settings.target_iter // 2:
             s *= 2.0

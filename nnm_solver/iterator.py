@@ -142,10 +142,10 @@ class NNMIterator:
 
     def _estimate_error(self, point):
         """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
-        prob, u, J, p = getattr(point, "_solution", (None, None, None, None))
+        prob, u, J, p, factor = getattr(point, "_solution", (None,) * 5)
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
             if not np.isfinite(point.freq_error):
-                point.freq_error, point._disc_error = prob.frequency_error(u, J, p)
+                point.freq_error, point._disc_error = prob.frequency_error(u, J, p, factor)
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
@@ -279,7 +279,7 @@ class NNMIterator:
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point.steps = int(getattr(prob, "spp", 0))
-        point._solution = (prob, cp.u, cp.jacobian, cp.tangent)   # for the error estimate of the points that are kept
+        point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)

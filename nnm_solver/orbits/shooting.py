@@ -222,7 +222,7 @@ class ShootingProblem:
         q0, v0, _ = self.unpack(u)
         return self.sys.energy(q0, v0)
 
-    def frequency_error(self, u, J, tangent):
+    def frequency_error(self, u, J, tangent, factor=None):
         """Estimated relative error of the frequency of the converged orbit u: (total, discretisation).
 
         The discrete orbit's frequency minus the exact one, relative.  Two parts, both from one Newton
@@ -236,7 +236,8 @@ class ShootingProblem:
         what the FEP shows.  Next to an energy fold (the tangent within FOLD_COSINE of the fixed-energy
         directions), where the frequency at a fixed energy is not defined, the orthogonal step is kept:
         the distance between the discrete and the exact branch.  Cost: two state sweeps (N and 2N steps)
-        and one factorisation of the corrector's size.  NaN if an integration fails.
+        and one factorisation of the corrector's size (``factor``: the continuation's factorisation of
+        [J; previous tangent], reused away from folds).  NaN if an integration fails.
         """
         q0, v0, T = self.unpack(u)
         q, v, ok = self.integrator.state(self.sys, q0, v0, 0.5 * self._h(T), 2 * self.nsteps)
@@ -246,10 +247,13 @@ class ShootingProblem:
         r_c = self._assemble(qc, vc, q0, v0)
         r_f = self._assemble(q, v, q0, v0)
         w = self.scale(u)
-        A = LeastSquares(np.vstack([J, (w * w * tangent)[None, :]]))
         g = self.energy_gradient(u)
         gp = g @ tangent
         cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
+        # away from folds the result is moved along the tangent to a fixed energy, so any factorisation of J
+        # with a row transversal to the tangent gives it; at a fold the orthogonal one is needed
+        A = factor if factor is not None and cos >= FOLD_COSINE else LeastSquares(
+            np.vstack([J, (w * w * tangent)[None, :]]))
 
         def period_step(r):
             du = A.solve(np.r_[-r, 0.0])
