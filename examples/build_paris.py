@@ -13,24 +13,35 @@ Axes: x aft from the nose, y towards the right wing, z up (ground at z = 0).
 """
 from __future__ import annotations
 
-import argparse
-import dataclasses
-import platform
-import sys
-import time
-from pathlib import Path
+import os
 
-import numpy as np
-import scipy.linalg as sla
+# One BLAS thread: the dense work here (Lanczos re-orthogonalisation, R^T M R) is memory-bound, and a
+# multi-threaded BLAS competing with other processes on a 2-core machine is several times slower.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import nnm_solver
-from nnm_fem import DOF_NAMES, modes
-from nnm_solver.reduction import craig_bampton, mac
-from paris_aircraft import ATTACHMENT_NAMES, BUILDER_VERSION, ParisParams, build_paris
-from paris_aircraft.labels import label_modes
-from paris_aircraft.tuning import TABLE2_HZ
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import platform  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy.linalg as sla  # noqa: E402
+
+import nnm_solver  # noqa: E402
+from nnm_fem import DOF_NAMES, modes  # noqa: E402
+from nnm_solver.analysis import mass_mac  # noqa: E402
+from nnm_solver.reduction import craig_bampton  # noqa: E402
+from paris_aircraft import ATTACHMENT_NAMES, BUILDER_VERSION, ParisParams, build_paris  # noqa: E402
+from paris_aircraft.fingerprint import build_fingerprint  # noqa: E402
+from paris_aircraft.labels import label_modes  # noqa: E402
+from paris_aircraft.tuning import TABLE2_HZ  # noqa: E402
 
 K3 = -1e13  # N/m^3, softening, per attachment (seed paper, section 4.1.3)
+#: relative accuracy of the Lanczos eigenvalues (ARPACK tol; 0 = machine precision costs more restarts)
+EIG_TOL = 1e-10
 
 
 def display_mesh(ac, R, stride):
@@ -77,6 +88,7 @@ def main(argv=None):
     ap.add_argument("--fmax", type=float, default=100.0, help="validation band upper limit (Hz)")
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
+    load_start = os.getloadavg()
     mesh = 0.5 if args.coarse else 1.0
     n_cb = args.cb_modes or (200 if args.coarse else 500)
     out = Path(args.out or ("paris_coarse.h5" if args.coarse else Path(__file__).resolve().parents[1]
@@ -89,10 +101,11 @@ def main(argv=None):
     mass = ac.fe.total_mass(ac.M)
     print(f"full FE model: {ac.fe.n_nodes} nodes, {n_full} DOF, mass {mass:.1f} kg, "
           f"built in {ac.build_seconds:.1f} s", flush=True)
+    t_assembly = time.perf_counter() - t_start
     t = time.perf_counter()
     n_eig = 60
     while True:
-        f_full, V_full = modes(ac.K, ac.M, n_eig, sigma=-1.0, xyz=ac.fe.nodes)
+        f_full, V_full = modes(ac.K, ac.M, n_eig, sigma=-1.0, xyz=ac.fe.nodes, tol=EIG_TOL)
         if f_full[-1] > args.fmax or n_eig > 400:
             break
         n_eig = int(n_eig * 1.5)
@@ -105,16 +118,15 @@ def main(argv=None):
     # ---------------------------------------------------------------- Craig-Bampton
     t = time.perf_counter()
     b = ac.retained_dofs
-    Mr, Kr, R, fixed_hz = craig_bampton(ac.M, ac.K, b, n_cb, xyz=ac.fe.nodes)
+    Mr, Kr, R, fixed_hz = craig_bampton(ac.M, ac.K, b, n_cb, tol=EIG_TOL, xyz=ac.fe.nodes)
     t_cb = time.perf_counter() - t
     lam, Q = sla.eigh(Kr, Mr)
     f_red = np.sqrt(np.maximum(lam, 0)) / (2 * np.pi)
     print(f"Craig-Bampton: {len(b)} boundary DOF + {n_cb} fixed-interface modes "
           f"(up to {fixed_hz[-1]:.0f} Hz) = {Mr.shape[0]} DOF ({t_cb:.1f} s)", flush=True)
-    trans = (6 * np.arange(ac.fe.n_nodes)[:, None] + np.arange(3)).ravel()
     nv = len(f_full)
-    Phi_red = R[trans] @ Q[:, :nv + 10]
-    Mac = mac(V_full[trans], Phi_red)
+    Phi_red = R @ Q[:, :nv + 10]                     # recovered physical displacements of the reduced modes
+    Mac = mass_mac(ac.M, V_full, Phi_red)            # mass-weighted, on all DOFs of the full model
     pair = np.argmax(Mac, axis=1)
     mac_diag = Mac[np.arange(nv), pair]
     ferr = f_red[pair] / f_full - 1.0
@@ -141,7 +153,9 @@ def main(argv=None):
         print(f" {k + 1:4d} {f_red[k]:10.4f} {TABLE2_HZ[k]:10.4f} {100 * (f_red[k] / TABLE2_HZ[k] - 1):8.2f}   "
               f"{mode_labels[k]}")
     build_seconds = time.perf_counter() - t_start
-    info = dict(builder_version=BUILDER_VERSION, full_dof=int(n_full), full_nodes=int(ac.fe.n_nodes),
+    fingerprint = build_fingerprint(params, n_cb, K3)
+    load = [load_start, os.getloadavg()]
+    info = dict(builder_version=BUILDER_VERSION, builder_fingerprint=fingerprint, full_dof=int(n_full), full_nodes=int(ac.fe.n_nodes),
                 total_mass_kg=float(mass), axes="x aft from the nose, y to the right wing, z up",
                 reduction="Craig-Bampton: 8 attachment nodes x 6 DOF + fixed-interface modes",
                 n_fixed_interface_modes=int(n_cb), nonlinearity="cubic springs k3=-1e13 N/m^3 on relative uz "
@@ -157,14 +171,19 @@ def main(argv=None):
                           "band_hz": np.array([0.0, args.fmax]), "retained_dofs": b.astype(np.int64),
                           "seconds": np.float64(t_cb)},
         "reference": {"table2_hz": TABLE2_HZ, "source": "seed paper Table 2"},
-        "provenance": {"builder_version": BUILDER_VERSION, "params": prov,
-                       "build_seconds": np.float64(build_seconds), "python": platform.python_version(),
+        "provenance": {"builder_version": BUILDER_VERSION, "builder_fingerprint": fingerprint, "params": prov,
+                       "build_seconds": np.float64(build_seconds), "eigen_tol": np.float64(EIG_TOL),
+                       "stage_seconds": np.array([t_assembly, t_full, t_cb, build_seconds]),
+                       "stage_names": ["assembly", "full-model modes and labels", "Craig-Bampton", "total"],
+                       "load_average_1_5_15_start_end": np.array(load), "python": platform.python_version(),
                        "numpy": np.__version__, "command": " ".join(["examples/build_paris.py"] + sys.argv[1:])},
     }
     nnm_solver.save_model(out, model, extra=extra)
     size = out.stat().st_size / 1e6
     print(f"\nwrote {out} ({size:.1f} MB, {mesh.vertices.shape[0]} display vertices, "
-          f"{mesh.faces.shape[0]} faces) in {time.perf_counter() - t_start:.1f} s total")
+          f"{mesh.faces.shape[0]} faces) in {time.perf_counter() - t_start:.1f} s total (assembly {t_assembly:.1f} s, "
+          f"full-model modes {t_full:.1f} s, Craig-Bampton {t_cb:.1f} s; load average {load[0][0]:.2f} at the start, "
+          f"{os.getloadavg()[0]:.2f} at the end)\nbuilder fingerprint {fingerprint}")
     return 0
 
 

@@ -24,7 +24,6 @@ from ..branch import Branch
 from ..errors import NNMInputError
 from ..fourier import fourier_coefficients
 from ..modal import modal_system
-from ..reduction import mac
 
 #: a harmonic k > 1 carrying at least this fraction of the amplitude marks an internal resonance
 RESONANCE_FRACTION = 0.15
