@@ -16,7 +16,7 @@ forces at stage l, so only the s n_s stage deformations d_l = Bq Q_l are unknown
 
     D + G g(D) = Dlin,   G[(l, r), (j, t)] = sum_m F_m[l, j] Bq[r, m] Bq[t, m],  F_m = h^2 M_m^-1 Abar,
 
-solved by Newton to round-off (the same damped Newton as Newmark's springs, newmark._solve_springs).
+solved by Newton to round-off (the same damped Newton as Newmark's springs, newmark.solve_stages).
 One step costs O(n s n_s) plus an (s n_s)^2 solve, like Newmark with s times as many springs.
 
 Sensitivities.  The linearised step is, per mode, z_{k+1} = A_m z_k + E_m p_k (z = (dq, dv)), with the
@@ -38,8 +38,8 @@ from functools import lru_cache
 import numpy as np
 
 from .jit import jit as _jit
-from .laws import law_force, law_force_tangent
-from .newmark import NEWTON_MAX, NEWTON_RTOL
+from .laws import law_force
+from .newmark import solve_stages
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
            "sweep_sensitivity"]
@@ -126,46 +126,6 @@ def constants(system, h, s):
 
 
 @_jit
-def _stage_forces(D, s, ns, powers, coeffs, kinks):
-    """g and g' at the s n_s stage deformations D (stage-major)."""
-    g = np.empty(s * ns)
-    t = np.empty(s * ns)
-    for l in range(s):
-        gl, tl = law_force_tangent(D[l * ns:(l + 1) * ns], powers, coeffs, kinks)
-        g[l * ns:(l + 1) * ns] = gl
-        t[l * ns:(l + 1) * ns] = tl
-    return g, t
-
-
-@_jit
-def _solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess):
-    """Solve D + G g(D) = Dlin by damped Newton; returns (D, J, g, Dg, ok), J = I + G diag(g')."""
-    m = s * ns
-    D = Dguess.copy()
-    scale = np.sqrt(np.sum(Dlin * Dlin)) + 1e-300
-    g, Dg = _stage_forces(D, s, ns, powers, coeffs, kinks)
-    F = D + G @ g - Dlin
-    nF = np.sqrt(np.sum(F * F))
-    J = np.eye(m) + G * Dg[None, :]
-    for _ in range(NEWTON_MAX):
-        if nF <= NEWTON_RTOL * scale:
-            return D, J, g, Dg, True
-        delta = np.linalg.solve(J, F)
-        lam = 1.0
-        for _ in range(30):
-            D_try = D - lam * delta
-            g_try, Dg_try = _stage_forces(D_try, s, ns, powers, coeffs, kinks)
-            F_try = D_try + G @ g_try - Dlin
-            n_try = np.sqrt(np.sum(F_try * F_try))
-            if n_try < nF or lam < 1e-8:
-                break
-            lam *= 0.5
-        D, F, nF, g, Dg = D_try, F_try, n_try, g_try, Dg_try
-        J = np.eye(m) + G * Dg[None, :]
-    return D, J, g, Dg, nF <= 1e-9 * scale
-
-
-@_jit
 def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, c):
     """One Gauss step from (q, v) with a = f(q). Returns (q1, v1, a1, P, fQ, J, Dg, ok):
     P (s, n) the stage element forces -Bq^T g, fQ (s, n) = f(Q) at the stages, J the converged Newton
@@ -187,7 +147,7 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
             Dlin[l * ns:(l + 1) * ns] = Bq @ Qlin[l]
             tl = c[l] * h
             Dguess[l * ns:(l + 1) * ns] = Bq @ (q + tl * v + 0.5 * tl * tl * a)
-        D, J, g, Dg, ok = _solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess)
+        D, J, g, Dg, ok = solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess)
         for l in range(s):
             P[l] = -(Bq.T @ g[l * ns:(l + 1) * ns])
     fQ = np.empty((s, n))

@@ -40,36 +40,49 @@ NEWTON_RTOL = 1e-13
 
 
 @_jit
-def _solve_springs(dlin, G, powers, coeffs, kinks, dguess):
-    """Solve d + G g(d) = dlin (n_s unknowns) by damped Newton; returns (d, J, g, D, ok), J = I + G diag(g'),
-    g = g(d) and D = g'(d) at the solution.
+def stage_forces(D, s, ns, powers, coeffs, kinks):
+    """g and g' (s n_s,) each at the deformations D of s stages of n_s springs (stage-major)."""
+    g = np.empty(s * ns)
+    t = np.empty(s * ns)
+    for l in range(s):
+        gl, tl = law_force_tangent(D[l * ns:(l + 1) * ns], powers, coeffs, kinks)
+        g[l * ns:(l + 1) * ns] = gl
+        t[l * ns:(l + 1) * ns] = tl
+    return g, t
+
+
+@_jit
+def solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess):
+    """Solve D + G g(D) = Dlin for the s n_s spring deformations of s implicit stages (Newmark: s = 1;
+    Gauss collocation: gauss.py) by damped Newton; returns (D, J, g, Dg, ok), J = I + G diag(g'),
+    g = g(D) and Dg = g'(D) at the solution.
 
     The Newton step is halved until the residual decreases (softening springs make the step
     equation fold; a full step from the explicit guess can overshoot near the fold).
     """
-    ns = dlin.shape[0]
-    d = dguess.copy()
-    scale = np.sqrt(np.sum(dlin * dlin)) + 1e-300
-    g, D = law_force_tangent(d, powers, coeffs, kinks)
-    F = d + G @ g - dlin
+    m = s * ns
+    D = Dguess.copy()
+    scale = np.sqrt(np.sum(Dlin * Dlin)) + 1e-300
+    g, Dg = stage_forces(D, s, ns, powers, coeffs, kinks)
+    F = D + G @ g - Dlin
     nF = np.sqrt(np.sum(F * F))
-    J = np.eye(ns) + G * D[None, :]
+    J = np.eye(m) + G * Dg[None, :]
     for _ in range(NEWTON_MAX):
         if nF <= NEWTON_RTOL * scale:
-            return d, J, g, D, True
+            return D, J, g, Dg, True
         delta = np.linalg.solve(J, F)
         lam = 1.0
         for _ in range(30):
-            d_try = d - lam * delta
-            g_try, D_try = law_force_tangent(d_try, powers, coeffs, kinks)
-            F_try = d_try + G @ g_try - dlin
+            D_try = D - lam * delta
+            g_try, Dg_try = stage_forces(D_try, s, ns, powers, coeffs, kinks)
+            F_try = D_try + G @ g_try - Dlin
             n_try = np.sqrt(np.sum(F_try * F_try))
             if n_try < nF or lam < 1e-8:
                 break
             lam *= 0.5
-        d, F, nF, g, D = d_try, F_try, n_try, g_try, D_try
-        J = np.eye(ns) + G * D[None, :]
-    return d, J, g, D, nF <= 1e-9 * scale
+        D, F, nF, g, Dg = D_try, F_try, n_try, g_try, Dg_try
+        J = np.eye(m) + G * Dg[None, :]
+    return D, J, g, Dg, nF <= 1e-9 * scale
 
 
 @_jit
@@ -83,7 +96,7 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
         return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
     dlin = Bq @ y
     dguess = Bq @ (q + h * v + 0.5 * h * h * a)
-    d1, J, g1, D1, ok = _solve_springs(dlin, G, powers, coeffs, kinks, dguess)
+    d1, J, g1, D1, ok = solve_stages(dlin, G, 1, Bq.shape[0], powers, coeffs, kinks, dguess)
     fnl = Bq.T @ g1
     q1 = (r - fnl) / S
     a1 = -omega2 * q1 - fnl
