@@ -190,18 +190,35 @@ def run_tongue(b, i, opts, max_points, log=print):
 
 # ---------------------------------------------------------------------- reading the branches
 def backbone_result(b, paper_mode):
-    """Numbers of a backbone: linear frequency, drop at its highest energy, MAC low/high (mass-weighted)."""
-    hi = int(np.argmax(b.energy))
+    """Numbers of a backbone: linear frequency, drop and MAC low/high (mass-weighted) at its highest point
+    labelled ``backbone`` (a skip continuation can drift into a tongue without a fold, its points are then
+    labelled ``tongue k:1``: they are not counted as backbone), and at its highest point."""
+    bb = np.flatnonzero(b.labels == "backbone")
+    hi = int(bb[np.argmax(b.energy[bb])]) if len(bb) else int(np.argmax(b.energy))
+    top = int(np.argmax(b.energy))
     f0 = float(b.frequency_hz[0])
     return dict(paper_mode=paper_mode, mode=b.mode, label=mode_label(b.model, b.mode), linear_hz=f0, points=len(b),
                 energy_min=float(b.energy[0]), energy_max=float(b.energy[hi]), f_high=float(b.frequency_hz[hi]),
                 drop_pct=float(100 * (1 - b.frequency_hz[hi] / f0)),
-                backbone_min_f_pct=float(100 * (1 - b.frequency_hz.min() / f0)),
+                backbone_min_f_pct=float(100 * (1 - b.frequency_hz[bb].min() / f0)) if len(bb) else float("nan"),
                 mac_low_high=float(analysis.mac_orbits(b, 0, b, hi)),
                 mac_low_high_x0=float(analysis.mac_orbits(b, 0, b, hi, kind="x0")),
-                low=0, high=hi, stable_fraction=float(np.mean(b.stable)), status=b.status, message=b.message,
+                low=0, high=hi, top=top, energy_top=float(b.energy[top]),
+                drop_top_pct=float(100 * (1 - b.frequency_hz[top] / f0)),
+                mac_low_top=float(analysis.mac_orbits(b, 0, b, top)), top_label=str(b.labels[top]),
+                stable_fraction=float(np.mean(b.stable)), status=b.status, message=b.message,
                 events=[dict(kind=e["kind"], energy=float(e["energy"]), frequency_hz=float(e["frequency_hz"]))
                         for e in b.events])
+
+
+def same_tongue(t, done):
+    """Index of an already computed tongue (record, branch) of ``done`` that ``t`` re-enters: same ratio and
+    partner mode, entry energy inside that tongue branch's energy range; else None."""
+    for j, (t2, tb2) in enumerate(done):
+        if (int(t["order"]) == int(t2["order"]) and int(t.get("partner_mode") or 0) == int(t2.get("partner_mode") or 0)
+                and tb2.energy.min() <= float(t["entry_energy"]) <= tb2.energy.max()):
+            return j
+    return None
 
 
 def tongue_picks(tb, k, F):
@@ -480,7 +497,8 @@ def fmt_tongue(t):
 def results_table(results, times, spp, tol):
     lines = [MARK_START, "",
              f"Computed by `examples/paris_fep.py` ({spp} Newmark steps per period, tolerance {tol:g}, Floquet "
-             f"multipliers at every point). Frequency change and MAC at the backbone's highest-energy point; MAC "
+             f"multipliers at every point). Frequency change and MAC at the backbone's highest point labelled "
+             f"`backbone` (no harmonic k >= 2 above 15 %); MAC "
              f"mass-weighted (`nnm.mass_mac`) between the orbit shapes (configuration of largest mass-weighted "
              f"amplitude) at the lowest and highest energy.", "",
              "| paper mode | what the paper reports | model mode | backbone: frequency change | MAC low/high (paper) "
@@ -489,10 +507,18 @@ def results_table(results, times, spp, tol):
     paper_mac = {10: "0.99", 13: "unchanged", 19: "0.98", 20: "0.97"}
     for m, r in results.items():
         tg = "<br>".join(fmt_tongue(t) for t in r["tongues"]) or "none met"
+        if r.get("tongue_records_left_out"):
+            tg += (f"<br>({r['tongue_records_left_out']} more record(s) of the skip continuation re-enter a tongue above "
+                   f"and are left out: each tongue once)")
+        end = f"{r['status']}: {r['message']}"
+        if r["top"] != r["high"]:
+            end = (f"above {r['energy_max']:.3g} J its points carry a growing higher harmonic (labelled "
+                   f"{r['top_label']}, up to {r['energy_top']:.3g} J, {-r['drop_top_pct']:+.2f} %, MAC "
+                   f"{r['mac_low_top']:.2f}); " + end)
         lines.append(f"| {m} {PAPER[m]['name']} | {PAPER[m]['paper']} | {r['mode']} ({r['label']}) | "
                      f"**{-r['drop_pct']:+.2f} %** ({r['linear_hz']:.4f} -> {r['f_high']:.4f} Hz, "
                      f"{r['energy_min']:.2g} to {r['energy_max']:.3g} J) | {r['mac_low_high']:.3f} ({paper_mac[m]}) | "
-                     f"{r['status']}: {r['message']} | {tg} | {times.get(m, float('nan')):.0f} s |")
+                     f"{end} | {tg} | {times.get(m, float('nan')):.0f} s |")
     lines += ["", MARK_END]
     return "\n".join(lines)
 
@@ -614,21 +640,39 @@ def main(argv=None):
             b.name = name
             tbs = []
             if do_tongues:
+                done = []
                 for i in range(len(b.tongues)):
+                    j = same_tongue(b.tongues[i], done)
+                    if j is not None:
+                        print(f"  tongue {i + 1} ({b.tongues[i]['label']} at {b.tongues[i]['entry_energy']:.4g} J) "
+                              f"re-enters tongue {j + 1}: not computed again", flush=True)
+                        tbs.append(None)
+                        continue
                     tb, _ = run_tongue(b, i, opts, args.tongue_points)
                     tb.name = tongue_name(name, i, b.tongues[i])
                     tbs.append(tb)
+                    done.append((b.tongues[i], tb))
         times[m] = run_times.get(m, float("nan")) if reuse else time.perf_counter() - t0
         res = backbone_result(b, m)
         res["steps_per_period"] = spp
         res["tongues"] = []
-        pairs = [(t, tb) for t, tb in zip(b.tongues, tbs) if tb is not None]
+        pairs = []
+        for i, (t, tb) in enumerate(zip(b.tongues, tbs)):
+            if tb is None:
+                continue
+            j = same_tongue(t, pairs)
+            if j is not None:   # e.g. branches computed before the check: each tongue is kept once
+                print(f"  tongue {i + 1} ({t['label']} at {t['entry_energy']:.4g} J) re-enters tongue {j + 1}: left out")
+                continue
+            pairs.append((t, tb))
+        res_dup = len(b.tongues) - len(pairs)
         tbs = [tb for _, tb in pairs]
         for t, tb in pairs:
             F = analysis.harmonic_fractions(tb, N_HARM)
             rt = tongue_result(b, t, tb, F)
             res["tongues"].append(rt)
             print(f"    {fmt_tongue(rt)}", flush=True)
+        res["tongue_records_left_out"] = res_dup
         res["tongues_passed"] = [dict(label=t["label"], partner_mode=int(t.get("partner_mode") or 0),
                                       entry_energy=float(t["entry_energy"])) for t in b.tongues]
         res["seconds"] = times[m]
