@@ -194,10 +194,11 @@ class Session:
     def _callbacks(self):
         """The callback of every control, by handle name (wired by Layout.connect)."""
         cbs = {name: self._set_field(name) for name in SIMPLE_CONTROLS}
-        cbs.update(h_zoom=self._on_zoom, h_branch=self._on_branch, h_energy=self._on_energy, h_reset=self._on_reset_camera,
-                   h_recompute=self._on_recompute, h_start=self._on_start, h_stop=self._on_stop,
-                   h_save=self._on_save, h_dismiss=self._dismiss_error, h_csv_fep=self._on_csv_fep,
-                   h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif, h_view=self._on_view)
+        cbs.update(h_zoom=self._on_zoom, h_branch=self._on_branch, h_energy=self._on_energy,
+                   h_reset=self._on_reset_camera, h_recompute=self._on_recompute, h_start=self._on_start,
+                   h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
+                   h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
+                   h_view=self._on_view)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
     def _set_field(self, name):

@@ -162,6 +162,10 @@ def orbit_lines(pd, model):
     return lines
 
 
+#: what a point label means (by its first word: 'backbone', 'tongue')
+LABEL_WORDS = {"backbone": " (the fundamental NNM family)", "tongue": " (inside an internal-resonance tongue)"}
+
+
 def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label=None, freq_error=None):
     """Markdown summary of the orbit (units: J, Hz, s).  label: the point's label ('backbone',
     'tongue 3:1'); freq_error: its estimated relative frequency error (the solver's, if the branch
@@ -173,9 +177,7 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label
              f"- energy **{pd.energy:.4g} J**",
              f"- k3 factor x{k3_factor:.3g}",
              f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
-             *( [f"- label: **{label}**" + (" (the fundamental NNM family)" if label == "backbone" else
-                                              " (inside an internal-resonance tongue)" if str(label).startswith("tongue")
-                                              else "")] if label else []),
+             *([f"- label: **{label}**{LABEL_WORDS.get(str(label).split(' ')[0], '')}"] if label else []),
              *orbit_lines(pd, model)]
     if pd.note:
         lines.append(f"- note: {pd.note}")

@@ -105,8 +105,13 @@ def name_remainder(name, mode):
     m = re.match(rf"^\s*(?:nnm|mode)\s*{re.escape(str(mode))}(?![0-9])\s*(.*)$", name, flags=re.IGNORECASE)
     rest = m.group(1) if m else name
     rest = rest.strip().strip(":,-;").strip()
-    if rest.startswith("(") and rest.endswith(")") and rest.count("(") == 1:
-        rest = rest[1:-1].strip()
+    if rest.startswith("("):                      # '(paper mode 13): tongue 1 (5:1)' -> 'paper mode 13: ...'
+        depth = 0
+        for k, ch in enumerate(rest):
+            depth += {"(": 1, ")": -1}.get(ch, 0)
+            if depth == 0:
+                rest = (rest[1:k] + rest[k + 1:]).strip()
+                break
     return rest
 
 

@@ -214,6 +214,10 @@ def board_change_on_arrow_keys(page, geom, box, shot):
     return float(np.mean(np.abs(board() - before).sum(axis=2) > 30))
 
 
+#: JavaScript: the Compute tab shows a job's line ('12 of at most 80 points ...' or '40 points in 1 min ...')
+JOB_LINE_JS = "/\\b[1-9]\\d* (of at most \\d+ points|points in)/.test(document.body.innerText)"
+
+
 @pytest.mark.slow
 def test_five_clients_at_once(tmp_path):
     """Issue 14: five browser tabs on one server at once: each gets its own session (its own selection),
@@ -257,8 +261,7 @@ def test_five_clients_at_once(tmp_path):
             pages[1].wait_for_function("document.body.innerText.includes('Selected: branch 3')", timeout=120000)
             for page in pages[2:] + pages[:1]:
                 page.get_by_role("tab", name="Compute").click()
-                page.wait_for_function("/\\b[1-9]\\d* (of at most \\d+ points|points in)/.test(document.body.innerText)",
-                                       timeout=60000)
+                page.wait_for_function(JOB_LINE_JS, timeout=60000)
             _phase(t_start, "the branch computed from tab 1 reached every tab")
             stop = pages[1].get_by_role("button", name="Stop (keep points)")
             if stop.is_enabled():

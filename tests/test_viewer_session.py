@@ -668,6 +668,8 @@ def test_every_mode_is_offered_and_branch_names_are_consistent(server, tmp_path)
     cases = {"NNM1": "NNM 1 (in phase)", "mode1": "NNM 1 (in phase)", "NNM 1": "NNM 1 (in phase)",
              "mode1 (paper mode 13)": "NNM 1 (in phase) \u00b7 paper mode 13",
              "NNM1 harmonic balance H15": "NNM 1 (in phase) \u00b7 harmonic balance H15",
+             "mode1: tongue 1 (3:1)": "NNM 1 (in phase) \u00b7 tongue 1 (3:1)",
+             "mode1 (paper mode 13): tongue 1 (5:1)": "NNM 1 (in phase) \u00b7 paper mode 13: tongue 1 (5:1)",
              "stiff:mode1": "NNM 1 (in phase) \u00b7 variant stiff", "": "NNM 1 (in phase)"}
     for name, want in cases.items():
         b1.name = name
