@@ -52,6 +52,34 @@ def stage_forces(D, s, ns, powers, coeffs, kinks):
 
 
 @_jit
+def _solve_one(Dlin, G, powers, coeffs, kinks, Dguess):
+    """solve_stages for a single unknown d + G g(d) = dlin, in scalars."""
+    dlin = Dlin[0]
+    G0 = G[0, 0]
+    scale = abs(dlin) + 1e-300
+    D = Dguess.copy()
+    g, Dg = law_force_tangent(D, powers, coeffs, kinks)
+    F = D[0] + G0 * g[0] - dlin
+    nF = abs(F)
+    for _ in range(NEWTON_MAX):
+        if nF <= NEWTON_RTOL * scale:
+            break
+        delta = F / (1.0 + G0 * Dg[0])
+        lam = 1.0
+        for _ in range(30):
+            D_try = D - lam * delta
+            g_try, Dg_try = law_force_tangent(D_try, powers, coeffs, kinks)
+            F_try = D_try[0] + G0 * g_try[0] - dlin
+            if abs(F_try) < nF or lam < 1e-8:
+                break
+            lam *= 0.5
+        D, F, nF, g, Dg = D_try, F_try, abs(F_try), g_try, Dg_try
+    J = np.empty((1, 1))
+    J[0, 0] = 1.0 + G0 * Dg[0]
+    return D, J, g, Dg, nF <= NEWTON_RTOL * scale or nF <= 1e-9 * scale
+
+
+@_jit
 def solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess):
     """Solve D + G g(D) = Dlin for the s n_s spring deformations of s implicit stages (Newmark: s = 1;
     Gauss collocation: gauss.py) by damped Newton; returns (D, J, g, Dg, ok), J = I + G diag(g'),
@@ -61,6 +89,8 @@ def solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess):
     equation fold; a full step from the explicit guess can overshoot near the fold).
     """
     m = s * ns
+    if m == 1:                                 # one spring, one stage: scalar Newton (no LAPACK call)
+        return _solve_one(Dlin, G, powers, coeffs, kinks, Dguess)
     D = Dguess.copy()
     scale = np.sqrt(np.sum(Dlin * Dlin)) + 1e-300
     g, Dg = stage_forces(D, s, ns, powers, coeffs, kinks)
@@ -238,7 +268,7 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
                         for c in range(ncols):
                             acc[a, c] += c_ab * W[j, b, c]
         Mk = eye - H[0] * Dseq[k][None, :]
-        dd = np.linalg.solve(Mk, acc)
+        dd = acc / Mk[0, 0] if ns == 1 else np.linalg.solve(Mk, acc)
         W[k] = dd * Dseq[k][:, None]
     # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1})
     U1 = np.empty((n, N * ns))
@@ -287,7 +317,7 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
         # the step size enters through c1, c2 and (N2)
         yh = (c1 * sq_h + c2 * sv_h + sa_h + c1p * (q - q1) + c2p * v) * invS
         if ns > 0:
-            wh = np.linalg.solve(J, Bq @ yh)
+            wh = (Bq @ yh) / J[0, 0] if ns == 1 else np.linalg.solve(J, Bq @ yh)
             fh = Bq.T @ (D1 * wh)
             sq1_h = yh - fh * invS
             sa1_h = -omega2 * sq1_h - fh
