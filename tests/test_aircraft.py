@@ -129,3 +129,26 @@ def test_shipped_model_is_the_builders_output(shipped):
     assert np.allclose(np.sqrt(np.asarray(model.K.diagonal())[48:]) / (2 * np.pi), cb["fixed_interface_hz"], rtol=1e-9)
     assert [(s.dof, s.other, s.k3) for s in model.springs] == [(2, 8, -1e13), (14, 20, -1e13), (26, 32, -1e13),
                                                                (38, 44, -1e13)]
+
+
+def test_shipped_branches_each_tongue_once(shipped):
+    """assets/paris.h5 carries the skip backbones of paper modes 10, 13 (model 14), 19, 20 and each tongue
+    they passed once, as its own branch named after its backbone (examples/paris_fep.py)."""
+    branches = nnm_solver.load_branches(ASSET, shipped)
+    backbones = {b.name: b for b in branches if ": tongue" not in b.name}
+    assert set(backbones) == {"mode10", "mode14 (paper mode 13)", "mode19", "mode20"}
+    seen = {}
+    for b in branches:
+        if b.name in backbones:
+            continue
+        parent, rest = b.name.split(": tongue ")
+        i, ratio = int(rest.split()[0]) - 1, rest.split()[1].strip("()")
+        record = backbones[parent].tongues[i]
+        assert record["label"] == f"tongue {ratio}"
+        key = (parent, ratio, record["partner_mode"])
+        for lo, hi in seen.get(key, []):          # no second branch over the same stretch of the same tongue
+            assert b.energy.max() < lo or b.energy.min() > hi
+        seen.setdefault(key, []).append((b.energy.min(), b.energy.max()))
+    drop = {name: 1 - b.frequency_hz[np.argmax(b.energy)] / b.frequency_hz[0] for name, b in backbones.items()}
+    assert drop["mode20"] > 0.01 and abs(drop["mode14 (paper mode 13)"]) < 0.005
+    assert any(k[:2] == ("mode20", "9:1") for k in seen)
