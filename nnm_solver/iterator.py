@@ -209,7 +209,15 @@ class NNMIterator:
         self._last_backbone = None
         E_base = max(bpoint.energy, point.energy)
         jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
-        self.tongues.append(tongue)
+        previous = self.tongues[-1] if self.tongues else None
+        if previous is not None and self._same_tongue(previous, tongue):
+            # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
+            previous["reentries"] = previous.get("reentries", 0) + 1
+            previous.pop("exit_energy", None)
+            previous.pop("exit_frequency_hz", None)
+            tongue = previous
+        else:
+            self.tongues.append(tongue)
         if jumped is None:
             tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
             return False
@@ -219,6 +227,15 @@ class NNMIterator:
         self._engine = pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol)
         self._prev = None          # no events are located across the jump
         return True
+
+    @staticmethod
+    def _same_tongue(a, b):
+        """Is tongue record b the tongue a entered again?  Same order and partner mode, entry frequency within
+        0.1 %, and b's entry at most 10 % above a's exit (or a's entry when it has no exit)."""
+        E_out = a.get("exit_energy", a["entry_energy"])
+        return (a["order"] == b["order"] and a["partner_mode"] == b["partner_mode"]
+                and abs(b["entry_frequency_hz"] / a["entry_frequency_hz"] - 1) < 1e-3
+                and b["entry_energy"] <= 1.1 * E_out)
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""

@@ -118,3 +118,14 @@ def test_events_labels_and_tongues_survive_the_file(tmp_path):
     ax = nnm.plot_fep([lf], path=str(tmp_path / "fep.png"))
     labels = ax.get_legend_handles_labels()[1]
     assert "fold" in labels and "branch point" in labels
+
+
+def test_a_tongue_re_entered_while_skipping_is_one_record():
+    from nnm_solver.iterator import NNMIterator
+    a = dict(order=9, partner_mode=263, entry_energy=12.20, entry_frequency_hz=33.9984, exit_energy=12.45)
+    again = dict(order=9, partner_mode=263, entry_energy=12.51, entry_frequency_hz=33.9981)
+    assert NNMIterator._same_tongue(a, again)
+    assert not NNMIterator._same_tongue(a, dict(again, order=15))                  # another tongue
+    assert not NNMIterator._same_tongue(a, dict(again, partner_mode=502))
+    assert not NNMIterator._same_tongue(a, dict(again, entry_energy=20.0))          # further up the backbone
+    assert not NNMIterator._same_tongue(a, dict(again, entry_frequency_hz=33.90))
