@@ -71,12 +71,12 @@ class BranchEntry:
         b = self.branch
         if b is None or len(b) == 0:
             z = np.zeros(0)
-            return FepSeries(z, z, np.zeros(0, bool), label or self.label)
+            return FepSeries(z, z, np.zeros(0, bool), label or legend_label(self.label))
         law = cubic_scaling(factor / self.k3_factor)
         events = [(event_kind(e), float(e["energy"]) * law.energy, float(e["frequency_hz"]))
                   for e in (getattr(b, "events", None) or []) if "energy" in e and "frequency_hz" in e]
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
-                         np.asarray(b.stable, dtype=bool), label or self.label, events=events,
+                         np.asarray(b.stable, dtype=bool), label or legend_label(self.label), events=events,
                          status=str(getattr(b, "status", "") or ""))
 
 
@@ -113,6 +113,22 @@ def name_remainder(name, mode):
                 rest = (rest[1:k] + rest[k + 1:]).strip()
                 break
     return rest
+
+
+def legend_label(label, width=42):
+    """A branch label for the FEP legends: without the mode's label ('NNM 14 (fin bending 1) · paper
+    mode 13' -> 'NNM 14 · paper mode 13'; the lists and the readout give it), at most ``width``
+    characters."""
+    text = str(label)
+    m = re.match(r"^(NNM \S+) \(", text)
+    if m:
+        depth, start = 0, m.end() - 1
+        for k in range(start, len(text)):
+            depth += {"(": 1, ")": -1}.get(text[k], 0)
+            if depth == 0:
+                text = m.group(1) + text[k + 1:]
+                break
+    return text if len(text) <= width else text[:width - 1].rstrip() + "\u2026"
 
 
 def branch_label(branch, k3_factor=1.0, source="file", model=None):

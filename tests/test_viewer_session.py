@@ -484,6 +484,7 @@ def test_branch_colours_are_distinct_with_legends(server, demo_file):
     """Issue 14, item 9: every branch has its own colour (no repeat after 8 branches) on the board and
     in the panel, whose legend names them."""
     from nnm_viewer.fep import BRANCH_COLORS, branch_color
+    from nnm_viewer.state import legend_label
 
     colours = [branch_color(k) for k in range(40)]
     assert colours[:8] == BRANCH_COLORS and len(set(colours)) == 40
@@ -498,7 +499,10 @@ def test_branch_colours_are_distinct_with_legends(server, demo_file):
     ax = s.drawing.fep.renderer.ax
     leg = ax.get_legend()
     names = [t.get_text() for t in leg.get_texts()]
-    assert names[:11] == [e.label for e in shared.entries]
+    assert names[:11] == [legend_label(e.label) for e in shared.entries]
+    assert names[0] == "NNM 1" and shared.entries[0].label == "NNM 1 (in phase)"   # the mode label: in the lists
+    short = legend_label("NNM 14 (fin bending 1 (anti-symmetric)) \u00b7 paper mode 13: tongue 1 (5:1) [new]")
+    assert short.startswith("NNM 14 \u00b7 paper mode 13: tongue 1") and len(short) <= 42
     assert len({h.get_color() for h in leg.legend_handles[:11]}) == 11
     s.close()
 
