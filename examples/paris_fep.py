@@ -207,8 +207,19 @@ def backbone_result(b, paper_mode):
                 drop_top_pct=float(100 * (1 - b.frequency_hz[top] / f0)),
                 mac_low_top=float(analysis.mac_orbits(b, 0, b, top)), top_label=str(b.labels[top]),
                 stable_fraction=float(np.mean(b.stable)), status=b.status, message=b.message,
+                freq_error_max=max_freq_error(b),
                 events=[dict(kind=e["kind"], energy=float(e["energy"]), frequency_hz=float(e["frequency_hz"]))
                         for e in b.events])
+
+
+def max_freq_error(b):
+    """The branch's largest estimated relative frequency error (branch.freq_error; NaN: none estimated)."""
+    err = np.asarray(getattr(b, "freq_error", []), dtype=float)
+    return float(np.nanmax(err)) if np.isfinite(err).any() else float("nan")
+
+
+def fmt_error(e):
+    return "not estimated" if not np.isfinite(e) else f"{e:.1e}"
 
 
 def same_tongue(t, done):
@@ -246,7 +257,7 @@ def tongue_result(b, t, tb, F):
                 points=len(tb), energy_range=[float(tb.energy.min()), float(tb.energy.max())], folds=folds,
                 tip=picks["c"], tip_energy=float(tb.energy[picks["c"]]),
                 tip_frequency_hz=float(tb.frequency_hz[picks["c"]]),
-                tip_fraction=float(np.nan_to_num(F[picks["c"], k])), picks=picks,
+                tip_fraction=float(np.nan_to_num(F[picks["c"], k])), picks=picks, freq_error_max=max_freq_error(tb),
                 status=tb.status, message=tb.message)
 
 
@@ -494,16 +505,19 @@ def fmt_tongue(t):
             f"ends {t['status']}")
 
 
-def results_table(results, times, spp, tol):
+def results_table(results, times, spp, tol, integrator="newmark"):
     lines = [MARK_START, "",
-             f"Computed by `examples/paris_fep.py` ({spp} Newmark steps per period, tolerance {tol:g}, Floquet "
+             f"Computed by `examples/paris_fep.py` (integrator {integrator}, {spp} steps per period, tolerance {tol:g}, "
+             f"Floquet "
              f"multipliers at every point). Frequency change and MAC at the backbone's highest point labelled "
              f"`backbone` (no harmonic k >= 2 above 15 %); MAC "
              f"mass-weighted (`nnm.mass_mac`) between the orbit shapes (configuration of largest mass-weighted "
-             f"amplitude) at the lowest and highest energy.", "",
+             f"amplitude) at the lowest and highest energy. Largest estimated frequency error: the largest "
+             f"`branch.freq_error` (relative, step doubling) of the backbone and of each tongue branch.", "",
              "| paper mode | what the paper reports | model mode | backbone: frequency change | MAC low/high (paper) "
-             "| how the backbone ends | tongues (ratio, partner, entry, tongue branch) | run time |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| how the backbone ends | tongues (ratio, partner, entry, tongue branch) | largest estimated frequency error "
+             "| run time |",
+             "|---|---|---|---|---|---|---|---|---|"]
     paper_mac = {10: "0.99", 13: "unchanged", 19: "0.98", 20: "0.97"}
     for m, r in results.items():
         tg = "<br>".join(fmt_tongue(t) for t in r["tongues"]) or "none met"
@@ -511,6 +525,8 @@ def results_table(results, times, spp, tol):
             tg += (f"<br>({r['tongue_records_left_out']} more record(s) of the skip continuation re-enter a tongue above "
                    f"and are left out: each tongue once)")
         end = f"{r['status']}: {r['message']}"
+        errors = "<br>".join([f"backbone {fmt_error(r.get('freq_error_max', float('nan')))}"]
+                             + [f"{t['label']}: {fmt_error(t.get('freq_error_max', float('nan')))}" for t in r["tongues"]])
         if r["top"] != r["high"]:
             end = (f"above {r['energy_max']:.3g} J its points carry a growing higher harmonic (labelled "
                    f"{r['top_label']}, up to {r['energy_top']:.3g} J, {-r['drop_top_pct']:+.2f} %, MAC "
@@ -518,7 +534,7 @@ def results_table(results, times, spp, tol):
         lines.append(f"| {m} {PAPER[m]['name']} | {PAPER[m]['paper']} | {r['mode']} ({r['label']}) | "
                      f"**{-r['drop_pct']:+.2f} %** ({r['linear_hz']:.4f} -> {r['f_high']:.4f} Hz, "
                      f"{r['energy_min']:.2g} to {r['energy_max']:.3g} J) | {r['mac_low_high']:.3f} ({paper_mac[m]}) | "
-                     f"{end} | {tg} | {times.get(m, float('nan')):.0f} s |")
+                     f"{end} | {tg} | {errors} | {times.get(m, float('nan')):.0f} s |")
     lines += ["", MARK_END]
     return "\n".join(lines)
 
@@ -567,7 +583,9 @@ def main(argv=None):
     p.add_argument("--fast", action="store_true", help="modes 13 and 20 only, coarse time steps, no tongue branches")
     p.add_argument("--modes", default=None, help="paper modes to compute, e.g. 10,13,19,20")
     p.add_argument("--map", nargs="*", help="paper=model mode overrides, e.g. 13=14")
-    p.add_argument("--steps", type=int, default=None, help="Newmark steps per period (default 200, fast 40)")
+    p.add_argument("--steps", type=int, default=None, help="time steps per period (default 200, fast 40)")
+    p.add_argument("--integrator", default="newmark", choices=sorted(nnm.INTEGRATORS),
+                   help="time integrator of the shooting (default newmark; gauss6: 6th order, see docs/integrators.md)")
     p.add_argument("--energy-max", type=float, default=None, help="energy_max (J) of every backbone")
     p.add_argument("--max-points", type=int, default=None, help="points per backbone (default 120, fast 30)")
     p.add_argument("--tongue-points", type=int, default=80, help="points per tongue branch (default 80)")
@@ -601,11 +619,12 @@ def main(argv=None):
     floquet = not args.fast
     max_points = args.max_points or (30 if args.fast else 120)
     do_tongues = not (args.fast or args.no_tongues)
-    opts = dict(steps_per_period=spp, tol=tol, floquet=floquet)
+    integrator = args.integrator
+    opts = dict(steps_per_period=spp, tol=tol, floquet=floquet, integrator=integrator)
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     freqs, _ = model.linear_modes()
-    print(f"{model_path}: {model.n} DOF, {len(model.springs)} cubic springs; {spp} steps/period, tol {tol:g}; "
+    print(f"{model_path}: {model.n} DOF, {len(model.springs)} cubic springs; {integrator}, {spp} steps/period, tol {tol:g}; "
           f"load average {os.getloadavg()[0]:.2f}", flush=True)
     saved, run_times = {}, {}
     if args.from_file:
@@ -654,7 +673,8 @@ def main(argv=None):
                     done.append((b.tongues[i], tb))
         times[m] = run_times.get(m, float("nan")) if reuse else time.perf_counter() - t0
         res = backbone_result(b, m)
-        res["steps_per_period"] = spp
+        res["steps_per_period"] = getattr(b.settings, "steps_per_period", spp)
+        res["integrator"] = getattr(b.settings, "integrator", integrator)
         res["tongues"] = []
         pairs = []
         for i, (t, tb) in enumerate(zip(b.tongues, tbs)):
@@ -677,7 +697,9 @@ def main(argv=None):
                                       entry_energy=float(t["entry_energy"])) for t in b.tongues]
         res["seconds"] = times[m]
         print(f"  paper mode {m}: {res['linear_hz']:.4f} Hz, {-res['drop_pct']:+.2f} % at {res['energy_max']:.3g} J, "
-              f"MAC low/high {res['mac_low_high']:.4f}", flush=True)
+              f"MAC low/high {res['mac_low_high']:.4f}; largest estimated frequency error: backbone "
+              f"{fmt_error(res['freq_error_max'])}, tongue branches "
+              f"{', '.join(fmt_error(t['freq_error_max']) for t in res['tongues']) or 'none'}", flush=True)
         branches[m], tongue_branches[m], results[m] = b, tbs, res
     branches = {m: branches[m] for m in wanted}
     results = {m: results[m] for m in wanted}
@@ -692,7 +714,8 @@ def main(argv=None):
         first = next(iter(branches.values()))
         spp = getattr(first.settings, "steps_per_period", spp)
         tol = getattr(first.settings, "tol", tol)
-    table = results_table(results, times, spp, tol)
+        integrator = getattr(first.settings, "integrator", integrator)
+    table = results_table(results, times, spp, tol, integrator)
     doc = args.doc or (None if args.fast else str(ROOT / "docs" / "paris_results.md"))
     if doc and not args.from_file:
         update_doc(doc, [table, table2_markdown(model)])
@@ -706,7 +729,7 @@ def main(argv=None):
                 every.append(tb)
                 keep.append(list(rt["picks"].values()))
         write_file(target, model_path, every, keep, thin_points=not args.keep_all)
-    summary = dict(model=str(model_path), fast=bool(args.fast), steps_per_period=spp, tol=tol,
+    summary = dict(model=str(model_path), fast=bool(args.fast), integrator=integrator, steps_per_period=spp, tol=tol,
                    total_seconds=total, load_average=os.getloadavg(), modes={str(m): r for m, r in results.items()})
     if args.summary:
         Path(args.summary).write_text(json.dumps(summary, indent=1, default=float))
