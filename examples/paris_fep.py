@@ -506,8 +506,17 @@ def fmt_tongue(t):
 
 
 def results_table(results, times, spp, tol, integrator="newmark"):
+    how = {}
+    for m, r in results.items():   # each mode's integrator and steps per period (runs put together may differ)
+        how.setdefault((r.get("integrator", integrator), r.get("steps_per_period", spp)), []).append(m)
+    if len(how) > 1:
+        how = "; ".join(f"integrator {i}, {s} steps per period for paper mode{'s' if len(ms) > 1 else ''} "
+                        f"{', '.join(map(str, ms))}" for (i, s), ms in how.items())
+    else:
+        (i, s), = how or [(integrator, spp)]
+        how = f"integrator {i}, {s} steps per period"
     lines = [MARK_START, "",
-             f"Computed by `examples/paris_fep.py` (integrator {integrator}, {spp} steps per period, tolerance {tol:g}, "
+             f"Computed by `examples/paris_fep.py` ({how}, tolerance {tol:g}, "
              f"Floquet "
              f"multipliers at every point). Frequency change and MAC at the backbone's highest point labelled "
              f"`backbone` (no harmonic k >= 2 above 15 %); MAC "
@@ -624,7 +633,9 @@ def main(argv=None):
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     freqs, _ = model.linear_modes()
-    print(f"{model_path}: {model.n} DOF, {len(model.springs)} cubic springs; {integrator}, {spp} steps/period, tol {tol:g}; "
+    how = ("settings of the saved branches" if args.from_file or args.branches_from
+           else f"{integrator}, {spp} steps/period, tol {tol:g}")
+    print(f"{model_path}: {model.n} DOF, {len(model.springs)} cubic springs; {how}; "
           f"load average {os.getloadavg()[0]:.2f}", flush=True)
     saved, run_times = {}, {}
     if args.from_file:
@@ -688,7 +699,7 @@ def main(argv=None):
         res_dup = len(b.tongues) - len(pairs)
         tbs = [tb for _, tb in pairs]
         for t, tb in pairs:
-            F = analysis.harmonic_fractions(tb, N_HARM)
+            F = analysis.harmonic_fractions(tb, max(N_HARM, int(t["order"]) + 1))
             rt = tongue_result(b, t, tb, F)
             res["tongues"].append(rt)
             print(f"    {fmt_tongue(rt)}", flush=True)
@@ -707,7 +718,7 @@ def main(argv=None):
     for m, b in branches.items():
         figs.append(fig_mode(b, results[m], tongue_branches[m], out_dir / f"paris_fep_mode{m}.png"))
         for rt, tb in zip(results[m]["tongues"], tongue_branches[m]):
-            F = analysis.harmonic_fractions(tb, N_HARM)
+            F = analysis.harmonic_fractions(tb, max(N_HARM, int(rt["order"]) + 1))
             figs.append(fig_tongue(b, rt, tb, F, out_dir / f"paris_tongue_mode{m}_{rt['label'].replace(':', 'to')}.png"))
     total = time.perf_counter() - t_all
     if reuse:   # the settings the branches were computed with
