@@ -117,11 +117,9 @@ class GaussConstants:
         IwF = np.eye(s)[None] - omega2[:, None, None] * self.F
         self.E = U[None] @ IwF
 
-    def kernel_args(self):
-        return (self.C1, self.Cc, self.F, self.G, self.b, self.bbar, self.c, self.Abar, self.Minv)
-
 
 def constants(system, h, s):
+    """GaussConstants of a ModalSystem for the step h (s) and s stages."""
     return GaussConstants(system.omega2, system.Bq, h, s)
 
 
