@@ -19,14 +19,17 @@ from . import downloads
 from . import scene as sc
 from .downloads import file_stem
 from .drawing import ALL_KINDS, Drawing
-from .fep import Y_LABELS, axis_ranges, energy_to_s, should_zoom
-from .fep_view import branch_options
+from .fep import Y_LABELS, axis_ranges, energy_to_s, interp_at, should_zoom
+from .fep_view import branch_options, sweep_key
 from .layout import Layout
-from .state import branch_label
+from .state import branch_label, scaling_law_holds
 from .worker import JobRunner, one_line
 
 #: auto amplification: the peak displacement is shown as this fraction of the model size
 AUTO_PEAK_FRACTION = 0.12
+#: non-cubic model: seconds the stiffness slider must rest before its factor is computed (debounce;
+#: tests with sync=True start at once)
+RECOMPUTE_DELAY = 0.5
 
 #: controls that set one state field from their value: handle -> (field, type, redraws)
 SIMPLE_CONTROLS = {
@@ -38,7 +41,6 @@ SIMPLE_CONTROLS = {
     "h_speed": ("speed", float, ("glb",)),
     "h_board": ("show_board", bool, ("branches",)),
     "h_relative": ("relative", bool, ("branches",)),
-    "h_k3": ("factor_log", float, ("branches", "point", "controls")),
     "h_dofs": ("dofs_text", str, ("info",)),
     "h_ghost": ("show_ghost", bool, ("ghost",)),
 }
@@ -56,7 +58,10 @@ class Session:
         self.mesh = shared.mesh
         self.geom = sc.view_geometry(self.mesh.vertices)
         self.start_job = start_job
+        self.sync = sync
         self.lock = threading.RLock()
+        #: pure cubic springs: the stiffness slider applies the exact scaling law; else it recomputes
+        self.scaling_law = scaling_law_holds(self.model)
         # ---- view state (under self.lock)
         self.sel_uid = None          # uid of the selected BranchEntry
         self.s = 0.0                 # fractional index along the selected branch
@@ -81,7 +86,14 @@ class Session:
         self.ratio = 1.0             # k3 factor of the view / k3 factor of that branch
         self.last_runner = None      # the JobRunner started from this tab
         self.last_download = None    # (file name, bytes) last offered to the browser
-        self.layout = Layout(api.gui, self.model, shared.linear_freqs)
+        # ---- recomputes started by the stiffness slider (models that are not pure cubic)
+        self._recompute_lock = threading.RLock()
+        self._pending = None         # (mode, energy_max, factor) chosen on the slider, not started yet
+        self._timer = None           # the debounce timer that starts it
+        self.slider_runner = None    # the last JobRunner the slider started
+        self._slider_base = None     # (mode, energy_max, uid of the branch it started from)
+        self._slider_uids = set()    # entries computed for the slider
+        self.layout = Layout(api.gui, self.model, shared.linear_freqs, scaling_law=self.scaling_law)
         self.drawing = Drawing(self, sync=sync)
         self.layout.connect(self._callbacks())
         first = next((e for e in shared.snapshot() if len(e)), None)
@@ -103,6 +115,10 @@ class Session:
         self.drawing.request(*kinds)
 
     def close(self):
+        with self._recompute_lock:
+            self._pending = None
+            if self._timer is not None:
+                self._timer.cancel()
         self.drawing.close()
         self.shared.unsubscribe(self._on_shared)
 
@@ -132,10 +148,16 @@ class Session:
                 return e
         return None
 
+    def view_factor(self, e):
+        """The k3 factor entry ``e`` is shown at: the slider's (exact scaling law) when its springs are
+        all pure cubic, else its own (nothing is scaled; the slider recomputes instead)."""
+        return self.factor if self.scaling_law and e.scalable else e.k3_factor
+
     def fep_series(self, e, factor=None):
-        """FEP series of entry ``e`` at the k3 factor ``factor`` (default: the one in use), on the
-        frequency axis chosen (Hz, or relative to the branch's linear frequency, %)."""
-        ser = e.series(self.factor if factor is None else factor)
+        """FEP series of entry ``e`` at the k3 factor ``factor`` (default: the one it is shown at,
+        ``view_factor``), on the frequency axis chosen (Hz, or relative to the branch's linear
+        frequency, %)."""
+        ser = e.series(self.view_factor(e) if factor is None else factor)
         if self.relative:
             f_lin = e.linear_frequency(self.shared.linear_freqs)
             if f_lin:
@@ -194,7 +216,7 @@ class Session:
     def _callbacks(self):
         """The callback of every control, by handle name (wired by Layout.connect)."""
         cbs = {name: self._set_field(name) for name in SIMPLE_CONTROLS}
-        cbs.update(h_zoom=self._on_zoom, h_branch=self._on_branch, h_energy=self._on_energy,
+        cbs.update(h_k3=self._on_k3, h_zoom=self._on_zoom, h_branch=self._on_branch, h_energy=self._on_energy,
                    h_reset=self._on_reset_camera, h_recompute=self._on_recompute, h_start=self._on_start,
                    h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
                    h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
@@ -247,7 +269,7 @@ class Session:
         e = self.selected_entry()
         if e is None or not len(e):
             return
-        ser = e.series(self.factor)
+        ser = e.series(self.view_factor(e))
         with self.lock:
             self.s = energy_to_s(ser.energy, 10.0 ** float(self.layout.h_energy.value), self.s)
         self.request("fep", "sliders:along", "point")
@@ -282,11 +304,129 @@ class Session:
         return -sc.PRESET_DIRECTIONS.get(getattr(self, "view", "Iso"), sc.CAMERA_DIR)
 
     def _on_recompute(self, _):
-        e = self.selected_entry()
-        if e is None or not len(e):
+        target = self._recompute_target()
+        if target is None:
             raise ValueError("select a branch first")
-        emax = float(np.max(e.series(self.factor).energy))
-        self._start(e.mode, emax, self.factor)
+        self._start(target[0], target[1], self.factor)
+
+    def _recompute_target(self):
+        """(mode, energy_max, uid) of a recompute at the slider's factor: the selected branch's mode
+        up to its largest energy (at the factor in use); for a branch the slider computed, or while
+        its job is being replaced, those of the branch the slider started from.  None: no branch."""
+        e = self.selected_entry()
+        with self.lock:
+            base = self._slider_base
+        if base is not None and (e is None or e.uid in self._slider_uids):
+            return base
+        job = self.shared.job
+        if not self.scaling_law and e is not None and job is not None and job.entry is e:
+            return job.mode, job.energy_max, e.uid        # a branch being computed: its job's range
+        if e is None or not len(e):
+            return None
+        return int(e.mode), float(np.max(e.series(self.view_factor(e)).energy)), e.uid
+
+    # ---- the stiffness slider
+    def _on_k3(self, _):
+        """The stiffness slider: pure cubic springs, the FEP and the orbit follow by the exact scaling
+        law; otherwise nothing is scaled and the chosen factor is computed (``_slider_recompute``)."""
+        with self.lock:
+            self.factor_log = float(self.layout.h_k3.value)
+        if self.scaling_law:
+            self.request("branches", "point", "controls")
+            return
+        self.request("controls", "progress", "sliders")
+        self._slider_recompute()
+
+    def _entry_at(self, mode, factor, prefer=None):
+        """A complete branch of ``mode`` computed at ``factor`` on the file's model (not a sweep
+        variant's), ``prefer`` (a uid) first; or None."""
+        found = [e for e in self.shared.snapshot()
+                 if len(e) and e.mode == mode and abs(e.k3_factor / factor - 1.0) < 1e-9
+                 and e.source in ("file", "computed", "saved") and sweep_key(e) is None]
+        return next((e for e in found if e.uid == prefer), found[0] if found else None)
+
+    def _slider_recompute(self):
+        """Non-cubic model: a background job (the Recompute button's path) for the selected branch's
+        mode at the slider's factor, debounced: it starts once the slider has rested RECOMPUTE_DELAY s
+        (at once with sync=True) and no job runs; a job the slider started for another factor is
+        stopped and its branch dropped, so that one job runs, for the final value.  A complete branch
+        already computed at that factor is selected instead."""
+        factor = self.factor
+        target = self._recompute_target()
+        if target is None:
+            self.show_status("select a branch: the stiffness slider recomputes the selected branch")
+            return
+        mode, emax, origin = target
+        existing = self._entry_at(mode, factor, prefer=origin)
+        with self._recompute_lock:
+            self._slider_base = (mode, emax, origin)
+            runner = self.slider_runner
+            busy = runner is not None and runner.running and not runner.cancelled
+            same = busy and abs(runner.k3_factor / factor - 1.0) < 1e-9
+            self._pending = None if (existing is not None or same) else (mode, emax, factor)
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+        if busy and not same:
+            self._supersede(runner, origin)
+        if existing is not None:
+            self._select_existing(existing)
+            return
+        if same:
+            return
+        if self.sync:
+            self._start_pending()
+        else:
+            timer = threading.Timer(RECOMPUTE_DELAY, self._start_pending)
+            timer.daemon = True
+            with self._recompute_lock:
+                self._timer = timer
+            timer.start()
+        job = self.shared.job
+        if job is not None and job.running and job is not self.slider_runner:
+            self.show_status(f"recompute at x {factor:.3g} queued: it starts when the running job ends")
+
+    def _supersede(self, runner, origin):
+        """Stop a slider job whose factor is no longer wanted and drop its branch; the branch the
+        slider started from is selected meanwhile."""
+        runner.cancel()
+        self.shared.remove(runner.entry)
+        with self.lock:
+            if self.sel_uid == runner.entry.uid and self.shared.index_of(origin) is not None:
+                self.sel_uid, self.s = origin, 0.0
+        self.request("branches", "point", "progress")
+
+    def _select_existing(self, e):
+        """Select ``e`` (a branch already computed at the slider's factor) near the energy shown."""
+        cur = self.selected_entry()
+        s = 0.0
+        if cur is not None and len(cur) and cur.uid != e.uid:
+            ser = cur.series(self.view_factor(cur))
+            energy = 10 ** interp_at(np.log10(ser.energy), float(np.clip(self.s, 0, len(ser) - 1)))
+            s = energy_to_s(e.series(e.k3_factor).energy, energy, 0.0)
+        elif cur is not None and cur.uid == e.uid:
+            return
+        self._select_uid(e.uid, s)
+
+    def _start_pending(self):
+        """Start the recompute the slider asked for, unless a job is running (then ``_on_shared``
+        starts it when that job ends)."""
+        with self._recompute_lock:
+            pending = self._pending
+            if pending is None:
+                return
+            job = self.shared.job
+            if job is not None and job.running:
+                return
+            self._pending = None
+            mode, emax, factor = pending
+            try:
+                runner = self._start(mode, emax, factor)
+            except Exception as exc:
+                self.show_error(one_line(exc))
+                return
+            self.slider_runner = runner
+            self._slider_uids.add(runner.entry.uid)
 
     def _on_start(self, _):
         mode = int(str(self.layout.h_mode.value).split(":")[0])
@@ -307,6 +447,7 @@ class Session:
             self.sel_uid, self.s = runner.entry.uid, 0.0
             self.current_point = self.current_anim = self.current_uid = None
         self.request("branches", "point", "progress")
+        return runner
 
     def _on_stop(self, _):
         job = self.shared.job
@@ -339,7 +480,8 @@ class Session:
 
     def _download_stem(self, e):
         idx = self.shared.index_of(e.uid)
-        k3 = f"_k3x{self.factor:.3g}" if abs(self.factor_log) > 1e-9 else ""
+        factor = self.view_factor(e)
+        k3 = f"_k3x{factor:.3g}" if abs(factor - 1.0) > 1e-9 else ""
         return file_stem(f"{self.model.name or 'model'}_branch{(idx or 0) + 1}_{e.label}{k3}")
 
     def fep_csv(self):
@@ -347,7 +489,7 @@ class Session:
         e = self.selected_entry()
         if e is None or not len(e):
             raise ValueError("select a branch with points first")
-        ratio = self.factor / e.k3_factor
+        ratio = self.view_factor(e) / e.k3_factor
         branch = e.branch if abs(ratio - 1.0) < 1e-12 else e.branch.scaled(ratio)
         return f"{self._download_stem(e)}_fep.csv", downloads.fep_csv(branch)
 
@@ -396,6 +538,8 @@ class Session:
             self.request("branches", "progress")
         elif kind == "progress":
             self.request("progress")
+            if self._pending is not None:       # a recompute of the stiffness slider waits for a job
+                self._start_pending()
         elif kind == "solver":
             self.request("solver", "point", "progress")
         elif kind == "error":

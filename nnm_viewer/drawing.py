@@ -132,7 +132,7 @@ class Drawing:
         s, ui = self.session, self.ui
         ui.set(ui.h_phase, visible=not s.playing)
         ui.set(ui.h_amp, disabled=s.auto_amp)
-        ui.set(ui.h_k3_text, content=k3_text(s.factor))
+        ui.set(ui.h_k3_text, content=k3_text(s.factor, s.scaling_law))
 
     def draw_ghost(self):
         """The undeformed shape, translucent, when asked for."""

@@ -115,7 +115,7 @@ def point_facts(e, along):
 def readout_markdown(s, e):
     """The picked point's readout under the panel FEP: branch, point, energy, frequency (and relative
     to the branch's linear frequency), stability, label and accuracy estimate."""
-    ser = e.series(s.factor)
+    ser = e.series(s.view_factor(e))
     n = len(ser)
     along = float(np.clip(s.s, 0, n - 1))
     energy = 10 ** interp_at(np.log10(ser.energy), along)
@@ -237,9 +237,12 @@ class FepView:
         """The branches of the panel image (redrawn when branches or the k3 factor change)."""
         s = self.session
         entries, series = s._series()
-        ghost = [s.fep_series(e, e.k3_factor) for e in entries] if abs(s.factor_log) > 1e-9 else []
+        # the branches as computed, in grey, behind their scaled FEP (scaling law only)
+        ghost = ([s.fep_series(e, e.k3_factor) for e in entries if e.scalable]
+                 if s.scaling_law and abs(s.factor_log) > 1e-9 else [])
         zoomed = s.zoomed(entries, series)
-        title = f"Frequency-energy plot (k3 x {s.factor:.3g})" + (", zoomed on the selected branch" if zoomed else "")
+        title = ("Frequency-energy plot" + (f" (k3 x {s.factor:.3g})" if s.scaling_law else "")
+                 + (", zoomed on the selected branch" if zoomed else ""))
         self.renderer.set_series(series, s.shared.index_of(s.sel_uid), ghosts=ghost, title=title,
                                  ranges=s._view_ranges(entries, series) if zoomed else None, ylabel=s.ylabel)
 
@@ -276,7 +279,7 @@ class FepView:
             ui.set(ui.h_along, disabled=True)
             ui.set(ui.h_sel, content="no point selected: compute a branch in the Compute tab")
             return
-        ser = e.series(s.factor)
+        ser = e.series(s.view_factor(e))
         n = len(ser)
         with s.lock:
             s.s = float(np.clip(s.s, 0, n - 1))

@@ -47,9 +47,18 @@ def key_guard_html():
     return f'<img alt="" src="data:," style="display:none" onerror="{KEY_GUARD_JS}">'
 
 
-def k3_text(factor):
-    """Label under the k3 slider: the factor applied to every k3 of the file."""
-    return "k3 x 1 (as in the file)" if abs(factor - 1.0) < 1e-9 else f"k3 x {factor:.3g} (scaling law)"
+#: under the stiffness slider of a model whose elements are not all pure cubic springs
+NO_SCALING_LAW = ("the scaling law holds for cubic springs only: choosing a factor recomputes the selected "
+                  "branch with every spring force x factor (background job)")
+
+
+def k3_text(factor, law=True):
+    """Label under the k3 slider: the factor applied to every k3 of the file, and how it is applied
+    (``law``: the exact scaling law of pure cubic springs; else a recompute)."""
+    same = abs(factor - 1.0) < 1e-9
+    if law:
+        return "k3 x 1 (as in the file)" if same else f"k3 x {factor:.3g} (scaling law)"
+    return ("forces x 1 (as in the file)" if same else f"forces x {factor:.3g} (recomputed)") + f"  \n{NO_SCALING_LAW}"
 
 
 def mode_label(model, linear_freqs, k):
@@ -72,7 +81,7 @@ def modes_markdown(model, linear_freqs):
 class Layout:
     """The GUI handles of one tab, built on ``gui`` (a tab's or the server's ``.gui``)."""
 
-    def __init__(self, gui, model, linear_freqs):
+    def __init__(self, gui, model, linear_freqs, scaling_law=True):
         self.gui = gui
         self._tl = threading.local()
         name = model.name or "model"
@@ -113,11 +122,18 @@ class Layout:
                                                     "from the side (-y), from the front (-x)")
             self.h_reset = gui.add_button("Reset camera")
         with gui.add_folder("Nonlinear stiffness"):
-            self.h_k3 = gui.add_slider("k3 factor log10", min=-2.0, max=2.0, step=0.05, initial_value=0.0,
-                                       marks=((-2, "0.01x"), (-1, "0.1x"), (0, "1x"), (1, "10x"), (2, "100x")))
-            self.h_k3_text = gui.add_markdown(k3_text(1.0))
+            self.h_k3 = gui.add_slider("k3 factor log10" if scaling_law else "Spring force factor log10",
+                                       min=-2.0, max=2.0, step=0.05, initial_value=0.0,
+                                       marks=((-2, "0.01x"), (-1, "0.1x"), (0, "1x"), (1, "10x"), (2, "100x")),
+                                       hint=("Every k3 x factor: the FEP and the orbit follow by the exact scaling "
+                                             "law of cubic springs" if scaling_law else
+                                             "The scaling law holds for cubic springs only: the chosen factor is "
+                                             "computed (a background job for the selected branch's mode)"))
+            self.h_k3_text = gui.add_markdown(k3_text(1.0, scaling_law))
             self.h_recompute = gui.add_button("Recompute at this stiffness", disabled=True,
-                                              hint="Background job on the scaled model, to confirm the scaling law")
+                                              hint="Background job on the scaled model, to confirm the scaling law"
+                                              if scaling_law else "Background job on the scaled model (the "
+                                              "slider starts it too)")
         self.h_status = gui.add_markdown("")
         self.h_keys = gui.add_html(key_guard_html())
 

@@ -76,7 +76,7 @@ class PointView:
             if len(self._anim_cache) > ANIM_CACHE:
                 self._anim_cache.clear()
             self._anim_cache[key] = anim
-        ratio = s.factor / e.k3_factor
+        ratio = s.view_factor(e) / e.k3_factor        # 1 unless the scaling law applies
         with s.lock:
             s.current_point = pd.scaled(ratio)
             s.current_anim = anim
@@ -127,7 +127,7 @@ class PointView:
         e = s.selected_entry()
         where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
         label, err = point_label_and_error(e.branch, s.s)
-        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.factor, where=where,
+        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.view_factor(e), where=where,
                                                 label=label, freq_error=err))
         try:
             dofs = parse_dofs(s.dofs_text, s.model.n, auto_dofs(s.model, pd.x))

@@ -65,19 +65,39 @@ class BranchEntry:
             cache[key] = f
         return cache[key]
 
+    @property
+    def scalable(self):
+        """Whether the exact k3 scaling law applies to this branch (its model's elements are all pure
+        cubic springs, or it has none)."""
+        return scaling_law_holds(getattr(self.branch, "model", None))
+
     def series(self, factor=1.0, label=None):
         """FEP arrays when every k3 is ``factor`` x the file's: exact scaling law
-        (frequency unchanged, energy / ratio), ratio = factor / k3_factor."""
+        (frequency unchanged, energy / ratio), ratio = factor / k3_factor.  A branch whose elements
+        are not all cubic is only shown at its own factor (ValueError otherwise: no law holds)."""
         b = self.branch
         if b is None or len(b) == 0:
             z = np.zeros(0)
             return FepSeries(z, z, np.zeros(0, bool), label or legend_label(self.label))
-        law = cubic_scaling(factor / self.k3_factor)
+        ratio = factor / self.k3_factor
+        if abs(ratio - 1.0) > 1e-12 and not self.scalable:
+            raise ValueError("the scaling law holds for cubic springs only: this branch is shown as computed")
+        law = cubic_scaling(ratio)
         events = [(event_kind(e), float(e["energy"]) * law.energy, float(e["frequency_hz"]))
                   for e in (getattr(b, "events", None) or []) if "energy" in e and "frequency_hz" in e]
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
                          np.asarray(b.stable, dtype=bool), label or legend_label(self.label), events=events,
                          status=str(getattr(b, "status", "") or ""))
+
+
+def scaling_law_holds(model):
+    """True when the exact k3 scaling law (nnm_solver.cubic_scaling) applies to ``model``: every
+    nonlinear element is a pure cubic spring (or there is none).  Otherwise a stiffness factor must
+    be computed (Model.scaled, a job), never scaled."""
+    if model is None:
+        return True
+    el = model.elements
+    return len(el) == 0 or bool(el.cubic_only)
 
 
 def mode_name(model, mode):
@@ -196,6 +216,13 @@ class SharedState:
             self.notify("branches")
         return entry
 
+    def remove(self, entry, notify=True):
+        """Drop ``entry`` from the list (a superseded recompute of the stiffness slider)."""
+        with self.lock:
+            self.entries = [e for e in self.entries if e is not entry]
+        if notify:
+            self.notify("branches")
+
     def update(self, entry, branch=None, source=None, status=None, notify=True):
         with self.lock:
             if branch is not None:
@@ -273,6 +300,11 @@ class SharedState:
             raise nnm_solver.NNMInputError("the branch has no points yet; nothing to save")
         branch = entry.branch
         if abs(entry.k3_factor - 1.0) > 1e-12:
+            if not entry.scalable:
+                raise nnm_solver.NNMInputError(
+                    f"this branch was computed with every spring force x {entry.k3_factor:.3g}; the scaling law "
+                    "that maps it back to the file's springs holds for cubic springs only, so it cannot be saved "
+                    "into this file (download its FEP as CSV instead)")
             branch = branch.scaled(1.0 / entry.k3_factor)
         target, reason = branch_output(self.path)
         nnm_solver.save_branch(target, branch)

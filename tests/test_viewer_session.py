@@ -153,6 +153,8 @@ def test_stiffness_slider_uses_exact_scaling_law(server, demo_file):
     assert np.max(np.abs(pd10.x)) == pytest.approx(np.max(np.abs(pd1.x)) / np.sqrt(10))
     assert s.amplification()[1] == pytest.approx(peak1 / np.sqrt(10))
     assert "E = " in s.h_sel.content and not s.h_recompute.disabled
+    assert s.scaling_law and s.last_runner is None and shared.job is None     # no job: Recompute confirms
+    assert s.h_k3.label == "k3 factor log10" and "cubic springs only" not in s.h_k3_text.content
     # the scaled branch agrees with Branch.scaled of the solver
     ref = shared.entries[0].branch.scaled(10.0)
     assert shared.entries[0].series(10.0).energy == pytest.approx(ref.energy)
@@ -889,3 +891,180 @@ def test_model_panel_lists_the_nonlinear_elements(server, tmp_path):
     assert "1 cubic spring, 1 polynomial spring, 1 piecewise-linear spring" in s.h_title.content
     assert "**Model:** chain, 4 DOFs" in s.h_model.content and "piecewise-linear spring" in s.h_model.content
     s.close()
+
+
+# ---------------------------------------------------------------- issue 18: stiffness slider, non-cubic models
+def polynomial_two_box(k3=0.5, k5=0.5):
+    """The 2-DOF demo with a cubic + quintic spring: no exact scaling law."""
+    from nnm_viewer.demo import two_box_model
+
+    m = two_box_model(k3)
+    return m.with_springs([nnm.PolynomialSpring(dof=0, coefficients={3: k3, 5: k5})])
+
+
+@pytest.fixture(scope="module")
+def poly_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("viewer_poly") / "poly.h5"
+    model = polynomial_two_box()
+    nnm.save_model(path, model)
+    for mode in (1, 2):
+        nnm.save_branch(path, nnm.continue_nnm(model, mode=mode, energy_max=1.0, max_points=12))
+    return path
+
+
+class JobRecorder:
+    """A ``start_job`` that records each call (the model's force factor, mode, energy_max) and returns
+    a FakeJob streaming ``branch``; the jobs end when the test says (release, cancel)."""
+
+    def __init__(self, branch, k5=0.5):
+        self.branch, self.k5, self.calls, self.jobs = branch, k5, [], []
+
+    def __call__(self, model, mode, energy_max, **kw):
+        factor = model.springs[0].law()[5] / self.k5
+        self.calls.append((factor, mode, energy_max))
+        job = FakeJob(self.branch)
+        self.jobs.append(job)
+        return job
+
+
+def _watch_ghosts(s):
+    """Record the ghosts (scaled-law grey curves) drawn in the panel FEP of session ``s``."""
+    seen = []
+    real = s.drawing.fep.renderer.set_series
+
+    def set_series(*a, **kw):
+        seen.append(list(kw.get("ghosts", ())))
+        return real(*a, **kw)
+    s.drawing.fep.renderer.set_series = set_series
+    return seen
+
+
+def test_scaling_law_is_only_for_pure_cubic_models():
+    from nnm_viewer.demo import two_box_model
+    from nnm_viewer.state import scaling_law_holds
+
+    assert scaling_law_holds(two_box_model())
+    assert not scaling_law_holds(polynomial_two_box())
+    pw = two_box_model().with_springs([nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.2, 1.0], breakpoints=[0.5])])
+    assert not scaling_law_holds(pw)
+    assert scaling_law_holds(two_box_model().with_springs([nnm.PolynomialSpring(dof=0, coefficients={3: 2.0})]))
+
+
+def test_stiffness_slider_recomputes_a_non_cubic_model(server, poly_file, tmp_path, monkeypatch):
+    """Issue 18: elements not all cubic: moving the stiffness slider scales nothing (no Branch.scaled,
+    no scaled point or FEP, no grey ghost); its label says why; a job computes the branch of the
+    model with every spring force x the chosen factor, named with its factor; it cannot be saved into
+    the file (no law maps it back)."""
+    path = tmp_path / "poly.h5"
+    path.write_bytes(poly_file.read_bytes())
+    file_b1 = nnm.load_branches(path)[0]
+    rec = JobRecorder(file_b1)
+    s, shared = make_session(server, path, start_job=rec)
+    assert not s.scaling_law and "cubic springs only" in s.h_k3_text.content
+    assert s.h_k3.label == "Spring force factor log10"
+    ghosts = _watch_ghosts(s)
+    scaled_calls = []
+    monkeypatch.setattr(nnm.Branch, "scaled", lambda self, f: scaled_calls.append(f) or 1 / 0)
+    b1 = shared.entries[0]
+    s.pick(b1.uid, 6)
+    s.h_k3.value = 1.0                                     # every spring force x 10
+    assert not s.h_error.visible, s.h_error.content
+    assert scaled_calls == []
+    assert [c[:2] for c in rec.calls] == [(pytest.approx(10.0), 1)]
+    assert rec.calls[0][2] == pytest.approx(np.max(b1.branch.energy))
+    runner = s.last_runner
+    assert runner is s.slider_runner and runner.k3_factor == pytest.approx(10.0) and shared.job is runner
+    new = runner.entry
+    assert s.sel_uid == new.uid and "(k3 x 10)" in new.label and "(k3 x 10)" in s.h_branch.value
+    assert "forces x 10 (recomputed)" in s.h_k3_text.content and "cubic springs only" in s.h_k3_text.content
+    # the file's branches are shown as computed: same energies, no ghost
+    np.testing.assert_array_equal(s.fep_series(b1).energy, b1.branch.energy)
+    assert all(g == [] for g in ghosts) and "k3 x" not in s.drawing.fep.renderer.ax.get_title()
+    runner.poll = 0.01
+    rec.jobs[0].release(len(file_b1))
+    rec.jobs[0]._end()
+    runner.finished.wait(5)
+    wait_for(lambda: new.source == "computed")
+    wait_for(lambda: f"({len(file_b1)} pts" in s.h_branch.value)
+    s.pick(new.uid, 4)                                     # its points are shown as computed
+    assert s.current_point.energy == pytest.approx(file_b1.energy[4]) and s.ratio == 1.0
+    assert not s.h_error.visible and scaled_calls == []
+    # the FEP CSV of a file branch at this slider position: as computed, no k3 in the name
+    s.pick(b1.uid, 2)
+    name, data = s.fep_csv()
+    assert "k3x" not in name and scaled_calls == []
+    # no scaling law maps the branch back to the file's springs: not saved, one line, file unchanged
+    s.pick(new.uid, 0)
+    s._cb(s._on_save)(None)
+    assert s.h_error.visible and "cubic springs only" in s.h_error.content and not new.saved
+    assert len(nnm.load_branches(path)) == 2
+    s.close()
+
+
+def test_stiffness_slider_recompute_is_debounced(server, poly_file):
+    """Issue 18: one job runs, for the slider's final value: a slider job for a factor no longer wanted
+    is stopped and its branch dropped; the next starts when it has ended; a factor already computed
+    (back to x 1: the file's branch) is selected, not recomputed; a job started by Start is not
+    stopped: the slider's recompute waits for it."""
+    file_b1 = nnm.load_branches(poly_file)[0]
+    rec = JobRecorder(file_b1)
+    s, shared = make_session(server, poly_file, start_job=rec)
+    b1 = shared.entries[0]
+    s.h_k3.value = 1.0
+    first = s.slider_runner
+    first.poll = 0.01
+    rec.jobs[0].release(3)
+    wait_for(lambda: len(first.entry) == 3)
+    s.h_k3.value = 1.5                                     # first job superseded
+    assert rec.jobs[0].cancelled and all(e is not first.entry for e in shared.entries)
+    wait_for(lambda: s.slider_runner is not first)
+    second = s.slider_runner
+    assert len(rec.calls) == 2 and rec.calls[1][0] == pytest.approx(10 ** 1.5) and rec.calls[1][1] == 1
+    assert rec.calls[1][2] == pytest.approx(rec.calls[0][2])        # the same energy range as the first
+    assert s.sel_uid == second.entry.uid and len(shared.entries) == 3
+    s.h_k3.value = 0.0                                     # back to the file's springs
+    assert rec.jobs[1].cancelled and s.sel_uid == b1.uid and len(rec.calls) == 2
+    second.finished.wait(5)
+    wait_for(lambda: shared.job is None)
+    assert len(rec.calls) == 2 and len(shared.entries) == 2 and not s.h_error.visible
+    # a Start job is not stopped by the slider: the recompute is queued until it ends
+    s._cb(s._on_start)(None)
+    user = shared.job
+    user.poll = 0.01
+    s.h_k3.value = 1.0
+    assert len(rec.calls) == 3 and not rec.jobs[2].cancelled and "queued" in s.h_status.content
+    rec.jobs[2].release(2)
+    rec.jobs[2]._end()
+    wait_for(lambda: s.slider_runner is not None and s.slider_runner.job is rec.jobs[-1] and len(rec.calls) == 4)
+    assert rec.calls[3][0] == pytest.approx(10.0) and s.slider_runner.k3_factor == pytest.approx(10.0)
+    rec.jobs[3].cancel()
+    s.slider_runner.finished.wait(5)
+    assert not s.h_error.visible
+    s.close()
+
+
+def test_stiffness_slider_drag_starts_one_job(server, poly_file, monkeypatch):
+    """Issue 18, a tab drawn in its own thread (as in the browser): values sent while the slider is
+    dragged start no job; one job starts once it has rested, for the final value."""
+    import nnm_viewer.controls as controls
+
+    monkeypatch.setattr(controls, "RECOMPUTE_DELAY", 0.3)
+    rec = JobRecorder(nnm.load_branches(poly_file)[1])
+    model = nnm.load_model(poly_file)
+    shared = SharedState(model, path=poly_file, branches=nnm.load_branches(poly_file))
+    s = Session(server, shared, start_job=rec)
+    s.pick(shared.entries[1].uid, 3)
+    for v in (0.1, 0.2, 0.3, 0.4, 0.5):
+        s.h_k3.value = v
+        time.sleep(0.05)
+    assert rec.calls == []
+    wait_for(lambda: s.slider_runner is not None)
+    time.sleep(0.5)
+    assert [c[:2] for c in rec.calls] == [(pytest.approx(10 ** 0.5), 2)]
+    wait_for(lambda: s.sel_uid == s.slider_runner.entry.uid and "(k3 x 3.16)" in s.h_branch.value)
+    rec.jobs[0].cancel()
+    s.slider_runner.finished.wait(5)
+    assert not s.h_error.visible
+    s.close()
+    with s.drawing._draw_lock:                            # a drawing under way ends before the server stops
+        pass
