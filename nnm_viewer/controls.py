@@ -21,7 +21,7 @@ from .downloads import file_stem
 from .drawing import ALL_KINDS, Drawing
 from .fep import Y_LABELS, axis_ranges, energy_to_s, interp_at, should_zoom
 from .fep_view import branch_options, sweep_key
-from .layout import Layout
+from .layout import SEE_COMPUTE_TAB, Layout
 from .state import branch_label, scaling_law_holds
 from .worker import JobRunner, one_line
 
@@ -78,6 +78,7 @@ class Session:
         self.dofs_text = "auto"
         self.show_ghost = False      # the undeformed shape, translucent
         self.view = "Iso"            # last camera preset
+        self.linear_mode = None      # k (1-based): linear mode k is shown instead of the selected point
         self.message = ""            # last status line for this tab
         # ---- the point shown (written by the drawing, under self.lock)
         self.current_point = None    # PointData shown (scaled to the current k3), or None
@@ -220,7 +221,8 @@ class Session:
                    h_reset=self._on_reset_camera, h_recompute=self._on_recompute, h_start=self._on_start,
                    h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
                    h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
-                   h_view=self._on_view)
+                   h_view=self._on_view, h_show_linear=self._on_show_linear,
+                   h_compute_linear=self._on_compute_linear)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
     def _set_field(self, name):
@@ -230,6 +232,8 @@ class Session:
         def on_update(_):
             with self.lock:
                 setattr(self, field, kind(getattr(self.layout, name).value))
+                if field == "s":             # a point of the branch: no more linear mode
+                    self.linear_mode = None
             self.request(*redraws)
         return on_update
 
@@ -255,6 +259,7 @@ class Session:
         with self.lock:
             changed = uid != self.sel_uid
             self.sel_uid, self.s = uid, float(s)
+            self.linear_mode = None          # a pick (or a branch chosen) shows its point again
         self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
 
     def pick(self, uid, instance_index):
@@ -272,6 +277,7 @@ class Session:
         ser = e.series(self.view_factor(e))
         with self.lock:
             self.s = energy_to_s(ser.energy, 10.0 ** float(self.layout.h_energy.value), self.s)
+            self.linear_mode = None
         self.request("fep", "sliders:along", "point")
 
     def _on_reset_camera(self, _):
@@ -431,13 +437,18 @@ class Session:
     def _on_start(self, _):
         mode = int(str(self.layout.h_mode.value).split(":")[0])
         emin, emax = float(self.layout.h_emin.value), float(self.layout.h_emax.value)
-        self._start(mode, emax, self.factor, energy_min=emin if emin > 0 else None)
+        return self._start(mode, emax, self.factor, energy_min=emin if emin > 0 else None)
 
     def _start(self, mode, emax, factor, energy_min=None):
         with self.shared.lock:
             if self.shared.job is not None and self.shared.job.running:
                 raise ValueError("a job is already running; stop it first")
-        opts = {"max_points": int(self.layout.h_maxpts.value)}
+        ui = self.layout
+        spp = int(round(float(ui.h_spp.value)))
+        if spp < 8:
+            raise ValueError(f"steps per period must be at least 8, got {spp}")
+        opts = {"max_points": int(ui.h_maxpts.value), "integrator": str(ui.h_integrator.value),
+                "steps_per_period": spp}
         if energy_min is not None:
             opts["energy_min"] = float(energy_min)
         runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
@@ -446,7 +457,37 @@ class Session:
         with self.lock:            # the new branch is selected: its points replace the old animation
             self.sel_uid, self.s = runner.entry.uid, 0.0
             self.current_point = self.current_anim = self.current_uid = None
+            self.linear_mode = None
         self.request("branches", "point", "progress")
+        return runner
+
+    # ---- the Modes tab
+    def _linear_mode_choice(self):
+        """Mode k (1-based) chosen in the Modes tab's dropdown."""
+        return int(str(self.layout.h_lin_mode.value).split(":")[0])
+
+    def show_linear_mode(self, k):
+        """Animate linear mode ``k`` (1-based) instead of the selected point (``info.linear_mode_point``);
+        the selection is kept: a pick, the sliders, a branch chosen or a new job show a point again."""
+        k = int(k)
+        freqs = self.shared.linear_freqs
+        if not 1 <= k <= len(freqs):
+            raise ValueError(f"linear mode {k} does not exist (valid: 1..{len(freqs)})")
+        if not freqs[k - 1] > 1e-9 * max(float(np.max(np.abs(freqs))), 1e-300):
+            raise ValueError(f"linear mode {k} is a rigid-body mode (0 Hz): nothing to animate")
+        with self.lock:
+            self.linear_mode = k
+        self.request("point")
+
+    def _on_show_linear(self, _):
+        self.show_linear_mode(self._linear_mode_choice())
+
+    def _on_compute_linear(self, _):
+        """'Compute its branch': that mode in the Compute tab's Mode list, then Start (as its button)."""
+        k = self._linear_mode_choice()
+        self.layout.set(self.layout.h_mode, value=self.layout.mode_options[k - 1])
+        runner = self._on_start(None)
+        self.show_status(f"started {runner.name}: {SEE_COMPUTE_TAB}")
         return runner
 
     def _on_stop(self, _):
@@ -493,11 +534,17 @@ class Session:
         branch = e.branch if abs(ratio - 1.0) < 1e-12 else e.branch.scaled(ratio)
         return f"{self._download_stem(e)}_fep.csv", downloads.fep_csv(branch)
 
+    def _linear_stem(self, k):
+        return file_stem(f"{self.model.name or 'model'}_linear_mode{k}")
+
     def orbit_csv(self):
-        """(file name, CSV bytes) of the picked orbit (as shown: at the current k3 factor)."""
+        """(file name, CSV bytes) of the picked orbit (as shown: at the current k3 factor), or of the
+        linear mode shown."""
         e = self.selected_entry()
         with self.lock:
-            pd, uid, along = self.current_point, self.current_uid, self.s
+            pd, uid, along, lin = self.current_point, self.current_uid, self.s, self.linear_mode
+        if lin is not None and pd is not None:
+            return f"{self._linear_stem(lin)}_orbit.csv", downloads.orbit_csv(pd, self.model)
         if e is None or pd is None or uid != e.uid:
             raise ValueError("no orbit shown: pick a point of the FEP first")
         return f"{self._download_stem(e)}_point{along:.2f}_orbit.csv", downloads.orbit_csv(pd, self.model)
@@ -507,9 +554,16 @@ class Session:
         factor), seen along the tab's camera direction."""
         from .gif import gif_title, orbit_gif
 
+        from .info import linear_mode_title
+
         e = self.selected_entry()
         with self.lock:
-            pd, anim, uid, along = self.current_point, self.current_anim, self.current_uid, self.s
+            pd, anim, uid, along, lin = (self.current_point, self.current_anim, self.current_uid, self.s,
+                                         self.linear_mode)
+        if lin is not None and pd is not None and anim is not None:
+            amp, peak = self.amplification()
+            title = gif_title("L" + linear_mode_title(self.model, self.shared.linear_freqs, lin, freq=False)[1:], pd, peak)
+            return f"{self._linear_stem(lin)}.gif", orbit_gif(anim, amp, self.view_direction(), title=title)
         if e is None or pd is None or anim is None or uid != e.uid:
             raise ValueError("no orbit shown: pick a point of the FEP first")
         amp, peak = self.amplification()

@@ -156,6 +156,8 @@ class Drawing:
                       + (f"  \n{s.shared.status}" if s.shared.status else ""))
         ui.set(ui.h_job, content=status)
         ui.set(ui.h_start, disabled=running)
+        ui.set(ui.h_compute_linear, disabled=running)
+        ui.set(ui.h_modes_job, content=f"**Job:** {status}" if job is not None or s.shared.status else "")
         ui.set(ui.h_stop, disabled=not running)
         ui.set(ui.h_recompute, disabled=running or e is None or abs(s.factor / e.k3_factor - 1.0) < 1e-9)
         ui.set(ui.h_save, disabled=e is None or e.saved or e.source == "running")

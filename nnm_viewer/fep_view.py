@@ -153,7 +153,8 @@ class FepView:
                 s.sel_uid, s.s = first.uid, 0.0
         e = s.selected_entry()
         with s.lock:
-            return vanished or (bool(len(e)) and (s.current_point is None or s.current_uid != e.uid))
+            return vanished or (bool(len(e)) and s.linear_mode is None
+                                and (s.current_point is None or s.current_uid != e.uid))
 
     def draw_branch_list(self):
         """The branch dropdown, showing the selected branch."""

@@ -86,6 +86,59 @@ def point_data(branch, s, samples=None):
                      x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description)
 
 
+#: samples per period of a linear mode's orbit (one harmonic: a few samples would do)
+LINEAR_SAMPLES = 64
+
+
+def linear_mode_point(model, k, freqs, shapes, amplitude=1.0, samples=LINEAR_SAMPLES):
+    """PointData of linear mode ``k`` (1-based) of ``model``: x(t) = a phi_k cos(2 pi f_k t) over one
+    period, phi_k mass-normalised (``model.linear_modes()``: ``freqs`` Hz, ``shapes[:, k-1]``), a =
+    ``amplitude``.  Energy: the linear mode's at that amplitude, (2 pi f_k a)^2 / 2; stable, no Floquet
+    multipliers; MAC (mass-weighted) with every linear mode (1 with itself)."""
+    freqs = np.asarray(freqs, dtype=float)
+    shapes = np.asarray(shapes, dtype=float)
+    if not 1 <= int(k) <= len(freqs):
+        raise ValueError(f"linear mode {k} does not exist (valid: 1..{len(freqs)})")
+    k = int(k)
+    f = float(freqs[k - 1])
+    if not np.isfinite(f) or f <= 1e-9 * max(float(np.max(np.abs(freqs))), 1e-300):
+        raise ValueError(f"linear mode {k} has no frequency ({f:.3g} Hz: a rigid-body mode): nothing to animate")
+    phi = shapes[:, k - 1]
+    period = 1.0 / f
+    t = np.arange(int(samples)) * period / int(samples)
+    x = float(amplitude) * np.cos(2.0 * np.pi * f * t)[:, None] * phi[None, :]
+    mac = np.asarray(nnm_solver.mac(phi, shapes, model.M)[0], dtype=float)
+    modal_mass = float(phi @ np.asarray(model.M @ phi).reshape(-1))
+    energy = 0.5 * (2.0 * np.pi * f * float(amplitude)) ** 2 * modal_mass
+    note = (f"linear mode: x(t) = a φ{k} cos(2π f{k} t), φ{k} mass-normalised, a = {float(amplitude):.3g} chosen "
+            "for display; the energy is the linear mode's at that amplitude (no Floquet multipliers: linear)")
+    return PointData(energy=energy, frequency=f, period=period, stable=True, floquet=np.zeros(0, complex),
+                     mac=mac, t=t, x=x, harmonics=fourier_amplitudes(x, N_HARMONICS), note=note,
+                     description="")
+
+
+def linear_mode_title(model, linear_freqs, k, freq=True):
+    """'linear mode 2 (out-of-phase mode), f = 1.234 Hz' (the label when the model has one)."""
+    labels = model.mode_labels or []
+    lab = f" ({labels[k - 1]})" if k - 1 < len(labels) and labels[k - 1] else ""
+    return f"linear mode {k}{lab}" + (f", f = {float(linear_freqs[k - 1]):.6g} Hz" if freq else "")
+
+
+def method_text(branch):
+    """How a branch's orbits were computed, in a few words: 'shooting, newmark, 200 steps per period',
+    'harmonic balance, 7 harmonics'; '' when the branch does not say."""
+    st = getattr(branch, "settings", None)
+    method = getattr(st, "method", "")
+    if method == "shooting":
+        integ = getattr(st, "integrator", None) or "newmark"
+        spp = getattr(st, "steps_per_period", None)
+        return f"shooting, {integ}" + (f", {int(spp)} steps per period" if spp else "")
+    if method == "harmonic_balance":
+        h = getattr(st, "harmonics", None)
+        return "harmonic balance" + (f", {int(h)} harmonics" if h else "")
+    return ""
+
+
 def parse_dofs(text, n, auto):
     """DOF indices from 'auto' or a comma/space separated list of 0-based indices."""
     text = (text or "").strip().lower()
@@ -166,16 +219,19 @@ def orbit_lines(pd, model):
 LABEL_WORDS = {"backbone": " (the fundamental NNM family)", "tongue": " (inside an internal-resonance tongue)"}
 
 
-def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label=None, freq_error=None):
+def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label=None, freq_error=None,
+                  method=""):
     """Markdown summary of the orbit (units: J, Hz, s).  label: the point's label ('backbone',
     'tongue 3:1'); freq_error: its estimated relative frequency error (the solver's, if the branch
-    has one)."""
+    has one); method: how the branch was computed (``method_text``: the integrator), on the same line;
+    k3_factor None: no k3 line (a linear mode)."""
     lines = [f"**{where}**" if where else "",
              f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)"
              + (f", estimated relative error {freq_error:.1e} (± {abs(freq_error) * pd.frequency:.2g} Hz)"
-                if freq_error is not None else ""),
+                if freq_error is not None else "")
+             + (f" · {method}" if method else ""),
              f"- energy **{pd.energy:.4g} J**",
-             f"- k3 factor x{k3_factor:.3g}",
+             *([f"- k3 factor x{k3_factor:.3g}"] if k3_factor is not None else []),
              f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
              *([f"- label: **{label}**{LABEL_WORDS.get(str(label).split(' ')[0], '')}"] if label else []),
              *orbit_lines(pd, model)]

@@ -10,6 +10,7 @@ import threading
 
 import numpy as np
 import viser
+from nnm_solver import INTEGRATORS
 
 from .help import HELP_MARKDOWN
 from .model_info import elements_summary, model_markdown
@@ -21,7 +22,12 @@ PANEL_WIDTH = 500
 MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
 BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit",
-           "h_gif", "h_view")
+           "h_gif", "h_view", "h_show_linear", "h_compute_linear")
+#: Compute tab: default time integrator and steps per period of the shooting
+DEFAULT_INTEGRATOR = "newmark"
+DEFAULT_STEPS_PER_PERIOD = 200
+#: Modes tab: what "Compute its branch" says (viser 1.1 cannot switch a tab from the server)
+SEE_COMPUTE_TAB = "the job's progress is in the **Compute** tab"
 #: view presets of the camera (scene.preset_camera)
 VIEW_PRESETS = ("Iso", "Top", "Side", "Front")
 
@@ -159,18 +165,37 @@ class Layout:
             self.h_gif = gui.add_button("Download animation (GIF)", icon=viser.Icon.DOWNLOAD,
                                         hint="the deformed structure over one period, seen as in the 3D view, "
                                              "with its colour bar (a few seconds to draw)")
+        options = tuple(mode_label(model, linear_freqs, k) for k in range(1, model.n + 1))    # every mode
+        self.mode_options = options
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
-            options = tuple(mode_label(model, linear_freqs, k) for k in range(1, model.n + 1))    # every mode
             self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
             self.h_emin = gui.add_number("Min energy (J), 0 = auto", initial_value=0.0, min=0.0, step=1e-6)
             self.h_emax = gui.add_number("Max energy (J)", initial_value=100.0, min=1e-12, step=1e-6)
             self.h_maxpts = gui.add_number("Max points", initial_value=80, min=2, max=5000, step=1)
+            self.h_integrator = gui.add_dropdown(
+                "Integrator", options=tuple(INTEGRATORS), initial_value=DEFAULT_INTEGRATOR,
+                hint="Time integrator of the shooting: newmark (2nd order, the seed paper's), gauss4 or gauss6 "
+                     "(Gauss-Legendre, 4th / 6th order, 2 / 3 stages per step)")
+            self.h_spp = gui.add_number(
+                "Steps per period", initial_value=DEFAULT_STEPS_PER_PERIOD, min=8, max=20000, step=1,
+                hint="Time steps per period of the shooting: 200 for newmark; about 100 are enough for gauss6 "
+                     "(a step costs ~3 Newmark steps); more for high-order tongues")
             self.h_start = gui.add_button("Start", color="green")
             self.h_stop = gui.add_button("Stop (keep points)", disabled=True)
             self.h_save = gui.add_button("Save selected branch to file", disabled=True)
             self.h_progress = gui.add_progress_bar(0.0, animated=False)
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):
+            self.h_lin_mode = gui.add_dropdown("Linear mode", options=options, initial_value=options[0])
+            self.h_show_linear = gui.add_button(
+                "Show this linear mode", icon=viser.Icon.EYE,
+                hint="Animates the linear mode shape x(t) = a φ cos(2π f t) on the structure (the Point tab "
+                     "tells it); picking a FEP point shows that orbit again")
+            self.h_compute_linear = gui.add_button(
+                "Compute its branch", color="green", icon=viser.Icon.PLAYER_PLAY,
+                hint="Selects this mode in the Compute tab and starts its branch, as Start does (with the "
+                     "Compute tab's energies, points and integrator)")
+            self.h_modes_job = gui.add_markdown("")
             self.h_model = gui.add_markdown(model_markdown(model))
             gui.add_markdown(modes_markdown(model, linear_freqs))
         with panel.add_tab("Help", viser.Icon.HELP):

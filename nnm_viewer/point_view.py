@@ -10,7 +10,8 @@ from nnm_solver import cubic_scaling
 from . import scene as sc
 from .animation import orbit_animation
 from .colorbar import colorbar_image
-from .info import auto_dofs, info_markdown, parse_dofs, peak_text, point_data, uplot_harmonics, uplot_time_series
+from .info import (auto_dofs, info_markdown, linear_mode_point, linear_mode_title, method_text, parse_dofs,
+                   peak_text, point_data, uplot_harmonics, uplot_time_series)
 
 #: cached orbits / animations per tab (cleared when full)
 POINT_CACHE = 64
@@ -51,6 +52,8 @@ class PointView:
     def compute(self):
         """Orbit and animation of the selection (None if the branch has no point); True."""
         s = self.session
+        if s.linear_mode is not None:             # a linear mode (Modes tab): no solver needed
+            return self.compute_linear(s.linear_mode)
         e = s.selected_entry()
         if not s.shared.solver_ready.is_set():     # no orbit before the kernels are compiled (warmup.py);
             with s.lock:                           # the session asks again when they are
@@ -84,6 +87,32 @@ class PointView:
             s.ratio = ratio
         return True
 
+    def compute_linear(self, k):
+        """Linear mode ``k`` as the point shown: its amplitude a is chosen so that its peak vertex
+        displacement is the auto amplification's (AUTO_PEAK_FRACTION of the model size), so that it looks
+        the same with a manual amplification of 1; True."""
+        from .controls import AUTO_PEAK_FRACTION
+
+        s = self.session
+        key = ("linear", int(k))
+        cached = self._anim_cache.get(key)
+        if cached is None:
+            freqs, shapes = s.shared.linear_freqs, s.shared.linear_shapes
+            verts, faces, mapper = s.mesh.vertices, s.mesh.faces, s.shared.mapper
+            unit = linear_mode_point(s.model, k, freqs, shapes, 1.0)
+            peak = orbit_animation(verts, faces, mapper, unit.t, unit.x, unit.period).peak_max
+            a = AUTO_PEAK_FRACTION * s.geom.size / peak if peak > 0 else 1.0
+            pd = linear_mode_point(s.model, k, freqs, shapes, a)
+            cached = (pd, orbit_animation(verts, faces, mapper, pd.t, pd.x, pd.period))
+            if len(self._anim_cache) > ANIM_CACHE:
+                self._anim_cache.clear()
+            self._anim_cache[key] = cached
+        with s.lock:
+            s.current_point, s.current_anim = cached
+            s.current_uid = None
+            s.ratio = 1.0
+        return True
+
     def draw_glb(self):
         """The model: animated over one orbit, or at rest if no point is shown."""
         s, ui = self.session, self.ui
@@ -99,7 +128,10 @@ class PointView:
                            phase=s.phase)
             if s.auto_amp:
                 ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
-            ui.set(ui.h_peak, content=peak_text(peak, amp, s.auto_amp)
+            lin = s.linear_mode
+            ui.set(ui.h_peak, content=(f"**{linear_mode_title(s.model, s.shared.linear_freqs, lin, freq=False)}** "
+                                       "(amplitude chosen for display)  \n" if lin is not None else "")
+                   + peak_text(peak, amp, s.auto_amp)
                    + f"  \nreal period {anim.period:.4g} s, shown in {shown:.3g} s")
         s.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
         self.last_glb = glb
@@ -123,12 +155,18 @@ class PointView:
             ui.set(ui.h_info, content="no point selected" if s.shared.solver_ready.is_set() else
                    "preparing the solver (compiling its kernels): the orbit is shown as soon as it is ready")
             return
-        idx = s.shared.index_of(s.sel_uid)
-        e = s.selected_entry()
-        where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
-        label, err = point_label_and_error(e.branch, s.s)
-        ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.view_factor(e), where=where,
-                                                label=label, freq_error=err))
+        lin = s.linear_mode
+        if lin is not None:
+            ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, None,
+                                                    where=linear_mode_title(s.model, s.shared.linear_freqs, lin)))
+        else:
+            idx = s.shared.index_of(s.sel_uid)
+            e = s.selected_entry()
+            where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
+            label, err = point_label_and_error(e.branch, s.s)
+            ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.view_factor(e),
+                                                    where=where, label=label, freq_error=err,
+                                                    method=method_text(e.branch)))
         try:
             dofs = parse_dofs(s.dofs_text, s.model.n, auto_dofs(s.model, pd.x))
         except ValueError as exc:

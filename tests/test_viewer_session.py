@@ -1068,3 +1068,136 @@ def test_stiffness_slider_drag_starts_one_job(server, poly_file, monkeypatch):
     s.close()
     with s.drawing._draw_lock:                            # a drawing under way ends before the server stops
         pass
+
+
+# ---------------------------------------------------------------- issue 14 item 11: the Modes tab's linear modes
+def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, demo_file):
+    """'Show this linear mode' animates x(t) = a phi_k cos(2 pi f_k t) (frequency f_k, MAC 1 with mode k,
+    stable, no Floquet multipliers) and the Point tab names it; the selection is kept, and a pick (even of
+    the point still selected), the along slider or the energy slider show a branch point again."""
+    s, shared = make_session(server, demo_file)
+    model = shared.model
+    freqs, shapes = model.linear_modes()
+    M = np.asarray(model.M)
+    assert s.h_lin_mode.options == s.h_mode.options                      # same labels as the Compute tab
+    e2 = shared.entries[1]
+    s.pick(e2.uid, 5)
+    glb_point = s.last_glb
+    s.h_lin_mode.value = s.h_lin_mode.options[1]
+    s._cb(s._on_show_linear)(None)
+    assert not s.h_error.visible
+    pd = s.current_point
+    f2, phi = freqs[1], shapes[:, 1]
+    assert pd.frequency == pytest.approx(f2, rel=1e-12) and pd.period == pytest.approx(1 / f2, rel=1e-12)
+    assert pd.stable and pd.floquet.size == 0
+    assert pd.mac[1] == pytest.approx(1.0, abs=1e-12) and pd.mac[0] == pytest.approx(0.0, abs=1e-12)
+    a = float(pd.x[0] @ M @ phi)                                         # x(0) = a phi (phi^T M phi = 1)
+    assert a > 0
+    np.testing.assert_allclose(pd.x, a * np.cos(2 * np.pi * f2 * pd.t)[:, None] * phi[None, :], atol=1e-12 * a)
+    assert nnm.mac(pd.x[0], phi, M) == pytest.approx(1.0, abs=1e-12)
+    assert pd.energy == pytest.approx(0.5 * (2 * np.pi * f2 * a) ** 2, rel=1e-12)
+    # the amplitude is the auto amplification's: a manual factor of 1 shows it the same
+    amp, peak = s.amplification()
+    assert amp == pytest.approx(1.0, rel=1e-6) and peak == pytest.approx(0.12 * s.geom.size, rel=1e-6)
+    label = model.mode_labels[1]
+    assert f"**linear mode 2 ({label}), f = {f2:.6g} Hz**" in s.h_info.content
+    assert "Branch 2" not in s.h_info.content and "linear mode 2" in s.h_peak.content
+    assert "animations" in read_glb_json(s.last_glb) and s.last_glb != glb_point
+    assert s.sel_uid == e2.uid and s.s == 5.0 and "branch 2, point 5.00" in s.h_sel.content
+    s.request("branches")                                  # e.g. a job's points arriving: the mode stays
+    assert s.current_point.frequency == pytest.approx(f2, rel=1e-12)
+    name, data = s.orbit_csv()
+    assert "linear_mode2" in name and data.count(b"\n") >= len(pd.t)
+    # a pick of the point still selected shows that point again, as before
+    s.pick(e2.uid, 5)
+    assert s.linear_mode is None and s.current_uid == e2.uid
+    assert s.current_point.energy == pytest.approx(e2.branch.energy[5])
+    assert s.current_point.frequency == pytest.approx(e2.branch.frequency_hz[5])
+    assert s.h_info.content.startswith("**Branch 2") and "linear mode" not in s.h_peak.content
+    # the sliders too
+    s._cb(s._on_show_linear)(None)
+    s.h_along.value = 3.0
+    assert s.current_point.energy == pytest.approx(e2.branch.energy[3])
+    s.h_lin_mode.value = s.h_lin_mode.options[0]
+    s._cb(s._on_show_linear)(None)
+    assert s.current_point.frequency == pytest.approx(freqs[0], rel=1e-12)
+    s.h_energy.value = round(float(np.log10(e2.branch.energy[7])), 2)
+    assert s.linear_mode is None and s.current_point.frequency == pytest.approx(e2.branch.frequency_hz[7], rel=1e-3)
+    s.close()
+
+
+def test_modes_tab_compute_its_branch_starts_the_job_as_start_does(server, demo_file):
+    """'Compute its branch' selects the mode in the Compute tab and starts the job with the same
+    arguments as Start; the new branch is selected (the linear mode shown is replaced)."""
+    full = nnm.load_branches(demo_file)[1]
+    calls = []
+
+    def start_job(model, mode, energy_max, **kw):
+        calls.append((mode, energy_max, kw))
+        return FakeJob(full)
+
+    s, shared = make_session(server, demo_file, start_job=start_job)
+    s.h_emax.value = 5.0
+    s.h_maxpts.value = 30
+    s.h_lin_mode.value = s.h_lin_mode.options[1]
+    s._cb(s._on_show_linear)(None)
+    s._cb(s._on_compute_linear)(None)
+    assert not s.h_error.visible
+    runner = shared.job
+    runner.poll = 0.01
+    assert s.h_mode.value == s.h_mode.options[1] and runner.mode == 2
+    assert calls == [(2, 5.0, {"max_points": 30, "integrator": "newmark", "steps_per_period": 200})]
+    assert s.sel_uid == runner.entry.uid and s.linear_mode is None and s.current_point is None
+    assert "Compute" in s.h_status.content and "NNM 2" in s.h_modes_job.content
+    assert s.h_compute_linear.disabled and s.h_start.disabled
+    s._cb(s._on_compute_linear)(None)                                   # one job at a time
+    assert s.h_error.visible and "already running" in s.h_error.content and len(calls) == 1
+    s._cb(s._on_stop)(None)
+    assert runner.finished.wait(5)
+    wait_for(lambda: not s.h_compute_linear.disabled)
+    s._cb(s._on_start)(None)                                            # Start with that mode: the same job
+    assert calls[1] == calls[0]
+    s._cb(s._on_stop)(None)
+    assert shared.job is None or shared.job.finished.wait(5)
+    s.close()
+
+
+def test_compute_tab_integrator_reaches_the_job(server, demo_file, tmp_path):
+    """The Compute tab's integrator and steps per period are passed to the job (start_branch); the
+    computed branch has them in its settings and the Point tab says so next to the frequency."""
+    calls = []
+    full = nnm.load_branches(demo_file)[0]
+
+    def start_job(model, mode, energy_max, **kw):
+        calls.append(kw)
+        return FakeJob(full)
+
+    s, shared = make_session(server, demo_file, start_job=start_job)
+    assert tuple(s.h_integrator.options) == tuple(nnm.INTEGRATORS) and s.h_integrator.value == "newmark"
+    assert s.h_spp.value == 200 and "gauss6" in s.h_spp.hint and "100" in s.h_spp.hint
+    s.h_integrator.value = "gauss6"
+    s.h_spp.value = 100
+    s._cb(s._on_start)(None)
+    assert calls[-1]["integrator"] == "gauss6" and calls[-1]["steps_per_period"] == 100
+    s._cb(s._on_stop)(None)
+    shared.job is None or shared.job.finished.wait(5)
+    s.close()
+    # the real solver: the branch's settings, and the Point tab
+    path = tmp_path / "copy.h5"
+    path.write_bytes(demo_file.read_bytes())
+    s, shared = make_session(server, path)
+    s.h_integrator.value = "gauss4"
+    s.h_spp.value = 120
+    s.h_maxpts.value = 3
+    s.h_emax.value = 1.0
+    s._cb(s._on_start)(None)
+    runner = s.last_runner
+    assert runner.finished.wait(120) and runner.entry.source == "computed", runner.entry.source
+    b = runner.entry.branch
+    assert b.settings.integrator == "gauss4" and b.settings.steps_per_period == 120 and len(b) == 3
+    s.pick(runner.entry.uid, 1)
+    freq_line = next(l for l in s.h_info.content.splitlines() if l.startswith("- frequency"))
+    assert freq_line.endswith("· shooting, gauss4, 120 steps per period")
+    s.pick(shared.entries[0].uid, 1)                                    # the file's branch: Newmark
+    assert "· shooting, newmark, 200 steps per period" in s.h_info.content
+    s.close()
