@@ -10,6 +10,7 @@ results table of docs/paris_results.md (between its ``paris_fep`` markers); the 
 the model file (atomically, thinned to keep it under 25 MB) so that ``nnm-view`` opens with them.
 
     python examples/paris_fep.py                  # modes 10, 13, 19, 20 -> docs/img/paris_*.png, table, assets/paris.h5
+    python examples/paris_fep.py --integrator gauss6 --steps 200   # as shipped (converged tongues; docs/paris_results.md)
     python examples/paris_fep.py --fast           # modes 13 and 20, 40 steps/period, no tongues, no Floquet (~1 min)
     python examples/paris_fep.py --from-file      # no computation: tables and figures from the branches in the file
     nnm-view assets/paris.h5
