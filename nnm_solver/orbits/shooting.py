@@ -153,20 +153,24 @@ class ShootingProblem:
         self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0 (; v0)]
         dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
         sgn = 1.0 if self.symmetric else -1.0
-        J = np.zeros((2 * n + 1, 2 * n + 1))
+        # J = dH/du directly in the free unknowns (reversible: [q0; T], else [q0; v0; T] plus the phase row)
+        m = len(self.free)
+        J = np.zeros((self.rows, m))
         J[:n, :n] = Sq[:, :n]
         J[n:2 * n, :n] = Sv[:, :n] / w
-        if self.all_columns:
+        if not self.reversible:
             J[:n, n:2 * n] = Sq[:, n:] * w
             J[n:2 * n, n:2 * n] = Sv[:, n:]
-        J[:n, 2 * n] = sq_h * dh_du
-        J[n:2 * n, 2 * n] = sv_h * dh_du / w
-        J[np.arange(2 * n), np.arange(2 * n)] += sgn
-        if self.section is None:
-            J[2 * n, n:2 * n] = self.q_ref
-        else:
-            J[2 * n, :2 * n] = self.section[1]
-        return r, J[:self.rows][:, self.free]
+        J[:n, m - 1] = sq_h * dh_du
+        J[n:2 * n, m - 1] = sv_h * dh_du / w
+        d = np.arange(n if self.reversible else 2 * n)
+        J[d, d] += sgn
+        if not self.reversible:
+            if self.section is None:
+                J[2 * n, n:2 * n] = self.q_ref
+            else:
+                J[2 * n, :2 * n] = self.section[1]
+        return r, J
 
     def error(self, u, r):
         """Relative periodicity error (eq. 11) in the scaled state [q; v / w_r]."""
