@@ -85,7 +85,6 @@ def _bilinear_period(A, k, k0, k1, d1):
 
 
 def test_piecewise_force_tangent_potential_and_kernels():
-    from nnm_solver.laws import law_force, law_force_tangent
     pw = nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[2.0, 0.5, 3.0], breakpoints=[0.1, 0.25], eps=0.05)
     m = nnm.Model(np.eye(3), np.diag([1.0, 2.0, 3.0]),
                   [nnm.PolynomialSpring(dof=0, coefficients={3: 0.4}), pw,
@@ -97,12 +96,7 @@ def test_piecewise_force_tangent_potential_and_kernels():
     np.testing.assert_allclose(el.force(d), (el.potential(d + h) - el.potential(d - h)) / (2 * h), rtol=1e-6,
                                atol=1e-8)
     np.testing.assert_allclose(el.force(-d), -el.force(d), atol=1e-15)                     # odd
-    for row in d[:20]:                                                                    # numba kernels
-        np.testing.assert_allclose(law_force(row, el.powers, el.coefficients, el.kinks), el.force(row), rtol=1e-12,
-                                   atol=1e-15)
-        g, t = law_force_tangent(row, el.powers, el.coefficients, el.kinks)
-        np.testing.assert_allclose(g, el.force(row), rtol=1e-12, atol=1e-15)
-        np.testing.assert_allclose(t, el.tangent(row), rtol=1e-12, atol=1e-15)
+    _kernels_match(el, d[:20])
     # the regularised nonlinear part + k0 d is the exact law away from the kinks (within ~w = eps d1)
     s = np.array([0.03, -0.05, 0.2, -0.4, 1.0])
     exact = pw.exact_force(s)
@@ -309,7 +303,6 @@ def _side_potential(A, k, k0, k1, d1):
 
 
 def test_asymmetric_piecewise_force_tangent_potential_and_kernels():
-    from nnm_solver.laws import law_force, law_force_tangent
     asym = nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[2.0, 0.5, 3.0], breakpoints=[0.1, 0.25],
                                      stiffnesses_negative=[2.0, 6.0], breakpoints_negative=[0.05], eps=0.05)
     m = nnm.Model(np.eye(3), np.diag([1.0, 2.0, 3.0]),
@@ -323,12 +316,7 @@ def test_asymmetric_piecewise_force_tangent_potential_and_kernels():
     np.testing.assert_allclose(el.tangent(d), (el.force(d + h) - el.force(d - h)) / (2 * h), rtol=1e-6, atol=1e-7)
     np.testing.assert_allclose(el.force(d), (el.potential(d + h) - el.potential(d - h)) / (2 * h), rtol=1e-6,
                                atol=1e-8)
-    for row in d[:20]:                                                                    # numba kernels
-        np.testing.assert_allclose(law_force(row, el.powers, el.coefficients, el.kinks), el.force(row), rtol=1e-12,
-                                   atol=1e-15)
-        g, t = law_force_tangent(row, el.powers, el.coefficients, el.kinks)
-        np.testing.assert_allclose(g, el.force(row), rtol=1e-12, atol=1e-15)
-        np.testing.assert_allclose(t, el.tangent(row), rtol=1e-12, atol=1e-15)
+    _kernels_match(el, d[:20])
     # exact law: tension 2 -> 0.5 at 0.1 -> 3 at 0.25; compression 2 -> 6 at 0.05
     assert asym.exact_force(0.3) == pytest.approx(2.0 * 0.1 + 0.5 * 0.15 + 3.0 * 0.05)
     assert asym.exact_force(-0.3) == pytest.approx(-(2.0 * 0.05 + 6.0 * 0.25))
@@ -453,3 +441,14 @@ def test_bad_element_input_is_one_line(make, match):
     with pytest.raises(nnm.NNMInputError, match=match) as exc:
         make()
     assert "\n" not in str(exc.value)
+
+
+def _kernels_match(el, rows):
+    """The numba kernels (law_force, law_force_tangent) give the element set's numpy force and tangent."""
+    from nnm_solver.laws import law_force, law_force_tangent
+    for row in rows:
+        np.testing.assert_allclose(law_force(row, el.powers, el.coefficients, el.kinks), el.force(row), rtol=1e-12,
+                                   atol=1e-15)
+        g, t = law_force_tangent(row, el.powers, el.coefficients, el.kinks)
+        np.testing.assert_allclose(g, el.force(row), rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(t, el.tangent(row), rtol=1e-12, atol=1e-15)
