@@ -232,7 +232,8 @@ def _run(args):
             plot_fep(branch, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM {args.mode}")
             print(f"FEP written to {args.plot}")
         cli_exchange.write_exports(args, branch)
-    return 0 if branch.status in ("done", "max_points", "cancelled") else 1
+    # a branch that ends by its own physics (escape to a saddle, a closed loop) is a result, not an error
+    return 1 if branch.status == "failed" else 0
 
 
 def _run_sweep(args, parser):

@@ -57,7 +57,7 @@ def test_ctrl_c_keeps_points(tmp_path):
     p = tmp_path / "m.h5"
     nnm.save_model(p, two_dof_model())
     proc = subprocess.Popen([sys.executable, "-m", "nnm_solver.cli", str(p), "--mode", "1", "--energy-max", "1e12",
-                             "--max-points", "100000", "--steps-per-period", "2000"],
+                             "--max-points", "100000", "--steps-per-period", "5000"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(4.0)
     proc.send_signal(signal.SIGINT)
