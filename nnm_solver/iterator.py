@@ -89,6 +89,7 @@ class NNMIterator:
             if self.tongue_mode == "skip":
                 self._last_backbone = (cp, point)
             self._estimate_error(point)
+            self._release(point)
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
             p = self.points[loop]
@@ -112,8 +113,8 @@ class NNMIterator:
         return point
 
     def _refined(self, cp, point):
-        """freq_tol: if the point's estimated frequency error exceeds it, raise the steps per period (to
-        about half the tolerance, by the scheme's order) and restart the continuation from this orbit, so
+        """freq_tol: if the point's estimated frequency error exceeds it, raise the steps per period (aiming at
+        a quarter of the tolerance, by the scheme's order) and restart the continuation from this orbit, so
         that the point is computed again with the finer step.  False if nothing was done."""
         prob = self._problem
         if not self.freq_tol or not hasattr(prob, "set_steps"):
@@ -142,10 +143,15 @@ class NNMIterator:
 
     def _estimate_error(self, point):
         """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
-        prob, u, J, p, factor = getattr(point, "_solution", (None,) * 5)
+        prob, u, J, p, factor = getattr(point, "_solution", None) or (None,) * 5
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
             if not np.isfinite(point.freq_error):
                 point.freq_error, point._disc_error = prob.frequency_error(u, J, p, factor)
+
+    @staticmethod
+    def _release(point):
+        """Drop the Jacobian and factorisation a kept point carried for its error estimate (O(n^2) each)."""
+        point._solution = None
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
