@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 import nnm_solver
+from nnm_solver import cubic_scaling
 
 
 def fep_csv(branch):
@@ -47,3 +48,80 @@ def orbit_csv(point, model):
 def file_stem(text):
     """``text`` made safe as (part of) a file name."""
     return re.sub(r"[^A-Za-z0-9._-]+", "_", str(text)).strip("._") or "nnm"
+
+
+class DownloadActions:
+    """The Point tab's downloads of one Session (a mixin of ``controls.Session``): the FEP and the orbit as
+    CSV, the animation as GIF, sent to the browser."""
+
+    def download(self, filename, content):
+        """Offer ``content`` (bytes) to the browser as file ``filename`` (kept as ``last_download``)."""
+        with self.lock:
+            self.last_download = (filename, content)
+        send = getattr(self.api, "send_file_download", None)
+        if send is not None:
+            send(filename, content, save_immediately=True)
+        self.show_status(f"download: {filename} ({len(content)} bytes)")
+
+    def _download_stem(self, e):
+        idx = self.shared.index_of(e.uid)
+        factor = self.view_factor(e)
+        k3 = f"_k3x{factor:.3g}" if abs(factor - 1.0) > 1e-9 else ""
+        return file_stem(f"{self.model.name or 'model'}_branch{(idx or 0) + 1}_{e.label}{k3}")
+
+    def fep_csv(self):
+        """(file name, CSV bytes) of the selected branch's FEP, at the current k3 factor."""
+        e = self.selected_entry()
+        if e is None or not len(e):
+            raise ValueError("select a branch with points first")
+        ratio = self.view_factor(e) / e.k3_factor
+        branch = e.branch if abs(ratio - 1.0) < 1e-12 else e.branch.scaled(ratio)
+        return f"{self._download_stem(e)}_fep.csv", fep_csv(branch)
+
+    def _linear_stem(self, k):
+        return file_stem(f"{self.model.name or 'model'}_linear_mode{k}")
+
+    def orbit_csv(self):
+        """(file name, CSV bytes) of the picked orbit (as shown: at the current k3 factor), or of the
+        linear mode shown."""
+        e = self.selected_entry()
+        with self.lock:
+            pd, uid, along, lin = self.current_point, self.current_uid, self.s, self.linear_mode
+        if lin is not None and pd is not None:
+            return f"{self._linear_stem(lin)}_orbit.csv", orbit_csv(pd, self.model)
+        if e is None or pd is None or uid != e.uid:
+            raise ValueError("no orbit shown: pick a point of the FEP first")
+        return f"{self._download_stem(e)}_point{along:.2f}_orbit.csv", orbit_csv(pd, self.model)
+
+    def animation_gif(self):
+        """(file name, GIF bytes) of the picked orbit over one period, as shown (amplification, k3
+        factor), seen along the tab's camera direction."""
+        from .gif import gif_title, orbit_gif
+
+        from .info import linear_mode_title
+
+        e = self.selected_entry()
+        with self.lock:
+            pd, anim, uid, along, lin = (self.current_point, self.current_anim, self.current_uid, self.s,
+                                         self.linear_mode)
+        if lin is not None and pd is not None and anim is not None:
+            amp, peak = self.amplification()
+            title = gif_title("L" + linear_mode_title(self.model, self.shared.linear_freqs, lin, freq=False)[1:], pd, peak)
+            return f"{self._linear_stem(lin)}.gif", orbit_gif(anim, amp, self.view_direction(), title=title)
+        if e is None or pd is None or anim is None or uid != e.uid:
+            raise ValueError("no orbit shown: pick a point of the FEP first")
+        amp, peak = self.amplification()
+        idx = self.shared.index_of(e.uid)
+        title = gif_title(f"Branch {(idx or 0) + 1}: {e.label}, point {along:.2f}", pd, peak)
+        data = orbit_gif(anim, amp * cubic_scaling(self.ratio).amplitude, self.view_direction(), title=title)
+        return f"{self._download_stem(e)}_point{along:.2f}.gif", data
+
+    def _on_gif(self, _):
+        self.show_status("drawing the animation (GIF) …")
+        self.download(*self.animation_gif())
+
+    def _on_csv_fep(self, _):
+        self.download(*self.fep_csv())
+
+    def _on_csv_orbit(self, _):
+        self.download(*self.orbit_csv())

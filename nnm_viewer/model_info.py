@@ -2,7 +2,6 @@
 Modes tab and the title line."""
 from __future__ import annotations
 
-import numpy as np
 
 #: elements listed in the table at most
 MAX_ELEMENTS_LISTED = 60

@@ -1046,9 +1046,9 @@ def test_stiffness_slider_recompute_is_debounced(server, poly_file):
 def test_stiffness_slider_drag_starts_one_job(server, poly_file, monkeypatch):
     """Issue 18, a tab drawn in its own thread (as in the browser): values sent while the slider is
     dragged start no job; one job starts once it has rested, for the final value."""
-    import nnm_viewer.controls as controls
+    import nnm_viewer.compute_actions as compute_actions
 
-    monkeypatch.setattr(controls, "RECOMPUTE_DELAY", 0.3)
+    monkeypatch.setattr(compute_actions, "RECOMPUTE_DELAY", 0.3)
     rec = JobRecorder(nnm.load_branches(poly_file)[1])
     model = nnm.load_model(poly_file)
     shared = SharedState(model, path=poly_file, branches=nnm.load_branches(poly_file))

@@ -1,0 +1,224 @@
+"""What a tab's buttons compute (a mixin of ``controls.Session``): branches started from the Compute tab
+and the Modes tab, the stiffness slider's recompute jobs (models that are not pure cubic, where the scaling
+law does not hold), Stop, saving a branch to the file, and showing a linear mode."""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from .layout import SEE_COMPUTE_TAB
+from .fep import energy_to_s, interp_at
+from .fep_view import sweep_key
+from .state import branch_label
+from .worker import JobRunner, one_line
+
+
+#: non-cubic model: seconds the stiffness slider must rest before its factor is computed (debounce;
+#: tests with sync=True start at once)
+RECOMPUTE_DELAY = 0.5
+
+
+class ComputeActions:
+    """Start / Stop / Save, stiffness recomputes and linear modes of one Session (uses its state, lock,
+    layout and shared branch list)."""
+
+    def _on_recompute(self, _):
+        target = self._recompute_target()
+        if target is None:
+            raise ValueError("select a branch first")
+        self._start(target[0], target[1], self.factor)
+
+    def _recompute_target(self):
+        """(mode, energy_max, uid) of a recompute at the slider's factor: the selected branch's mode
+        up to its largest energy (at the factor in use); for a branch the slider computed, or while
+        its job is being replaced, those of the branch the slider started from.  None: no branch."""
+        e = self.selected_entry()
+        with self.lock:
+            base = self._slider_base
+        if base is not None and (e is None or e.uid in self._slider_uids):
+            return base
+        job = self.shared.job
+        if not self.scaling_law and e is not None and job is not None and job.entry is e:
+            return job.mode, job.energy_max, e.uid        # a branch being computed: its job's range
+        if e is None or not len(e):
+            return None
+        return int(e.mode), float(np.max(e.series(self.view_factor(e)).energy)), e.uid
+
+    # ---- the stiffness slider
+    def _on_k3(self, _):
+        """The stiffness slider: pure cubic springs, the FEP and the orbit follow by the exact scaling
+        law; otherwise nothing is scaled and the chosen factor is computed (``_slider_recompute``)."""
+        with self.lock:
+            self.factor_log = float(self.layout.h_k3.value)
+        if self.scaling_law:
+            self.request("branches", "point", "controls")
+            return
+        self.request("controls", "progress", "sliders")
+        self._slider_recompute()
+
+    def _entry_at(self, mode, factor, prefer=None):
+        """A complete branch of ``mode`` computed at ``factor`` on the file's model (not a sweep
+        variant's), ``prefer`` (a uid) first; or None."""
+        found = [e for e in self.shared.snapshot()
+                 if len(e) and e.mode == mode and abs(e.k3_factor / factor - 1.0) < 1e-9
+                 and e.source in ("file", "computed", "saved") and sweep_key(e) is None]
+        return next((e for e in found if e.uid == prefer), found[0] if found else None)
+
+    def _slider_recompute(self):
+        """Non-cubic model: a background job (the Recompute button's path) for the selected branch's
+        mode at the slider's factor, debounced: it starts once the slider has rested RECOMPUTE_DELAY s
+        (at once with sync=True) and no job runs; a job the slider started for another factor is
+        stopped and its branch dropped, so that one job runs, for the final value.  A complete branch
+        already computed at that factor is selected instead."""
+        factor = self.factor
+        target = self._recompute_target()
+        if target is None:
+            self.show_status("select a branch: the stiffness slider recomputes the selected branch")
+            return
+        mode, emax, origin = target
+        existing = self._entry_at(mode, factor, prefer=origin)
+        with self._recompute_lock:
+            self._slider_base = (mode, emax, origin)
+            runner = self.slider_runner
+            busy = runner is not None and runner.running and not runner.cancelled
+            same = busy and abs(runner.k3_factor / factor - 1.0) < 1e-9
+            self._pending = None if (existing is not None or same) else (mode, emax, factor)
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+        if busy and not same:
+            self._supersede(runner, origin)
+        if existing is not None:
+            self._select_existing(existing)
+            return
+        if same:
+            return
+        if self.sync:
+            self._start_pending()
+        else:
+            timer = threading.Timer(RECOMPUTE_DELAY, self._start_pending)
+            timer.daemon = True
+            with self._recompute_lock:
+                self._timer = timer
+            timer.start()
+        job = self.shared.job
+        if job is not None and job.running and job is not self.slider_runner:
+            self.show_status(f"recompute at x {factor:.3g} queued: it starts when the running job ends")
+
+    def _supersede(self, runner, origin):
+        """Stop a slider job whose factor is no longer wanted and drop its branch; the branch the
+        slider started from is selected meanwhile."""
+        runner.cancel()
+        self.shared.remove(runner.entry)
+        with self.lock:
+            if self.sel_uid == runner.entry.uid and self.shared.index_of(origin) is not None:
+                self.sel_uid, self.s = origin, 0.0
+        self.request("branches", "point", "progress")
+
+    def _select_existing(self, e):
+        """Select ``e`` (a branch already computed at the slider's factor) near the energy shown."""
+        cur = self.selected_entry()
+        s = 0.0
+        if cur is not None and len(cur) and cur.uid != e.uid:
+            ser = cur.series(self.view_factor(cur))
+            energy = 10 ** interp_at(np.log10(ser.energy), float(np.clip(self.s, 0, len(ser) - 1)))
+            s = energy_to_s(e.series(e.k3_factor).energy, energy, 0.0)
+        elif cur is not None and cur.uid == e.uid:
+            return
+        self._select_uid(e.uid, s)
+
+    def _start_pending(self):
+        """Start the recompute the slider asked for, unless a job is running (then ``_on_shared``
+        starts it when that job ends)."""
+        with self._recompute_lock:
+            pending = self._pending
+            if pending is None:
+                return
+            job = self.shared.job
+            if job is not None and job.running:
+                return
+            self._pending = None
+            mode, emax, factor = pending
+            try:
+                runner = self._start(mode, emax, factor)
+            except Exception as exc:
+                self.show_error(one_line(exc))
+                return
+            self.slider_runner = runner
+            self._slider_uids.add(runner.entry.uid)
+
+    def _on_start(self, _):
+        mode = int(str(self.layout.h_mode.value).split(":")[0])
+        emin, emax = float(self.layout.h_emin.value), float(self.layout.h_emax.value)
+        return self._start(mode, emax, self.factor, energy_min=emin if emin > 0 else None)
+
+    def _start(self, mode, emax, factor, energy_min=None):
+        with self.shared.lock:
+            if self.shared.job is not None and self.shared.job.running:
+                raise ValueError("a job is already running; stop it first")
+        ui = self.layout
+        spp = int(round(float(ui.h_spp.value)))
+        if spp < 8:
+            raise ValueError(f"steps per period must be at least 8, got {spp}")
+        opts = {"max_points": int(ui.h_maxpts.value), "integrator": str(ui.h_integrator.value),
+                "steps_per_period": spp}
+        if energy_min is not None:
+            opts["energy_min"] = float(energy_min)
+        runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
+        runner.start()
+        self.last_runner = runner
+        with self.lock:            # the new branch is selected: its points replace the old animation
+            self.sel_uid, self.s = runner.entry.uid, 0.0
+            self.current_point = self.current_anim = self.current_uid = None
+            self.linear_mode = None
+        self.request("branches", "point", "progress")
+        return runner
+
+    # ---- the Modes tab
+    def _linear_mode_choice(self):
+        """Mode k (1-based) chosen in the Modes tab's dropdown."""
+        return int(str(self.layout.h_lin_mode.value).split(":")[0])
+
+    def show_linear_mode(self, k):
+        """Animate linear mode ``k`` (1-based) instead of the selected point (``info.linear_mode_point``);
+        the selection is kept: a pick, the sliders, a branch chosen or a new job show a point again."""
+        k = int(k)
+        freqs = self.shared.linear_freqs
+        if not 1 <= k <= len(freqs):
+            raise ValueError(f"linear mode {k} does not exist (valid: 1..{len(freqs)})")
+        if not freqs[k - 1] > 1e-9 * max(float(np.max(np.abs(freqs))), 1e-300):
+            raise ValueError(f"linear mode {k} is a rigid-body mode (0 Hz): nothing to animate")
+        with self.lock:
+            self.linear_mode = k
+        self.request("point")
+
+    def _on_show_linear(self, _):
+        self.show_linear_mode(self._linear_mode_choice())
+
+    def _on_compute_linear(self, _):
+        """'Compute its branch': that mode in the Compute tab's Mode list, then Start (as its button)."""
+        k = self._linear_mode_choice()
+        self.layout.set(self.layout.h_mode, value=self.layout.mode_options[k - 1])
+        runner = self._on_start(None)
+        self.show_status(f"started {runner.name}: {SEE_COMPUTE_TAB}")
+        return runner
+
+    def _on_stop(self, _):
+        job = self.shared.job
+        if job is not None:
+            job.cancel()
+
+    def _on_save(self, _):
+        e = self.selected_entry()
+        if e is None:
+            raise ValueError("select a branch to save")
+        if e.source == "running":
+            raise ValueError("the branch is still being computed: stop it or wait, then save")
+        if e.saved:
+            raise ValueError("this branch is already in the file")
+        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model)
+        target, reason = self.shared.save(e)
+        self.show_status(f"saved {name}, {len(e)} points, to {target}"
+                         + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
+                            if reason else ""))
