@@ -58,7 +58,9 @@ def test_ctrl_c_keeps_points(tmp_path):
     nnm.save_model(p, two_dof_model())
     proc = subprocess.Popen([sys.executable, "-m", "nnm_solver.cli", str(p), "--mode", "1", "--energy-max", "1e12",
                              "--max-points", "100000", "--steps-per-period", "5000"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            # a runner started in the background ignores SIGINT, and children inherit that
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(4.0)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
