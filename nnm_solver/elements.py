@@ -39,7 +39,7 @@ import numpy as np
 
 import math
 
-from .errors import NNMInputError
+from .errors import NNMInputError, finite_number
 from .laws import law_force, law_force_tangent, ramp_integral, sigmoid, softplus  # noqa: F401 (kernels)
 
 __all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "element_law", "law_force",
@@ -102,13 +102,7 @@ class PolynomialSpring:
             p = int(p)
             if p < 2:
                 raise NNMInputError(f"PolynomialSpring power {p} < 2; the linear stiffness belongs in K")
-            try:
-                c = float(c)
-            except (TypeError, ValueError):
-                raise NNMInputError(f"PolynomialSpring coefficient of d^{p} is {c!r}, not a number") from None
-            if not np.isfinite(c):
-                raise NNMInputError(f"PolynomialSpring coefficient of d^{p} is {c}, not finite")
-            clean[p] = c
+            clean[p] = finite_number(c, f"PolynomialSpring coefficient of d^{p}")
         if not clean:
             raise NNMInputError("PolynomialSpring needs at least one coefficient, e.g. coefficients={3: k3}")
         object.__setattr__(self, "coefficients", dict(sorted(clean.items())))

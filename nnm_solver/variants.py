@@ -31,26 +31,19 @@ contain neither ``/`` nor ``:``.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import NNMInputError
+from .errors import NNMInputError, finite_number
 
 __all__ = ["Variant", "variant_grid", "as_variants", "parse_modes", "SweepSpec", "load_sweep_file"]
 
 
 def _finite(name, value):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise NNMInputError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise NNMInputError(f"{name} must be finite, got {value!r}")
-    return v
+    return finite_number(value, name)
 
 
 def _dof(name, value):
