@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.linalg import lapack
 
 
 @dataclass(frozen=True)
@@ -75,15 +76,33 @@ class ContinuationPoint:
 
 
 class LeastSquares:
-    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once."""
+    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once.
+
+    Q is kept as LAPACK's Householder reflectors and applied to each right-hand side (ormqr), which
+    halves the cost of the factorisation compared with forming Q explicitly."""
+
+    #: below this many columns Q is formed explicitly (cheaper than a LAPACK call per solve)
+    EXPLICIT_Q = 64
 
     def __init__(self, A):
-        self.Q, self.R = sla.qr(A, mode="economic", check_finite=False)
+        self.n = A.shape[1]
+        if self.n < self.EXPLICIT_Q:
+            self._Q, self.R = sla.qr(A, mode="economic", check_finite=False)
+        else:
+            self._Q = None
+            (self._h, self._tau), self.R = sla.qr(A, mode="raw", check_finite=False)
         d = np.abs(np.diag(self.R))
         self.rcond = d.min() / max(d.max(), 1e-300)
 
     def solve(self, b):
-        return sla.solve_triangular(self.R, self.Q.T @ b, check_finite=False)
+        if self._Q is not None:
+            return sla.solve_triangular(self.R, self._Q.T @ b, check_finite=False)
+        c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
+                                   lwork=64 * max(1, np.ndim(b) and (1 if np.ndim(b) == 1 else np.shape(b)[1])))
+        if info != 0:
+            raise np.linalg.LinAlgError(f"ormqr failed (info {info})")
+        x = sla.solve_triangular(self.R, c[:self.n], check_finite=False)
+        return x[:, 0] if np.ndim(b) == 1 else x
 
 
 def tangent(J, previous, w=None):
@@ -91,14 +110,18 @@ def tangent(J, previous, w=None):
     return tangent_factored(J, previous, w)[0]
 
 
-def tangent_factored(J, previous, w=None):
+def tangent_factored(J, previous, w=None, factor=None):
     """(p, factor): the tangent, and the factorisation of [J; previous^T] it was solved with (any solve
-    J du = b with previous . du = 0 can reuse it)."""
+    J du = b with previous . du = 0 can reuse it).
+
+    factor : optional factorisation of [J; c^T] with any row c transversal to the tangent (e.g. the
+    corrector's, ``correct_factored``); it is used instead of a new QR (the null direction of J is
+    the same whatever the extra row)."""
     w = np.ones(J.shape[1]) if w is None else w
-    A = np.vstack([J, previous[None, :]])
-    b = np.zeros(A.shape[0])
+    if factor is None:
+        factor = LeastSquares(np.vstack([J, previous[None, :]]))
+    b = np.zeros(J.shape[0] + 1)
     b[-1] = 1.0
-    factor = LeastSquares(A)
     p = factor.solve(b)
     p /= np.linalg.norm(w * p)
     return (p if (w * p) @ (w * previous) >= 0 else -p), factor
@@ -114,6 +137,12 @@ def correct(problem, u_pred, p, settings, tol, w=None):
 
     Returns (u, J, iterations, error).  J is the Jacobian at the converged point.
     """
+    return correct_factored(problem, u_pred, p, settings, tol, w)[:4]
+
+
+def correct_factored(problem, u_pred, p, settings, tol, w=None):
+    """``correct``, also returning the factorisation of [J; (w^2 p)^T] at the converged point (5th item):
+    the tangent there and other solves with J reuse it (one QR per Jacobian evaluation)."""
     row = p if w is None else w * w * p
     u = u_pred.copy()
     factor = None
@@ -135,7 +164,8 @@ def correct(problem, u_pred, p, settings, tol, w=None):
                 err = problem.error(u, r)
                 if not err < tol:
                     raise CorrectorFailure("the residual changed when the Jacobian was refreshed")
-            return u, J, it, err
+                factor = LeastSquares(np.vstack([J, row[None, :]]))
+            return u, J, it, err, factor
         if it == settings.max_iter:
             break
         rhs = np.concatenate([-r, [-(row @ (u - u_pred))]])
@@ -165,11 +195,11 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     w = _scale(problem, u0)
     p0 = p0 / np.linalg.norm(w * p0)
     try:
-        u, J, it, err = correct(problem, u0, p0, settings, tol, w)
+        u, J, it, err, factor = correct_factored(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
     w = _scale(problem, u)
-    p, factor = tangent_factored(J, p0, w)
+    p, factor = tangent_factored(J, p0, w, factor)
     problem.accept(u, J)
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
@@ -178,7 +208,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     while True:
         u_pred = u + s * p
         try:
-            u_new, J_new, it, err = correct(problem, u_pred, p, settings, tol, w)
+            u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w)
             dist = np.linalg.norm(w * (u_new - u_pred))
             # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
             if dist > settings.max_correction * s and dist > 10 * tol:
@@ -187,7 +217,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
                 reason = problem.check_step(u, u_new)
                 if reason:
                     raise CorrectorFailure(reason)
-            p_new, factor = tangent_factored(J_new, p, w)
+            p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
             cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
@@ -215,7 +245,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             s_clean = s
         failures = 0
         w = _scale(problem, u_new)
-        u, J, p = u_new, J_new, p_new / np.linalg.norm(w * p_new)
+        u, J, p, factor = u_new, J_new, p_new / np.linalg.norm(w * p_new), factor_new
         problem.accept(u, J)
         yield ContinuationPoint(u, p, J, it, s, err, factor)
         # step control from the number of corrector iterations

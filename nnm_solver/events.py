@@ -23,7 +23,7 @@ import copy
 
 import numpy as np
 
-from .continuation import CorrectorFailure, _energy_slope, correct, tangent
+from .continuation import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 
 __all__ = ["Locator", "classify_multipliers", "EVENT_KINDS"]
@@ -67,8 +67,9 @@ class Locator:
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            u, J, _, _ = correct(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings, self.tol, self.w)
-            self.cache[key] = (u, J, tangent(J, self.p_a, self.w))
+            u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings,
+                                                  self.tol, self.w)
+            self.cache[key] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
         return self.cache[key]
 
     def energy(self, sigma):
@@ -85,6 +86,48 @@ class Locator:
 
     def stable(self, sigma):
         return is_stable(self.multipliers(sigma))
+
+    def collision(self, sigma):
+        """Collision coordinates of the multipliers at sigma (problem.collision), or None."""
+        self.multipliers(sigma)
+        return getattr(self.problem, "collision", None)
+
+    def krein(self, lo, hi, rho_star, ends=None):
+        """sigma at a Krein collision between lo and hi (stable at one end, a complex pair at the other),
+        located by regula falsi on the smooth test function krein_gap (the squared half-distance of the
+        two colliding coordinates, negative once they are a complex pair) around rho_star, the real part
+        of the complex pair at the unstable end.  The bracket is kept on the stability flag, so a poorly
+        chosen pair only costs a bisection step.  ends : optional ((stable, coordinates) at lo, at hi), known
+        from the two points, to save their evaluation.  Returns (lo, hi) like bisect."""
+        pm = getattr(self.problem, "collision_per_modulus", 1.0)
+        (f_lo, r_lo), (f_hi, r_hi) = ends or [(self.stable(x), self.problem.collision) for x in (lo, hi)]
+        g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
+        last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
+        widths = [abs(hi - lo)]
+        for _ in range(60):
+            if self._converged(lo, hi):
+                break
+            (x1, g1), (x2, g2) = last
+            c = None
+            if g1 is not None and g2 is not None and g1 != g2:
+                c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
+            if c is None or not min(lo, hi) < c < max(lo, hi) or (len(widths) > 3 and widths[-1] > 0.5 * widths[-4]):
+                c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
+            f_c = self.stable(c)
+            r_c = self.collision(c)
+            g_c = krein_gap(r_c, rho_star, pm)
+            if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
+                z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
+                rho_star = float(z[np.argmin(np.abs(z.real - rho_star))].real)
+            if g_c is not None and (g_c > 0) != f_c:
+                g_c = None                       # the test function disagrees with the flag: no secant from here
+            if f_c == f_lo:
+                lo = c
+            else:
+                hi = c
+            last = [last[1], (c, g_c)]
+            widths.append(abs(hi - lo))
+        return lo, hi
 
     def real_crossing(self, sigma):
         """max_i |Re rho_i| - 1, rho = (mu + 1/mu) / 2 over the non-trivial multipliers:
@@ -139,6 +182,33 @@ class Locator:
         except CorrectorFailure:
             return False
         return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
+
+
+def krein_gap(rho, rho_star, per_modulus=0.5, tol=STABILITY_TOL, imag_tol=1e-12):
+    """Test function of a Krein collision near rho_star, positive while stable.
+
+    For the complex coordinate a + ib nearest rho_star, if there is one: b_tol^2 - b^2, where b_tol is
+    the imaginary part at which the multiplier modulus reaches the stability tolerance (|mu| - 1 =
+    b / (per_modulus sqrt(1 - a^2)) to first order: per_modulus = 1/2 for the coordinates c of the
+    reversible half map, 1 for rho = (mu + 1/mu) / 2); else (d / 2)^2 + b_tol^2 for the two consecutive
+    real coordinates around rho_star (d their distance).  Both sides are smooth in the branch parameter
+    through a generic collision (the discriminant of the colliding pair) and continuous across it; the
+    zero is where the stability flag changes.  None without coordinates."""
+    if rho is None or len(rho) < 2:
+        return None
+    rho = np.asarray(rho, dtype=complex)
+
+    def b_tol(a):
+        return per_modulus * tol * np.sqrt(max(1.0 - a * a, 0.0))
+
+    cplx = np.abs(rho.imag) > imag_tol
+    if cplx.any():
+        r = rho[cplx]
+        z = r[np.argmin(np.abs(r.real - rho_star))]
+        return float(b_tol(z.real) ** 2 - z.imag ** 2)
+    r = np.sort(rho.real)
+    i = int(np.clip(np.searchsorted(r, rho_star), 1, len(r) - 1))
+    return float((0.5 * (r[i] - r[i - 1])) ** 2 + b_tol(rho_star) ** 2)
 
 
 def real_crossing(mu):
@@ -199,8 +269,15 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
         try:
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
                 sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
-            else:                                    # a Krein collision: bisection on the flag
-                lo, hi = loc.bisect(loc.stable, 0.0, s)
+            else:                                    # a Krein collision
+                rho_u = getattr(pu, "_collision", None)
+                if rho_u is not None and np.any(np.abs(np.imag(rho_u)) > 1e-9):
+                    rho_u = np.asarray(rho_u)
+                    rho_star = float(rho_u[np.argmax(np.abs(rho_u.imag))].real)
+                    lo, hi = loc.krein(0.0, s, rho_star, ends=[(p.stable, getattr(p, "_collision", None))
+                                                               for p in (pa, pb)])
+                else:                                # no coordinates (e.g. Hill's method): bisection on the flag
+                    lo, hi = loc.bisect(loc.stable, 0.0, s)
                 sig = 0.5 * (lo + hi)
             pe = record(sig)
         except CorrectorFailure:

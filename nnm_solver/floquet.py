@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.linalg import lapack
 
 #: stability tolerance on the modulus of the non-trivial Floquet multipliers
 STABILITY_TOL = 1e-5
@@ -34,10 +35,14 @@ def deflate(Phi, V):
     vanishes for an exactly invariant span(V); C = Q2^T Phi Q2 (m-k, m-k) carries the other
     eigenvalues, to first order in E.
     """
-    Q, _ = np.linalg.qr(np.asarray(V, dtype=float), mode="complete")
+    V = np.asarray(V, dtype=float)
     k = V.shape[1]
-    Q2 = Q[:, k:]
-    return Q2.T @ Phi @ Q2
+    m = Phi.shape[0]
+    # Q = H_1 ... H_k (Householder reflectors of V's QR), applied on both sides in O(k m^2)
+    (h, tau), _ = sla.qr(V, mode="raw", check_finite=False)
+    C = lapack.dormqr("L", "T", h, tau, np.array(Phi, dtype=float, order="F"), lwork=32 * m)[0]
+    C = lapack.dormqr("R", "N", h, tau, C, lwork=32 * m)[0]
+    return C[k:, k:]
 
 
 def nontrivial_multipliers(monodromy, velocity, family):
@@ -49,21 +54,41 @@ def nontrivial_multipliers(monodromy, velocity, family):
 
 
 def reversible_multipliers(A11, family=None):
+    """Multipliers (2n,) of a symmetric reversible orbit from A11 = dq(T/2)/dq0 (n, n); see
+    reversible_spectrum, which also returns the eigenvalues c of A11 they come from."""
+    return reversible_spectrum(A11, family)[0]
+
+
+def reversible_spectrum(A11, family=None):
     """Multipliers (2n,) of a symmetric reversible orbit from A11 = dq(T/2)/dq0 (n, n).
 
     Newmark's scheme is time-reversible, so the half-period map A (with z(T/2) = -z0) satisfies
     R A R = A^-1, R = diag(I, -I); hence c = (lam + 1/lam) / 2 for each eigenvalue lam of A are the
     eigenvalues of A11, lam = c +- sqrt(c^2 - 1), and mu = lam^2.  The trivial pair is c = -1 with
     eigenvector the family direction dq0 (A11 dq0 = -dq0 exactly in continuous time): A11 is
-    deflated by ``family`` (n,) when given.
+    deflated by ``family`` (n,) when given.  Returns (multipliers (2n,), c (n - 1,) without the trivial
+    one, or (n,) without ``family``): stable orbits have every c real in [-1, 1]; a Krein collision is
+    two real c meeting and leaving the real axis as a complex pair.
     """
     if family is not None and np.linalg.norm(family) > 0:
-        c = sla.eigvals(deflate(A11, np.asarray(family, dtype=float)[:, None]), check_finite=False).astype(complex)
-        c = np.concatenate([c, [-1.0]])
+        c_nontrivial = sla.eigvals(deflate(A11, np.asarray(family, dtype=float)[:, None]),
+                                   check_finite=False).astype(complex)
+        c = np.concatenate([c_nontrivial, [-1.0]])
     else:
-        c = sla.eigvals(A11, check_finite=False).astype(complex)
+        c = c_nontrivial = sla.eigvals(A11, check_finite=False).astype(complex)
     root = np.sqrt(c * c - 1.0)
-    return np.concatenate([(c + root) ** 2, (c - root) ** 2])
+    return np.concatenate([(c + root) ** 2, (c - root) ** 2]), c_nontrivial
+
+
+def collision_coordinates(mu):
+    """Real-line coordinates rho = (mu + 1/mu) / 2 of the multipliers of a full-period monodromy, one per
+    pair: those with Im mu > 0 (on the unit circle rho = cos(theta) maps each pair e^{+-i theta} once)
+    and the complex ones off the circle (a Krein quadruple gives rho and its conjugate).  Real
+    multipliers (at +-1 or off the circle on the real axis) are left out: they take no part in Krein
+    collisions."""
+    mu = np.asarray(mu, dtype=complex)
+    mu = mu[(mu.imag > 1e-12 * np.abs(mu)) & (np.abs(mu - 1.0) > 0.0)]
+    return 0.5 * (mu + 1.0 / mu)
 
 
 def without_nearest_to_one(mu):

@@ -116,6 +116,31 @@ def solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess):
 
 
 @_jit
+def bq_dot(Bq, y):
+    """Bq @ y (n_s,) by loops: no BLAS call, whose overhead dominates for small models."""
+    ns, n = Bq.shape
+    out = np.zeros(ns)
+    for s in range(ns):
+        acc = 0.0
+        for i in range(n):
+            acc += Bq[s, i] * y[i]
+        out[s] = acc
+    return out
+
+
+@_jit
+def bqt_dot(Bq, g):
+    """Bq^T @ g (n,) by loops (see bq_dot)."""
+    ns, n = Bq.shape
+    out = np.zeros(n)
+    for s in range(ns):
+        gs = g[s]
+        for i in range(n):
+            out[i] += Bq[s, i] * gs
+    return out
+
+
+@_jit
 def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
     """One Newmark step; returns (q1, v1, a1, d1, J, D1, ok), D1 = g'(d1)."""
     r = (4.0 / h ** 2) * q + (4.0 / h) * v + a
@@ -124,10 +149,10 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
         q1 = y
         a1 = -omega2 * q1
         return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
-    dlin = Bq @ y
-    dguess = Bq @ (q + h * v + 0.5 * h * h * a)
+    dlin = bq_dot(Bq, y)
+    dguess = bq_dot(Bq, q + h * v + 0.5 * h * h * a)
     d1, J, g1, D1, ok = solve_stages(dlin, G, 1, Bq.shape[0], powers, coeffs, kinks, dguess)
-    fnl = Bq.T @ g1
+    fnl = bqt_dot(Bq, g1)
     q1 = (r - fnl) / S
     a1 = -omega2 * q1 - fnl
     v1 = v + 0.5 * h * (a + a1)
@@ -138,8 +163,8 @@ def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
 def _start(q0, omega2, Bq, powers, coeffs, kinks, h):
     S = 4.0 / h ** 2 + omega2
     G = (Bq / S[None, :]) @ Bq.T
-    d = Bq @ q0
-    a = -omega2 * q0 - Bq.T @ law_force(d, powers, coeffs, kinks)
+    d = bq_dot(Bq, q0)
+    a = -omega2 * q0 - bqt_dot(Bq, law_force(d, powers, coeffs, kinks))
     return S, G, d, a
 
 
@@ -243,9 +268,15 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
     if ns == 0:
         return Sq, Sv
     # impulse responses of the deformations: H[m] = Bq diag(ge1[m]) Bq^T
-    H = np.empty((N, ns, ns))
+    H = np.zeros((N, ns, ns))
     for m in range(N):
-        H[m] = (Bq * ge1[m][None, :]) @ Bq.T
+        for a in range(ns):
+            for b in range(a, ns):
+                acc = 0.0
+                for i in range(n):
+                    acc += Bq[a, i] * ge1[m, i] * Bq[b, i]
+                H[m, a, b] = acc
+                H[m, b, a] = acc
     # kernel of w_j in dd_k: H(k-1) for j = 0, Kc(k-j) = H(k-j) + H(k-j-1) for 0 < j < k, H(0) for j = k
     Kc = np.zeros((N, ns, ns))
     for m in range(1, N):
@@ -317,8 +348,8 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
         # the step size enters through c1, c2 and (N2)
         yh = (c1 * sq_h + c2 * sv_h + sa_h + c1p * (q - q1) + c2p * v) * invS
         if ns > 0:
-            wh = (Bq @ yh) / J[0, 0] if ns == 1 else np.linalg.solve(J, Bq @ yh)
-            fh = Bq.T @ (D1 * wh)
+            wh = bq_dot(Bq, yh) / J[0, 0] if ns == 1 else np.linalg.solve(J, bq_dot(Bq, yh))
+            fh = bqt_dot(Bq, D1 * wh)
             sq1_h = yh - fh * invS
             sa1_h = -omega2 * sq1_h - fh
         else:

@@ -129,3 +129,43 @@ def test_a_tongue_re_entered_while_skipping_is_one_record():
     assert not NNMIterator._same_tongue(a, dict(again, partner_mode=502))
     assert not NNMIterator._same_tongue(a, dict(again, entry_energy=20.0))          # further up the backbone
     assert not NNMIterator._same_tongue(a, dict(again, entry_frequency_hz=33.90))
+
+
+def _combination_resonance_model():
+    """3 DOF, linear frequencies 1, 1.8, 2.4 rad/s (mixed by a fixed rotation), a hardening cubic spring on
+    DOF 0: NNM 1 hardens through the combination resonance 4 w = w2 + w3, where two multipliers of opposite
+    Krein signature collide (a 'torus' instability between two located events)."""
+    from scipy.stats import ortho_group
+    Phi = ortho_group.rvs(3, random_state=0)
+    K = Phi @ np.diag([1.0, 1.8 ** 2, 2.4 ** 2]) @ Phi.T
+    return nnm.Model(M=np.eye(3), K=K, springs=[nnm.CubicSpring(dof=0, k3=1.0)])
+
+
+def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
+    """The Krein collisions located by the secant on their test function (events.krein_gap), with
+    gauss6 shooting, match harmonic balance (Hill's multipliers, flag bisection) to 1e-6, and the same
+    shooting branch located by bisection on the stability flag gives the same energies with more
+    corrector runs."""
+    import nnm_solver.events as ev
+    m = _combination_resonance_model()
+    hb = nnm.continue_nnm(m, 1, 3.0, method="hb", harmonics=15, max_points=400)
+    runs = []
+    at = ev.Locator.at
+
+    def counting_at(self, sigma):
+        if float(sigma) not in self.cache:
+            runs.append(sigma)
+        return at(self, sigma)
+
+    monkeypatch.setattr(ev.Locator, "at", counting_at)
+    sh = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100)
+    n_secant = len(runs)
+    ref = [e["energy"] for e in hb.events if e["kind"] == "torus"]
+    got = [e["energy"] for e in sh.events if e["kind"] == "torus"]
+    assert len(ref) == len(got) == 2 and all(e["located"] for e in sh.events if e["kind"] == "torus")
+    assert np.allclose(got, ref, rtol=1e-6, atol=0)
+    runs.clear()
+    monkeypatch.setattr(ev.Locator, "krein", lambda self, lo, hi, rho_star, ends=None: self.bisect(self.stable, lo, hi))
+    bis = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100)
+    assert np.allclose([e["energy"] for e in bis.events if e["kind"] == "torus"], got, rtol=2e-6, atol=0)
+    assert n_secant < 0.75 * len(runs)

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..continuation import LeastSquares
-from ..floquet import nontrivial_multipliers, reversible_multipliers
+from ..floquet import collision_coordinates, nontrivial_multipliers, reversible_spectrum
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
 
@@ -96,6 +96,8 @@ class ShootingProblem:
         # the dv0 columns of the sensitivity are needed for v0 unknowns or the full-size Floquet problem
         self.all_columns = not (self.reversible and self.symmetric)
         self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
+        #: real-line coordinates of the last multipliers where Krein collisions happen (events.py), or None
+        self.collision = None
         self.accepted_map = None  # ... at the last accepted point
 
     def set_steps(self, steps_per_period):
@@ -324,14 +326,21 @@ class ShootingProblem:
         """
         A = self.accepted_map
         if self.symmetric and self.reversible:
-            return reversible_multipliers(A[:self.n, :self.n], None if family is None else family[0])
+            mu, self.collision = reversible_spectrum(A[:self.n, :self.n], None if family is None else family[0])
+            self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
+            return mu
         Phi = A @ A if self.symmetric else A
         if family is None:
-            return sla.eigvals(Phi, check_finite=False)
-        q0, v0, _ = self.unpack(self.accepted_u)
-        s = self.sys
-        f = np.concatenate([v0, -s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)])
-        return nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
+            mu = sla.eigvals(Phi, check_finite=False)
+        else:
+            q0, v0, _ = self.unpack(self.accepted_u)
+            s = self.sys
+            f = np.concatenate([v0, -s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)])
+            mu = nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
+        # half-period maps square their eigenvalues: mu alone does not tell which pairs can collide
+        self.collision = None if self.symmetric else collision_coordinates(mu)
+        self.collision_per_modulus = 1.0
+        return mu
 
 
 def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples, integrator="newmark"):
