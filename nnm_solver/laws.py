@@ -18,7 +18,7 @@ import numpy as np
 
 from .jit import jit_inline
 
-__all__ = ["law_force", "law_force_tangent", "softplus", "sigmoid", "ramp_integral"]
+__all__ = ["law_force", "law_force_tangent", "law_scalar", "softplus", "sigmoid", "ramp_integral"]
 
 
 def softplus(x, w):
@@ -103,35 +103,39 @@ def law_force(d, powers, coeffs, kinks):
 
 
 @jit_inline
+def law_scalar(x, s, powers, coeffs, kinks):
+    """(g_s(x), g_s'(x)) of element s at the deformation x, as two numbers (numba kernel)."""
+    sided = kinks.shape[2] > 3
+    acc = 0.0
+    dacc = 0.0
+    for j in range(powers.shape[0]):
+        c = coeffs[s, j]
+        if c != 0.0:
+            p = powers[j]
+            xp1 = x ** (p - 1)
+            acc += c * xp1 * x
+            dacc += p * c * xp1
+    for j in range(kinks.shape[1]):
+        dk = kinks[s, j, 0]
+        if dk != 0.0:
+            b = kinks[s, j, 1]
+            w = kinks[s, j, 2]
+            side = kinks[s, j, 3] if sided else 0.0
+            if side >= 0.0:
+                acc += dk * _softplus1(x - b, w)
+                dacc += dk * _sigmoid1(x - b, w)
+            if side <= 0.0:
+                acc -= dk * _softplus1(-x - b, w)
+                dacc += dk * _sigmoid1(-x - b, w)
+    return acc, dacc
+
+
+@jit_inline
 def law_force_tangent(d, powers, coeffs, kinks):
     """(g(d), g'(d)) (n_s,) each, of the element laws (numba kernel)."""
     ns = d.shape[0]
-    sided = kinks.shape[2] > 3
     g = np.empty(ns)
     t = np.empty(ns)
     for s in range(ns):
-        x = d[s]
-        acc = 0.0
-        dacc = 0.0
-        for j in range(powers.shape[0]):
-            c = coeffs[s, j]
-            if c != 0.0:
-                p = powers[j]
-                xp1 = x ** (p - 1)
-                acc += c * xp1 * x
-                dacc += p * c * xp1
-        for j in range(kinks.shape[1]):
-            dk = kinks[s, j, 0]
-            if dk != 0.0:
-                b = kinks[s, j, 1]
-                w = kinks[s, j, 2]
-                side = kinks[s, j, 3] if sided else 0.0
-                if side >= 0.0:
-                    acc += dk * _softplus1(x - b, w)
-                    dacc += dk * _sigmoid1(x - b, w)
-                if side <= 0.0:
-                    acc -= dk * _softplus1(-x - b, w)
-                    dacc += dk * _sigmoid1(-x - b, w)
-        g[s] = acc
-        t[s] = dacc
+        g[s], t[s] = law_scalar(d[s], s, powers, coeffs, kinks)
     return g, t

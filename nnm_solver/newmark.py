@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .laws import law_force, law_force_tangent
+from .laws import law_force, law_force_tangent, law_scalar
 from .jit import jit as _jit
 
 NEWTON_MAX = 40
@@ -57,26 +57,28 @@ def _solve_one(Dlin, G, powers, coeffs, kinks, Dguess):
     dlin = Dlin[0]
     G0 = G[0, 0]
     scale = abs(dlin) + 1e-300
-    D = Dguess.copy()
-    g, Dg = law_force_tangent(D, powers, coeffs, kinks)
-    F = D[0] + G0 * g[0] - dlin
+    D = Dguess[0]
+    g, Dg = law_scalar(D, 0, powers, coeffs, kinks)
+    F = D + G0 * g - dlin
     nF = abs(F)
     for _ in range(NEWTON_MAX):
         if nF <= NEWTON_RTOL * scale:
             break
-        delta = F / (1.0 + G0 * Dg[0])
+        delta = F / (1.0 + G0 * Dg)
         lam = 1.0
         for _ in range(30):
             D_try = D - lam * delta
-            g_try, Dg_try = law_force_tangent(D_try, powers, coeffs, kinks)
-            F_try = D_try[0] + G0 * g_try[0] - dlin
+            g_try, Dg_try = law_scalar(D_try, 0, powers, coeffs, kinks)
+            F_try = D_try + G0 * g_try - dlin
             if abs(F_try) < nF or lam < 1e-8:
                 break
             lam *= 0.5
         D, F, nF, g, Dg = D_try, F_try, abs(F_try), g_try, Dg_try
     J = np.empty((1, 1))
-    J[0, 0] = 1.0 + G0 * Dg[0]
-    return D, J, g, Dg, nF <= NEWTON_RTOL * scale or nF <= 1e-9 * scale
+    J[0, 0] = 1.0 + G0 * Dg
+    out = np.empty(3)
+    out[0], out[1], out[2] = D, g, Dg
+    return out[0:1], J, out[1:2], out[2:3], nF <= NEWTON_RTOL * scale or nF <= 1e-9 * scale
 
 
 @_jit
@@ -141,22 +143,39 @@ def bqt_dot(Bq, g):
 
 
 @_jit
-def _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S):
-    """One Newmark step; returns (q1, v1, a1, d1, J, D1, ok), D1 = g'(d1)."""
-    r = (4.0 / h ** 2) * q + (4.0 / h) * v + a
-    y = r / S
-    if Bq.shape[0] == 0:
-        q1 = y
-        a1 = -omega2 * q1
-        return q1, v + 0.5 * h * (a + a1), a1, d, np.eye(0), d, True
-    dlin = bq_dot(Bq, y)
-    dguess = bq_dot(Bq, q + h * v + 0.5 * h * h * a)
-    d1, J, g1, D1, ok = solve_stages(dlin, G, 1, Bq.shape[0], powers, coeffs, kinks, dguess)
-    fnl = bqt_dot(Bq, g1)
-    q1 = (r - fnl) / S
-    a1 = -omega2 * q1 - fnl
-    v1 = v + 0.5 * h * (a + a1)
-    return q1, v1, a1, d1, J, D1, ok
+def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, G, S, q1, v1, a1, dlin, dguess):
+    """One Newmark step from (q, v, a) into the buffers (q1, v1, a1), without temporaries (the per-step
+    allocations dominate for small models).  Returns (d1, J, D1, ok): spring deformations, Newton matrix
+    I + G diag(g'), D1 = g'(d1)."""
+    n = q.shape[0]
+    ns = Bq.shape[0]
+    c1 = 4.0 / h ** 2
+    c2 = 4.0 / h
+    hh = 0.5 * h * h
+    for i in range(n):                          # y = r / S, r = 4/h^2 q + 4/h v + a
+        q1[i] = (c1 * q[i] + c2 * v[i] + a[i]) / S[i]
+    if ns == 0:
+        for i in range(n):
+            a1[i] = -omega2[i] * q1[i]
+            v1[i] = v[i] + 0.5 * h * (a[i] + a1[i])
+        return dlin, np.eye(0), dlin, True
+    for s_ in range(ns):
+        acc = 0.0
+        accg = 0.0
+        for i in range(n):
+            acc += Bq[s_, i] * q1[i]
+            accg += Bq[s_, i] * (q[i] + h * v[i] + hh * a[i])
+        dlin[s_] = acc
+        dguess[s_] = accg
+    d1, J, g1, D1, ok = solve_stages(dlin, G, 1, ns, powers, coeffs, kinks, dguess)
+    for i in range(n):                          # q1 = (r - Bq^T g) / S, a1 = -Omega^2 q1 - Bq^T g
+        f = 0.0
+        for s_ in range(ns):
+            f += Bq[s_, i] * g1[s_]
+        q1[i] -= f / S[i]
+        a1[i] = -omega2[i] * q1[i] - f
+        v1[i] = v[i] + 0.5 * h * (a[i] + a1[i])
+    return d1, J, D1, ok
 
 
 @_jit
@@ -172,10 +191,15 @@ def _start(q0, omega2, Bq, powers, coeffs, kinks, h):
 def sweep_state(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
     """Integrate nsteps of size h from (q0, v0). Returns (q, v, ok)."""
     S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
-    q = q0.copy()
-    v = v0.copy()
+    n = q0.shape[0]
+    q, v = q0.copy(), v0.copy()
+    q1, v1, a1 = np.empty(n), np.empty(n), np.empty(n)
+    dlin, dguess = np.empty(Bq.shape[0]), np.empty(Bq.shape[0])
     for _ in range(nsteps):
-        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
+        d, J, D, ok = _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, G, S, q1, v1, a1, dlin, dguess)
+        q, q1 = q1, q
+        v, v1 = v1, v
+        a, a1 = a1, a
         if not ok:
             return q, v, False
     return q, v, True
@@ -188,12 +212,16 @@ def sweep_record(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
     Q = np.empty((nsteps + 1, n))
     V = np.empty((nsteps + 1, n))
     S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
-    q = q0.copy()
-    v = v0.copy()
+    q, v = q0.copy(), v0.copy()
+    q1, v1, a1 = np.empty(n), np.empty(n), np.empty(n)
+    dlin, dguess = np.empty(Bq.shape[0]), np.empty(Bq.shape[0])
     Q[0] = q
     V[0] = v
     for k in range(nsteps):
-        q, v, a, d, J, D, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
+        d, J, D, ok = _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, G, S, q1, v1, a1, dlin, dguess)
+        q, q1 = q1, q
+        v, v1 = v1, v
+        a, a1 = a1, a
         if not ok:
             return Q[: k + 1], V[: k + 1], False
         Q[k + 1] = q
@@ -287,9 +315,12 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
     eye = np.eye(ns)
     acc = np.empty((ns, ncols))
     for k in range(1, N + 1):
-        acc[:, :n] = Bq * p11[k][None, :]
-        if ncols > n:
-            acc[:, n:] = Bq * p12[k][None, :]
+        for a in range(ns):
+            for c in range(n):
+                acc[a, c] = Bq[a, c] * p11[k, c]
+            if ncols > n:
+                for c in range(n):
+                    acc[a, n + c] = Bq[a, c] * p12[k, c]
         for j in range(k):
             Kj = H[k - 1] if j == 0 else Kc[k - j]
             for a in range(ns):
@@ -298,9 +329,15 @@ def _monodromy(omega2, Bq, h, nsteps, Dseq, ncols):
                     if c_ab != 0.0:
                         for c in range(ncols):
                             acc[a, c] += c_ab * W[j, b, c]
-        Mk = eye - H[0] * Dseq[k][None, :]
-        dd = acc / Mk[0, 0] if ns == 1 else np.linalg.solve(Mk, acc)
-        W[k] = dd * Dseq[k][:, None]
+        if ns == 1:
+            f = Dseq[k, 0] / (1.0 - H[0, 0, 0] * Dseq[k, 0])
+            for c in range(ncols):
+                W[k, 0, c] = acc[0, c] * f
+        else:
+            dd = np.linalg.solve(eye - H[0] * Dseq[k][None, :], acc)
+            for a in range(ns):
+                for c in range(ncols):
+                    W[k, a, c] = dd[a, c] * Dseq[k, a]
     # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1})
     U1 = np.empty((n, N * ns))
     U2 = np.empty((n, N * ns))
@@ -340,24 +377,38 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
     c1p = -8.0 / h ** 3
     c2p = -4.0 / h ** 2
     invS = 1.0 / S
+    q1, v1, a1 = np.empty(n), np.empty(n), np.empty(n)
+    dlin, dguess = np.empty(ns), np.empty(ns)
+    wh = np.empty(ns)
     for k in range(nsteps):
-        q1, v1, a1, d1, J, D1, ok = _step(q, v, a, d, h, omega2, Bq, powers, coeffs, kinks, G, S)
+        d1, J, D1, ok = _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, G, S, q1, v1, a1, dlin, dguess)
         if not ok:
             return q1, v1, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
         Dseq[k + 1] = D1
-        # the step size enters through c1, c2 and (N2)
-        yh = (c1 * sq_h + c2 * sv_h + sa_h + c1p * (q - q1) + c2p * v) * invS
+        # the step size enters through c1, c2 and (N2); the d/dh column is updated in place:
+        # y_h = (c1 sq_h + c2 sv_h + sa_h + c1' (q - q1) + c2' v) / S,  w_h = J^-1 Bq y_h,  f_h = Bq^T (D1 w_h)
+        for i in range(n):
+            sq_h[i] = (c1 * sq_h[i] + c2 * sv_h[i] + sa_h[i] + c1p * (q[i] - q1[i]) + c2p * v[i]) * invS[i]
         if ns > 0:
-            wh = bq_dot(Bq, yh) / J[0, 0] if ns == 1 else np.linalg.solve(J, bq_dot(Bq, yh))
-            fh = bqt_dot(Bq, D1 * wh)
-            sq1_h = yh - fh * invS
-            sa1_h = -omega2 * sq1_h - fh
-        else:
-            sq1_h = yh
-            sa1_h = -omega2 * sq1_h
-        sv_h = sv_h + 0.5 * h * (sa_h + sa1_h) + 0.5 * (a + a1)
-        sq_h = sq1_h
-        sa_h = sa1_h
-        q, v, a, d = q1, v1, a1, d1
+            for s_ in range(ns):
+                acc = 0.0
+                for i in range(n):
+                    acc += Bq[s_, i] * sq_h[i]
+                wh[s_] = acc
+            if ns == 1:
+                wh[0] /= J[0, 0]
+            else:
+                wh[:] = np.linalg.solve(J, wh)
+        for i in range(n):
+            fh = 0.0
+            for s_ in range(ns):
+                fh += Bq[s_, i] * D1[s_] * wh[s_]
+            sq_h[i] -= fh * invS[i]
+            sa1 = -omega2[i] * sq_h[i] - fh
+            sv_h[i] += 0.5 * h * (sa_h[i] + sa1) + 0.5 * (a[i] + a1[i])
+            sa_h[i] = sa1
+        q, q1 = q1, q
+        v, v1 = v1, v
+        a, a1 = a1, a
     Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq, ncols)
     return q, v, Sq, Sv, sq_h, sv_h, True
