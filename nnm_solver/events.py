@@ -33,6 +33,10 @@ EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 #: relative energy tolerance of located events
 EVENT_RTOL = 5e-7
 
+#: corrector tolerance of located points (relative to the continuation's) when a nearby point's Jacobian starts
+#: the chord iterations
+CHORD_TOL_FACTOR = 1e-2
+
 
 def classify_multipliers(mu, tol=STABILITY_TOL):
     """Kind of instability of a multiplier set (2n,): 'branch_point' (real > 1), 'period_doubling'
@@ -61,14 +65,30 @@ class Locator:
         self.p_a = p_a
         self.w = problem.scale(u_a) if hasattr(problem, "scale") else np.ones(len(u_a))
         self.cache = {}
+        self.last_factor = None     # factorisation of [J; (w^2 p_a)^T] at the latest point (chord start)
+        self.spectra = {}           # sigma -> (multipliers, collision coordinates)
 
     def at(self, sigma):
         """(u, J, p) on the branch at pseudo-arclength sigma from point a (CorrectorFailure if the
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings,
-                                                  self.tol, self.w)
+            # every point here is corrected on a hyperplane normal to w^2 p_a: the factorisation of the nearest
+            # point evaluated so far starts the chord iterations (a fresh Jacobian is still taken at the end)
+            # (only the latest is kept: O(n^2) each, and the located points converge onto one another)
+            try:
+                # chord iterations converge linearly and stop just below the tolerance, where fresh Newton steps
+                # overshoot it by far; test functions at a fold are sensitive to that error: a tighter tolerance
+                # (a few more state sweeps) keeps the located points as accurate as with fresh Jacobians
+                u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a,
+                                                      self.settings, CHORD_TOL_FACTOR * self.tol, self.w,
+                                                      start=self.last_factor)
+            except CorrectorFailure:
+                if self.last_factor is None:
+                    raise
+                u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a,
+                                                      self.settings, self.tol, self.w)
+            self.last_factor = factor
             self.cache[key] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
         return self.cache[key]
 
@@ -80,9 +100,22 @@ class Locator:
         return _energy_slope(self.problem.energy, u, p)
 
     def multipliers(self, sigma):
-        u, J, p = self.at(sigma)
+        """Floquet multipliers at sigma (sorted, computed once per point)."""
+        key = float(sigma)
+        if key not in self.spectra:
+            u, J, p = self.at(sigma)
+            self.refresh(u, J)
+            mu = sort_multipliers(self.problem.multipliers(u, p))
+            self.spectra[key] = (mu, getattr(self.problem, "collision", None))
+        return self.spectra[key][0]
+
+    def refresh(self, u, J):
+        """Make u the problem's accepted point; its monodromy is that of the latest Jacobian evaluation,
+        so it is evaluated again when a later point was computed since (a cached u)."""
+        last = getattr(self.problem, "_last_residual", None)
+        if last is not None and not np.array_equal(last[0], u):
+            _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
-        return sort_multipliers(self.problem.multipliers(u, p))
 
     def stable(self, sigma):
         return is_stable(self.multipliers(sigma))
@@ -90,7 +123,7 @@ class Locator:
     def collision(self, sigma):
         """Collision coordinates of the multipliers at sigma (problem.collision), or None."""
         self.multipliers(sigma)
-        return getattr(self.problem, "collision", None)
+        return self.spectra[float(sigma)][1]
 
     def krein(self, lo, hi, rho_star, ends=None):
         """sigma at a Krein collision between lo and hi (stable at one end, a complex pair at the other),
@@ -100,7 +133,7 @@ class Locator:
         chosen pair only costs a bisection step.  ends : optional ((stable, coordinates) at lo, at hi), known
         from the two points, to save their evaluation.  Returns (lo, hi) like bisect."""
         pm = getattr(self.problem, "collision_per_modulus", 1.0)
-        (f_lo, r_lo), (f_hi, r_hi) = ends or [(self.stable(x), self.problem.collision) for x in (lo, hi)]
+        (f_lo, r_lo), (f_hi, r_hi) = ends or [(self.stable(x), self.collision(x)) for x in (lo, hi)]
         g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
         last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
         widths = [abs(hi - lo)]

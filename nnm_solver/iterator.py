@@ -273,7 +273,7 @@ class NNMIterator:
 
         def record(sigma):
             u, J, p = loc.at(sigma)
-            loc.problem.accept(u, J)
+            loc.refresh(u, J)
             return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem)[0]
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
