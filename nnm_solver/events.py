@@ -120,6 +120,14 @@ class Locator:
     def stable(self, sigma):
         return is_stable(self.multipliers(sigma))
 
+    def local_collision(self, sigma, shift):
+        """The problem's collision coordinates at sigma nearest ``shift`` (problem.local_collision), or None."""
+        if not hasattr(self.problem, "local_collision"):
+            return None
+        u, J, p = self.at(sigma)
+        self.refresh(u, J)
+        return self.problem.local_collision(p, shift)
+
     def collision(self, sigma):
         """Collision coordinates of the multipliers at sigma (problem.collision), or None."""
         self.multipliers(sigma)
@@ -146,14 +154,19 @@ class Locator:
                 c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
             if c is None or not min(lo, hi) < c < max(lo, hi) or (len(widths) > 3 and widths[-1] > 0.5 * widths[-4]):
                 c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
-            f_c = self.stable(c)
-            r_c = self.collision(c)
-            g_c = krein_gap(r_c, rho_star, pm)
+            r_c = self.local_collision(c, rho_star)
+            if r_c is not None:                  # this collision only: its test function is the flag
+                g_c = krein_gap(r_c, rho_star, pm)
+                f_c = g_c > 0
+            else:
+                f_c = self.stable(c)
+                r_c = self.collision(c)
+                g_c = krein_gap(r_c, rho_star, pm)
+                if g_c is not None and (g_c > 0) != f_c:
+                    g_c = None                   # the test function disagrees with the flag: no secant from here
             if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
                 z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
                 rho_star = float(z[np.argmin(np.abs(z.real - rho_star))].real)
-            if g_c is not None and (g_c > 0) != f_c:
-                g_c = None                       # the test function disagrees with the flag: no secant from here
             if f_c == f_lo:
                 lo = c
             else:

@@ -171,3 +171,26 @@ def test_restoring_ratio_along_an_orbit():
     Q = np.array([[0.01], [0.2], [0.99], [0.6], [-0.7]])
     assert restoring_ratio(ms, Q) == pytest.approx(1 - 0.99 ** 2)
     assert restoring_ratio(ms, Q[[0, 1, 3, 4]]) == pytest.approx(1 - 0.7 ** 2)
+
+
+def test_local_collision_coordinates_match_the_full_eigenproblem():
+    """ShootingProblem.local_collision (shift-invert Arnoldi on the deflated half map, used to follow a Krein
+    collision during event location) returns the eigenvalues of the full problem nearest the shift."""
+    from nnm_solver.modal import ModalSystem
+    from nnm_solver.orbits.shooting import ShootingProblem
+    beam = cantilever_beam(n_el=40)                       # 80 DOF: above the size where the full problem is used
+    s = ModalSystem(beam)
+    prob = ShootingProblem(s, 0, 100)
+    q0 = np.zeros(s.n)
+    q0[0] = 3e-3
+    u = prob.pack(q0, np.zeros(s.n), prob.T_r)
+    _, J = prob.jacobian(u)
+    prob.accept(u, J)
+    tangent = np.zeros(len(u))
+    tangent[0] = 1.0
+    prob.multipliers(u, tangent)
+    full = np.asarray(prob.collision)
+    for shift in (-0.61, 0.07, 0.93):
+        local = prob.local_collision(tangent, shift, k=6)
+        nearest = full[np.argsort(np.abs(full - shift))[:6]]
+        assert np.allclose(np.sort_complex(local), np.sort_complex(nearest), atol=1e-9)

@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
 from ..continuation import LeastSquares
-from ..floquet import collision_coordinates, nontrivial_multipliers, reversible_spectrum
+from ..floquet import collision_coordinates, deflate, nontrivial_multipliers, reversible_spectrum
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
 
@@ -315,6 +316,23 @@ class ShootingProblem:
             raise RuntimeError("the monodromy needs all sensitivity columns: set problem.all_columns = True")
         Mh = self.accepted_map
         return Mh @ Mh if self.symmetric else Mh
+
+    def local_collision(self, tangent, shift, k=6):
+        """The k collision coordinates (events.py) of the last accepted point nearest ``shift``, or None when
+        this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
+        nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
+        ~10x cheaper); used to follow one Krein collision during event location."""
+        if not (self.symmetric and self.reversible):
+            return None
+        A11 = self.accepted_map[:self.n, :self.n]
+        family = self.unpack(tangent)[0]
+        C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
+        if C.shape[0] <= 8 * k:
+            return sla.eigvals(C, check_finite=False)
+        try:
+            return eigs(C, k=k, sigma=shift, return_eigenvectors=False)
+        except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
+            return sla.eigvals(C, check_finite=False)
 
     def floquet_multipliers(self, family=None):
         """Floquet multipliers (2n,) of the last accepted point.
