@@ -79,26 +79,9 @@ def _sigmoid1(x, w):
 def law_force(d, powers, coeffs, kinks):
     """g(d) (n_s,) of the element laws (numba kernel; see ElementSet)."""
     ns = d.shape[0]
-    sided = kinks.shape[2] > 3
     g = np.empty(ns)
     for s in range(ns):
-        x = d[s]
-        acc = 0.0
-        for j in range(powers.shape[0]):
-            c = coeffs[s, j]
-            if c != 0.0:
-                acc += c * x ** powers[j]
-        for j in range(kinks.shape[1]):
-            dk = kinks[s, j, 0]
-            if dk != 0.0:
-                b = kinks[s, j, 1]
-                w = kinks[s, j, 2]
-                side = kinks[s, j, 3] if sided else 0.0
-                if side >= 0.0:
-                    acc += dk * _softplus1(x - b, w)
-                if side <= 0.0:
-                    acc -= dk * _softplus1(-x - b, w)
-        g[s] = acc
+        g[s] = law_scalar(d[s], s, powers, coeffs, kinks)[0]
     return g
 
 
