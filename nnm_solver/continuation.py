@@ -75,8 +75,17 @@ class ContinuationPoint:
     factor: object = None       # LeastSquares of [jacobian; previous tangent] (reusable for other solves)
 
 
+def stacked(J, row):
+    """[J; row^T] in Fortran order (what LAPACK's QR works on in place)."""
+    A = np.empty((J.shape[0] + 1, J.shape[1]), order="F")
+    A[:-1] = J
+    A[-1] = row
+    return A
+
+
 class LeastSquares:
-    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once.
+    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once.  A is
+    overwritten (pass a temporary, e.g. ``stacked(J, row)``).
 
     Q is kept as LAPACK's Householder reflectors and applied to each right-hand side (ormqr), which
     halves the cost of the factorisation compared with forming Q explicitly."""
@@ -90,7 +99,7 @@ class LeastSquares:
             self._Q, self.R = sla.qr(A, mode="economic", check_finite=False)
         else:
             self._Q = None
-            (self._h, self._tau), self.R = sla.qr(A, mode="raw", check_finite=False)
+            (self._h, self._tau), self.R = sla.qr(A, mode="raw", overwrite_a=True, check_finite=False)
         d = np.abs(np.diag(self.R))
         self.rcond = d.min() / max(d.max(), 1e-300)
 
@@ -119,7 +128,7 @@ def tangent_factored(J, previous, w=None, factor=None):
     the same whatever the extra row)."""
     w = np.ones(J.shape[1]) if w is None else w
     if factor is None:
-        factor = LeastSquares(np.vstack([J, previous[None, :]]))
+        factor = LeastSquares(stacked(J, previous))
     b = np.zeros(J.shape[0] + 1)
     b[-1] = 1.0
     p = factor.solve(b)
@@ -157,7 +166,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
         if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
-            factor = LeastSquares(np.vstack([J, row[None, :]]))
+            factor = LeastSquares(stacked(J, row))
         else:
             r = problem.residual(u)
         if not np.all(np.isfinite(r)):
@@ -169,7 +178,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
                 err = problem.error(u, r)
                 if not err < tol:
                     raise CorrectorFailure("the residual changed when the Jacobian was refreshed")
-                factor = LeastSquares(np.vstack([J, row[None, :]]))
+                factor = LeastSquares(stacked(J, row))
             return u, J, it, err, factor
         if it == settings.max_iter:
             break

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
-from ..continuation import LeastSquares
+from ..continuation import LeastSquares, stacked
 from ..floquet import collision_coordinates, deflate, nontrivial_multipliers, reversible_spectrum
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
@@ -96,10 +96,20 @@ class ShootingProblem:
         self.rows = 2 * n if self.reversible else 2 * n + 1   # H (+ phase condition)
         # the dv0 columns of the sensitivity are needed for v0 unknowns or the full-size Floquet problem
         self.all_columns = not (self.reversible and self.symmetric)
-        self.half_map = None     # map dz(T/2 or T)/dz0 at the last Jacobian evaluation
+        self._maps = None         # (dq, dv)(T/2 or T) / dz0 at the last Jacobian evaluation (half_map)
         #: real-line coordinates of the last multipliers where Krein collisions happen (events.py), or None
         self.collision = None
-        self.accepted_map = None  # ... at the last accepted point
+        self._accepted_maps = None  # ... at the last accepted point (accepted_map)
+
+    @property
+    def half_map(self):
+        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, or None."""
+        return None if self._maps is None else np.vstack(self._maps)
+
+    @property
+    def accepted_map(self):
+        """half_map at the last accepted point, or None."""
+        return None if self._accepted_maps is None else np.vstack(self._accepted_maps)
 
     def set_steps(self, steps_per_period):
         """Use steps_per_period time steps per period from now on (rounded up to even for half-period
@@ -153,7 +163,7 @@ class ShootingProblem:
             return bad
         r = self._assemble(q, v, q0, v0)
         self._last_residual = (u.copy(), r)
-        self.half_map = np.block([[Sq], [Sv]])          # d[q; v](end) / d[q0 (; v0)]
+        self._maps = (Sq, Sv)                           # d[q; v](end) / d[q0 (; v0)], kept as two blocks
         dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
         sgn = 1.0 if self.symmetric else -1.0
         # J = dH/du directly in the free unknowns (reversible: [q0; T], else [q0; v0; T] plus the phase row)
@@ -199,7 +209,7 @@ class ShootingProblem:
         self.q_ref = q0 / np.linalg.norm(q0)
         if not self.reversible:
             self.set_section(q0, v0)
-        self.accepted_map = self.half_map
+        self._accepted_maps = self._maps
         self.accepted_u = u.copy()
 
     def check_step(self, u_old, u_new):
@@ -266,8 +276,7 @@ class ShootingProblem:
         cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
         # away from folds the result is moved along the tangent to a fixed energy, so any factorisation of J
         # with a row transversal to the tangent gives it; at a fold the orthogonal one is needed
-        A = factor if factor is not None and cos >= FOLD_COSINE else LeastSquares(
-            np.vstack([J, (w * w * tangent)[None, :]]))
+        A = factor if factor is not None and cos >= FOLD_COSINE else LeastSquares(stacked(J, w * w * tangent))
 
         def period_step(r):
             du = A.solve(np.r_[-r, 0.0])
@@ -324,7 +333,7 @@ class ShootingProblem:
         ~10x cheaper); used to follow one Krein collision during event location."""
         if not (self.symmetric and self.reversible):
             return None
-        A11 = self.accepted_map[:self.n, :self.n]
+        A11 = self._accepted_maps[0][:, :self.n]
         family = self.unpack(tangent)[0]
         C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
         if C.shape[0] <= 8 * k:
@@ -342,11 +351,12 @@ class ShootingProblem:
         (the default) need only an n x n eigenproblem (floquet.reversible_multipliers); otherwise the
         full 2n x 2n monodromy is deflated by the velocity and family directions.
         """
-        A = self.accepted_map
         if self.symmetric and self.reversible:
-            mu, self.collision = reversible_spectrum(A[:self.n, :self.n], None if family is None else family[0])
+            mu, self.collision = reversible_spectrum(self._accepted_maps[0][:, :self.n],
+                                                     None if family is None else family[0])
             self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
             return mu
+        A = self.accepted_map
         Phi = A @ A if self.symmetric else A
         if family is None:
             mu = sla.eigvals(Phi, check_finite=False)
