@@ -73,21 +73,23 @@ class Locator:
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            # every point here is corrected on a hyperplane normal to w^2 p_a: the factorisation of the nearest
-            # point evaluated so far starts the chord iterations (a fresh Jacobian is still taken at the end)
-            # (only the latest is kept: O(n^2) each, and the located points converge onto one another)
-            try:
-                # chord iterations converge linearly and stop just below the tolerance, where fresh Newton steps
-                # overshoot it by far; test functions at a fold are sensitive to that error: a tighter tolerance
-                # (a few more state sweeps) keeps the located points as accurate as with fresh Jacobians
-                u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a,
-                                                      self.settings, CHORD_TOL_FACTOR * self.tol, self.w,
-                                                      start=self.last_factor)
-            except CorrectorFailure:
-                if self.last_factor is None:
-                    raise
-                u, J, _, _, factor = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a,
-                                                      self.settings, self.tol, self.w)
+            # every point here is corrected on a hyperplane normal to w^2 p_a: the factorisation of the latest
+            # point evaluated starts the chord iterations (a fresh Jacobian is still taken at the end; only the
+            # latest is kept: O(n^2) each, and the located points converge onto one another).  Chord iterations
+            # converge linearly and stop just below the tolerance, where fresh Newton steps overshoot it by far;
+            # test functions at a fold are sensitive to that error: a tighter tolerance (a few more state
+            # sweeps) keeps the located points as accurate as with fresh Jacobians.
+            u_pred = self.u_a + sigma * self.p_a
+            result = None
+            if self.last_factor is not None:
+                try:
+                    result = correct_factored(self.problem, u_pred, self.p_a, self.settings,
+                                              CHORD_TOL_FACTOR * self.tol, self.w, start=self.last_factor)
+                except CorrectorFailure:
+                    pass                         # e.g. a tolerance at the residual's floor: fresh Newton below
+            if result is None:
+                result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
+            u, J, _, _, factor = result
             self.last_factor = factor
             self.cache[key] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
         return self.cache[key]
@@ -143,6 +145,7 @@ class Locator:
         pm = getattr(self.problem, "collision_per_modulus", 1.0)
         (f_lo, r_lo), (f_hi, r_hi) = ends or [(self.stable(x), self.collision(x)) for x in (lo, hi)]
         g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
+        lo0, hi0 = lo, hi
         last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
         widths = [abs(hi - lo)]
         for _ in range(60):
@@ -173,6 +176,10 @@ class Locator:
                 hi = c
             last = [last[1], (c, g_c)]
             widths.append(abs(hi - lo))
+        if self.stable(lo) == self.stable(hi):
+            # the pair followed was not what changed the stability (e.g. another pair left through +-1 in the
+            # same step): bisection on the full flag
+            return self.bisect(self.stable, lo0, hi0)
         return lo, hi
 
     def real_crossing(self, sigma):
@@ -230,7 +237,7 @@ class Locator:
         return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
 
 
-def krein_gap(rho, rho_star, per_modulus=0.5, tol=STABILITY_TOL, imag_tol=1e-12):
+def krein_gap(rho, rho_star, per_modulus=1.0, tol=STABILITY_TOL, imag_tol=1e-12):
     """Test function of a Krein collision near rho_star, positive while stable.
 
     For the complex coordinate a + ib nearest rho_star, if there is one: b_tol^2 - b^2, where b_tol is
