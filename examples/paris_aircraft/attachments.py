@@ -65,16 +65,17 @@ def add_landing_gears(b: StructureBuilder, fus_nodes, wing_nodes):
     point masses.  Returns the gear nodes (nose, right main, left main)."""
     p, fe = b.p, b.fe
     gear_nodes = []
-    xg, zg = 2.0, geo.fuselage_profile(2.0)[2] - geo.fuselage_profile(2.0)[1]
+    xg = p.nose_gear_x
+    zg = geo.fuselage_profile(xg)[2] - geo.fuselage_profile(xg)[1]
     gn = b.pool(np.array([xg, 0.0, zg]), 300)[0]
     b.spider("fuselage", gn, fus_nodes, 0.35, "fuselage", max_n=10)
     fe.add_bushing("gear", gn, None, list(p.nose_gear_k) + [0.0] * 3)
     fe.add_point_mass("gear mass", gn, p.mass_gear_nose)
     gear_nodes.append(gn)
     for sgn in (1.0, -1.0):
-        yg = sgn * 1.6
-        zc = p.z_wing_root + np.tan(np.radians(p.dihedral_deg)) * 1.6
-        gn = b.pool(np.array([4.9, yg, zc]), 301 if sgn > 0 else 302)[0]
+        yg = sgn * p.main_gear_y
+        zc = p.z_wing_root + np.tan(np.radians(p.dihedral_deg)) * p.main_gear_y
+        gn = b.pool(np.array([p.main_gear_x, yg, zc]), 301 if sgn > 0 else 302)[0]
         b.spider("wing", gn, wing_nodes, 0.35, "wing", max_n=10)
         fe.add_bushing("gear", gn, None, list(p.main_gear_k) + [0.0] * 3)
         fe.add_point_mass("gear mass", gn, p.mass_gear_main)

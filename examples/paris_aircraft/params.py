@@ -11,7 +11,7 @@ import numpy as np
 
 from nnm_fem import FEModel
 
-BUILDER_VERSION = "1.0"
+BUILDER_VERSION = "1.1"
 
 #: The retained (interface) nodes, in reduced-model order: 4 per wing.
 ATTACHMENT_NAMES = ["wing R front (wing side)", "wing R front (tank side)",
@@ -39,54 +39,58 @@ class ParisParams:
     tau_root: float = 0.15
     tau_tip: float = 0.12
     # wing structure
-    wing_skin_t: float = 3.30072e-3
+    wing_skin_t: float = 0.0034
     wing_skin_tb: float = 0.012
     wing_web_t: float = 2.5e-3
-    wing_skin_ex: float = 0.382
-    wing_cap_area: float = 2e-4
+    wing_skin_ex: float = 0.3897
+    wing_cap_area: float = 0.0002912
     wing_rib_area: float = 1.5e-4
     # fuselage structure
-    fus_skin_t: float = 1.2e-3
-    fus_rear_skin_t: float = 3.0e-3
+    fus_skin_t: float = 0.0019365
+    fus_rear_skin_t: float = 0.0038227
     fus_skin_tb: float = 0.012
     fus_frame_area: float = 4e-4
-    fus_longeron_area: float = 4e-4
+    fus_longeron_area: float = 0.00070499
     # tail structure
-    tail_skin_t: float = 2.5e-3
-    fin_skin_t: float = 5.5e-3
+    tail_skin_t: float = 0.0037069
+    fin_skin_t: float = 0.0047453
     tail_skin_tb: float = 0.010
     tail_cap_area: float = 2e-4
-    tail_tau: float = 0.1365
+    tail_tau: float = 0.12478
+    fin_skin_ex: float = 0.90762       # fin skins: spanwise (vertical) membrane stiffness scale
     # tip tanks and attachments
     tank_length: float = 2.9
     tank_radius: float = 0.225
     tank_gap: float = 0.05
     att_spacing: float = 0.8
     att_kz: float = 1.0e7
-    att_kx: float = 8.0e5
+    att_kx: float = 1.1673e6
     tank_skin_t: float = 1.5e-3
     # joints and suspensions
     wf_k: float = 5e7
-    wf_rear_k: float = 1.9e6
-    main_gear_k: tuple = (252.0, 66834.0, 83337.0)
-    nose_gear_k: tuple = (169.0, 51964.0, 395228.0)
-    k_aileron: float = 6.169
-    k_aileron_sym: float = 8.5e3
-    k_elevator: float = 18.82
-    k_rudder: float = 47.72
+    wf_rear_k: float = 1.8136e6
+    nose_gear_x: float = 2.0       # gear positions: nose gear (x, 0), main gears (x, +-y) on the wing
+    main_gear_x: float = 5.0194
+    main_gear_y: float = 1.455
+    main_gear_k: tuple = (245.15, 76413.0, 88339.0)
+    nose_gear_k: tuple = (182.54, 47701.0, 396800.0)
+    k_aileron: float = 5.9823
+    k_aileron_sym: float = 6380.7
+    k_elevator: float = 17.021
+    k_rudder: float = 44.088
     # masses (kg, structure included); the fuselage takes the rest of total_mass
     total_mass: float = 1945.0
     mass_wing: float = 380.0
-    mass_htail: float = 60.0
+    mass_htail: float = 60.787
     mass_fin: float = 65.0
     mass_aileron: float = 9.0
     mass_elevator: float = 14.0
     mass_rudder: float = 9.0
-    mass_tank: float = 40.0
+    mass_tank: float = 47.002
     mass_gear_nose: float = 35.0
     mass_gear_main: float = 55.0
 
-    tank_mass_sigma: float = 0.5
+    tank_mass_sigma: float = 0.4571
 
     @property
     def mass_fuselage(self):
