@@ -718,9 +718,13 @@ def main(argv=None):
     figs = [fig_overview(results, branches, tongue_branches, out_dir / "paris_fep_overview.png")] if len(branches) > 1 else []
     for m, b in branches.items():
         figs.append(fig_mode(b, results[m], tongue_branches[m], out_dir / f"paris_fep_mode{m}.png"))
+        seen = {}
         for rt, tb in zip(results[m]["tongues"], tongue_branches[m]):
             F = analysis.harmonic_fractions(tb, max(N_HARM, int(rt["order"]) + 1))
-            figs.append(fig_tongue(b, rt, tb, F, out_dir / f"paris_tongue_mode{m}_{rt['label'].replace(':', 'to')}.png"))
+            name = rt['label'].replace(':', 'to')
+            seen[name] = seen.get(name, 0) + 1          # a second tongue of the same ratio: _2, _3, ...
+            suffix = "" if seen[name] == 1 else f"_{seen[name]}"
+            figs.append(fig_tongue(b, rt, tb, F, out_dir / f"paris_tongue_mode{m}_{name}{suffix}.png"))
     total = time.perf_counter() - t_all
     if reuse:   # the settings the branches were computed with
         first = next(iter(branches.values()))
