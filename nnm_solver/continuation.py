@@ -149,17 +149,12 @@ def correct(problem, u_pred, p, settings, tol, w=None):
     return correct_factored(problem, u_pred, p, settings, tol, w)[:4]
 
 
-def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
+def correct_factored(problem, u_pred, p, settings, tol, w=None):
     """``correct``, also returning the factorisation of [J; (w^2 p)^T] at the converged point (5th item):
-    the tangent there and other solves with J reuse it (one QR per Jacobian evaluation).
-
-    start : optional factorisation of [J_near; (w^2 p)^T] with the same p and w and J_near the Jacobian
-    at a nearby converged point (e.g. the previous evaluation of an event locator, whose points all lie on
-    parallel hyperplanes): the chord iterations start with it instead of a Jacobian at u_pred.  A fresh
-    Jacobian is taken when they contract poorly, and always at the converged point."""
+    the tangent there and other solves with J reuse it (one QR per Jacobian evaluation)."""
     row = p if w is None else w * w * p
     u = u_pred.copy()
-    factor = start
+    factor = None
     last_norm = None
     for it in range(settings.max_iter + 1):
         fresh = False

@@ -33,10 +33,6 @@ EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 #: relative energy tolerance of located events
 EVENT_RTOL = 5e-7
 
-#: corrector tolerance of located points (relative to the continuation's) when a nearby point's Jacobian starts
-#: the chord iterations
-CHORD_TOL_FACTOR = 1e-2
-
 
 def classify_multipliers(mu, tol=STABILITY_TOL):
     """Kind of instability of a multiplier set (2n,): 'branch_point' (real > 1), 'period_doubling'
@@ -65,7 +61,6 @@ class Locator:
         self.p_a = p_a
         self.w = problem.scale(u_a) if hasattr(problem, "scale") else np.ones(len(u_a))
         self.cache = {}
-        self.last_factor = None     # factorisation of [J; (w^2 p_a)^T] at the latest point (chord start)
         self.spectra = {}           # sigma -> (multipliers, collision coordinates)
 
     def at(self, sigma):
@@ -73,24 +68,12 @@ class Locator:
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            # every point here is corrected on a hyperplane normal to w^2 p_a: the factorisation of the latest
-            # point evaluated starts the chord iterations (a fresh Jacobian is still taken at the end; only the
-            # latest is kept: O(n^2) each, and the located points converge onto one another).  Chord iterations
-            # converge linearly and stop just below the tolerance, where fresh Newton steps overshoot it by far;
-            # test functions at a fold are sensitive to that error: a tighter tolerance (a few more state
-            # sweeps) keeps the located points as accurate as with fresh Jacobians.
-            u_pred = self.u_a + sigma * self.p_a
-            result = None
-            if self.last_factor is not None:
-                try:
-                    result = correct_factored(self.problem, u_pred, self.p_a, self.settings,
-                                              CHORD_TOL_FACTOR * self.tol, self.w, start=self.last_factor)
-                except CorrectorFailure:
-                    pass                         # e.g. a tolerance at the residual's floor: fresh Newton below
-            if result is None:
-                result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
+            # a fresh Jacobian at every prediction: starting the chord iterations from a nearby located point's
+            # factorisation saves a sweep, but near a tongue the hyperplane can cut the solution curve twice
+            # within a step, and the chord iterations then converge to the other cut (seen on a beam's fold)
+            result = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings, self.tol,
+                                      self.w)
             u, J, _, _, factor = result
-            self.last_factor = factor
             self.cache[key] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
         return self.cache[key]
 
@@ -176,11 +159,18 @@ class Locator:
                 hi = c
             last = [last[1], (c, g_c)]
             widths.append(abs(hi - lo))
-        if self.stable(lo) == self.stable(hi):
-            # the pair followed was not what changed the stability (e.g. another pair left through +-1 in the
-            # same step): bisection on the full flag
-            return self.bisect(self.stable, lo0, hi0)
-        return lo, hi
+        if self.stable(lo) != self.stable(hi):
+            return lo, hi
+        # the full flag is the same at both ends: the tracked pair's threshold and the full flag's differ by
+        # round-off (look just around the bracket), or the pair followed was not what changed the stability
+        # (e.g. another pair left through +-1 in the same step): bisection on the full flag
+        a, b = min(lo0, hi0), max(lo0, hi0)
+        for k in (10.0, 1000.0):
+            w = k * max(abs(hi - lo), 1e-12 * max(1.0, abs(hi)))
+            x0, x1 = max(a, min(lo, hi) - w), min(b, max(lo, hi) + w)
+            if self.stable(x0) != self.stable(x1):
+                return self.bisect(self.stable, x0, x1)
+        return self.bisect(self.stable, lo0, hi0)
 
     def real_crossing(self, sigma):
         """max_i |Re rho_i| - 1, rho = (mu + 1/mu) / 2 over the non-trivial multipliers:

@@ -169,3 +169,22 @@ def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
     bis = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100)
     assert np.allclose([e["energy"] for e in bis.events if e["kind"] == "torus"], got, rtol=2e-6, atol=0)
     assert n_secant < 0.75 * len(runs)
+
+
+def test_located_folds_lie_on_their_step():
+    """Every located fold is an energy extremum of its own step: at or beyond the energies of the two points
+    around it and within 1 % of them.  (Near a tongue a hyperplane of the locator can cut the solution curve
+    twice within one step; chord iterations started from another located point once converged to the
+    other cut, 3 % away, on this beam.)"""
+    import sys
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from reference_models import cantilever_beam
+    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=150)
+    E = np.asarray(b.energy)
+    folds = [e for e in b.events if e["kind"] == "fold" and e["located"]]
+    assert folds
+    for e in folds:
+        lo, hi = sorted((E[e["index"] - 1], E[e["index"]]))
+        ext = hi if e["detail"] == "energy maximum" else lo
+        assert (e["energy"] >= hi * (1 - 1e-9)) if e["detail"] == "energy maximum" else (e["energy"] <= lo * (1 + 1e-9))
+        assert abs(e["energy"] / ext - 1) < 0.01, (e["energy"], lo, hi)
