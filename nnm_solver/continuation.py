@@ -149,12 +149,18 @@ def correct(problem, u_pred, p, settings, tol, w=None):
     return correct_factored(problem, u_pred, p, settings, tol, w)[:4]
 
 
-def correct_factored(problem, u_pred, p, settings, tol, w=None):
+def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
     """``correct``, also returning the factorisation of [J; (w^2 p)^T] at the converged point (5th item):
-    the tangent there and other solves with J reuse it (one QR per Jacobian evaluation)."""
+    the tangent there and other solves with J reuse it (one QR per Jacobian evaluation).
+
+    start : optional (u0, factor): a first iterate u0 on the same hyperplane (w^2 p)^T (u - u_pred) = 0 and
+    the factorisation of [J_near; (w^2 p)^T] at a converged point next to it (e.g. the previous point of
+    an event locator, whose hyperplanes are parallel): the chord iterations start there instead of at
+    u_pred with a Jacobian there.  A fresh Jacobian is taken when they contract poorly, and always at the
+    converged point."""
     row = p if w is None else w * w * p
-    u = u_pred.copy()
-    factor = None
+    u = u_pred.copy() if start is None else start[0].copy()
+    factor = None if start is None else start[1]
     last_norm = None
     for it in range(settings.max_iter + 1):
         fresh = False

@@ -33,6 +33,13 @@ EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 #: relative energy tolerance of located events
 EVENT_RTOL = 5e-7
 
+#: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
+CHORD_REACH = 1.0
+#: ... to a corrector tolerance this much tighter than the continuation's
+CHORD_TOL_FACTOR = 1e-2
+#: ... and must lie within this many times the pseudo-arclength difference from it (the same cut of the curve)
+CHORD_CONTINUITY = 3.0
+
 
 def classify_multipliers(mu, tol=STABILITY_TOL):
     """Kind of instability of a multiplier set (2n,): 'branch_point' (real > 1), 'period_doubling'
@@ -53,7 +60,11 @@ class Locator:
     phase reference, last monodromy -- is untouched); settings, tol : the continuation's.
     """
 
-    def __init__(self, problem, settings, tol, u_a, p_a):
+    def __init__(self, problem, settings, tol, u_a, p_a, step=None):
+        """step : the continuation's step from a to the next point (scaled units): located points closer
+        than CHORD_REACH x step to the latest one start from it (chord iterations with its factorisation)."""
+        self.step = step
+        self.latest = None          # (sigma, u, factorisation of [J; (w^2 p_a)^T]) of the latest located point
         self.problem = copy.copy(problem)
         self.settings = settings
         self.tol = tol
@@ -68,14 +79,36 @@ class Locator:
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            # a fresh Jacobian at every prediction: starting the chord iterations from a nearby located point's
-            # factorisation saves a sweep, but near a tongue the hyperplane can cut the solution curve twice
-            # within a step, and the chord iterations then converge to the other cut (seen on a beam's fold)
-            result = correct_factored(self.problem, self.u_a + sigma * self.p_a, self.p_a, self.settings, self.tol,
-                                      self.w)
+            u_pred = self.u_a + sigma * self.p_a
+            result = self._from_latest(sigma, u_pred)
+            if result is None:
+                result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
             u, J, _, _, factor = result
+            self.latest = (key, u, factor)
             self.cache[key] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
         return self.cache[key]
+
+    def _from_latest(self, sigma, u_pred):
+        """The point at sigma from the latest located point when it is close (the root finders' last
+        iterations): first iterate that point moved to sigma's hyperplane (all the hyperplanes are parallel),
+        chord iterations with its factorisation, to a tolerance CHORD_TOL_FACTOR tighter (chord iterations stop
+        just below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The
+        result must continue the branch from that point (distance at most CHORD_CONTINUITY x |d sigma|: near a
+        tongue a hyperplane can cut the solution curve twice within a step); otherwise None (fresh Newton)."""
+        if self.latest is None or self.step is None:
+            return None
+        s_l, u_l, factor = self.latest
+        ds = abs(sigma - s_l)
+        if ds > CHORD_REACH * self.step:
+            return None
+        try:
+            result = correct_factored(self.problem, u_pred, self.p_a, self.settings, CHORD_TOL_FACTOR * self.tol,
+                                      self.w, start=(u_l + (sigma - s_l) * self.p_a, factor))
+        except CorrectorFailure:
+            return None
+        if np.linalg.norm(self.w * (result[0] - u_l)) > CHORD_CONTINUITY * ds + 10 * self.tol:
+            return None
+        return result
 
     def energy(self, sigma):
         return self.problem.energy(self.at(sigma)[0])

@@ -269,7 +269,7 @@ class NNMIterator:
         if prev is None:
             return point, state
         pcp, ppoint, pslope = prev
-        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent)
+        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step)
 
         def record(sigma):
             u, J, p = loc.at(sigma)
