@@ -24,7 +24,7 @@ import copy
 import numpy as np
 
 from .continuation import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
-from .floquet import STABILITY_TOL, is_stable, sort_multipliers
+from .floquet import instability_kind, is_stable, krein_gap, real_crossing, sort_multipliers
 
 __all__ = ["Locator", "classify_multipliers", "EVENT_KINDS"]
 
@@ -41,16 +41,8 @@ CHORD_TOL_FACTOR = 1e-2
 CHORD_CONTINUITY = 3.0
 
 
-def classify_multipliers(mu, tol=STABILITY_TOL):
-    """Kind of instability of a multiplier set (2n,): 'branch_point' (real > 1), 'period_doubling'
-    (real < -1), 'torus' (complex outside the unit circle) or '' (stable)."""
-    mu = sort_multipliers(mu)
-    m = mu[0]
-    if not abs(m) > 1.0 + tol:
-        return ""
-    if abs(m.imag) > 1e-6 * abs(m):
-        return "torus"
-    return "branch_point" if m.real > 0 else "period_doubling"
+#: the kind of instability of a multiplier set (floquet.instability_kind)
+classify_multipliers = instability_kind
 
 
 class Locator:
@@ -258,43 +250,6 @@ class Locator:
         except CorrectorFailure:
             return False
         return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
-
-
-def krein_gap(rho, rho_star, per_modulus=1.0, tol=STABILITY_TOL, imag_tol=1e-12):
-    """Test function of a Krein collision near rho_star, positive while stable.
-
-    For the complex coordinate a + ib nearest rho_star, if there is one: b_tol^2 - b^2, where b_tol is
-    the imaginary part at which the multiplier modulus reaches the stability tolerance (|mu| - 1 =
-    b / (per_modulus sqrt(1 - a^2)) to first order: per_modulus = 1/2 for the coordinates c of the
-    reversible half map, 1 for rho = (mu + 1/mu) / 2); else (d / 2)^2 + b_tol^2 for the two consecutive
-    real coordinates around rho_star (d their distance).  Both sides are smooth in the branch parameter
-    through a generic collision (the discriminant of the colliding pair) and continuous across it; the
-    zero is where the stability flag changes.  None without coordinates."""
-    if rho is None or len(rho) < 2:
-        return None
-    rho = np.asarray(rho, dtype=complex)
-
-    def b_tol(a):
-        return per_modulus * tol * np.sqrt(max(1.0 - a * a, 0.0))
-
-    cplx = np.abs(rho.imag) > imag_tol
-    if cplx.any():
-        r = rho[cplx]
-        z = r[np.argmin(np.abs(r.real - rho_star))]
-        return float(b_tol(z.real) ** 2 - z.imag ** 2)
-    r = np.sort(rho.real)
-    i = int(np.clip(np.searchsorted(r, rho_star), 1, len(r) - 1))
-    return float((0.5 * (r[i] - r[i - 1])) ** 2 + b_tol(rho_star) ** 2)
-
-
-def real_crossing(mu):
-    """Test function of a real pair leaving the unit circle (see Locator.real_crossing)."""
-    mu = np.asarray(mu, dtype=complex)
-    mu = mu[np.abs(mu - 1.0) > 0.0]                # the trivial pair is reported as exactly 1
-    if not len(mu):
-        return -1.0
-    rho = 0.5 * (mu + 1.0 / mu)
-    return float(np.max(np.abs(rho.real)) - 1.0)
 
 
 def event_record(kind, index, point, detail, **extra):

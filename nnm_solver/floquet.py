@@ -115,11 +115,49 @@ def instability_kind(mu, tol=STABILITY_TOL):
     'period_doubling' (real < -1), 'torus' (complex) or '' if stable."""
     mu = sort_multipliers(mu)
     m = mu[0]
-    if abs(m) <= 1.0 + tol:
+    if not abs(m) > 1.0 + tol:                   # stable (or not computed: NaN)
         return ""
     if abs(m.imag) <= 1e-6 * abs(m):
         return "branch_point" if m.real > 0 else "period_doubling"
     return "torus"
+
+
+def krein_gap(rho, rho_star, per_modulus=1.0, tol=STABILITY_TOL, imag_tol=1e-12):
+    """Test function of a Krein collision near rho_star, positive while stable.
+
+    For the complex coordinate a + ib nearest rho_star, if there is one: b_tol^2 - b^2, where b_tol is
+    the imaginary part at which the multiplier modulus reaches the stability tolerance (|mu| - 1 =
+    b / (per_modulus sqrt(1 - a^2)) to first order: per_modulus = 1/2 for the coordinates c of the
+    reversible half map, 1 for rho = (mu + 1/mu) / 2); else (d / 2)^2 + b_tol^2 for the two consecutive
+    real coordinates around rho_star (d their distance).  Both sides are smooth in the branch parameter
+    through a generic collision (the discriminant of the colliding pair) and continuous across it; the
+    zero is where the stability flag changes.  None without coordinates."""
+    if rho is None or len(rho) < 2:
+        return None
+    rho = np.asarray(rho, dtype=complex)
+
+    def b_tol(a):
+        return per_modulus * tol * np.sqrt(max(1.0 - a * a, 0.0))
+
+    cplx = np.abs(rho.imag) > imag_tol
+    if cplx.any():
+        r = rho[cplx]
+        z = r[np.argmin(np.abs(r.real - rho_star))]
+        return float(b_tol(z.real) ** 2 - z.imag ** 2)
+    r = np.sort(rho.real)
+    i = int(np.clip(np.searchsorted(r, rho_star), 1, len(r) - 1))
+    return float((0.5 * (r[i] - r[i - 1])) ** 2 + b_tol(rho_star) ** 2)
+
+
+def real_crossing(mu):
+    """Test function of a real pair leaving the unit circle: max |Re rho| - 1 over the non-trivial
+    multipliers, rho = (mu + 1/mu) / 2 (events.Locator.real_crossing)."""
+    mu = np.asarray(mu, dtype=complex)
+    mu = mu[np.abs(mu - 1.0) > 0.0]                # the trivial pair is reported as exactly 1
+    if not len(mu):
+        return -1.0
+    rho = 0.5 * (mu + 1.0 / mu)
+    return float(np.max(np.abs(rho.real)) - 1.0)
 
 
 def detect_events(energy, frequency_hz, floquet, stable):

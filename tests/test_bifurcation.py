@@ -142,7 +142,7 @@ def _combination_resonance_model():
 
 
 def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
-    """The Krein collisions located by the secant on their test function (events.krein_gap), with
+    """The Krein collisions located by the secant on their test function (floquet.krein_gap), with
     gauss6 shooting, match harmonic balance (Hill's multipliers, flag bisection) to 1e-6, and the same
     shooting branch located by bisection on the stability flag gives the same energies with more
     corrector runs."""
