@@ -121,26 +121,23 @@ def compare(model, mode, energy_max):
                      partner_mode=t.get("partner_mode"), skipped=bool(t.get("skipped")), note=t.get("note", ""),
                      hidden_points=t.get("hidden_points")) for t in b.tongues]
 
+    def summary(b, pk, seconds):
+        """What the JSON and the page report of one backbone b (peak spring deformations pk per point)."""
+        return dict(points=len(b), status=b.status, message=b.message, tongues=tongues(b), seconds=round(seconds, 1),
+                    energy=[float(b.energy[0]), float(b.energy[-1])],
+                    frequency_hz=[float(b.frequency_hz[0]), float(b.frequency_hz[-1])],
+                    drop_percent=drop(b, b.energy[-1]), stable=bool(np.all(b.stable)),
+                    unstable_energies=[float(E) for E in b.energy[~np.asarray(b.stable, bool)]],
+                    peak_d=float(pk[-1].max()))
+
     E_hi = min(cubic.energy[-1], bil.energy[-1])
     E_lo = max(cubic.energy[0], bil.energy[0])
     energies = [float(E) for E in np.geomspace(E_lo, E_hi, 7)]
     onset = [float(E) for E, p in zip(bil.energy, bil_peaks.max(axis=1)) if p > d1]
     out = dict(mode=mode, f_linear_hz=f_lin, f_linear_discrete_hz=f_ref, steps_per_period=N, k3=k3, d_r=d_r, d1=d1, k1=k1, eps=bil_model.springs[0].eps,
                force_at_d_r=k3 * d_r ** 3, potential_at_d_r=k3 * d_r ** 4 / 4,
-               cubic=dict(points=len(cubic), status=cubic.status, message=cubic.message, tongues=tongues(cubic),
-                          seconds=round(t_c, 1),
-                          energy=[float(cubic.energy[0]), float(cubic.energy[-1])],
-                          frequency_hz=[float(cubic.frequency_hz[0]), float(cubic.frequency_hz[-1])],
-                          drop_percent=drop(cubic, cubic.energy[-1]), stable=bool(np.all(cubic.stable)),
-                          unstable_energies=[float(E) for E in cubic.energy[~np.asarray(cubic.stable, bool)]],
-                          peak_d=float(peaks[-1].max())),
-               bilinear=dict(points=len(bil), status=bil.status, message=bil.message, tongues=tongues(bil),
-                             seconds=round(t_b, 1),
-                             energy=[float(bil.energy[0]), float(bil.energy[-1])],
-                             frequency_hz=[float(bil.frequency_hz[0]), float(bil.frequency_hz[-1])],
-                             drop_percent=drop(bil, bil.energy[-1]), stable=bool(np.all(bil.stable)),
-                             unstable_energies=[float(E) for E in bil.energy[~np.asarray(bil.stable, bool)]],
-                             peak_d=float(bil_peaks[-1].max()),
+               cubic=summary(cubic, peaks, t_c),
+               bilinear=dict(summary(bil, bil_peaks, t_b),
                              first_energy_past_d1=onset[0] if onset else None,
                              linear_below_d1=float(np.max(np.abs(bil.frequency_hz[bil_peaks.max(axis=1) < 0.9 * d1]
                                                                  / f_ref - 1), initial=0.0))),
