@@ -204,7 +204,9 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
 
     u0 : approximate first point; p0 : approximate direction (the first point is corrected with
     corrections orthogonal to p0).  Yields ContinuationPoint; the caller stops
-    the iteration.  When a step cannot be completed even at ``step_min`` the generator returns with
+    the iteration.  ``send(REFUSE)`` instead of ``next`` refuses the point just yielded: the engine goes
+    back to the point before it and tries again with half the step (e.g. when the caller could not
+    locate the events inside the step: it jumped over a feature of the branch).  When a step cannot be completed even at ``step_min`` the generator returns with
     a ``StopIteration`` value: the reason (str).  Step lengths are in the problem's scaled units.
     """
     w = _scale(problem, u0)
@@ -259,10 +261,17 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         if failures == 0:
             s_clean = s
         failures = 0
+        previous = (u, J, p, factor, w)
         w = _scale(problem, u_new)
         u, J, p, factor = u_new, J_new, p_new / np.linalg.norm(w * p_new), factor_new
         problem.accept(u, J)
-        yield ContinuationPoint(u, p, J, it, s, err, factor)
+        if (yield ContinuationPoint(u, p, J, it, s, err, factor)) == REFUSE:
+            # the caller refuses the step (its events could not be located inside it): back to the
+            # previous point, half the step
+            u, J, p, factor, w = previous
+            problem.accept(u, J)
+            s = max(0.5 * s, settings.step_min)
+            continue
         # step control from the number of corrector iterations
         if it <= settings.target_iter // 2:
             s *= 2.0
@@ -274,6 +283,10 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         if hasattr(problem, "max_step"):
             s_max = min(s_max, problem.max_step(u, p))
         s = float(np.clip(s, settings.step_min, max(s_max, settings.step_min)))
+
+
+#: sent to the pseudo_arclength generator (``engine.send(REFUSE)``) to refuse the point it just yielded
+REFUSE = "refuse"
 
 
 def _energy_slope(energy, u, p, h=1e-6):

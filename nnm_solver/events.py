@@ -33,6 +33,10 @@ EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 #: relative energy tolerance of located events
 EVENT_RTOL = 5e-7
 
+#: a stability change through +1 is a fold's when the flags on either side of the fold, this many steps from it,
+#: are those of the step's two ends
+FOLD_REACH = 1e-2
+
 #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
 CHORD_REACH = 1.0
 #: ... to a corrector tolerance this much tighter than the continuation's
@@ -66,12 +70,46 @@ class Locator:
         self.cache = {}
         self.spectra = {}           # sigma -> (multipliers, collision coordinates)
 
+    def seed(self, sigma, u, J, factor):
+        """Record a converged point at sigma (e.g. the two points of the continuation's step, so that they
+        are not computed again); factor : the factorisation of [J; (w^2 p_a)^T] at it."""
+        self.cache[float(sigma)] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])
+
+    def prediction(self, sigma):
+        """A first iterate on sigma's hyperplane: the cubic Hermite interpolant of the known points around
+        sigma (values and tangents, with d u / d sigma = p / ((w^2 p_a) . p)), or the tangent line of the
+        nearest known point when sigma is outside them (the tangent line of a when none is known).  The
+        interpolant lies on the hyperplane exactly (sigma is linear in u)."""
+        known = sorted(self.cache)
+        if not known:
+            return self.u_a + sigma * self.p_a
+        row = self.w * self.w * self.p_a
+
+        def slope(key):
+            u, _, p = self.cache[key]
+            d = row @ p
+            return u, (p / d if abs(d) > 0.3 * np.linalg.norm(self.w * p) else None)
+
+        left = [k for k in known if k <= sigma]
+        right = [k for k in known if k > sigma]
+        if left and right:
+            k0, k1 = left[-1], right[0]
+            (u0, d0), (u1, d1) = slope(k0), slope(k1)
+            h, t = k1 - k0, (sigma - k0) / (k1 - k0)
+            if d0 is None or d1 is None:            # the tangent turns across sigma's hyperplane: the chord
+                return u0 + t * (u1 - u0)
+            return ((2 * t ** 3 - 3 * t ** 2 + 1) * u0 + (t ** 3 - 2 * t ** 2 + t) * h * d0
+                    + (3 * t ** 2 - 2 * t ** 3) * u1 + (t ** 3 - t ** 2) * h * d1)
+        k = left[-1] if left else right[0]
+        u, d = slope(k)
+        return u + (sigma - k) * (self.p_a if d is None else d)
+
     def at(self, sigma):
         """(u, J, p) on the branch at pseudo-arclength sigma from point a (CorrectorFailure if the
         corrector does not converge there)."""
         key = float(sigma)
         if key not in self.cache:
-            u_pred = self.u_a + sigma * self.p_a
+            u_pred = self.prediction(key)
             result = self._from_latest(sigma, u_pred)
             if result is None:
                 result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
@@ -203,13 +241,15 @@ class Locator:
         -cosh off it), negative while stable; its zero is where the pair leaves the circle."""
         return real_crossing(self.multipliers(sigma))
 
-    def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60):
-        """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi)."""
+    def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60, converged=None):
+        """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi).  converged(a, b, fa, fb)
+        : when to stop (default: the energies at the bracket's ends agree to EVENT_RTOL)."""
+        converged = converged or (lambda a_, b_, fa_, fb_: self._converged(a_, b_))
         a, fa = lo, (g(lo) if g_lo is None else g_lo)
         b, fb = hi, (g(hi) if g_hi is None else g_hi)
         side = 0
         for _ in range(max_iter):
-            if fa == 0.0 or fb == 0.0 or self._converged(a, b):
+            if fa == 0.0 or fb == 0.0 or converged(a, b, fa, fb):
                 break
             c = (a * fb - b * fa) / (fb - fa)
             if not min(a, b) < c < max(a, b):
@@ -228,6 +268,28 @@ class Locator:
             else:
                 return c
         return a if abs(fa) <= abs(fb) else b
+
+    def fold_converged(self, a, b, ga, gb):
+        """Stop rule of a fold's root on the energy slope g = dE/dsigma: the energy of the better end lies
+        below the extremum by about g^2 / (2 |dg/dsigma|) (the parabola through the extremum), within
+        EVENT_RTOL / 10 of it.  (Equal energies at the bracket's ends are no test here: two points on either
+        side of an extremum have them while far from it.)"""
+        if abs(b - a) <= 1e-12 * max(1.0, abs(b)):
+            return True
+        curvature = abs((gb - ga) / (b - a))
+        best = min(abs(ga), abs(gb))
+        try:
+            E = abs(self.energy(a if abs(ga) <= abs(gb) else b))
+        except CorrectorFailure:
+            return False
+        return curvature > 0 and best * best / (2 * curvature) <= 0.1 * EVENT_RTOL * E
+
+    def around(self, sigma):
+        """The known points nearest sigma on each side (sigma keys; None where there is none)."""
+        keys = sorted(k for k in self.cache if k != float(sigma))
+        left = [k for k in keys if k < sigma]
+        right = [k for k in keys if k > sigma]
+        return (left[-1] if left else None), (right[0] if right else None)
 
     def bisect(self, flag, lo, hi, max_iter=60):
         """sigma at the change of a boolean flag between lo and hi (flag(lo) != flag(hi))."""
@@ -285,7 +347,7 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
     if slope_a * slope_b < 0:
         detail = "energy maximum" if slope_a > 0 else "energy minimum"
         try:
-            sig = loc.root(loc.slope, 0.0, s, slope_a, slope_b)
+            sig = loc.root(loc.slope, 0.0, s, slope_a, slope_b, converged=loc.fold_converged)
             fold = (sig, record(sig))
             events.append(event_record("fold", index, fold[1], detail))
         except CorrectorFailure:
@@ -297,6 +359,12 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
         change = "loss" if pa.stable else "gain"
         ga, gb = real_crossing(pa.floquet), real_crossing(pb.floquet)
         located = True
+        if fold is not None and kind == "branch_point" and _changes_at(loc, fold[0], s, pa.stable, pb.stable):
+            # at an energy fold a pair of multipliers passes through +1 (the real-crossing test function is flat
+            # there, so its own root would be poorly placed): the change is the fold's when the flags on the two
+            # sides of the located fold are those of the step's two ends
+            events[-1]["stability_change"] = change
+            return events, end
         try:
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
                 sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
@@ -322,6 +390,22 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                                                         f"(next point: {crit:.5g})", stability_change=change,
                                        **({} if located else dict(located=False))))
     return events, end
+
+
+def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
+    """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
+    that distance (known ones, e.g. the root finder's last iterates, or new ones at that distance) have the
+    flags of the step's ends a (sigma = 0) and b (sigma = s)?"""
+    delta = reach * abs(s)
+    left, right = loc.around(sigma)
+    if left is None or sigma - left > delta:
+        left = max(sigma - delta, 0.0)
+    if right is None or right - sigma > delta:
+        right = min(sigma + delta, s)
+    try:
+        return loc.stable(left) == stable_a and loc.stable(right) == stable_b
+    except CorrectorFailure:
+        return False
 
 
 def stability_changes(events):

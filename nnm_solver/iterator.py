@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .branch import Branch, Point
-from .continuation import ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
+from .continuation import REFUSE, ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
 from .events import Locator, locate_between
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
@@ -20,6 +20,8 @@ from .tongue_skip import SKIP_FRACTION, TongueSkipper, harmonic_label, partner_m
 
 #: the most steps per period the freq_tol refinement goes to
 MAX_STEPS_PER_PERIOD = 20000
+#: steps refused in a row when an event inside them cannot be located (the step is halved each time)
+MAX_REFUSALS = 3
 
 __all__ = ["NNMIterator"]
 
@@ -64,6 +66,7 @@ class NNMIterator:
         self._tongue = None            # the tongue being traversed (skip mode)
         self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
         self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
+        self._refusals = 0             # steps refused in a row because an event in them was not located
 
     def __iter__(self):
         return self
@@ -73,19 +76,26 @@ class NNMIterator:
             raise StopIteration
         N = len(self.points)
         with blas_limited():
+            command = None
             while True:
                 try:
-                    cp = next(self._engine)
+                    cp = self._engine.send(command) if command else next(self._engine)
                 except StopIteration as fin:
                     self._failed(fin.value)
                     raise StopIteration from None
+                command = None
                 point, (q0, v0, T) = self._record(cp, self._problem)
                 if self._refined(cp, point):
                     continue
-                if self.tongue_mode != "skip" or not self._hidden(cp, point):
+                if self.tongue_mode == "skip" and self._hidden(cp, point):
+                    continue
+                if not self.locate:
                     break
-            if self.locate:
-                point, (q0, v0, T) = self._locate(cp, point, (q0, v0, T))
+                located = self._locate(cp, point, (q0, v0, T))
+                if located is not None:
+                    point, (q0, v0, T) = located
+                    break
+                command = REFUSE                # an event could not be located: a shorter step
             if self.tongue_mode == "skip":
                 self._last_backbone = (cp, point)
             self._estimate_error(point)
@@ -263,13 +273,17 @@ class NNMIterator:
 
     def _locate(self, cp, point, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at
-        energy_max.  Returns the (possibly located) end point and its modal state."""
+        energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
+        could not be located and the step should be refused (at most MAX_REFUSALS times in a row)."""
         slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
         prev, self._prev = self._prev, (cp, point, slope)
         if prev is None:
             return point, state
         pcp, ppoint, pslope = prev
         loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step)
+        loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
+        if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
+            loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
 
         def record(sigma):
             u, J, p = loc.at(sigma)
@@ -278,6 +292,14 @@ class NNMIterator:
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
+        if (any(not e["located"] for e in events) and self._refusals < MAX_REFUSALS
+                and cp.step > 4 * self._cs.step_min):
+            # the corrector failed inside the step: it jumped over a feature of the branch (e.g. a fold and a
+            # branch point, or three folds, next to each other); the engine retries with half the step
+            self._refusals += 1
+            self._prev = prev
+            return None
+        self._refusals = 0
         self.events.extend(events)
         if end is not None:
             u, J, p = loc.at(end[0])

@@ -188,3 +188,29 @@ def test_located_folds_lie_on_their_step():
         ext = hi if e["detail"] == "energy maximum" else lo
         assert (e["energy"] >= hi * (1 - 1e-9)) if e["detail"] == "energy maximum" else (e["energy"] <= lo * (1 + 1e-9))
         assert abs(e["energy"] / ext - 1) < 0.01, (e["energy"], lo, hi)
+
+
+def test_beam_tongue_both_folds_located_and_passed():
+    """A 60-DOF cantilever's NNM 1 runs into a tongue (energy maximum, then an energy minimum where
+    the stability is regained) and out of it onto the backbone above.  A step once jumped from just
+    past the tongue's energy-minimum fold back onto the incoming backbone: the minimum was left
+    unlocated and the branch was cut as a spurious closed loop.  The step is now refused when an event
+    inside it cannot be located, so both folds are located and the continuation goes on."""
+    import sys
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from reference_models import cantilever_beam
+    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=110)
+    assert b.status == "max_points", b.message
+    folds = [e for e in b.events if e["kind"] == "fold"]
+    assert [e["detail"] for e in folds] == ["energy maximum", "energy minimum"]
+    assert all(e["located"] for e in folds)
+    # the stability is regained at the minimum; it is lost at (or, within the stability tolerance, just past)
+    # the maximum, where the critical pair leaves the unit circle very slowly
+    assert folds[1].get("stability_change") == "gain"
+    loss = [e for e in b.events if e.get("stability_change") == "loss"]
+    assert len(loss) == 1 and abs(loss[0]["energy"] / folds[0]["energy"] - 1) < 5e-3
+    E, f = np.asarray(b.energy), np.asarray(b.frequency_hz)
+    i_min = folds[1]["index"]
+    assert folds[1]["energy"] <= E[i_min - 3:i_min + 3].min() * (1 + 1e-9)
+    # past the tongue: energy and frequency rise again along the backbone, above the tongue's frequencies
+    assert E[-1] > 1.4 * folds[1]["energy"] and f[-1] > f[:i_min].max() + 0.05
