@@ -37,6 +37,12 @@ EVENT_RTOL = 5e-7
 #: are those of the step's two ends
 FOLD_REACH = 1e-2
 
+#: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the stability)
+MAX_KREIN_PAIRS = 4
+
+#: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
+KREIN_PROBES = 3
+
 #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
 CHORD_REACH = 1.0
 #: ... to a corrector tolerance this much tighter than the continuation's
@@ -181,19 +187,61 @@ class Locator:
         self.multipliers(sigma)
         return self.spectra[float(sigma)][1]
 
-    def krein(self, lo, hi, rho_star, ends=None):
-        """sigma at a Krein collision between lo and hi (stable at one end, a complex pair at the other),
-        located by regula falsi on the smooth test function krein_gap (the squared half-distance of the
-        two colliding coordinates, negative once they are a complex pair) around rho_star, the real part
-        of the complex pair at the unstable end.  The bracket is kept on the stability flag, so a poorly
-        chosen pair only costs a bisection step.  ends : optional ((stable, coordinates) at lo, at hi), known
-        from the two points, to save their evaluation.  Returns (lo, hi) like bisect."""
-        pm = getattr(self.problem, "collision_per_modulus", 1.0)
+    def krein(self, lo, hi, rho_stars, ends=None, depth=0):
+        """sigma at a Krein collision between lo and hi (stable at one end, complex pairs at the other).
+
+        Each candidate pair (rho_stars: the real parts of the complex collision coordinates at the unstable
+        end, most unstable first) is followed by a secant on its smooth test function krein_gap (the squared
+        half-distance of the two colliding coordinates, negative once they are a complex pair), evaluated by
+        the problem's local eigen-solver (``local_collision``) where it has one.  Several pairs can collide
+        within one step: the stability changes at the collision nearest the stable end.  The result is
+        checked with the full flags around it; if they do not change there, bisection on the full flag.
+        ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
+        evaluation.  Returns (lo, hi) like bisect."""
+        rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
         (f_lo, r_lo), (f_hi, r_hi) = ends or [(self.stable(x), self.collision(x)) for x in (lo, hi)]
+        brackets = []
+        for k, rho_star in enumerate(rho_stars):
+            bracket, local = self._follow_pair(lo, hi, rho_star, f_lo, r_lo, r_hi)
+            brackets.append(bracket)
+            if not local:              # followed with the full flags: its bracket is the flag's change already
+                break
+        first = min if f_lo else max   # the change is at the boundary of the stable end's interval
+        blo, bhi = first(brackets, key=lambda b: min(b) if f_lo else max(b))
+        if self.stable(blo) != self.stable(bhi):
+            # a pair that collided and separated again inside the step is complex at neither end: probe the
+            # full flag between the stable end and the collision; the first change found is the event
+            start, stop = (lo, min(blo, bhi)) if f_lo else (hi, max(blo, bhi))
+            for x in start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1):
+                if not self.stable(x):             # (the stable end's flag is True)
+                    r_x = self.collision(x)
+                    cands = _krein_candidates(r_x) if r_x is not None and depth < 2 else []
+                    if not cands:
+                        return self.bisect(self.stable, start, x)
+                    stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
+                    return (self.krein(start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
+                            self.krein(x, start, cands, [unstable_x, stable_end], depth + 1))
+            return blo, bhi
+        # the full flag is the same at both ends: the tracked pair's threshold and the full flag's differ by
+        # round-off (look just around the bracket), or no pair followed was what changed the stability
+        # (e.g. another pair left through +-1 in the same step): bisection on the full flag
+        a, b = min(lo, hi), max(lo, hi)
+        for k in (10.0, 1000.0):
+            w = k * max(abs(bhi - blo), 1e-12 * max(1.0, abs(bhi)))
+            x0, x1 = max(a, min(blo, bhi) - w), min(b, max(blo, bhi) + w)
+            if self.stable(x0) != self.stable(x1):
+                return self.bisect(self.stable, x0, x1)
+        return self.bisect(self.stable, lo, hi)
+
+    def _follow_pair(self, lo, hi, rho_star, f_lo, r_lo, r_hi):
+        """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
+        collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
+        flag had to be, i.e. the bracket is that of the flag's change)."""
+        pm = getattr(self.problem, "collision_per_modulus", 1.0)
         g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
-        lo0, hi0 = lo, hi
         last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
         widths = [abs(hi - lo)]
+        local = True
         for _ in range(60):
             if self._converged(lo, hi):
                 break
@@ -208,6 +256,7 @@ class Locator:
                 g_c = krein_gap(r_c, rho_star, pm)
                 f_c = g_c > 0
             else:
+                local = False
                 f_c = self.stable(c)
                 r_c = self.collision(c)
                 g_c = krein_gap(r_c, rho_star, pm)
@@ -222,18 +271,7 @@ class Locator:
                 hi = c
             last = [last[1], (c, g_c)]
             widths.append(abs(hi - lo))
-        if self.stable(lo) != self.stable(hi):
-            return lo, hi
-        # the full flag is the same at both ends: the tracked pair's threshold and the full flag's differ by
-        # round-off (look just around the bracket), or the pair followed was not what changed the stability
-        # (e.g. another pair left through +-1 in the same step): bisection on the full flag
-        a, b = min(lo0, hi0), max(lo0, hi0)
-        for k in (10.0, 1000.0):
-            w = k * max(abs(hi - lo), 1e-12 * max(1.0, abs(hi)))
-            x0, x1 = max(a, min(lo, hi) - w), min(b, max(lo, hi) + w)
-            if self.stable(x0) != self.stable(x1):
-                return self.bisect(self.stable, x0, x1)
-        return self.bisect(self.stable, lo0, hi0)
+        return (lo, hi), local
 
     def real_crossing(self, sigma):
         """max_i |Re rho_i| - 1, rho = (mu + 1/mu) / 2 over the non-trivial multipliers:
@@ -371,10 +409,8 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             else:                                    # a Krein collision
                 rho_u = getattr(pu, "_collision", None)
                 if rho_u is not None and np.any(np.abs(np.imag(rho_u)) > 1e-9):
-                    rho_u = np.asarray(rho_u)
-                    rho_star = float(rho_u[np.argmax(np.abs(rho_u.imag))].real)
-                    lo, hi = loc.krein(0.0, s, rho_star, ends=[(p.stable, getattr(p, "_collision", None))
-                                                               for p in (pa, pb)])
+                    lo, hi = loc.krein(0.0, s, _krein_candidates(rho_u),
+                                       ends=[(p.stable, getattr(p, "_collision", None)) for p in (pa, pb)])
                 else:                                # no coordinates (e.g. Hill's method): bisection on the flag
                     lo, hi = loc.bisect(loc.stable, 0.0, s)
                 sig = 0.5 * (lo + hi)
@@ -390,6 +426,19 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                                                         f"(next point: {crit:.5g})", stability_change=change,
                                        **({} if located else dict(located=False))))
     return events, end
+
+
+def _krein_candidates(rho, most=MAX_KREIN_PAIRS):
+    """Real parts of the complex collision coordinates rho (one per conjugate pair), the most unstable (largest
+    imaginary part) first, at most ``most``."""
+    rho = np.asarray(rho, dtype=complex)
+    z = rho[rho.imag > 1e-9]
+    z = z[np.argsort(-z.imag, kind="stable")]
+    out = []
+    for x in z.real:
+        if all(abs(x - y) > 1e-9 for y in out):
+            out.append(float(x))
+    return out[:most]
 
 
 def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):

@@ -165,7 +165,7 @@ def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
     assert len(ref) == len(got) == 2 and all(e["located"] for e in sh.events if e["kind"] == "torus")
     assert np.allclose(got, ref, rtol=1e-6, atol=0)
     runs.clear()
-    monkeypatch.setattr(ev.Locator, "krein", lambda self, lo, hi, rho_star, ends=None: self.bisect(self.stable, lo, hi))
+    monkeypatch.setattr(ev.Locator, "krein", lambda self, lo, hi, rho_stars, ends=None: self.bisect(self.stable, lo, hi))
     bis = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100)
     assert np.allclose([e["energy"] for e in bis.events if e["kind"] == "torus"], got, rtol=2e-6, atol=0)
     assert n_secant < 0.75 * len(runs)
@@ -214,3 +214,58 @@ def test_beam_tongue_both_folds_located_and_passed():
     assert folds[1]["energy"] <= E[i_min - 3:i_min + 3].min() * (1 + 1e-9)
     # past the tongue: energy and frequency rise again along the backbone, above the tongue's frequencies
     assert E[-1] > 1.4 * folds[1]["energy"] and f[-1] > f[:i_min].max() + 0.05
+
+
+def _synthetic_locator(coords):
+    """An events.Locator whose branch is sigma itself (E = 1 + sigma) and whose collision coordinates are
+    coords(sigma): the Krein locator's logic on a known spectrum."""
+    import types
+    import nnm_solver.events as ev
+
+    class Synthetic(ev.Locator):
+        def __init__(self):
+            self.cache, self.spectra = {}, {}
+            self.problem = types.SimpleNamespace(collision_per_modulus=1.0)
+
+        def energy(self, sigma):
+            return 1.0 + sigma
+
+        def collision(self, sigma):
+            return coords(sigma)
+
+        def local_collision(self, sigma, shift):
+            return coords(sigma)
+
+        def stable(self, sigma):
+            c = coords(sigma)
+            return bool(np.all(np.abs(c.imag) <= 1e-5 * np.sqrt(np.clip(1 - c.real ** 2, 0, None))))
+
+    return Synthetic()
+
+
+def _pair(centre, d2):
+    """Two collision coordinates centre +- sqrt(d2): real while d2 > 0, a complex pair once d2 < 0."""
+    r = np.sqrt(complex(d2))
+    return [centre + r, centre - r]
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_krein_locator_finds_the_first_of_several_collisions_in_a_step(reverse):
+    """A step (sigma 0 -> 1) where pair A collides at 0.8 (complex at the unstable end) and pair B collides at
+    0.3 and separates again at 0.6 (real at both ends): the stability changes first at 0.3, which the
+    Krein locator must report (following A alone gives 0.8).  Reversed: the stable end is sigma = 1 and
+    the change nearest it is at 1 - 0.3."""
+    import nnm_solver.events as ev
+
+    def coords(sigma):
+        s = 1.0 - sigma if reverse else sigma
+        return np.array(_pair(0.5, 0.01 * (0.8 - s)) + _pair(-0.3, 0.01 * (s - 0.3) * (s - 0.6)) + [0.9, -0.95],
+                        dtype=complex)
+
+    loc = _synthetic_locator(coords)
+    ends = [(loc.stable(x), coords(x)) for x in (0.0, 1.0)]
+    assert ends[0][0] != ends[1][0]
+    unstable = coords(0.0 if reverse else 1.0)
+    lo, hi = loc.krein(0.0, 1.0, ev._krein_candidates(unstable), ends=ends)
+    expected = 0.7 if reverse else 0.3
+    assert abs(0.5 * (lo + hi) - expected) < 1e-5 and loc.stable(lo) != loc.stable(hi)
