@@ -165,7 +165,7 @@ def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
     assert len(ref) == len(got) == 2 and all(e["located"] for e in sh.events if e["kind"] == "torus")
     assert np.allclose(got, ref, rtol=1e-6, atol=0)
     runs.clear()
-    monkeypatch.setattr(ev.Locator, "krein", lambda self, lo, hi, rho_stars, ends=None: self.bisect(self.stable, lo, hi))
+    monkeypatch.setattr(ev, "locate_collision", lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi))
     bis = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100)
     assert np.allclose([e["energy"] for e in bis.events if e["kind"] == "torus"], got, rtol=2e-6, atol=0)
     assert n_secant < 0.75 * len(runs)
@@ -220,9 +220,9 @@ def _synthetic_locator(coords):
     """An events.Locator whose branch is sigma itself (E = 1 + sigma) and whose collision coordinates are
     coords(sigma): the Krein locator's logic on a known spectrum."""
     import types
-    import nnm_solver.events as ev
+    from nnm_solver.locator import Locator
 
-    class Synthetic(ev.Locator):
+    class Synthetic(Locator):
         def __init__(self):
             self.cache, self.spectra = {}, {}
             self.problem = types.SimpleNamespace(collision_per_modulus=1.0)
@@ -255,7 +255,7 @@ def test_krein_locator_finds_the_first_of_several_collisions_in_a_step(reverse):
     0.3 and separates again at 0.6 (real at both ends): the stability changes first at 0.3, which the
     Krein locator must report (following A alone gives 0.8).  Reversed: the stable end is sigma = 1 and
     the change nearest it is at 1 - 0.3."""
-    import nnm_solver.events as ev
+    import nnm_solver.krein as krein
 
     def coords(sigma):
         s = 1.0 - sigma if reverse else sigma
@@ -266,6 +266,6 @@ def test_krein_locator_finds_the_first_of_several_collisions_in_a_step(reverse):
     ends = [(loc.stable(x), coords(x)) for x in (0.0, 1.0)]
     assert ends[0][0] != ends[1][0]
     unstable = coords(0.0 if reverse else 1.0)
-    lo, hi = loc.krein(0.0, 1.0, ev._krein_candidates(unstable), ends=ends)
+    lo, hi = krein.locate_collision(loc, 0.0, 1.0, krein.candidates(unstable), ends=ends)
     expected = 0.7 if reverse else 0.3
     assert abs(0.5 * (lo + hi) - expected) < 1e-5 and loc.stable(lo) != loc.stable(hi)

@@ -1,0 +1,124 @@
+"""Krein collisions located inside a continuation step.
+
+Two Floquet multipliers of opposite Krein signature meet on the unit circle and leave it as a complex
+quadruple.  In the coordinates where they are real before the collision (the eigenvalues c of the reversible
+half map's A11 block, or rho = (mu + 1/mu) / 2 of a full-period monodromy) the test function is the
+discriminant of the colliding pair (floquet.krein_gap), linear in the branch parameter through a generic
+collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
+(shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
+stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
+neither end) is caught by probing the full flag.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .floquet import krein_gap
+
+__all__ = ["locate_collision", "candidates"]
+
+#: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the stability)
+MAX_KREIN_PAIRS = 4
+
+#: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
+KREIN_PROBES = 3
+
+
+def candidates(rho, most=MAX_KREIN_PAIRS):
+    """Real parts of the complex collision coordinates rho (one per conjugate pair), the most unstable (largest
+    imaginary part) first, at most ``most``."""
+    rho = np.asarray(rho, dtype=complex)
+    z = rho[rho.imag > 1e-9]
+    z = z[np.argsort(-z.imag, kind="stable")]
+    out = []
+    for x in z.real:
+        if all(abs(x - y) > 1e-9 for y in out):
+            out.append(float(x))
+    return out[:most]
+
+
+def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
+    """sigma at a Krein collision between lo and hi (stable at one end, complex pairs at the other).
+
+    Each candidate pair (rho_stars: the real parts of the complex collision coordinates at the unstable
+    end, most unstable first) is followed by a secant on its smooth test function krein_gap (the squared
+    half-distance of the two colliding coordinates, negative once they are a complex pair), evaluated by
+    the problem's local eigen-solver (``local_collision``) where it has one.  Several pairs can collide
+    within one step: the stability changes at the collision nearest the stable end.  The result is
+    checked with the full flags around it; if they do not change there, bisection on the full flag.
+    ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
+    evaluation.  Returns (lo, hi) like bisect."""
+    rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
+    (f_lo, r_lo), (f_hi, r_hi) = ends or [(loc.stable(x), loc.collision(x)) for x in (lo, hi)]
+    brackets = []
+    for rho_star in rho_stars:
+        bracket, local = _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi)
+        brackets.append(bracket)
+        if not local:              # followed with the full flags: its bracket is the flag's change already
+            break
+    first = min if f_lo else max   # the change is at the boundary of the stable end's interval
+    blo, bhi = first(brackets, key=lambda b: min(b) if f_lo else max(b))
+    if loc.stable(blo) != loc.stable(bhi):
+        # a pair that collided and separated again inside the step is complex at neither end: probe the
+        # full flag between the stable end and the collision; the first change found is the event
+        start, stop = (lo, min(blo, bhi)) if f_lo else (hi, max(blo, bhi))
+        for x in start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1):
+            if not loc.stable(x):             # (the stable end's flag is True)
+                r_x = loc.collision(x)
+                cands = candidates(r_x) if r_x is not None and depth < 2 else []
+                if not cands:
+                    return loc.bisect(loc.stable, start, x)
+                stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
+                return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
+                        locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
+        return blo, bhi
+    # the full flag is the same at both ends: the tracked pair's threshold and the full flag's differ by
+    # round-off (look just around the bracket), or no pair followed was what changed the stability
+    # (e.g. another pair left through +-1 in the same step): bisection on the full flag
+    a, b = min(lo, hi), max(lo, hi)
+    for k in (10.0, 1000.0):
+        w = k * max(abs(bhi - blo), 1e-12 * max(1.0, abs(bhi)))
+        x0, x1 = max(a, min(blo, bhi) - w), min(b, max(blo, bhi) + w)
+        if loc.stable(x0) != loc.stable(x1):
+            return loc.bisect(loc.stable, x0, x1)
+    return loc.bisect(loc.stable, lo, hi)
+
+def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
+    """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
+    collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
+    flag had to be, i.e. the bracket is that of the flag's change)."""
+    pm = getattr(loc.problem, "collision_per_modulus", 1.0)
+    g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
+    last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
+    widths = [abs(hi - lo)]
+    local = True
+    for _ in range(60):
+        if loc._converged(lo, hi):
+            break
+        (x1, g1), (x2, g2) = last
+        c = None
+        if g1 is not None and g2 is not None and g1 != g2:
+            c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
+        if c is None or not min(lo, hi) < c < max(lo, hi) or (len(widths) > 3 and widths[-1] > 0.5 * widths[-4]):
+            c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
+        r_c = loc.local_collision(c, rho_star)
+        if r_c is not None:                  # this collision only: its test function is the flag
+            g_c = krein_gap(r_c, rho_star, pm)
+            f_c = g_c > 0
+        else:
+            local = False
+            f_c = loc.stable(c)
+            r_c = loc.collision(c)
+            g_c = krein_gap(r_c, rho_star, pm)
+            if g_c is not None and (g_c > 0) != f_c:
+                g_c = None                   # the test function disagrees with the flag: no secant from here
+        if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
+            z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
+            rho_star = float(z[np.argmin(np.abs(z.real - rho_star))].real)
+        if f_c == f_lo:
+            lo = c
+        else:
+            hi = c
+        last = [last[1], (c, g_c)]
+        widths.append(abs(hi - lo))
+    return (lo, hi), local
