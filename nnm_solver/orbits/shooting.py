@@ -29,13 +29,11 @@ Half-period shooting needs an odd f_nl (only odd powers in the element laws): th
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
-from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
 from ..continuation import LeastSquares, stacked
-from ..floquet import collision_coordinates, deflate, nontrivial_multipliers, reversible_spectrum
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
+from .shooting_stability import ShootingStability
 
 
 def balanced_max_step(wp, max_rel_state, max_rel_period):
@@ -60,7 +58,7 @@ def discrete_linear_period(omega, nsteps_per_period, integrator="newmark"):
 FOLD_COSINE = 0.05
 
 
-class ShootingProblem:
+class ShootingProblem(ShootingStability):
     """Shooting function + phase condition of one NNM branch, for ``continuation.pseudo_arclength``.
 
     reversible=True (default with symmetric=True): the orbit starts at rest, v0 = 0, so the
@@ -100,16 +98,6 @@ class ShootingProblem:
         #: real-line coordinates of the last multipliers where Krein collisions happen (events.py), or None
         self.collision = None
         self._accepted_maps = None  # ... at the last accepted point (accepted_map)
-
-    @property
-    def half_map(self):
-        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, or None."""
-        return None if self._maps is None else np.vstack(self._maps)
-
-    @property
-    def accepted_map(self):
-        """half_map at the last accepted point, or None."""
-        return None if self._accepted_maps is None else np.vstack(self._accepted_maps)
 
     def set_steps(self, steps_per_period):
         """Use steps_per_period time steps per period from now on (rounded up to even for half-period
@@ -294,11 +282,6 @@ class ShootingProblem:
         """(q0, v0, T) of the orbit u: modal initial state and period (s)."""
         return self.unpack(u)
 
-    def multipliers(self, u, tangent=None):
-        """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep),
-        the trivial pair identified with the family tangent (u-space, optional) and set to 1."""
-        return self.floquet_multipliers(None if tangent is None else self.unpack(tangent))
-
     def coefficients(self, u):
         """No Fourier coefficients: the orbit is rebuilt by integration (ShootingSettings.orbit)."""
         return None
@@ -319,56 +302,6 @@ class ShootingProblem:
         g = np.concatenate([s.omega2 * q0 + s.Bq.T @ s.force(s.Bq @ q0), v0 * self.w_r, [0.0]])
         return g[self.free]
 
-    def monodromy(self):
-        """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
-        if not self.all_columns:
-            raise RuntimeError("the monodromy needs all sensitivity columns: set problem.all_columns = True")
-        Mh = self.accepted_map
-        return Mh @ Mh if self.symmetric else Mh
-
-    def local_collision(self, tangent, shift, k=6):
-        """The k collision coordinates (events.py) of the last accepted point nearest ``shift``, or None when
-        this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
-        nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
-        ~10x cheaper); used to follow one Krein collision during event location."""
-        if not (self.symmetric and self.reversible):
-            return None
-        A11 = self._accepted_maps[0][:, :self.n]
-        family = self.unpack(tangent)[0]
-        C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
-        if C.shape[0] <= 8 * k:
-            return sla.eigvals(C, check_finite=False)
-        try:
-            return eigs(C, k=k, sigma=shift, return_eigenvectors=False)
-        except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
-            return sla.eigvals(C, check_finite=False)
-
-    def floquet_multipliers(self, family=None):
-        """Floquet multipliers (2n,) of the last accepted point.
-
-        family : optional (dq0, dv0, dT) tangent of the family at that point; with it the trivial
-        pair is identified and reported as exactly 1, 1 (floquet.py).  Symmetric reversible orbits
-        (the default) need only an n x n eigenproblem (floquet.reversible_multipliers); otherwise the
-        full 2n x 2n monodromy is deflated by the velocity and family directions.
-        """
-        if self.symmetric and self.reversible:
-            mu, self.collision = reversible_spectrum(self._accepted_maps[0][:, :self.n],
-                                                     None if family is None else family[0])
-            self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
-            return mu
-        A = self.accepted_map
-        Phi = A @ A if self.symmetric else A
-        if family is None:
-            mu = sla.eigvals(Phi, check_finite=False)
-        else:
-            q0, v0, _ = self.unpack(self.accepted_u)
-            s = self.sys
-            f = np.concatenate([v0, -s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)])
-            mu = nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
-        # half-period maps square their eigenvalues: mu alone does not tell which pairs can collide
-        self.collision = None if self.symmetric else collision_coordinates(mu)
-        self.collision_per_modulus = 1.0
-        return mu
 
 
 def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples, integrator="newmark"):

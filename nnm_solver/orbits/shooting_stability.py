@@ -1,0 +1,89 @@
+"""Floquet stability of shooting orbits: the multipliers from the sensitivity maps of the last accepted point.
+
+The sensitivity sweep of a shooting Jacobian gives the map d[q; v](T/2 or T) / d[q0 (; v0)] at no extra cost
+(kept as its two blocks, ``_maps``; ``accept`` keeps those of the accepted point).  Symmetric reversible orbits
+(the default: odd forces, v0 = 0) need only its n x n block A11 = dq(T/2)/dq0, whose eigenvalues c give the
+multipliers (floquet.reversible_spectrum); other orbits use the full 2n x 2n monodromy.  ``ShootingProblem``
+inherits these methods.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
+
+from ..floquet import collision_coordinates, deflate, nontrivial_multipliers, reversible_spectrum
+
+__all__ = ["ShootingStability"]
+
+
+class ShootingStability:
+    """Floquet multipliers, monodromy and collision coordinates of a ShootingProblem's last accepted point
+    (attributes used: n, symmetric, reversible, all_columns, sys, unpack, _maps, _accepted_maps,
+    accepted_u)."""
+
+    @property
+    def half_map(self):
+        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, or None."""
+        return None if self._maps is None else np.vstack(self._maps)
+
+    @property
+    def accepted_map(self):
+        """half_map at the last accepted point, or None."""
+        return None if self._accepted_maps is None else np.vstack(self._accepted_maps)
+
+    def multipliers(self, u, tangent=None):
+        """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep),
+        the trivial pair identified with the family tangent (u-space, optional) and set to 1."""
+        return self.floquet_multipliers(None if tangent is None else self.unpack(tangent))
+
+    def monodromy(self):
+        """Monodromy (2n, 2n) of the last accepted point, in modal coordinates [q; v]."""
+        if not self.all_columns:
+            raise RuntimeError("the monodromy needs all sensitivity columns: set problem.all_columns = True")
+        Mh = self.accepted_map
+        return Mh @ Mh if self.symmetric else Mh
+
+    def local_collision(self, tangent, shift, k=6):
+        """The k collision coordinates (events.py) of the last accepted point nearest ``shift``, or None when
+        this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
+        nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
+        ~10x cheaper); used to follow one Krein collision during event location."""
+        if not (self.symmetric and self.reversible):
+            return None
+        A11 = self._accepted_maps[0][:, :self.n]
+        family = self.unpack(tangent)[0]
+        C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
+        if C.shape[0] <= 8 * k:
+            return sla.eigvals(C, check_finite=False)
+        try:
+            return eigs(C, k=k, sigma=shift, return_eigenvectors=False)
+        except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
+            return sla.eigvals(C, check_finite=False)
+
+    def floquet_multipliers(self, family=None):
+        """Floquet multipliers (2n,) of the last accepted point.
+
+        family : optional (dq0, dv0, dT) tangent of the family at that point; with it the trivial
+        pair is identified and reported as exactly 1, 1 (floquet.py).  Symmetric reversible orbits
+        (the default) need only an n x n eigenproblem (floquet.reversible_multipliers); otherwise the
+        full 2n x 2n monodromy is deflated by the velocity and family directions.
+        """
+        if self.symmetric and self.reversible:
+            mu, self.collision = reversible_spectrum(self._accepted_maps[0][:, :self.n],
+                                                     None if family is None else family[0])
+            self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
+            return mu
+        A = self.accepted_map
+        Phi = A @ A if self.symmetric else A
+        if family is None:
+            mu = sla.eigvals(Phi, check_finite=False)
+        else:
+            q0, v0, _ = self.unpack(self.accepted_u)
+            s = self.sys
+            f = np.concatenate([v0, -s.omega2 * q0 - s.Bq.T @ s.force(s.Bq @ q0)])
+            mu = nontrivial_multipliers(Phi, f, np.concatenate([family[0], family[1]]))
+        # half-period maps square their eigenvalues: mu alone does not tell which pairs can collide
+        self.collision = None if self.symmetric else collision_coordinates(mu)
+        self.collision_per_modulus = 1.0
+        return mu
