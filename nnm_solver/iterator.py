@@ -284,6 +284,9 @@ class NNMIterator:
         loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
         if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
             loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
+        for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
+            if not np.isnan(pt.floquet).any():
+                loc.spectra[float(sigma)] = (pt.floquet, getattr(pt, "_collision", None))
 
         def record(sigma):
             u, J, p = loc.at(sigma)
