@@ -58,30 +58,38 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
             break
     first = min if f_lo else max   # the change is at the boundary of the stable end's interval
     blo, bhi = first(brackets, key=lambda b: min(b) if f_lo else max(b))
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi)
+    if bracket is None:        # no pair followed changed the stability (e.g. a pair left through +-1 too)
+        return loc.bisect(loc.stable, lo, hi)
+    # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
+    # between the stable end and the collision; the first change found is the event
+    start, stop = (lo, min(bracket)) if f_lo else (hi, max(bracket))
+    for x in start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1):
+        if not loc.stable(x):             # (the stable end's flag is True)
+            r_x = loc.collision(x)
+            cands = candidates(r_x) if r_x is not None and depth < 2 else []
+            if not cands:
+                return loc.bisect(loc.stable, start, x)
+            stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
+            return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
+                    locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
+    return bracket
+
+
+def _flag_change_near(loc, lo, hi, blo, bhi):
+    """The bracket (blo, bhi) of a followed collision if the full stability flag changes across it; else
+    (the tracked pair's threshold and the full flag's differ by round-off) a bracket of the flag's change
+    within 10 or 1000 times its width around it, by bisection; None if the flag does not change there."""
     if loc.stable(blo) != loc.stable(bhi):
-        # a pair that collided and separated again inside the step is complex at neither end: probe the
-        # full flag between the stable end and the collision; the first change found is the event
-        start, stop = (lo, min(blo, bhi)) if f_lo else (hi, max(blo, bhi))
-        for x in start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1):
-            if not loc.stable(x):             # (the stable end's flag is True)
-                r_x = loc.collision(x)
-                cands = candidates(r_x) if r_x is not None and depth < 2 else []
-                if not cands:
-                    return loc.bisect(loc.stable, start, x)
-                stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
-                return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
-                        locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
         return blo, bhi
-    # the full flag is the same at both ends: the tracked pair's threshold and the full flag's differ by
-    # round-off (look just around the bracket), or no pair followed was what changed the stability
-    # (e.g. another pair left through +-1 in the same step): bisection on the full flag
     a, b = min(lo, hi), max(lo, hi)
     for k in (10.0, 1000.0):
         w = k * max(abs(bhi - blo), 1e-12 * max(1.0, abs(bhi)))
         x0, x1 = max(a, min(blo, bhi) - w), min(b, max(blo, bhi) + w)
         if loc.stable(x0) != loc.stable(x1):
             return loc.bisect(loc.stable, x0, x1)
-    return loc.bisect(loc.stable, lo, hi)
+    return None
+
 
 def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its

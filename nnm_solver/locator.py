@@ -18,7 +18,7 @@ from .floquet import is_stable, real_crossing, sort_multipliers
 __all__ = ["Locator", "EVENT_RTOL"]
 
 #: relative energy tolerance of located events
-EVENT_RTOL = 5e-7
+EVENT_RTOL = 1e-8
 
 #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
 CHORD_REACH = 1.0
