@@ -269,3 +269,36 @@ def test_krein_locator_finds_the_first_of_several_collisions_in_a_step(reverse):
     lo, hi = krein.locate_collision(loc, 0.0, 1.0, krein.candidates(unstable), ends=ends)
     expected = 0.7 if reverse else 0.3
     assert abs(0.5 * (lo + hi) - expected) < 1e-5 and loc.stable(lo) != loc.stable(hi)
+
+
+def test_similar_mode_loss_of_stability_matches_hills_equation():
+    """A 2-DOF system with identical grounded cubic springs and a linear coupling Kc has the similar
+    anti-phase NNM x1 = -x2 = x(t), x'' + (1 + 2 Kc) x + x^3 = 0.  Its in-phase perturbation y obeys Hill's
+    equation y'' + (1 + 3 x(t)^2) y = 0, whose monodromy (integrated by DOP853 at rtol 1e-12) gives the exact
+    energy where the orbit loses stability (|trace| = 2).  gauss6 shooting locates it to 2e-8."""
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq
+    Kc = 0.1
+    m = nnm.Model(M=np.eye(2), K=np.array([[1 + Kc, -Kc], [-Kc, 1 + Kc]]),
+                  springs=[nnm.CubicSpring(dof=0, k3=1.0), nnm.CubicSpring(dof=1, k3=1.0)])
+
+    def trace_minus_two(A):
+        def f(t, s):
+            x, v, y, yd, z, zd = s
+            q = 1 + 3 * x * x
+            return [v, -(1 + 2 * Kc) * x - x ** 3, yd, -q * y, zd, -q * z]
+        half = lambda t, s: s[1]
+        half.direction, half.terminal = 1, True          # x = -A: half a period, the period of x^2
+        sol = solve_ivp(f, [0, 50], [A, 0, 1, 0, 0, 1], method="DOP853", rtol=1e-12, atol=1e-14, events=half)
+        s = sol.y_events[0][0]
+        return abs(s[2] + s[5]) - 2
+
+    amps = np.linspace(0.05, 1.0, 20)
+    g = [trace_minus_two(A) for A in amps]
+    i = next(k for k in range(len(g) - 1) if g[k] * g[k + 1] < 0)
+    A = brentq(trace_minus_two, amps[i], amps[i + 1], xtol=1e-15, rtol=1e-15)
+    exact = 2 * (A * A / 2 + A ** 4 / 4) + 2 * Kc * A * A
+    b = nnm.continue_nnm(m, 2, 2.0, integrator="gauss6", steps_per_period=100)
+    changes = stability_changes(b.events)
+    assert len(changes) == 1 and changes[0]["kind"] == "branch_point" and changes[0]["stability_change"] == "loss"
+    assert abs(changes[0]["energy"] / exact - 1) < 2e-8, (changes[0]["energy"], exact)
