@@ -80,7 +80,8 @@ def start_amplitude(system, k, energy_max, energy_min=None):
     elements = system.elements
 
     def share(a):  # bound on (nonlinear potential) / (linear potential) at amplitude a; grows with a
-        return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
+        with np.errstate(over="ignore"):      # inf at huge energy_max amplitudes: above the threshold anyway
+            return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
 
     lo, hi = 1e-30, a_cap
     if share(hi) <= START_NONLINEARITY:

@@ -21,6 +21,8 @@ MAX_DENSE_DOF = 6000
 
 
 def _as_matrix(name, A):
+    if np.iscomplexobj(A.data if sp.issparse(A) else A):
+        raise NNMInputError(f"{name} has complex entries; conservative models need real symmetric matrices")
     if sp.issparse(A):
         A = A.tocsr().astype(float)
         data = A.data
@@ -78,7 +80,12 @@ class Model:
         _check_symmetric("K", K)
         self.M = M
         self.K = K
-        self.springs = list(springs)
+        if not isinstance(springs, (list, tuple)):
+            springs = [springs] if hasattr(springs, "law") else springs
+        try:
+            self.springs = list(springs)
+        except TypeError:
+            raise NNMInputError(f"springs must be a list of nonlinear elements, got {type(springs).__name__}") from None
         for i, s in enumerate(self.springs):
             check_element(i, s, self.n)
         if dof_labels is not None and len(dof_labels) != self.n:
@@ -192,10 +199,13 @@ class Model:
         if not 1 <= mode <= self.n:
             raise NNMInputError(f"mode {mode} is out of range: this model has modes 1..{self.n}")
         lam, _ = self.eigensolution
-        if lam[mode - 1] <= 1e-12 * max(lam[-1], 1e-300):
+        # a rigid-body eigenvalue is zero to the eigen-solver's round-off, ~ n eps lam_max; elastic modes can be
+        # far below lam_max (a stiff link next to a soft mode: 1e-12 of it is a 1e6 frequency ratio)
+        if lam[mode - 1] <= 10 * self.n * np.finfo(float).eps * max(lam[-1], 1e-300):
             raise NNMInputError(
-                f"mode {mode} is a rigid-body (zero-frequency) mode and has no periodic NNM; "
-                f"pick an elastic mode or ground the structure")
+                f"mode {mode} is a rigid-body (zero-frequency) mode: its eigenvalue {lam[mode - 1]:.2e} is at the "
+                f"round-off of the eigen-solver (highest {lam[-1]:.2e}); it has no periodic NNM: pick an elastic "
+                f"mode or ground the structure")
         return mode - 1
 
     def __repr__(self):

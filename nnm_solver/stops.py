@@ -20,7 +20,9 @@ Escape test.  At the turning point x0 of a reversible orbit (v0 = 0) -- or at an
 the orbit with at least half its largest amplitude -- the restoring force K x + f_nl(x) vanishes only
 at an equilibrium.  In modal coordinates its size relative to the linear
 force, r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0|, is 1 for a linear motion and falls to 0 as the
-family approaches a saddle (a homoclinic orbit, whose period tends to infinity).  r < ESCAPE_RATIO
+family approaches a saddle (a homoclinic orbit, whose period tends to infinity).  So does the work ratio
+q0 . (restoring force) / q0 . Omega^2 q0, which is >= 1 for hardening forces; the larger of the two is used
+(the norm ratio alone can be small far from any equilibrium when masses or stiffnesses are decades apart).  r < ESCAPE_RATIO
 stops the branch with status ``escape``; so does a failure of the continuation where r < 0.1.
 """
 from __future__ import annotations
@@ -42,6 +44,11 @@ def restoring_ratio(system, q0):
     lin = q * system.omega2
     res = lin + system.force(q @ system.Bq.T) @ system.Bq
     r = np.linalg.norm(res, axis=1) / np.maximum(np.linalg.norm(lin, axis=1), 1e-300)
+    # the work ratio q . res / q . lin (the secant stiffness along q, coordinate-free) vanishes at an
+    # equilibrium too, and is >= 1 for hardening forces: the norm ratio alone can be small without one when
+    # a small component of a much stiffer mode dominates |lin| (masses or stiffnesses decades apart)
+    work = np.maximum(np.einsum("ij,ij->i", q, res), 0.0) / np.maximum(np.einsum("ij,ij->i", q, lin), 1e-300)
+    r = np.maximum(r, work)
     big = np.linalg.norm(q, axis=1) >= 0.5 * np.max(np.linalg.norm(q, axis=1))   # not the passages through 0
     return float(np.min(r[big]))
 

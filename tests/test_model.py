@@ -50,6 +50,8 @@ def test_relative_spring_force():
     (np.eye(2), K2, [CubicSpring(dof=0, other=5, k3=1.0)], "other=5 is not a DOF"),
     (np.eye(2), K2, [CubicSpring(dof=0, k3=float("nan"))], "not finite"),
     (np.eye(2), K2, [(0, 1.0)], "expected nnm_solver.CubicSpring"),
+    (np.array([[1.0, 0.5j], [-0.5j, 1.0]]), K2, [], "complex"),
+    (np.eye(2), K2, 5, "springs must be a list"),
 ])
 def test_bad_input_one_line(M, K, springs, fragment):
     with pytest.raises(NNMInputError) as err:
@@ -78,6 +80,16 @@ def test_mode_checks():
         nnm.continue_nnm(m, mode=3, energy_max=1.0)
     with pytest.raises(NNMInputError, match="out of range"):
         nnm.continue_nnm(m, mode=0, energy_max=1.0)
+
+
+def test_soft_mode_next_to_a_very_stiff_link_is_elastic():
+    """A 1e13 stiffness contrast puts the first eigenvalue 1e-13 below the highest: an elastic mode (f = 1/(2 pi)
+    Hz to 1e-13), not a rigid-body one (zero to the eigen-solver's round-off); a single element is also accepted
+    without a list."""
+    K = np.array([[1e13, -1.0], [-1.0, 1.0]])
+    m = Model(np.eye(2), K, CubicSpring(dof=1, k3=1.0))
+    b = nnm.continue_nnm(m, mode=1, energy_max=0.1, max_points=10)
+    assert abs(b.frequency_hz[0] * 2 * np.pi - np.sqrt(np.linalg.eigvalsh(K)[0])) < 1e-3
 
 
 @pytest.mark.parametrize("kwargs, fragment", [

@@ -130,6 +130,19 @@ def test_softening_beam_with_tip_mass_escapes():
     assert f"{b.energy[-1]:.6g}" in b.message
 
 
+def test_hardening_spring_between_masses_decades_apart_never_escapes():
+    """A hardening relative cubic spring (k3 > 0: the potential is convex, x = 0 its only equilibrium) between
+    a 1 t and a 1 g mass: mode 2's orbits carry a small component of the stiff light mode, whose linear force
+    dominates |Omega^2 q|; the modal restoring-force norm ratio then fell below ESCAPE_RATIO at 1.1 kJ and the
+    branch was stopped as an escape.  The work ratio q . F / q . Omega^2 q (>= 1 when hardening) prevents it."""
+    M = np.diag([1e3, 1e-3, 1e3])
+    K = 1e9 * np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
+    b = nnm.continue_nnm(nnm.Model(M, K, springs=[nnm.CubicSpring(dof=0, other=1, k3=1e15)]), 2, 1e4,
+                         max_points=300)
+    assert b.status == "done", b.message
+    assert np.all(np.diff(b.frequency_hz) > 0)          # hardening all the way
+
+
 def test_softening_cantilever_never_runs_past_its_escape():
     """Without a payload the NNM meets k:1 tongues with mode 2 (k = 7, 9, 11, ...) on its way to the
     saddle: the continuation either passes them and stops at the escape, or follows one whose loop
