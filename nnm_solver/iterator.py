@@ -357,6 +357,9 @@ class NNMIterator:
             if len(over) > len(steps):
                 message += (f"; {len(over) - len(steps)} points exceed freq_tol = {self.freq_tol:g} because of the "
                             f"corrector's tolerance: lower tol (now {self._tol:g})")
+        if not self.settings.floquet and self.points:
+            message += ("; stability was not computed (floquet off: the points are not known to be stable, and "
+                        "stability changes and branch points are not detected; pass floquet=True)")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=message,
                                   events=self.events if self.locate else None, tongues=tongues)

@@ -31,7 +31,9 @@ def plot_fep(branches, ax=None, path=None, title=None):
         label = b.name or f"NNM {b.mode}"
         ax.plot(b.energy, b.frequency_hz, "-", color=c, lw=1.0, alpha=0.6)
         st = b.stable
-        ax.plot(b.energy[st], b.frequency_hz[st], "o", ms=3.5, color=c, label=f"{label} stable")
+        known = not np.all(np.isnan(np.asarray(b.floquet))) if len(b.energy) else True
+        ax.plot(b.energy[st], b.frequency_hz[st], "o", ms=3.5, color=c,
+                label=f"{label} stable" if known else f"{label} (stability not computed)")
         if np.any(~st):
             ax.plot(b.energy[~st], b.frequency_hz[~st], "o", ms=4, mfc="none", color=c, label=f"{label} unstable")
         for e in b.events:
