@@ -233,6 +233,17 @@ def same_tongue(t, done):
     return None
 
 
+def overlapping_tongue(t, tb, kept):
+    """Index of a kept tongue (record, branch) of ``kept`` with the same ratio and partner mode as ``t`` whose
+    branch spans an overlapping energy range: a second entry into the same tongue (e.g. where the backbone
+    stops) whose branch runs back over the first one's stretch; else None."""
+    for j, (t2, tb2) in enumerate(kept):
+        if (int(t["order"]) == int(t2["order"]) and int(t.get("partner_mode") or 0) == int(t2.get("partner_mode") or 0)
+                and tb.energy.min() <= tb2.energy.max() and tb.energy.max() >= tb2.energy.min()):
+            return j
+    return None
+
+
 def tongue_picks(tb, k, F):
     """Three points along a tongue branch like the seed's Fig. 12: (a) its entry, (c) the point where
     harmonic k carries most of the amplitude, (b) on the way from (a) to (c), where it carries half of that."""
@@ -695,6 +706,11 @@ def main(argv=None):
             j = same_tongue(t, pairs)
             if j is not None:   # e.g. branches computed before the check: each tongue is kept once
                 print(f"  tongue {i + 1} ({t['label']} at {t['entry_energy']:.4g} J) re-enters tongue {j + 1}: left out")
+                continue
+            j = overlapping_tongue(t, tb, pairs)
+            if j is not None:   # a second entry whose branch runs back over a kept one: each tongue is kept once
+                print(f"  tongue {i + 1} ({t['label']} at {t['entry_energy']:.4g} J, branch {tb.energy.min():.4g}.."
+                      f"{tb.energy.max():.4g} J) runs over the branch of tongue {j + 1}: left out", flush=True)
                 continue
             pairs.append((t, tb))
         res_dup = len(b.tongues) - len(pairs)

@@ -151,11 +151,26 @@ def add_tail(b: StructureBuilder, fus_nodes, tree):
                           [("elevator", 4, "elevator", "elevator", np.ones(len(yh) - 1, bool))], "htail")
     b.sections["htail tip R"] = H["ring"][-1]
     b.sections["htail tip L"] = H["ring"][0]
-    # T-tail junction: a rigid body joining the fin tip rib and the HT centre section
-    jt = b.pool(np.array([Pf[-1, 0] + 0.35 * fch[-1], 0.0, fin_top_z]), 400)[0]
+    jt = np.array([Pf[-1, 0] + 0.35 * fch[-1], 0.0, fin_top_z])
     centre_h = np.flatnonzero(np.abs(yh) <= 0.3)
-    legs = np.unique(np.concatenate([Fn["ring"][-1], H["ring"][centre_h].ravel()]))
-    fe.add_rigid_links("tail joints", jt, legs)
+    if p.htail_pitch_k > 0:
+        # T-tail fittings (builder 1.2): a rigid body on the fin tip rib and one on the horizontal tail's
+        # centre section, joined on the pitch axis (x = htail_pivot_x) by a bushing stiff in translation,
+        # roll and yaw and of pitch stiffness htail_pitch_k: the symmetric tail torsion (the horizontal
+        # tail twisting and pitching on the fin) is set by htail_pitch_k; the anti-symmetric modes and,
+        # with the axis near the tail's mass centre, the symmetric tail bending are not changed
+        if p.htail_pivot_x > 0:
+            jt[0] = p.htail_pivot_x
+        jf, jh = b.pool(jt, 400)[0], b.pool(jt, 401)[0]
+        fe.add_rigid_links("tail joints", jf, Fn["ring"][-1])
+        fe.add_rigid_links("htail fittings", jh, np.unique(H["ring"][centre_h].ravel()))
+        fe.add_bushing("htail fittings", jf, jh, [1e10, 1e10, 1e10, 1e10, p.htail_pitch_k, 1e10])
+        b.categories["htail fittings"] = "htail"
+    else:
+        # T-tail junction (builder <= 1.1): one rigid body joining the fin tip rib and the HT centre section
+        jt = b.pool(jt, 400)[0]
+        legs = np.unique(np.concatenate([Fn["ring"][-1], H["ring"][centre_h].ravel()]))
+        fe.add_rigid_links("tail joints", jt, legs)
     ids, st = H["te"]["elevator"]
     pick = st[[0, len(st) // 2, -1]]
     mid = H["idx"]["n_up"] + H["idx"]["n_low"] + H["idx"]["n_web"] // 2

@@ -11,7 +11,7 @@ import numpy as np
 
 from nnm_fem import FEModel
 
-BUILDER_VERSION = "1.1"
+BUILDER_VERSION = "1.2"
 
 #: The retained (interface) nodes, in reduced-model order: 4 per wing.
 ATTACHMENT_NAMES = ["wing R front (wing side)", "wing R front (tank side)",
@@ -48,7 +48,7 @@ class ParisParams:
     # fuselage structure
     fus_skin_t: float = 0.0019365
     fus_rear_skin_t: float = 0.0038227
-    fus_skin_tb: float = 0.012
+    fus_skin_tb: float = 0.011         # builder 1.2: 12 -> 11 mm (fuselage shell mode 94.2 -> 92.6 Hz)
     fus_frame_area: float = 4e-4
     fus_longeron_area: float = 0.00070499
     # tail structure
@@ -58,6 +58,11 @@ class ParisParams:
     tail_cap_area: float = 2e-4
     tail_tau: float = 0.12478
     fin_skin_ex: float = 0.90762       # fin skins: spanwise (vertical) membrane stiffness scale
+    htail_skin_ex: float = 1.0         # horizontal-tail skins: spanwise membrane stiffness scale (builder 1.2)
+    # T-tail fittings (builder 1.2): the horizontal tail pitches on the fin about a spanwise axis at
+    # x = htail_pivot_x (m), restrained by htail_pitch_k (N m/rad); htail_pitch_k = 0: one rigid junction
+    htail_pitch_k: float = 1.065e6
+    htail_pivot_x: float = 9.59
     # tip tanks and attachments
     tank_length: float = 2.9
     tank_radius: float = 0.225

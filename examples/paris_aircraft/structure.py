@@ -111,7 +111,7 @@ class StructureBuilder:
         taper = (chord / chord.max())
         tsk = np.repeat(t_skin * (0.55 + 0.45 * taper[:-1]), len(xc))
         self.shells(f"{name}", grid_quads(ring, True), tsk, tb_skin, mass_group, cat,
-                    ex_scale={"wing": p.wing_skin_ex, "fin": p.fin_skin_ex}.get(name, 1.0))
+                    ex_scale={"wing": p.wing_skin_ex, "fin": p.fin_skin_ex, "htail": p.htail_skin_ex}.get(name, 1.0))
         self.grids.append((name, ring, True))
         # front spar web
         wf = np.linspace(-1, 1, n_web + 1)

@@ -11,6 +11,10 @@ Builder 1.1 (tune_builder_1_1) re-tunes the whole spectrum on the fine mesh: the
 with the gear and hinge stiffnesses corrected on the FE model (tune_gear_layout,
 tune_low_modes_fe), then a Levenberg-Marquardt fit of up to 17 structural parameters on all the
 Table-2 slots 10-24 (tune_spectrum), the modes followed by their shapes (track_modes).
+
+Builder 1.2 (tune_builder_1_2) adds the T-tail fittings' pitch stiffness, fitted so that a global
+symmetric tail torsion sits just under three times mode 19 (tune_tail_torsion): the 3:1 internal
+resonance of the seed paper's Fig. 12.
 """
 from __future__ import annotations
 
@@ -449,3 +453,62 @@ def tune_builder_1_1(params, verbose=True):
     p, _, _ = tune_spectrum(p, SPECTRUM_NAMES_2, iterations=8, by="order", verbose=verbose)
     p = tune_low_modes_fe(p, iterations=3, verbose=verbose)
     return dataclasses.replace(p, wing_skin_ex=1.03 * p.wing_skin_ex)
+
+
+# ---------------------------------------------------------------------------------------------
+# Builder 1.2: a global tail torsion for mode 19's 3:1 internal resonance (seed paper, Fig. 12)
+# ---------------------------------------------------------------------------------------------
+
+def tail_torsion_index(labels, kinds):
+    """Index of the first symmetric mode with most of its strain energy in the empennage labelled a
+    horizontal-tail torsion (the tail torsion of builder 1.2), or None."""
+    for i, (lab, kind) in enumerate(zip(labels, kinds)):
+        if lab.startswith("horizontal tail torsion") and kind[2] == "symmetric":
+            return i
+    return None
+
+
+def tune_tail_torsion(params, margin=0.0032, iterations=6, tol=2e-4, n_modes=45, verbose=True):
+    """Secant iteration in log(htail_pitch_k) that puts the symmetric tail torsion at
+    3 x f19 x (1 - margin), f19 = the frequency of mode 19 (slot 19, the symmetric wing torsion):
+    slightly below three times f19, where the softening backbone of mode 19 meets it (the 3:1
+    internal resonance of the paper's Fig. 12).  Returns (params, history of (k, f_tail, f19))."""
+    hist = []
+    logk = np.log(params.htail_pitch_k)
+    for it in range(iterations):
+        p = dataclasses.replace(params, htail_pitch_k=float(np.exp(logk)))
+        f, labels, kinds, _, _ = labelled_spectrum(p, n_modes=n_modes)
+        i = tail_torsion_index(labels, kinds)
+        if i is None:
+            raise NNMInputError(f"no symmetric horizontal-tail torsion below {f[-1]:.0f} Hz at k = {np.exp(logk):.4g}")
+        target = 3 * f[18] * (1 - margin)
+        hist.append((float(np.exp(logk)), float(f[i]), float(f[18])))
+        if verbose:
+            print(f"tail torsion, iteration {it}: k {np.exp(logk):.5g} N m/rad -> mode {i + 1} at {f[i]:.4f} Hz, "
+                  f"target {target:.4f} Hz (f19 {f[18]:.4f} Hz)", flush=True)
+        r = np.log(f[i] / target)
+        if abs(r) < tol:
+            return p, hist
+        if len(hist) < 2:
+            step = -2 * r          # f ~ sqrt(k) away from the veering with the fuselage
+        else:
+            (k0, f0, g0), (k1, f1, g1) = hist[-2], hist[-1]
+            slope = (np.log(f1 / (3 * g1)) - np.log(f0 / (3 * g0))) / (np.log(k1) - np.log(k0))
+            step = -r / slope if abs(slope) > 1e-3 else -2 * r
+        logk += float(np.clip(step, -0.2, 0.2))
+    return dataclasses.replace(params, htail_pitch_k=float(np.exp(logk))), hist
+
+
+def tune_builder_1_2(params, verbose=True):
+    """Builder 1.2 from the builder-1.1 values (see docs/aircraft.md, "Tuning", third round):
+
+    1. the horizontal tail on pitch fittings: pitch axis at x = htail_pivot_x = 9.59 m (about the
+       mass centre of the horizontal tail with its elevator, so that the symmetric tail bending does
+       not pitch: it stays at 53.8 Hz), pitch stiffness htail_pitch_k;
+    2. the fuselage skins' bending thickness fus_skin_tb 12 -> 11 mm: the fuselage shell mode at
+       94.2 Hz (symmetric ovalisation of the cabin and the rear fuselage) drops to 92.6 Hz, out of
+       the way of the tail torsion (they veer with a gap of about 2 Hz);
+    3. htail_pitch_k by tune_tail_torsion: the symmetric tail torsion 0.32 % under 3 x f19."""
+    p = dataclasses.replace(params, htail_pivot_x=9.59, fus_skin_tb=0.011, htail_pitch_k=1.1e6)
+    p, _ = tune_tail_torsion(p, verbose=verbose)
+    return p
