@@ -7,6 +7,7 @@ import pytest
 
 import nnm_solver
 from nnm_fem import modes
+from nnm_solver import analysis
 from nnm_solver.analysis import mass_mac
 from nnm_solver.errors import NNMInputError
 from paris_aircraft import BUILDER_VERSION, ParisParams, build_paris
@@ -197,3 +198,6 @@ def test_shipped_branches_each_tongue_once(shipped):
     # along the 3:1 tongue of mode 19 the motion turns into the tail torsion: its third harmonic dominates
     tb = next(b for b in branches if b.name.startswith("mode19: tongue") and "(3:1)" in b.name)
     assert tb.energy.max() > 100.0
+    share = analysis.harmonic_fractions(tb, 4)[:, 3]
+    assert share[0] < 0.1 and np.nanmax(share) > 0.9
+    assert shipped.mode_labels[38] == "horizontal tail torsion 1 (symmetric)"
