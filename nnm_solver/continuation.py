@@ -269,6 +269,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             # the caller refuses the step (its events could not be located inside it): back to the
             # previous point, half the step
             u, J, p, factor, w = previous
+            problem.jacobian(u)         # the problem's state (e.g. its last sensitivity maps) at that point again
             problem.accept(u, J)
             s = max(0.5 * s, settings.step_min)
             continue

@@ -36,6 +36,9 @@ EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 #: are those of the step's two ends
 FOLD_REACH = 1e-2
 
+#: ... and a located +1 crossing within this many steps of a fold (along the branch) is the fold's too
+FOLD_MERGE = 5e-2
+
 #: the kind of instability of a multiplier set (floquet.instability_kind)
 classify_multipliers = instability_kind
 
@@ -105,14 +108,16 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             pe = record(sig)
         except CorrectorFailure:
             pe, located = pu, False
-        if fold is not None and abs(pe.energy - fold[1].energy) <= 1e-4 * abs(fold[1].energy):
+        if located and fold is not None and kind == "branch_point" and abs(sig - fold[0]) <= FOLD_MERGE * abs(s):
+            # the real-crossing test function is flat at a fold, so its root lands near it, not on it: the fold's
+            # (by the distance along the branch, not by energy, which is flat there)
             events[-1]["stability_change"] = change
-        else:
-            crit = pu.floquet[0]
-            through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
-            events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
-                                                        f"(next point: {crit:.5g})", stability_change=change,
-                                       **({} if located else dict(located=False))))
+            return events, end
+        crit = pu.floquet[0]
+        through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
+        events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
+                                                    f"(next point: {crit:.5g})", stability_change=change,
+                                   **({} if located else dict(located=False))))
     return events, end
 
 

@@ -149,6 +149,7 @@ class NNMIterator:
         self._engine.close()
         self._engine = pseudo_arclength(prob, cp.u, cp.tangent, self._cs, self._tol)
         self._prev = None                       # no event is located across a change of time step
+        self._refusals = 0
         return True
 
     def _estimate_error(self, point):
@@ -242,6 +243,7 @@ class NNMIterator:
         self._engine.close()
         self._engine = pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol)
         self._prev = None          # no events are located across the jump
+        self._refusals = 0
         return True
 
     @staticmethod

@@ -7,7 +7,7 @@ discriminant of the colliding pair (floquet.krein_gap), linear in the branch par
 collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
 (shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
 stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
-neither end) is caught by probing the full flag.
+neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.
 """
 from __future__ import annotations
 

@@ -22,7 +22,9 @@ MAX_DENSE_DOF = 6000
 
 def _as_matrix(name, A):
     if np.iscomplexobj(A.data if sp.issparse(A) else A):
-        raise NNMInputError(f"{name} has complex entries; conservative models need real symmetric matrices")
+        if np.any(np.imag(A.data if sp.issparse(A) else np.asarray(A)) != 0):
+            raise NNMInputError(f"{name} has complex entries; conservative models need real symmetric matrices")
+        A = A.real if sp.issparse(A) else np.real(np.asarray(A))
     if sp.issparse(A):
         A = A.tocsr().astype(float)
         data = A.data
@@ -80,7 +82,9 @@ class Model:
         _check_symmetric("K", K)
         self.M = M
         self.K = K
-        if not isinstance(springs, (list, tuple)):
+        if springs is None:
+            springs = ()
+        elif not isinstance(springs, (list, tuple)):
             springs = [springs] if hasattr(springs, "law") else springs
         try:
             self.springs = list(springs)

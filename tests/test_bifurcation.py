@@ -302,3 +302,65 @@ def test_similar_mode_loss_of_stability_matches_hills_equation():
     changes = stability_changes(b.events)
     assert len(changes) == 1 and changes[0]["kind"] == "branch_point" and changes[0]["stability_change"] == "loss"
     assert abs(changes[0]["energy"] / exact - 1) < 2e-8, (changes[0]["energy"], exact)
+
+
+def _fold_and_crossing_step(s_fold, s_cross):
+    """A synthetic step sigma 0 -> 1: the energy 1 - 1e-3 (sigma - s_fold)^2 (a fold at s_fold) and a real pair
+    through +1 at s_cross.  Returns (locator, point(sigma), slope(sigma))."""
+    import types
+    from nnm_solver.floquet import is_stable, sort_multipliers
+    from nnm_solver.locator import Locator
+
+    def energy(s):
+        return 1.0 - 1e-3 * (s - s_fold) ** 2
+
+    def slope(s):
+        return -2e-3 * (s - s_fold)
+
+    def mults(s):
+        rho = 1.0 + (s - s_cross)
+        m = ([np.exp(1j * np.arccos(rho)), np.exp(-1j * np.arccos(rho))] if rho <= 1 else
+             [rho + np.sqrt(rho * rho - 1), 1 / (rho + np.sqrt(rho * rho - 1))])
+        return sort_multipliers(np.array(m + [np.exp(0.7j), np.exp(-0.7j), 1.0, 1.0]))
+
+    class Synthetic(Locator):
+        def __init__(self):
+            self.cache, self.spectra = {}, {}
+            self.problem = types.SimpleNamespace()
+
+        def at(self, s):
+            self.cache[float(s)] = None
+
+        def energy(self, s):
+            self.at(s)
+            return energy(s)
+
+        def slope(self, s):
+            self.at(s)
+            return slope(s)
+
+        def multipliers(self, s):
+            self.at(s)
+            return mults(s)
+
+    def point(s):
+        mu = mults(s)
+        return types.SimpleNamespace(energy=energy(s), frequency_hz=1.0 + s, period=1 / (1.0 + s), x0=[s], v0=[0.0],
+                                     floquet=mu, stable=is_stable(mu), _collision=None)
+    return Synthetic(), point, slope
+
+
+@pytest.mark.parametrize("s_cross, merged", [(0.3, True), (0.45, False)])
+def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
+    """A pair through +1 at the fold is the fold's stability change; one 15 % of the step further along the
+    branch is a branch point of its own, although its energy is within 3e-5 of the fold's (energy is flat at a
+    fold: it once was merged by energy)."""
+    from nnm_solver.events import locate_between
+    loc, point, slope = _fold_and_crossing_step(0.3, s_cross)
+    events, _ = locate_between(loc, 1.0, (point(0.0), slope(0.0)), (point(1.0), slope(1.0)), 5, point)
+    kinds = [e["kind"] for e in events]
+    if merged:
+        assert kinds == ["fold"] and events[0]["stability_change"] == "loss"
+    else:
+        assert kinds == ["fold", "branch_point"] and "stability_change" not in events[0]
+        assert abs(events[1]["x0"][0] - s_cross) < 1e-6 and events[1]["stability_change"] == "loss"

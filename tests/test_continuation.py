@@ -173,3 +173,21 @@ def test_general_phase_condition_agrees_with_reversible(two_dof):
     inside = (rev.energy > gen.energy[0]) & (rev.energy < gen.energy[-1])
     assert np.allclose(rev.frequency_hz[inside], f[inside], rtol=2e-4)
     assert np.all(np.abs(gen.v0) < 1e-3 * np.abs(gen.x0).max())   # it also finds the orbits at rest
+
+
+def test_engine_refuses_a_point_and_retries_with_half_the_step():
+    """send(REFUSE) takes the engine back to the point before the refused one and steps again with half the
+    step: the new point lies on the branch between the two."""
+    import nnm_solver.continuation as co
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=1.0)])
+    it = nnm.iter_nnm(m, 1, 10.0)
+    next(it)
+    eng = co.pseudo_arclength(it._problem, it._prev[0].u, it._prev[0].tangent, it._cs, it._tol)
+    first = next(eng)
+    second = next(eng)
+    third = eng.send(co.REFUSE)
+    assert np.isclose(third.step, 0.5 * second.step)
+    E = [it._problem.energy(cp.u) for cp in (first, third, second)]
+    assert E[0] < E[1] < E[2]
+    fourth = next(eng)                      # and goes on from there
+    assert it._problem.energy(fourth.u) > E[1]
