@@ -10,7 +10,7 @@ the two points is zeroed by the Illinois (regula falsi) method, or by bisection 
 * stability    the stability flag of the non-trivial Floquet multipliers (floquet.py);
 * energy_max   g = E - energy_max (the branch ends exactly at the requested energy).
 
-Events are located to a relative energy tolerance of 1e-8 (or to a step of 1e-12 in sigma) and
+Events are located to a relative energy tolerance of 1e-8 to 5e-7 (locator.event_rtol) (or to a step of 1e-12 in sigma) and
 stored with their orbit (x0, v0 in m, m/s; period in s).  A change of stability is classified by the
 critical multiplier on its unstable side: ``branch_point`` (a real pair through +1 away from a fold:
 pitchfork or transcritical), ``period_doubling`` (through -1), ``torus`` (a complex quadruple leaves

@@ -13,6 +13,7 @@ import numpy as np
 from .branch import Branch, Point
 from .continuation import REFUSE, ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
 from .events import Locator, locate_between
+from .locator import event_rtol
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
@@ -282,7 +283,8 @@ class NNMIterator:
         if prev is None:
             return point, state
         pcp, ppoint, pslope = prev
-        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step)
+        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step,
+                      rtol=event_rtol(getattr(ppoint, "_disc_error", ppoint.freq_error)))
         loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
         if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
             loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)

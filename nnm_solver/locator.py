@@ -15,10 +15,22 @@ import numpy as np
 from .continuation import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
 from .floquet import is_stable, real_crossing, sort_multipliers
 
-__all__ = ["Locator", "EVENT_RTOL"]
+__all__ = ["Locator", "EVENT_RTOL", "event_rtol"]
 
-#: relative energy tolerance of located events
+#: relative energy tolerance of located events (the finest; see event_rtol)
 EVENT_RTOL = 1e-8
+#: ... the coarsest, where the time discretisation's error is large anyway
+EVENT_RTOL_MAX = 5e-7
+
+
+def event_rtol(freq_error):
+    """Relative energy tolerance of the events of a step whose points have the estimated relative frequency error
+    freq_error (the time discretisation's, ShootingProblem.frequency_error): a hundredth of it, within
+    [EVENT_RTOL, EVENT_RTOL_MAX] (EVENT_RTOL when there is no estimate).  Locating far below the discretisation
+    error would only cost corrector runs."""
+    if not np.isfinite(freq_error):
+        return EVENT_RTOL
+    return float(min(max(0.01 * freq_error, EVENT_RTOL), EVENT_RTOL_MAX))
 
 #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
 CHORD_REACH = 1.0
@@ -35,10 +47,15 @@ class Locator:
     phase reference, last monodromy -- is untouched); settings, tol : the continuation's.
     """
 
-    def __init__(self, problem, settings, tol, u_a, p_a, step=None):
+    #: relative energy tolerance of the located events (set per step: event_rtol)
+    rtol = EVENT_RTOL
+
+    def __init__(self, problem, settings, tol, u_a, p_a, step=None, rtol=EVENT_RTOL):
         """step : the continuation's step from a to the next point (scaled units): located points closer
-        than CHORD_REACH x step to the latest one start from it (chord iterations with its factorisation)."""
+        than CHORD_REACH x step to the latest one start from it (chord iterations with its factorisation).
+        rtol : relative energy tolerance of the events (event_rtol)."""
         self.step = step
+        self.rtol = rtol            # relative energy tolerance of located events (event_rtol)
         self.latest = None          # (sigma, u, factorisation of [J; (w^2 p_a)^T]) of the latest located point
         self.problem = copy.copy(problem)
         self.settings = settings
@@ -168,7 +185,7 @@ class Locator:
 
     def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60, converged=None):
         """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi).  converged(a, b, fa, fb)
-        : when to stop (default: the energies at the bracket's ends agree to EVENT_RTOL)."""
+        : when to stop (default: the energies at the bracket's ends agree to the locator's rtol)."""
         converged = converged or (lambda a_, b_, fa_, fb_: self._converged(a_, b_))
         a, fa = lo, (g(lo) if g_lo is None else g_lo)
         b, fb = hi, (g(hi) if g_hi is None else g_hi)
@@ -197,7 +214,7 @@ class Locator:
     def fold_converged(self, a, b, ga, gb):
         """Stop rule of a fold's root on the energy slope g = dE/dsigma: the energy of the better end lies
         below the extremum by about g^2 / (2 |dg/dsigma|) (the parabola through the extremum), within
-        EVENT_RTOL / 10 of it.  (Equal energies at the bracket's ends are no test here: two points on either
+        rtol / 10 of it.  (Equal energies at the bracket's ends are no test here: two points on either
         side of an extremum have them while far from it.)"""
         if abs(b - a) <= 1e-12 * max(1.0, abs(b)):
             return True
@@ -207,7 +224,7 @@ class Locator:
             E = abs(self.energy(a if abs(ga) <= abs(gb) else b))
         except CorrectorFailure:
             return False
-        return curvature > 0 and best * best / (2 * curvature) <= 0.1 * EVENT_RTOL * E
+        return curvature > 0 and best * best / (2 * curvature) <= 0.1 * self.rtol * E
 
     def around(self, sigma):
         """The known points nearest sigma on each side (sigma keys; None where there is none)."""
@@ -236,4 +253,4 @@ class Locator:
             E_lo, E_hi = self.energy(lo), self.energy(hi)
         except CorrectorFailure:
             return False
-        return abs(E_hi - E_lo) <= EVENT_RTOL * max(abs(E_lo), abs(E_hi))
+        return abs(E_hi - E_lo) <= self.rtol * max(abs(E_lo), abs(E_hi))
