@@ -19,6 +19,7 @@ from .branch import Point
 from .continuation import ContinuationSettings, pseudo_arclength
 from .errors import NNMInputError
 from .iterator import NNMIterator
+from .tongue_skip import leaves_backbone
 from .modal import modal_system
 from .model import Model
 from .orbits.harmonic_balance import BASES, HBBasis, HBProblem
@@ -325,7 +326,7 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     last, inside = E_in, False
     for p in it:
         inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
-        if inside and p.energy > E_in and p.energy > last and not it._entering_tongue(p, entry):
+        if inside and p.energy > E_in and p.energy > last and not leaves_backbone(p, entry):
             it.cancel(f"back on the backbone at E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz, above the "
                       f"tongue's entry at {E_in:.6g} J")
             break

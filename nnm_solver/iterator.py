@@ -17,7 +17,7 @@ from .locator import event_rtol
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
-from .tongue_skip import SKIP_FRACTION, TongueSkipper, harmonic_label, partner_mode
+from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record
 
 #: the most steps per period the freq_tol refinement goes to
 MAX_STEPS_PER_PERIOD = 20000
@@ -173,7 +173,7 @@ class NNMIterator:
             rising = point.energy > t["last_energy"]
             t["last_energy"] = point.energy
             trend_ok = (point.frequency_hz - t["entry_frequency_hz"]) * t["trend"] >= -1e-4 * t["entry_frequency_hz"]
-            if rising and trend_ok and point.energy > t["entry_energy"] and not self._entering_tongue(point, t["backbone"]):
+            if rising and trend_ok and point.energy > t["entry_energy"] and not leaves_backbone(point, t["backbone"]):
                 t.update(exit_energy=point.energy, exit_frequency_hz=point.frequency_hz)
                 self._tongue = None
                 self._prev = None              # no event is located across the tongue
@@ -184,7 +184,7 @@ class NNMIterator:
                              f"({t['hidden_points']} points inside it)")
                 raise StopIteration
             return True
-        if self._last_backbone is None or not self._entering_tongue(point, self._last_backbone[1]):
+        if self._last_backbone is None or not leaves_backbone(point, self._last_backbone[1]):
             return False
         bpoint = self._last_backbone[1]
         trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
@@ -196,39 +196,18 @@ class NNMIterator:
         self._tongue = t
         return True
 
-    def _entering_tongue(self, point, bpoint):
-        """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy
-        turned back (a backbone continued in energy has no fold), or a harmonic k >= 2 carries
-        SKIP_FRACTION of its amplitude and grew by half since the last backbone point."""
-        if point.energy < bpoint.energy:
-            return True
-        k, frac = self._content(point)
-        kb, frac_b = self._content(bpoint)
-        return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
-
-    @staticmethod
-    def _content(point):
-        """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (measured when it was recorded)."""
-        return getattr(point, "_content", (1, 0.0))
-
     def _skip(self, cp, point):
         """Jump over the tongue that ``point`` entered (tongue_skip.py); True if the continuation now
         restarts beyond it."""
         bcp, bpoint = self._last_backbone
         Q = self._problem.modal_orbit(cp.u)
         k = harmonic_label(Q)[1] if Q is not None else 1
-        mode, mac = partner_mode(self._system, Q, k) if Q is not None else (0, float("nan"))
-        tongue = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
-                      entry_index=len(self.points) - 1, entry_energy=bpoint.energy,
-                      entry_frequency_hz=bpoint.frequency_hz, entry_period=bpoint.period,
-                      entry_x0=np.asarray(bpoint.x0).tolist(), entry_v0=np.asarray(bpoint.v0).tolist(),
-                      inside_x0=np.asarray(point.x0).tolist(), inside_v0=np.asarray(point.v0).tolist(),
-                      inside_period=point.period)
+        tongue = tongue_record(self._system, Q, k, bpoint, point, len(self.points) - 1)
         self._last_backbone = None
         E_base = max(bpoint.energy, point.energy)
         jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
         previous = self.tongues[-1] if self.tongues else None
-        if previous is not None and self._same_tongue(previous, tongue):
+        if previous is not None and same_tongue(previous, tongue):
             # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
             previous["reentries"] = previous.get("reentries", 0) + 1
             previous.pop("exit_energy", None)
@@ -246,15 +225,6 @@ class NNMIterator:
         self._prev = None          # no events are located across the jump
         self._refusals = 0
         return True
-
-    @staticmethod
-    def _same_tongue(a, b):
-        """Is tongue record b the tongue a entered again?  Same order and partner mode, entry frequency within
-        0.1 %, and b's entry at most 10 % above a's exit (or a's entry when it has no exit)."""
-        E_out = a.get("exit_energy", a["entry_energy"])
-        return (a["order"] == b["order"] and a["partner_mode"] == b["partner_mode"]
-                and abs(b["entry_frequency_hz"] / a["entry_frequency_hz"] - 1) < 1e-3
-                and b["entry_energy"] <= 1.1 * E_out)
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""

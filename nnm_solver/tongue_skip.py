@@ -28,7 +28,7 @@ from .analysis.harmonics import RESONANCE_FRACTION
 from .continuation import CorrectorFailure, correct
 from .fourier import fourier_coefficients
 
-__all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION"]
+__all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION", "leaves_backbone", "same_tongue", "tongue_record"]
 
 #: highest harmonic looked at for labels
 LABEL_HARMONICS = 25
@@ -65,6 +65,42 @@ def partner_mode(system, Q, k):
     m = shape ** 2 / max(shape @ shape, 1e-300)        # MAC with each unit modal vector
     r = int(np.argmax(m))
     return r + 1, float(m[r])
+
+
+def tongue_record(system, Q, k, bpoint, point, entry_index):
+    """The record of a k:1 tongue entered from the backbone point ``bpoint`` (index entry_index) into ``point``
+    (Q: its modal orbit): ratio, partner mode (partner_mode) and the entry and inside orbits."""
+    mode, mac = partner_mode(system, Q, k) if Q is not None else (0, float("nan"))
+    return dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
+                entry_index=entry_index, entry_energy=bpoint.energy, entry_frequency_hz=bpoint.frequency_hz,
+                entry_period=bpoint.period, entry_x0=np.asarray(bpoint.x0).tolist(),
+                entry_v0=np.asarray(bpoint.v0).tolist(), inside_x0=np.asarray(point.x0).tolist(),
+                inside_v0=np.asarray(point.v0).tolist(), inside_period=point.period)
+
+
+def harmonic_content(point):
+    """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (measured when it was recorded)."""
+    return getattr(point, "_content", (1, 0.0))
+
+
+def leaves_backbone(point, bpoint):
+    """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy turned back (a
+    backbone continued in energy has no fold), or a harmonic k >= 2 carries SKIP_FRACTION of its amplitude and
+    grew by half since the last backbone point."""
+    if point.energy < bpoint.energy:
+        return True
+    k, frac = harmonic_content(point)
+    kb, frac_b = harmonic_content(bpoint)
+    return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
+
+
+def same_tongue(a, b):
+    """Is tongue record b the tongue a entered again?  Same order and partner mode, entry frequency within
+    0.1 %, and b's entry at most 10 % above a's exit (or a's entry when it has no exit)."""
+    E_out = a.get("exit_energy", a["entry_energy"])
+    return (a["order"] == b["order"] and a["partner_mode"] == b["partner_mode"]
+            and abs(b["entry_frequency_hz"] / a["entry_frequency_hz"] - 1) < 1e-3
+            and b["entry_energy"] <= 1.1 * E_out)
 
 
 class TongueSkipper:

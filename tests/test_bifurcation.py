@@ -121,14 +121,14 @@ def test_events_labels_and_tongues_survive_the_file(tmp_path):
 
 
 def test_a_tongue_re_entered_while_skipping_is_one_record():
-    from nnm_solver.iterator import NNMIterator
+    from nnm_solver.tongue_skip import same_tongue
     a = dict(order=9, partner_mode=263, entry_energy=12.20, entry_frequency_hz=33.9984, exit_energy=12.45)
     again = dict(order=9, partner_mode=263, entry_energy=12.51, entry_frequency_hz=33.9981)
-    assert NNMIterator._same_tongue(a, again)
-    assert not NNMIterator._same_tongue(a, dict(again, order=15))                  # another tongue
-    assert not NNMIterator._same_tongue(a, dict(again, partner_mode=502))
-    assert not NNMIterator._same_tongue(a, dict(again, entry_energy=20.0))          # further up the backbone
-    assert not NNMIterator._same_tongue(a, dict(again, entry_frequency_hz=33.90))
+    assert same_tongue(a, again)
+    assert not same_tongue(a, dict(again, order=15))                  # another tongue
+    assert not same_tongue(a, dict(again, partner_mode=502))
+    assert not same_tongue(a, dict(again, entry_energy=20.0))          # further up the backbone
+    assert not same_tongue(a, dict(again, entry_frequency_hz=33.90))
 
 
 def _combination_resonance_model():
