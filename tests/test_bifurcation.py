@@ -364,3 +364,38 @@ def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
     else:
         assert kinds == ["fold", "branch_point"] and "stability_change" not in events[0]
         assert abs(events[1]["x0"][0] - s_cross) < 1e-6 and events[1]["stability_change"] == "loss"
+
+
+def test_locator_prediction_is_on_its_hyperplane_and_exact_for_a_cubic_branch():
+    """Between two known points the locator predicts by cubic Hermite interpolation in sigma (values and
+    tangents, du/dsigma = p / (w^2 p_a . p)): on sigma's hyperplane, and exact for a branch that is a cubic in
+    sigma; outside the known points, the nearest point's tangent line."""
+    from nnm_solver.locator import Locator
+    rng = np.random.default_rng(3)
+    n = 6
+    w = rng.uniform(0.5, 2.0, n)
+    p_a = rng.standard_normal(n)
+    p_a /= np.linalg.norm(w * p_a)
+    row = w * w * p_a
+    c1, c2 = 0.2 * rng.standard_normal(n), 0.1 * rng.standard_normal(n)      # a gently curved branch
+    c1 -= (row @ c1) / (row @ p_a) * p_a                 # sigma = row . (u - u_a) exactly along the branch
+    c2 -= (row @ c2) / (row @ p_a) * p_a
+    u_a = rng.standard_normal(n)
+
+    def u(s):
+        return u_a + s * p_a + s * s * c1 + s ** 3 * c2
+
+    def du(s):
+        d = p_a + 2 * s * c1 + 3 * s * s * c2
+        return 7.0 * d / np.linalg.norm(w * d)           # any normalisation of the tangent
+    loc = Locator.__new__(Locator)
+    loc.w, loc.p_a, loc.u_a, loc.cache = w, p_a, u_a, {}
+    for s in (0.0, 1.0):
+        loc.cache[s] = (u(s), None, du(s))
+    for s in (0.13, 0.5, 0.91):
+        pred = loc.prediction(s)
+        assert abs(row @ (pred - u_a) - s) < 1e-12
+        assert np.allclose(pred, u(s), atol=1e-12)
+    ext = loc.prediction(1.2)                              # beyond: the tangent line at sigma = 1
+    assert abs(row @ (ext - u_a) - 1.2) < 1e-12
+    assert np.allclose(ext, u(1.0) + 0.2 * du(1.0) / (row @ du(1.0)), atol=1e-12)
