@@ -13,8 +13,8 @@ import numpy as np
 from .branch import Branch, Point
 from .continuation import REFUSE, ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
 from .events import Locator, locate_between
-from .locator import event_rtol
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
+from .locator import event_rtol
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
 from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record
