@@ -10,7 +10,8 @@ Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
     nnm.save_branch("file.h5", branch); nnm.load_branches("file.h5")
 """
 from .errors import NNMFileError, NNMInputError
-from .elements import CubicSpring, ElementSet, PiecewiseLinearSpring, PolynomialSpring
+from .element_set import ElementSet
+from .elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring
 from .mesh import DisplayMesh
 from .model import Model
 from .modal import ModalSystem, modal_system

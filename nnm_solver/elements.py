@@ -4,7 +4,8 @@ Every element acts on one scalar deformation d = x[dof] (grounded) or d = x[dof]
 (relative), i.e. d = B x with one row of B, and returns a restoring force g(d) (N) along that
 deformation; the model force is  f_nl(x) = B^T g(B x)  and the potential  V(x) = sum_s P_s(d_s),
 P' = g.  The time integrators, harmonic balance, Hill's method and the model's energy all evaluate
-the elements through ``ElementSet``, so a new element is added here and nowhere else.
+the elements through ``element_set.ElementSet``, built from each element's ``law()``, ``kinks()`` and
+``linear_stiffness``, so a new element is added here and nowhere else.
 
 Two law families, summed per element (an element uses one of them, the table holds both):
 
@@ -24,14 +25,7 @@ Two law families, summed per element (an element uses one of them, the table hol
   ~w of d1) the smoothed kink already acts where the exact one does not, an error of order (dk / k) eps
   (docs/elements.md: 1e-2 for a contact 1000x stiffer than the structure at eps = 1e-3).
 
-``ElementSet`` stores the laws as a table (powers (P,), coefficients (n_s, P), kinks (n_s, J, 3 or 4)),
-kinks[s, j] = (dk, b, w[, side]) (dk = 0: unused row; J = 0 when no element has kinks, so the polynomial
-path costs what it did; the fourth column only when some kink is one-sided, laws.py) that the numba-compiled kernels ``law_force`` / ``law_force_tangent``
-evaluate; numpy callers use ``ElementSet.force``, ``tangent`` and ``potential``.  A set whose
-powers are all odd and no one-sided kink gives an odd f_nl (f_nl(-x) = -f_nl(x)): its NNMs are
-half-wave symmetric, which the shooting exploits.  An asymmetric ``PiecewiseLinearSpring`` (tension
-!= compression) has one-sided kinks, kinks[s, j] = (dk, b, w, +1) for d > 0 and (dk, b, w, -1) for
-d < 0: each side's law is that of an odd spring restricted to that side.
+The table of the laws that the kernels evaluate is ``element_set.ElementSet``.
 """
 from __future__ import annotations
 
@@ -42,10 +36,8 @@ import numpy as np
 import math
 
 from .errors import NNMInputError, finite_number
-from .laws import law_force, law_force_tangent, ramp_integral, sigmoid, softplus  # noqa: F401 (kernels)
 
-__all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "element_law", "law_force",
-           "law_force_tangent"]
+__all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "element_law", "check_element", "PWL_EPS"]
 
 #: default regularisation of PiecewiseLinearSpring: kink width eps * d1
 PWL_EPS = 1e-3
@@ -282,95 +274,3 @@ def check_element(i, element, n):
     for p, c in element_law(element).items():
         if not np.isfinite(c):
             raise NNMInputError(f"spring {i}: coefficient of d^{p} is {c}, not finite")
-
-
-class ElementSet:
-    """The nonlinear elements of a model, evaluated together on their deformations d = B x.
-
-    B (n_s, n) selection matrix; powers (P,) int64 and coefficients (n_s, P) float of the polynomial
-    force laws; kinks (n_s, J, 3 or 4) float (dk, b, w[, side]) of the regularised piecewise-linear laws; k0 (n_s,)
-    the elements' linear stiffnesses (part of the linear model, not of g).  ``force``, ``tangent`` and
-    ``potential`` take d (..., n_s) and return (..., n_s) in N, N/m and J.
-    """
-
-    def __init__(self, elements, n):
-        self.elements = list(elements)
-        self.n = int(n)
-        ns = len(self.elements)
-        self.B = np.zeros((ns, self.n))
-        for s, e in enumerate(self.elements):
-            self.B[s, e.dof] = 1.0
-            if e.other is not None:
-                self.B[s, e.other] = -1.0
-        laws = [element_law(e) for e in self.elements]
-        self.powers = np.array(sorted({p for law in laws for p in law}) or [3], dtype=np.int64)
-        self.coefficients = np.zeros((ns, len(self.powers)))
-        for s, law in enumerate(laws):
-            for p, c in law.items():
-                self.coefficients[s, int(np.flatnonzero(self.powers == p)[0])] = c
-        kinks = [e.kinks() if hasattr(e, "kinks") else [] for e in self.elements]
-        cols = 4 if any(len(row) > 3 for ks in kinks for row in ks) else 3     # side column: one-sided kinks only
-        self.kinks = np.zeros((ns, max((len(k) for k in kinks), default=0), cols))
-        for s, ks in enumerate(kinks):
-            for j, row in enumerate(ks):
-                self.kinks[s, j, :len(row)] = row
-        self.k0 = np.array([getattr(e, "linear_stiffness", 0.0) for e in self.elements], dtype=float)
-
-    @property
-    def cubic_only(self):
-        """True when every force law is a pure cubic (the exact scaling law applies)."""
-        used = np.any(self.coefficients != 0.0, axis=0)
-        return not np.any(self.kinks[..., 0] != 0.0) and set(self.powers[used].tolist()) <= {3}
-
-    def __len__(self):
-        return len(self.elements)
-
-    @property
-    def odd(self):
-        """True when every force law is odd (only odd powers, no one-sided kink): f_nl(-x) = -f_nl(x)."""
-        used = np.any(self.coefficients != 0.0, axis=0)
-        one_sided = self.kinks.shape[2] > 3 and np.any((self.kinks[..., 0] != 0.0) & (self.kinks[..., 3] != 0.0))
-        return bool(np.all(self.powers[used] % 2 == 1)) and not one_sided
-
-    def force(self, d):
-        d = np.asarray(d, dtype=float)
-        g = sum(self.coefficients[:, j] * d ** p for j, p in enumerate(self.powers))
-        for dk, b, w, up, down in self._kink_columns():
-            g = g + dk * (up * softplus(d - b, w) - down * softplus(-d - b, w))
-        return g
-
-    def tangent(self, d):
-        d = np.asarray(d, dtype=float)
-        t = sum(p * self.coefficients[:, j] * d ** (p - 1) for j, p in enumerate(self.powers))
-        for dk, b, w, up, down in self._kink_columns():
-            t = t + dk * (up * sigmoid(d - b, w) + down * sigmoid(-d - b, w))
-        return t
-
-    def potential(self, d):
-        d = np.asarray(d, dtype=float)
-        P = sum(self.coefficients[:, j] * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
-        for dk, b, w, up, down in self._kink_columns():
-            R0 = ramp_integral(-b, w)
-            P = P + dk * (up * (ramp_integral(d - b, w) - R0) + down * (ramp_integral(-d - b, w) - R0))
-        return P
-
-    def abs_potential(self, d):
-        """Bound on |potential| (..., n_s): every coefficient and slope jump taken positive, kinks on both sides."""
-        d = np.abs(np.asarray(d, dtype=float))
-        P = sum(np.abs(self.coefficients[:, j]) * d ** (p + 1) / (p + 1) for j, p in enumerate(self.powers))
-        for dk, b, w, _, _ in self._kink_columns():
-            P = P + np.abs(dk) * (ramp_integral(d - b, w) + ramp_integral(-d - b, w) - 2.0 * ramp_integral(-b, w))
-        return P
-
-    def _kink_columns(self):
-        """(dk, b, w, up, down) (n_s,) each, per kink column j: up/down = 1.0 where the kink acts for
-        d > 0 / d < 0 (side >= 0 / side <= 0), else 0.0 (unused rows: dk = 0, w = 1)."""
-        for j in range(self.kinks.shape[1]):
-            dk, b, w = self.kinks[:, j, :3].T
-            side = self.kinks[:, j, 3] if self.kinks.shape[2] > 3 else np.zeros_like(dk)
-            yield dk, b, np.where(w > 0, w, 1.0), (side >= 0).astype(float), (side <= 0).astype(float)
-
-    def in_basis(self, Phi):
-        """(B Phi, powers, coefficients, kinks): the table for coordinates q with x = Phi q (kernels' input)."""
-        return (np.ascontiguousarray(self.B @ Phi), np.ascontiguousarray(self.powers),
-                np.ascontiguousarray(self.coefficients), np.ascontiguousarray(self.kinks))

@@ -12,7 +12,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .elements import CubicSpring, ElementSet, check_element  # noqa: F401 (CubicSpring: first-release import path)
+from .element_set import ElementSet
+from .elements import CubicSpring, check_element  # noqa: F401 (CubicSpring: first-release import path)
 from .errors import NNMInputError
 from .mesh import DisplayMesh  # noqa: F401 (first-release import path)
 
