@@ -300,39 +300,8 @@ class Branch:
 
 
 def _match_energy(model, x, v, energy):
-    """Scale (x, v) by c > 0 so that its energy is ``energy``.
-
-    E(c x, c v) = e_2 c^2 + sum_p e_p c^(p+1) (quadratic part, and one term per power p of the
-    element laws), solved for c by Newton from c = 1; (x, v) unchanged if no positive root is found.
-    """
-    el = model.elements
-    if el.kinks.shape[1]:
-        return _match_energy_generic(model, x, v, energy)
-    e_tot = model.energy(x, v)
-    d = el.B @ x
-    terms = {int(p) + 1: float(np.sum(el.coefficients[:, j] * d ** (p + 1) / (p + 1)))
-             for j, p in enumerate(el.powers)}
-    e2 = e_tot - sum(terms.values())
-    if e2 <= 0 or energy <= 0:
-        return x, v
-    terms[2] = terms.get(2, 0.0) + e2
-    c = 1.0
-    for _ in range(50):
-        f = sum(e * c ** k for k, e in terms.items()) - energy
-        df = sum(k * e * c ** (k - 1) for k, e in terms.items())
-        if not df > 0:
-            return x, v
-        step = f / df
-        c = c - step if c - step > 0 else 0.5 * c
-        if abs(step) <= 1e-15 * c:
-            break
-    if not abs(sum(e * c ** k for k, e in terms.items()) - energy) <= 1e-9 * energy:
-        return x, v
-    return c * x, c * v
-
-
-def _match_energy_generic(model, x, v, energy):
-    """_match_energy for any element law (piecewise-linear kinks): secant iteration on E(c x, c v) = energy."""
+    """Scale (x, v) by c > 0 so that its energy is ``energy`` (J): secant iteration on E(c x, c v) = energy from
+    c = 1, for any element law; (x, v) unchanged if it does not converge to 1e-9."""
     if energy <= 0 or not model.energy(x, v) > 0:
         return x, v
     f = lambda c: float(model.energy(c * x, c * v)) - energy
