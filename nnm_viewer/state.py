@@ -85,8 +85,12 @@ class BranchEntry:
         law = cubic_scaling(ratio)
         events = [(event_kind(e), float(e["energy"]) * law.energy, float(e["frequency_hz"]))
                   for e in (getattr(b, "events", None) or []) if "energy" in e and "frequency_hz" in e]
+        label = label or legend_label(self.label)
+        floquet = getattr(b, "floquet", None)
+        if floquet is not None and np.size(floquet) and np.all(np.isnan(np.asarray(floquet))):
+            label += " (stability not computed)"          # its points are drawn filled, not known to be stable
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
-                         np.asarray(b.stable, dtype=bool), label or legend_label(self.label), events=events,
+                         np.asarray(b.stable, dtype=bool), label, events=events,
                          status=str(getattr(b, "status", "") or ""))
 
 

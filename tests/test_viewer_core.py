@@ -179,3 +179,15 @@ def test_info_panel_names_the_orbit_from_its_harmonics(two_dof_nnm1):
     text = info_markdown(pd, b.model, b.model.linear_modes()[0])
     assert "3:1 internal resonance" in text
     assert "fundamental NNM motion" in point_data(b, 0.0).description
+
+
+def test_fep_series_of_a_branch_without_multipliers_says_so():
+    """A branch computed with floquet=False has NaN multipliers: its points are drawn filled but its legend
+    label says that the stability was not computed (not that they are stable)."""
+    import nnm_solver as nnm
+    from nnm_viewer.state import BranchEntry
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=1.0)])
+    off = nnm.continue_nnm(m, 1, 1.0, floquet=False, max_points=8)
+    on = nnm.continue_nnm(m, 1, 1.0, max_points=8)
+    assert BranchEntry(off, "NNM 1").series().label.endswith("(stability not computed)")
+    assert "stability" not in BranchEntry(on, "NNM 1").series().label
