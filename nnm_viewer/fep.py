@@ -1,4 +1,4 @@
-"""Frequency-energy plot (FEP): the panel image, the clickable copy in the 3D scene, and
+"""Frequency-energy plot (FEP): the panel image, the clickable copy in the 3D scene (placed by board.py), and
 the mapping between an energy and a position along a branch.
 
 Axes follow the literature (seed paper Figs. 8-11): x = energy (J, log scale), y =
@@ -298,55 +298,6 @@ def render_fep(series, selected=None, selected_branch=None, size=(520, 380), tit
     r = FepRenderer(size)
     r.set_series(series, selected_branch, title, ghosts)
     return r.image(selected)
-
-
-@dataclass
-class BoardLayout:
-    """Placement of the in-scene FEP: a rectangle spanned by ``right`` (energy axis) and
-    ``up`` (frequency axis) from ``origin`` (lower-left corner), sizes in m."""
-
-    origin: np.ndarray
-    right: np.ndarray
-    up: np.ndarray
-    width: float
-    height: float
-    normal: np.ndarray
-
-    def to_world(self, energy, frequency, ranges):
-        """World positions (N, 3) of FEP points (energy J, frequency Hz)."""
-        (elo, ehi), (flo, fhi) = ranges
-        u = (np.log10(np.maximum(np.asarray(energy, dtype=float), 1e-300)) - elo) / (ehi - elo)
-        v = (np.asarray(frequency, dtype=float) - flo) / (fhi - flo)
-        return (self.origin[None] + np.outer(u * self.width, self.right) + np.outer(v * self.height, self.up)
-                + 0.02 * self.height * self.normal[None])
-
-    def point_radius(self):
-        return 0.016 * max(self.width, self.height)
-
-
-def board_layout(bounds_min, bounds_max, view_dir, place="above"):
-    """Place the FEP board next to a model with bounding box bounds_min/max (m), facing a camera
-    that looks along ``view_dir`` (world, z up): above the model (``place="above"``, best for
-    the tall viewport between the two side panels) or on the camera's right-hand side."""
-    lo, hi = np.asarray(bounds_min, dtype=float), np.asarray(bounds_max, dtype=float)
-    size = float(max(np.max(hi - lo), 1e-9))
-    center = 0.5 * (lo + hi)
-    f = np.asarray(view_dir, dtype=float).copy()
-    if np.linalg.norm(np.cross(f, [0.0, 0.0, 1.0])) < 1e-9:
-        f = np.array([0.0, 1.0, -0.5])
-    f /= np.linalg.norm(f)
-    right = np.cross(f, [0.0, 0.0, 1.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, f)                      # the board faces the camera
-    width, height = 1.0 * size, 0.7 * size
-    if place == "above":
-        half_up = 0.5 * float(np.abs(hi - lo) @ np.abs(up))
-        # the picture's bottom margin (tick labels) is about 0.2 of the plot height
-        origin = center + up * (half_up + 0.05 * size + 0.22 * height) - right * 0.5 * width
-    else:
-        half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
-        origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height
-    return BoardLayout(origin=origin, right=right, up=up, width=width, height=height, normal=-f)
 
 
 def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25, ylabel=Y_LABELS[False]):

@@ -9,7 +9,8 @@ import numpy as np
 import nnm_solver
 
 from .glb import build_glb
-from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, BoardLayout, board_layout, pale, rgb
+from .board import BoardLayout, board_layout
+from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, pale, rgb
 
 #: vertical field of view of the initial camera, degrees
 CAMERA_FOV_DEG = 50.0
