@@ -32,8 +32,9 @@ Jacobian is re-used between iterations (chord Newton) and refreshed only when th
 contracting fast, so most iterations cost only a residual evaluation.  Step control: the step grows
 when the corrector converges in few iterations, shrinks when it needs many, and is halved on
 failure, when the new tangent turns by more than ``max_angle``, when the corrector lands far from the
-prediction (``max_correction``), when the energy changed against the tangent's energy derivative at
-both ends of the step (an even number of folds crossed unseen: a tongue stepped over), or when the
+prediction (``max_correction``), when the energy or the period changed against the tangent's derivative
+of it at both ends of the step (an even number of turning points crossed unseen: a tongue stepped over,
+or a jump onto a branch alongside), or when the
 problem refuses the step (``check_step``); these guard against jumping between nearby branches and
 over the narrow entrance of internal-resonance tongues.  When small steps keep failing (a singular
 point, e.g. a branch point), one longer step is tried to step over it.
@@ -84,17 +85,26 @@ def stacked(J, row):
 
 
 class LeastSquares:
-    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), QR factorised once.  A is
+    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), factorised once.  A is
     overwritten (pass a temporary, e.g. ``stacked(J, row)``).
 
-    Q is kept as LAPACK's Householder reflectors and applied to each right-hand side (ormqr), which
-    halves the cost of the factorisation compared with forming Q explicitly."""
+    Over-determined A (m > n): QR, with Q kept as LAPACK's Householder reflectors and applied to each
+    right-hand side (ormqr), which halves the cost of the factorisation compared with forming Q explicitly.
+    Square A (e.g. quarter-period shooting, whose n equations in n + 1 unknowns have no redundant row): LU
+    with partial pivoting, a third of the QR's work; the solution of a nonsingular square system is its
+    Moore-Penrose solution."""
 
     #: below this many columns Q is formed explicitly (cheaper than a LAPACK call per solve)
     EXPLICIT_Q = 64
 
     def __init__(self, A):
         self.n = A.shape[1]
+        self._lu = None
+        if A.shape[0] == self.n and self.n >= self.EXPLICIT_Q:
+            self._lu = sla.lu_factor(A, overwrite_a=True, check_finite=False)
+            d = np.abs(np.diag(self._lu[0]))
+            self.rcond = d.min() / max(d.max(), 1e-300)
+            return
         if self.n < self.EXPLICIT_Q:
             self._Q, self.R = sla.qr(A, mode="economic", check_finite=False)
         else:
@@ -104,6 +114,8 @@ class LeastSquares:
         self.rcond = d.min() / max(d.max(), 1e-300)
 
     def solve(self, b):
+        if self._lu is not None:
+            return sla.lu_solve(self._lu, b, check_finite=False)
         if self._Q is not None:
             return sla.solve_triangular(self.R, self._Q.T @ b, check_finite=False)
         c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
@@ -222,6 +234,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
     failures = 0
     s_clean = s_before_jump = s
+    s_cap = _largest_step(problem, u, p, settings)
     while True:
         u_pred = u + s * p
         try:
@@ -238,17 +251,16 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
-            if hasattr(problem, "energy"):
-                reason = _unseen_folds(problem.energy, u, p, u_new, p_new, 10 * tol)
-                if reason:
-                    raise CorrectorFailure(reason)
+            reason = _unseen_turns(getattr(problem, "energy", None), u, p, u_new, p_new, 10 * tol)
+            if reason:
+                raise CorrectorFailure(reason)
         except CorrectorFailure as exc:
             failures += 1
             if failures == settings.jump_after:
                 # small steps keep failing: likely a singular point (e.g. a branch point where the
                 # Jacobian loses rank); try once to step over it with a step longer than the last
                 # step that succeeded without trouble
-                s = settings.jump_factor * s_clean
+                s = min(settings.jump_factor * s_clean, s_cap)     # never beyond the problem's largest step
             elif failures == settings.jump_after + 1:
                 s = s_before_jump * 0.5
             else:
@@ -280,10 +292,16 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             s *= 1.4
         elif it > settings.target_iter + 1:
             s *= 0.6
-        s_max = settings.step_max
-        if hasattr(problem, "max_step"):
-            s_max = min(s_max, problem.max_step(u, p))
-        s = float(np.clip(s, settings.step_min, max(s_max, settings.step_min)))
+        s_cap = _largest_step(problem, u, p, settings)
+        s = float(np.clip(s, settings.step_min, s_cap))
+
+
+def _largest_step(problem, u, p, settings):
+    """The largest step from u along p: settings.step_max, or less if the problem says so (max_step)."""
+    s_max = settings.step_max
+    if hasattr(problem, "max_step"):
+        s_max = min(s_max, problem.max_step(u, p))
+    return max(s_max, settings.step_min)
 
 
 #: sent to the pseudo_arclength generator (``engine.send(REFUSE)``) to refuse the point it just yielded
@@ -295,14 +313,21 @@ def _energy_slope(energy, u, p, h=1e-6):
     return (energy(u + h * p) - energy(u - h * p)) / (2 * h)
 
 
-def _unseen_folds(energy, u, p, u_new, p_new, floor):
-    """A reason to refuse the step if the energy changed against its derivative along the tangent at
-    both ends (the step crossed an even number of folds: the branch turned back and forth unseen).
-    Energy changes below ``floor`` (relative: the corrector's own accuracy) are not judged."""
-    E0, E1 = energy(u), energy(u_new)
-    dE = E1 - E0
-    if abs(dE) <= floor * max(abs(E0), abs(E1)):
-        return ""
-    if dE * _energy_slope(energy, u, p) < 0 and dE * _energy_slope(energy, u_new, p_new) < 0:
-        return "the energy changed against its slope at both ends of the step (folds crossed unseen)"
+def _unseen_turns(energy, u, p, u_new, p_new, floor):
+    """A reason to refuse the step if the energy, or the last unknown (for orbit problems the period or the
+    frequency: the other coordinate of the frequency-energy plot), changed against its derivative along the
+    tangent at both ends.  Then the step crossed an even number of turning points of that coordinate (the
+    branch turned back and forth unseen, e.g. over a tongue's fold), or the corrector landed on another branch
+    running alongside (e.g. from the side of a tongue onto the backbone).  Changes below ``floor`` (relative:
+    the corrector's own accuracy) are not judged.  energy : callable or None."""
+    if energy is not None:
+        E0, E1 = energy(u), energy(u_new)
+        dE = E1 - E0
+        if (abs(dE) > floor * max(abs(E0), abs(E1)) and dE * _energy_slope(energy, u, p) < 0
+                and dE * _energy_slope(energy, u_new, p_new) < 0):
+            return "the energy changed against its slope at both ends of the step (folds crossed unseen)"
+    dT = u_new[-1] - u[-1]
+    if abs(dT) > floor * max(abs(u[-1]), abs(u_new[-1])) and dT * p[-1] < 0 and dT * p_new[-1] < 0:
+        return ("the period (last unknown) changed against its slope at both ends of the step (turning points "
+                "crossed unseen, or another branch reached)")
     return ""

@@ -91,7 +91,11 @@ def test_skip_mode_returns_the_backbone_and_tongues_match_follow():
     skip = nnm.continue_nnm(m, 1, 3e5, tongues="skip")
     assert skip.status == "done" and np.all(np.diff(skip.energy) > 0)     # a backbone, no excursion
     assert set(skip.labels) == {"backbone"}
-    assert [t["label"] for t in skip.tongues] == ["tongue 3:1", "tongue 5:1"]
+    labels = [t["label"] for t in skip.tongues]
+    # the 3:1 and 5:1 tongues that follow goes through; narrower odd ones above them (e.g. a 9:1 at 130 kJ whose
+    # entrance follow steps over, tip 25.6 kJ) may be met too, depending on where the points fall
+    assert labels[:2] == ["tongue 3:1", "tongue 5:1"]
+    assert all(t["order"] > 5 and t["order"] % 2 == 1 for t in skip.tongues[2:])
     assert all(t["partner_mode"] == 2 for t in skip.tongues)
     assert len(skip) < len(follow)
     folds_follow = [e["energy"] for e in follow.events if e["kind"] == "fold"]
@@ -99,7 +103,9 @@ def test_skip_mode_returns_the_backbone_and_tongues_match_follow():
         tb = nnm.continue_tongue(skip, j)
         assert tb.status == "done" and "back on the backbone" in tb.message
         assert any(lab == t["label"] for lab in tb.labels)
-        for e in (e for e in tb.events if e["kind"] == "fold"):           # every fold of the tongue ...
+        if t["label"] not in follow.labels:
+            continue
+        for e in (e for e in tb.events if e["kind"] == "fold"):           # every fold of a tongue follow saw ...
             assert min(abs(E / e["energy"] - 1) for E in folds_follow) < 1e-5   # ... is one of follow's
         tip = min(e["energy"] for e in tb.events if e["kind"] == "fold")
         assert tip < 0.1 * t["entry_energy"]                              # the tongue's tip, far below

@@ -7,11 +7,26 @@ Unknowns (scaled, dimension 2n + 1), in mass-normalised modal coordinates q (x =
 with w_r = 2 pi / T_r the linear angular frequency of the continued mode.
 
 Shooting function (eq. 4).  Full period:  H = [q(T) - q0 ; (v(T) - v0) / w_r].
-Half period (default, ``symmetric=True``): cubic springs make the equations odd
+Half period (``symmetric=True``): cubic springs make the equations odd
 (f(-x) = -f(x)), so the orbits that continue a linear mode satisfy z(t + T/2) = -z(t); they are
 found by  H = [q(T/2) + q0 ; (v(T/2) + v0) / w_r]  at half the cost, and the full monodromy is
 the square of the half-period map (z -> -z commutes with the flow).  Every solution of the
 half-period problem is an exact periodic orbit of period T.
+
+Quarter period (the default for reversible orbits of odd systems: ``symmetric`` and ``reversible``):
+an orbit that starts at rest (v0 = 0) and has z(t + T/2) = -z(t) is even in time about t = 0 and odd
+about t = T/4, so every coordinate passes through zero at T/4.  Conversely q(T/4) = 0 with v0 = 0 gives
+such an orbit: the motion -x(T/2 - t) solves the same (odd, time-reversible) equations with the same
+state at T/4, so x(t) = -x(T/2 - t), hence v(T/2) = v0 = 0 and x(T/2) = -x0.  The shooting function is
+
+    H = q(T/4)      (n equations in the n + 1 unknowns [q0; T])
+
+at half the cost of the half-period sweep, with a square corrector (LU) instead of a (2n + 1) x (n + 1)
+least-squares problem.  The argument holds step by step for the discrete map of a symmetric scheme
+(Newmark's average acceleration and Gauss collocation are), so with a number of steps per period divisible
+by 4 (it is rounded up to one) the discrete orbits are exactly those of the half-period problem.  The
+Floquet multipliers need the half-period map, which one sensitivity sweep over T/2 at the accepted point
+gives (shooting_stability.py).
 
 Phase condition (eq. 6).  Default (reversible orbits): v0 = 0, i.e. t = 0 is an instant of zero
 velocity, and the unknowns reduce to u = [q0; T / T_r] (see ShootingProblem).  General orbits
@@ -22,7 +37,7 @@ condition <q_ref, v0> = 0 (an extremum of the motion along q_ref, which degenera
 extrema merge as the orbit's shape changes), the section stays transversal along the family.  The
 trivial orbit u = 0 is excluded by starting at finite amplitude and by the arclength condition.
 
-Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol.
+Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol (quarter period: ||q(T/4)|| / ||q0|| < tol).
 
 Half-period shooting needs an odd f_nl (only odd powers in the element laws): the driver checks it.
 """
@@ -71,7 +86,7 @@ class ShootingProblem(ShootingStability):
     """
 
     def __init__(self, system, mode_index, steps_per_period=200, symmetric=True, max_rel_step=0.4,
-                 reversible=None, max_rel_period_step=np.inf, integrator="newmark"):
+                 reversible=None, max_rel_period_step=np.inf, integrator="newmark", quarter=None):
         if steps_per_period < 8:
             raise ValueError("steps_per_period must be at least 8")
         self.sys = system
@@ -80,7 +95,9 @@ class ShootingProblem(ShootingStability):
         self.k = mode_index
         self.symmetric = bool(symmetric)
         self.reversible = self.symmetric if reversible is None else bool(reversible)
-        self.frac = 0.5 if self.symmetric else 1.0
+        # quarter-period shooting (module docstring): for symmetric reversible orbits, unless quarter=False
+        self.quarter = self.symmetric and self.reversible and (quarter is None or bool(quarter))
+        self.frac = 0.25 if self.quarter else 0.5 if self.symmetric else 1.0
         self.set_steps(steps_per_period)
         self.w_r = float(np.sqrt(system.omega2[mode_index]))
         self.T_r = 2 * np.pi / self.w_r
@@ -91,22 +108,22 @@ class ShootingProblem(ShootingStability):
         self.max_rel_period_step = max_rel_period_step
         # unknowns: entries of y = [q0; v0 / w_r; T / T_r] that are free
         self.free = np.r_[0:n, 2 * n] if self.reversible else np.arange(2 * n + 1)
-        self.rows = 2 * n if self.reversible else 2 * n + 1   # H (+ phase condition)
+        self.rows = n if self.quarter else 2 * n if self.reversible else 2 * n + 1   # H (+ phase condition)
         # the dv0 columns of the sensitivity are needed for v0 unknowns or the full-size Floquet problem
         self.all_columns = not (self.reversible and self.symmetric)
-        self._maps = None         # (dq, dv)(T/2 or T) / dz0 at the last Jacobian evaluation (half_map)
+        self._maps = None         # (dq, dv)(T/4, T/2 or T) / dz0 at the last Jacobian evaluation (half_map)
         #: real-line coordinates of the last multipliers where Krein collisions happen (events.py), or None
         self.collision = None
         self._accepted_maps = None  # ... at the last accepted point (accepted_map)
 
     def set_steps(self, steps_per_period):
         """Use steps_per_period time steps per period from now on (rounded up to even for half-period
-        shooting)."""
+        shooting, to a multiple of 4 for quarter-period shooting)."""
         spp = int(steps_per_period)
-        if self.symmetric and spp % 2:
-            spp += 1
+        multiple = 4 if self.quarter else 2 if self.symmetric else 1
+        spp = -(-spp // multiple) * multiple
         self.spp = spp
-        self.nsteps = spp // 2 if self.symmetric else spp
+        self.nsteps = int(round(spp * self.frac))       # steps of the shooting interval (T/4, T/2 or T)
 
     # --------------------------------------------------------------- packing
     def pack(self, q0, v0, T):
@@ -131,9 +148,12 @@ class ShootingProblem(ShootingStability):
         q, v, ok = self.integrator.state(self.sys, q0, v0, self._h(T), self.nsteps)
         if not ok:
             return np.full(self.rows, np.nan)
+        self._end_state = (u.copy(), q, v)
         return self._assemble(q, v, q0, v0)
 
     def _assemble(self, q, v, q0, v0):
+        if self.quarter:
+            return q.copy()
         sgn = 1.0 if self.symmetric else -1.0
         r = np.concatenate([q + sgn * q0, (v + sgn * v0) / self.w_r, [self._phase(q0, v0)]])
         return r[:self.rows]
@@ -149,6 +169,7 @@ class ShootingProblem(ShootingStability):
                                                                    self.all_columns)
         if not ok:
             return bad
+        self._end_state = (u.copy(), q, v)
         r = self._assemble(q, v, q0, v0)
         self._last_residual = (u.copy(), r)
         self._maps = (Sq, Sv)                           # d[q; v](end) / d[q0 (; v0)], kept as two blocks
@@ -156,6 +177,11 @@ class ShootingProblem(ShootingStability):
         sgn = 1.0 if self.symmetric else -1.0
         # J = dH/du directly in the free unknowns (reversible: [q0; T], else [q0; v0; T] plus the phase row)
         m = len(self.free)
+        if self.quarter:                                # H = q(T/4): J = [dq/dq0, dq/du_T]
+            J = np.empty((n, m))
+            J[:, :n] = Sq[:, :n]
+            J[:, n] = sq_h * dh_du
+            return r, J
         J = np.zeros((self.rows, m))
         J[:n, :n] = Sq[:, :n]
         J[n:2 * n, :n] = Sv[:, :n] / w
@@ -174,9 +200,25 @@ class ShootingProblem(ShootingStability):
         return r, J
 
     def error(self, u, r):
-        """Relative periodicity error (eq. 11) in the scaled state [q; v / w_r]."""
-        q0, v0, _ = self.unpack(u)
+        """Relative periodicity error (eq. 11) in the scaled state [q; v / w_r].
+
+        Quarter-period shooting measures it on the half-period residual [q(T/2) + q0; v(T/2) / w_r], as the
+        half-period formulation does: the integration goes on from the state at T/4 of the latest residual
+        (a state sweep of N/4 more steps).  q(T/4) alone would be a weaker test (a small displacement error of
+        a stiff mode at T/4 becomes a velocity error w_j / w_r times larger at T/2)."""
+        q0, v0, T = self.unpack(u)
         z = np.concatenate([q0, v0 / self.w_r])
+        if self.quarter:
+            last = getattr(self, "_end_state", None)
+            if last is None or not np.array_equal(last[0], u):
+                q, v, ok = self.integrator.state(self.sys, q0, v0, self._h(T), self.nsteps)
+            else:
+                q, v, ok = last[1], last[2], True
+            if ok:
+                q, v, ok = self.integrator.state(self.sys, q, v, self._h(T), self.nsteps)
+            if not ok:
+                return float("inf")
+            r = np.concatenate([q + q0, v / self.w_r])
         return float(np.linalg.norm(r[:2 * self.n]) / max(np.linalg.norm(z), 1e-300))
 
     def set_section(self, q0, v0):
@@ -197,7 +239,8 @@ class ShootingProblem(ShootingStability):
         self.q_ref = q0 / np.linalg.norm(q0)
         if not self.reversible:
             self.set_section(q0, v0)
-        self._accepted_maps = self._maps
+        # quarter period: the half-period map the multipliers need is swept at u when they are asked for
+        self._accepted_maps = None if self.quarter else self._maps
         self.accepted_u = u.copy()
 
     def check_step(self, u_old, u_new):
@@ -289,7 +332,8 @@ class ShootingProblem(ShootingStability):
     def modal_orbit(self, u):
         """Modal displacements (N, n) of the orbit u at its N = steps_per_period time steps over a period."""
         q0, v0, T = self.unpack(u)
-        Q, _, ok = self.sys.orbit(q0, v0, self.frac * T, self.nsteps, self.integrator.name)
+        nsteps = self.spp // 2 if self.symmetric else self.spp
+        Q, _, ok = self.sys.orbit(q0, v0, T * nsteps / self.spp, nsteps, self.integrator.name)
         if not ok:
             return None
         Q = Q[:-1]

@@ -1,7 +1,9 @@
 """Floquet stability of shooting orbits: the multipliers from the sensitivity maps of the last accepted point.
 
 The sensitivity sweep of a shooting Jacobian gives the map d[q; v](T/2 or T) / d[q0 (; v0)] at no extra cost
-(kept as its two blocks, ``_maps``; ``accept`` keeps those of the accepted point).  Symmetric reversible orbits
+(kept as its two blocks, ``_maps``; ``accept`` keeps those of the accepted point).  Quarter-period shooting
+(the default, shooting.py) sweeps only to T/4: the half-period map is then swept once at the accepted point,
+when the multipliers are first asked for (``stability_maps``).  Symmetric reversible orbits
 (the default: odd forces, v0 = 0) need only its n x n block A11 = dq(T/2)/dq0, whose eigenvalues c give the
 multipliers (floquet.reversible_spectrum); other orbits use the full 2n x 2n monodromy.  ``ShootingProblem``
 inherits these methods.
@@ -24,13 +26,28 @@ class ShootingStability:
 
     @property
     def half_map(self):
-        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, or None."""
+        """d[q; v](end) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, end = T/4 (quarter-period
+        shooting), T/2 (half-period) or T, or None."""
         return None if self._maps is None else np.vstack(self._maps)
 
     @property
     def accepted_map(self):
-        """half_map at the last accepted point, or None."""
-        return None if self._accepted_maps is None else np.vstack(self._accepted_maps)
+        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last accepted point, or None."""
+        maps = self.stability_maps()
+        return None if maps is None else np.vstack(maps)
+
+    def stability_maps(self):
+        """(dq, dv)(T/2 or T) / d[q0 (; v0)] at the last accepted point: the blocks of the half-period (symmetric
+        orbits) or full-period map.  Quarter-period shooting sweeps them here, once per accepted point (one
+        sensitivity sweep over T/2); None if that integration fails or no point was accepted."""
+        maps = self._accepted_maps
+        stale = maps is None or (self.all_columns and maps[0].shape[1] < 2 * self.n)
+        if stale and getattr(self, "quarter", False) and hasattr(self, "accepted_u"):
+            q0, v0, T = self.unpack(self.accepted_u)
+            out = self.integrator.sensitivity(self.sys, q0, v0, T / self.spp, self.spp // 2, self.all_columns)
+            if out[-1]:
+                self._accepted_maps = (out[2], out[3])
+        return self._accepted_maps
 
     def multipliers(self, u, tangent=None):
         """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep),
@@ -49,9 +66,9 @@ class ShootingStability:
         this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
         nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
         ~10x cheaper); used to follow one Krein collision during event location."""
-        if not (self.symmetric and self.reversible):
+        if not (self.symmetric and self.reversible) or self.stability_maps() is None:
             return None
-        A11 = self._accepted_maps[0][:, :self.n]
+        A11 = self.stability_maps()[0][:, :self.n]
         family = self.unpack(tangent)[0]
         C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
         if C.shape[0] <= 8 * k:
@@ -69,8 +86,11 @@ class ShootingStability:
         (the default) need only an n x n eigenproblem (floquet.reversible_multipliers); otherwise the
         full 2n x 2n monodromy is deflated by the velocity and family directions.
         """
+        if self.stability_maps() is None:       # the half-period sweep failed (quarter-period shooting)
+            self.collision = None
+            return np.full(2 * self.n, np.nan, dtype=complex)
         if self.symmetric and self.reversible:
-            mu, self.collision = reversible_spectrum(self._accepted_maps[0][:, :self.n],
+            mu, self.collision = reversible_spectrum(self.stability_maps()[0][:, :self.n],
                                                      None if family is None else family[0])
             self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
             return mu

@@ -1,0 +1,103 @@
+"""Quarter-period shooting (orbits/shooting.py): H = q(T/4) for reversible orbits of odd systems, the square
+corrector it gives, and the continuation guards that came with it (continuation.py)."""
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_solver.continuation import ContinuationSettings, LeastSquares, _unseen_turns, correct
+from nnm_solver.modal import modal_system
+from nnm_solver.orbits.shooting import ShootingProblem
+
+from conftest import two_dof_model
+
+
+def _three_dof():
+    """A chain of three unequal masses with two cubic springs (one grounded, one relative) and a quintic one."""
+    M = np.diag([1.0, 2.0, 0.5])
+    K = np.array([[3.0, -1.0, 0.0], [-1.0, 2.5, -1.2], [0.0, -1.2, 1.7]])
+    springs = [nnm.CubicSpring(dof=0, k3=0.8), nnm.CubicSpring(dof=1, k3=-0.05, other=2),
+               nnm.PolynomialSpring(dof=2, coefficients={5: 0.3})]
+    return nnm.Model(M, K, springs)
+
+
+def _converge(ms, mode, integrator, quarter, amplitude=0.6, tol=1e-13):
+    prob = ShootingProblem(ms, mode, 100, symmetric=True, integrator=integrator, quarter=quarter)
+    q0 = np.zeros(ms.n)
+    q0[mode] = amplitude
+    u0 = prob.pack(q0, np.zeros(ms.n), prob.T_r * 1.02)
+    p = np.zeros(len(u0))
+    p[mode] = 1.0                       # fix the amplitude of the continued mode: a hyperplane of the branch
+    settings = ContinuationSettings(step=0.1, step_min=1e-9, step_max=1.0, max_iter=40)
+    u, J, it, err = correct(prob, u0, p, settings, tol)
+    prob.accept(u, J)
+    return prob, u
+
+
+@pytest.mark.parametrize("integrator", ["newmark", "gauss4"])
+@pytest.mark.parametrize("model, mode", [(two_dof_model(), 0), (_three_dof(), 1)])
+def test_quarter_and_half_period_shooting_find_the_same_discrete_orbit(model, mode, integrator):
+    """Both formulations converge, on the same hyperplane, to the same discrete orbit (u to round-off) with the
+    same Floquet multipliers; the quarter Jacobian is square (n x (n + 1))."""
+    ms = modal_system(model)
+    pq, uq = _converge(ms, mode, integrator, quarter=None)
+    ph, uh = _converge(ms, mode, integrator, quarter=False)
+    assert pq.quarter and not ph.quarter and pq.rows == ms.n and ph.rows == 2 * ms.n
+    assert np.allclose(uq, uh, rtol=1e-9, atol=1e-11)
+    mq, mh = np.sort_complex(pq.multipliers(uq)), np.sort_complex(ph.multipliers(uh))
+    assert np.allclose(mq, mh, atol=1e-7)
+
+
+def test_half_period_orbits_pass_through_zero_displacement_at_a_quarter_period():
+    """The theory of the formulation: a converged half-period orbit (z(T/2) = -z0, v0 = 0) of the discrete map has
+    every displacement zero after N/4 steps (N divisible by 4), to the corrector's accuracy."""
+    ms = modal_system(_three_dof())
+    ph, uh = _converge(ms, 0, "newmark", quarter=False, amplitude=0.9)
+    q0, v0, T = ph.unpack(uh)
+    q, v, ok = ph.integrator.state(ms, q0, v0, T / ph.spp, ph.spp // 4)
+    assert ok and np.linalg.norm(q) < 1e-10 * np.linalg.norm(q0)
+    assert np.linalg.norm(v) > 0.1 * np.linalg.norm(q0) * ph.w_r       # the velocity is at its largest there
+
+
+@pytest.mark.parametrize("requested, used", [(200, 200), (198, 200), (81, 84), (8, 8)])
+def test_steps_per_period_are_a_multiple_of_four_for_quarter_shooting(requested, used):
+    ms = modal_system(two_dof_model())
+    prob = ShootingProblem(ms, 0, requested)
+    assert prob.quarter and prob.spp == used and prob.nsteps == used // 4
+    half = ShootingProblem(ms, 0, requested, quarter=False)
+    assert half.spp == requested + requested % 2 and half.nsteps == half.spp // 2
+
+
+def test_square_systems_are_solved_by_lu_and_agree_with_lstsq():
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((80, 80)) + 8 * np.eye(80)
+    b = rng.standard_normal(80)
+    ls = LeastSquares(np.array(A, order="F"))
+    assert ls._lu is not None
+    assert np.allclose(ls.solve(b), np.linalg.solve(A, b), rtol=1e-12, atol=1e-12)
+    B = rng.standard_normal((80, 3))
+    assert np.allclose(ls.solve(B), np.linalg.solve(A, B), rtol=1e-12, atol=1e-12)
+    tall = rng.standard_normal((120, 80))
+    assert LeastSquares(np.array(tall, order="F"))._lu is None        # over-determined: QR
+
+
+def test_a_step_against_the_period_slope_at_both_ends_is_refused():
+    """A converged point whose period moved against the tangent's period derivative at both ends (a jump onto a
+    branch alongside, or two turning points inside the step) is refused; one turning point inside the step is
+    not (the slopes at the two ends then differ in sign)."""
+    u, p = np.array([1.0, 1.0]), np.array([1.0, -0.2])       # the period falls along the branch ...
+    jumped = np.array([1.5, 1.01])                          # ... but rose over the step
+    assert "period" in _unseen_turns(None, u, p, jumped, np.array([1.0, -0.1]), 1e-6)
+    assert _unseen_turns(None, u, p, jumped, np.array([1.0, 0.3]), 1e-6) == ""          # one turning point
+    assert _unseen_turns(None, u, p, np.array([1.5, 0.95]), np.array([1.0, -0.1]), 1e-6) == ""
+    assert _unseen_turns(None, u, p, np.array([1.5, 1.0 + 1e-8]), np.array([1.0, -0.1]), 1e-6) == ""  # noise
+
+
+def test_the_two_dof_backbone_goes_all_round_the_5to1_tongue():
+    """NNM 1 of the 2-DOF benchmark to 300 kJ goes through the 5:1 tongue and its inner loop (folds at 109 kJ,
+    2.36 kJ, 75.8 kJ and 43.9 kJ) before it goes on up the backbone: without the period test it stepped from
+    the tongue's far side (73 kJ) straight onto the backbone (89.6 kJ)."""
+    b = nnm.continue_nnm(two_dof_model(), 1, 3e5)
+    folds = [e["energy"] for e in b.events if e["kind"] == "fold"]
+    for E in (4708.27, 285.607, 109148.2, 2356.36, 75849.1, 43884.9):
+        assert min(abs(f / E - 1) for f in folds) < 1e-4, E
+    assert b.status == "done" and b.energy[-1] == pytest.approx(3e5)
