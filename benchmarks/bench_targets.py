@@ -69,6 +69,29 @@ def summary(b):
                 events=[(e["kind"], float(e["energy"])) for e in b.events])
 
 
+def on_curve(cur, ref):
+    """How far the points of one run are from the other run's curve: for each point of ``cur``, the distance to
+    the nearest segment of ``ref``'s polyline in (log10 E, f / f_first) -- the FEP, with the frequency in
+    relative units -- and whether its stability flag is that of the nearest reference point on that segment,
+    for points more than 1e-3 (in those units) from the segment's ends.  A text line."""
+    def xy(s):
+        return np.column_stack([np.log10(np.asarray(s["energy"])), np.asarray(s["frequency_hz"]) / s["frequency_hz"][0]])
+    P, R = xy(cur), xy(ref)
+    worst, flags, judged = 0.0, 0, 0
+    for k, x in enumerate(P):
+        a, b = R[:-1], R[1:]
+        d = b - a
+        t = np.clip(np.einsum("ij,ij->i", x - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
+        dist = np.linalg.norm(a + t[:, None] * d - x, axis=1)
+        j = int(np.argmin(dist))
+        worst = max(worst, float(dist[j]))
+        if min(np.linalg.norm(x - a[j]), np.linalg.norm(x - b[j])) > 1e-3 and ref["stable"][j] == ref["stable"][j + 1]:
+            judged += 1
+            flags += int(cur["stable"][k] != ref["stable"][j])
+    return (f"distance of every point to the reference curve (log10 E, f/f0): max {worst:.2e}; stability flags "
+            f"that differ from the reference segment's: {flags} of {judged}")
+
+
 def compare(cur, ref):
     """Text lines comparing two summaries point by point."""
     n = min(len(cur["energy"]), len(ref["energy"]))
@@ -78,6 +101,8 @@ def compare(cur, ref):
         dE = np.max(np.abs(np.asarray(cur["energy"][:n]) / np.asarray(ref["energy"][:n]) - 1))
         flags = int(np.sum(np.asarray(cur["stable"][:n]) != np.asarray(ref["stable"][:n])))
         lines.append(f"point by point: max |df/f| {dF:.2e}, max |dE/E| {dE:.2e}, stability flags that differ: {flags}")
+        if dE > 1e-3:
+            lines.append("  (the runs placed their points differently) " + on_curve(cur, ref))
     ev_c, ev_r = cur["events"], ref["events"]
     lines.append(f"events: {len(ev_c)} (reference {len(ev_r)})")
     for (k, e) in ev_c:

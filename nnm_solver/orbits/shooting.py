@@ -45,9 +45,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..continuation import LeastSquares, stacked
 from ..fourier import resample_periodic
 from ..integrators import get_integrator
+from .shooting_error import ShootingError
 from .shooting_stability import ShootingStability
 
 
@@ -68,12 +68,9 @@ def discrete_linear_period(omega, nsteps_per_period, integrator="newmark"):
     return get_integrator(integrator).linear_period(omega, nsteps_per_period)
 
 
-#: next to an energy fold (|cos| between the branch tangent and the energy gradient, balanced norm, below
-#: this) the frequency error estimate is not taken at a fixed energy (ShootingProblem.frequency_error)
-FOLD_COSINE = 0.05
 
 
-class ShootingProblem(ShootingStability):
+class ShootingProblem(ShootingError, ShootingStability):
     """Shooting function + phase condition of one NNM branch, for ``continuation.pseudo_arclength``.
 
     reversible=True (default with symmetric=True): the orbit starts at rest, v0 = 0, so the
@@ -270,55 +267,6 @@ class ShootingProblem(ShootingStability):
     def energy(self, u):
         q0, v0, _ = self.unpack(u)
         return self.sys.energy(q0, v0)
-
-    def frequency_error(self, u, J, tangent, factor=None):
-        """Estimated relative error of the frequency of the converged orbit u: (total, discretisation).
-
-        The discrete orbit's frequency minus the exact one, relative.  Two parts, both from one Newton
-        step with the Jacobian J of the converged point:
-        - the time discretisation, by step doubling: the shooting residual with half the step (2N steps
-          per period) minus the residual with N steps moves the period by dT = T_N/2 - T_N to first order,
-          and with the scheme's order p, T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson);
-        - the corrector's tolerance: the step that the residual left at convergence would still make.
-        The step is taken orthogonal to the branch tangent (as the corrector does), then moved along the
-        branch back to the point's energy, so that the estimate is the frequency error at a fixed energy,
-        what the FEP shows.  Next to an energy fold (the tangent within FOLD_COSINE of the fixed-energy
-        directions), where the frequency at a fixed energy is not defined, the orthogonal step is kept:
-        the distance between the discrete and the exact branch.  Cost: two state sweeps (N and 2N steps)
-        and one factorisation of the corrector's size (``factor``: the continuation's factorisation of
-        [J; previous tangent], reused away from folds).  NaN if an integration fails.
-        """
-        q0, v0, T = self.unpack(u)
-        q, v, ok = self.integrator.state(self.sys, q0, v0, 0.5 * self._h(T), 2 * self.nsteps)
-        if not ok:
-            return float("nan"), float("nan")
-        r_f = self._assemble(q, v, q0, v0)
-        last = getattr(self, "_last_residual", None)
-        if last is not None and np.array_equal(last[0], u):
-            r_c = last[1]                          # the residual of the Jacobian evaluation at u
-        else:
-            qc, vc, okc = self.integrator.state(self.sys, q0, v0, self._h(T), self.nsteps)
-            if not okc:
-                return float("nan"), float("nan")
-            r_c = self._assemble(qc, vc, q0, v0)
-        w = self.scale(u)
-        g = self.energy_gradient(u)
-        gp = g @ tangent
-        cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
-        # away from folds the result is moved along the tangent to a fixed energy, so any factorisation of J
-        # with a row transversal to the tangent gives it; at a fold the orthogonal one is needed
-        A = factor if factor is not None and cos >= FOLD_COSINE else LeastSquares(stacked(J, w * w * tangent))
-
-        def period_step(r):
-            du = A.solve(np.r_[-r, 0.0])
-            if cos >= FOLD_COSINE:               # move along the branch back to the point's energy
-                du = du - (g @ du) / gp * tangent
-            return du[-1] * self.T_r / T
-
-        p = self.integrator.order
-        disc = period_step(r_f - r_c) * 2 ** p / (2 ** p - 1)
-        conv = period_step(r_c)
-        return float(abs(disc + conv)), float(abs(disc))
 
     # --------------------------------------------------------------- results (driver protocol)
     def state(self, u):
