@@ -6,7 +6,9 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
 
     state(system, q0, v0, h, nsteps)              -> (q, v, ok)
     record(system, q0, v0, h, nsteps)             -> (Q, V, ok)     every state
-    sensitivity(system, q0, v0, h, nsteps, all)   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
+    sensitivity(system, q0, v0, h, nsteps, all, velocities)
+                                                  -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
+                                                     (velocities=False: Sv may be None, not assembled)
     linear_period(omega, steps_per_period)        -> T (s) whose discrete orbit closes for frequency omega
     relative_error(y)                             -> relative frequency error of a harmonic with h w = y
 
@@ -75,7 +77,7 @@ class Integrator:
     def record(self, system, q0, v0, h, nsteps):
         raise NotImplementedError  # pragma: no cover
 
-    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True):
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
         raise NotImplementedError  # pragma: no cover
 
 
@@ -86,8 +88,8 @@ class _Newmark(Integrator):
     def record(self, system, q0, v0, h, nsteps):
         return newmark.sweep_record(q0, v0, h, nsteps, *system.kernel)
 
-    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True):
-        return newmark.sweep_sensitivity(q0, v0, h, nsteps, *system.kernel, all_columns)
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        return newmark.sweep_sensitivity(q0, v0, h, nsteps, *system.kernel, all_columns, velocities)
 
 
 class _Gauss(Integrator):
@@ -101,7 +103,8 @@ class _Gauss(Integrator):
     def record(self, system, q0, v0, h, nsteps):
         return gauss.sweep_record(q0, v0, h, nsteps, *self._args(system, h))
 
-    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True):
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        # (the velocity rows are assembled in any case)
         return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns)
 
 

@@ -157,7 +157,8 @@ class Locator:
         """Make u the problem's accepted point; its monodromy is that of the latest Jacobian evaluation,
         so it is evaluated again when a later point was computed since (a cached u)."""
         last = getattr(self.problem, "_last_residual", None)
-        if last is not None and not np.array_equal(last[0], u):
+        # (quarter-period shooting sweeps the maps of its multipliers at the accepted point itself)
+        if getattr(self.problem, "stability_needs_jacobian", True) and last is not None and not np.array_equal(last[0], u):
             _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
 

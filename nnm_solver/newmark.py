@@ -230,17 +230,28 @@ def sweep_record(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
     return Q, V, True
 
 
-@_jit
-def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_columns=True):
+def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_columns=True, velocities=True):
     """Integrate with the sensitivity of the final state.
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n), Sv = dv_N/d[q0; v0],
-    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  all_columns=False: only the n columns of dq0.  The state pass records the spring tangents
-    D_k = g'(d_k) and carries the single d/dh column; the 2n columns come from _monodromy.
+    sq_h = dq_N/dh, sv_h = dv_N/dh (n,).  all_columns=False: only the n columns of dq0; velocities=False: Sv is
+    None (not assembled).  The state pass (_sweep_tangents) records the spring tangents D_k = g'(d_k) and
+    carries the single d/dh column; the columns come from newmark_monodromy.monodromy.
     """
     n = q0.shape[0]
-    ns = Bq.shape[0]
     ncols = 2 * n if all_columns else n
+    q, v, Dseq, sq_h, sv_h, ok = _sweep_tangents(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks)
+    if not ok:
+        return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
+    Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities)
+    return q, v, Sq, Sv, sq_h, sv_h, True
+
+
+@_jit
+def _sweep_tangents(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
+    """The state pass of sweep_sensitivity: (q, v, Dseq (nsteps + 1, n_s), sq_h, sv_h, ok)."""
+    n = q0.shape[0]
+    ns = Bq.shape[0]
     S, G, d, a = _start(q0, omega2, Bq, powers, coeffs, kinks, h)
     q = q0.copy()
     v = v0.copy()
@@ -260,7 +271,7 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
     for k in range(nsteps):
         d1, J, D1, ok = _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, G, S, q1, v1, a1, dlin, dguess)
         if not ok:
-            return q1, v1, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
+            return q1, v1, Dseq, sq_h, sv_h, False
         Dseq[k + 1] = D1
         # the step size enters through c1, c2 and (N2); the d/dh column is updated in place:
         # y_h = (c1 sq_h + c2 sv_h + sa_h + c1' (q - q1) + c2' v) / S,  w_h = J^-1 Bq y_h,  f_h = Bq^T (D1 w_h)
@@ -287,5 +298,4 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
         q, q1 = q1, q
         v, v1 = v1, v
         a, a1 = a1, a
-    Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq, ncols)
-    return q, v, Sq, Sv, sq_h, sv_h, True
+    return q, v, Dseq, sq_h, sv_h, True

@@ -162,8 +162,9 @@ class ShootingProblem(ShootingError, ShootingStability):
         if not T > 0:
             return bad
         h = self._h(T)
+        # (quarter-period shooting needs no velocity rows: H = q(T/4))
         q, v, Sq, Sv, sq_h, sv_h, ok = self.integrator.sensitivity(self.sys, q0, v0, h, self.nsteps,
-                                                                   self.all_columns)
+                                                                   self.all_columns, not self.quarter)
         if not ok:
             return bad
         self._end_state = (u.copy(), q, v)
@@ -236,8 +237,12 @@ class ShootingProblem(ShootingError, ShootingStability):
         self.q_ref = q0 / np.linalg.norm(q0)
         if not self.reversible:
             self.set_section(q0, v0)
-        # quarter period: the half-period map the multipliers need is swept at u when they are asked for
-        self._accepted_maps = None if self.quarter else self._maps
+        # quarter period: the half-period map the multipliers need is swept at u when they are asked for (kept
+        # while u stays the accepted point)
+        if not self.quarter:
+            self._accepted_maps = self._maps
+        elif not np.array_equal(getattr(self, "accepted_u", None), u):
+            self._accepted_maps = None
         self.accepted_u = u.copy()
 
     def check_step(self, u_old, u_new):

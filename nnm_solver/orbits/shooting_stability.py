@@ -26,15 +26,22 @@ class ShootingStability:
 
     @property
     def half_map(self):
-        """d[q; v](end) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, end = T/4 (quarter-period
-        shooting), T/2 (half-period) or T, or None."""
-        return None if self._maps is None else np.vstack(self._maps)
+        """d[q; v](end) / d[q0 (; v0)] (2n, n or 2n) at the last Jacobian evaluation, end = T/2 (half-period
+        shooting) or T, or None (also for quarter-period shooting, whose Jacobian needs no velocity rows)."""
+        return None if self._maps is None or self._maps[1] is None else np.vstack(self._maps)
 
     @property
     def accepted_map(self):
-        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last accepted point, or None."""
+        """d[q; v](T/2 or T) / d[q0 (; v0)] (2n, n or 2n) at the last accepted point, or None (quarter-period
+        shooting assembles the velocity rows only with all_columns)."""
         maps = self.stability_maps()
-        return None if maps is None else np.vstack(maps)
+        return None if maps is None or maps[1] is None else np.vstack(maps)
+
+    @property
+    def stability_needs_jacobian(self):
+        """Do the multipliers of the accepted point come from its latest Jacobian evaluation (so that it must be
+        evaluated there)?  Not for quarter-period shooting: stability_maps sweeps them at the accepted point."""
+        return not getattr(self, "quarter", False)
 
     def stability_maps(self):
         """(dq, dv)(T/2 or T) / d[q0 (; v0)] at the last accepted point: the blocks of the half-period (symmetric
@@ -44,7 +51,9 @@ class ShootingStability:
         stale = maps is None or (self.all_columns and maps[0].shape[1] < 2 * self.n)
         if stale and getattr(self, "quarter", False) and hasattr(self, "accepted_u"):
             q0, v0, T = self.unpack(self.accepted_u)
-            out = self.integrator.sensitivity(self.sys, q0, v0, T / self.spp, self.spp // 2, self.all_columns)
+            # the multipliers of reversible orbits need only dq(T/2)/dq0; the monodromy (all_columns) needs all
+            out = self.integrator.sensitivity(self.sys, q0, v0, T / self.spp, self.spp // 2, self.all_columns,
+                                              self.all_columns)
             if out[-1]:
                 self._accepted_maps = (out[2], out[3])
         return self._accepted_maps
