@@ -8,9 +8,10 @@ impulse responses of the linear modes; the final state is then the block-diagona
 through every step.
 
 The Volterra recursion is one block lower-triangular system in the N n_s deformations with ncols right-hand
-sides (one per column of the monodromy): ``monodromy`` builds it (O(N^2 n_s^3)) and solves it with one BLAS-3
-triangular solve (O((N n_s)^2 ncols)); tests/test_newmark_monodromy.py checks it against the step-by-step
-recursion over all columns it replaced (about twice as fast at n = 548).
+sides (one per column of the monodromy), solved VOLTERRA_BLOCK steps at a time: the earlier steps enter a block
+by one matrix product and the block by a triangular solve, both BLAS-3 (O((N n_s)^2 ncols) in all, memory
+O(N n_s ncols)).  tests/test_newmark_monodromy.py checks it against the step-by-step recursion over all
+columns it replaced (about twice as fast at n = 548).
 """
 from __future__ import annotations
 
@@ -58,14 +59,20 @@ def _powers(omega2, h, N):
     return p11, p12, p21, p22, ge1, ge2
 
 
-@_jit
-def _volterra_system(omega2, Bq, h, N, Dseq, ncols, ge1):
-    """The Volterra recursion of the monodromy as one unit lower-triangular system L x = F.
+#: time steps per block of the Volterra solve: one block (one triangular solve) for the usual 200 steps per period,
+#: bounded memory (O((block n_s)^2)) and (N / block)^2 / 2 matrix products for long sweeps
+VOLTERRA_BLOCK = 128
 
-    Unknowns x_k = dd_k (n_s each, k = 1..N: the spring deformations' perturbations at step k, one column per
-    column of the monodromy).  Row block k: (I - H0 D_k) dd_k - sum_{0<j<k} Kc(k-j) D_j dd_j = free_k + H(k-1) w_0,
-    multiplied by M_k = (I - H0 D_k)^-1 so that its diagonal block is the identity.  Returns (L (N n_s, N n_s),
-    F (N n_s, ncols))."""
+
+@_jit
+def _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1):
+    """The pieces of the Volterra recursion (module docstring) for the deformations' perturbations dd_k, k = 1..N:
+
+        (I - H0 D_k) dd_k - sum_{0<j<k} Kc(k-j) D_j dd_j = F_k,   F_k = free_k + H(k-1) w_0,
+
+    with H(m) = Bq diag(ge1[m]) Bq^T the impulse responses, Kc(m) = H(m) + H(m-1), free_k the response of the
+    deformations to the initial state through the linear modes.  Returns (Kc (N, n_s, n_s), M (N + 1, n_s, n_s)
+    with M_k = (I - H0 D_k)^-1, F (N n_s, ncols))."""
     n = omega2.shape[0]
     ns = Bq.shape[0]
     a11, a12, a21, a22, e1, e2 = _linear_map(omega2, h)
@@ -81,37 +88,87 @@ def _volterra_system(omega2, Bq, h, N, Dseq, ncols, ge1):
     Kc = np.zeros((N, ns, ns))
     for m in range(1, N):
         Kc[m] = H[m] + H[m - 1]
-    L = np.zeros((N * ns, N * ns))
-    F = np.zeros((N * ns, ncols))
+    M = np.zeros((N + 1, ns, ns))
+    F = np.empty((N * ns, ncols))
     W0 = Bq * Dseq[0][:, None]                  # w_0 = D_0 Bq dq0 (the dv0 columns have w_0 = 0)
     p11, p12, p21, p22 = np.ones(n), np.zeros(n), np.zeros(n), np.ones(n)
     eye = np.eye(ns)
     for k in range(1, N + 1):
         p11, p12, p21, p22 = (a11 * p11 + a12 * p21, a11 * p12 + a12 * p22,
                               a21 * p11 + a22 * p21, a21 * p12 + a22 * p22)
-        Mk = np.linalg.inv(eye - H[0] * Dseq[k][None, :])
+        M[k] = np.linalg.inv(eye - H[0] * Dseq[k][None, :])
         r0 = (k - 1) * ns
-        rhs = np.empty((ns, ncols))
         for a in range(ns):
             for c in range(n):
-                rhs[a, c] = Bq[a, c] * p11[c]
+                F[r0 + a, c] = Bq[a, c] * p11[c]
             if ncols > n:
                 for c in range(n):
-                    rhs[a, n + c] = Bq[a, c] * p12[c]
-        rhs[:, :n] += H[k - 1] @ W0
-        F[r0:r0 + ns] = Mk @ rhs
-        for j in range(1, k):
-            blk = -(Mk @ Kc[k - j]) * Dseq[j][None, :]
-            L[r0:r0 + ns, (j - 1) * ns:j * ns] = blk
+                    F[r0 + a, n + c] = Bq[a, c] * p12[c]
+        F[r0:r0 + ns, :n] += H[k - 1] @ W0
+    return Kc, M, F
+
+
+@_jit
+def _history(Kc, k0, k1, j0, j1, ns):
+    """T ((k1 - k0) n_s, (j1 - j0) n_s): block (k - k0, j - j0) = Kc(k - j), the kernel of the earlier steps
+    j0 <= j < j1 in the right-hand sides of the steps k0 <= k < k1 (all j < k): their terms are T @ [w_j0; ...]."""
+    T = np.empty(((k1 - k0) * ns, (j1 - j0) * ns))
+    for k in range(k0, k1):
+        for j in range(j0, j1):
+            K = Kc[k - j]
+            for a in range(ns):
+                for b in range(ns):
+                    T[(k - k0) * ns + a, (j - j0) * ns + b] = K[a, b]
+    return T
+
+
+@_jit
+def _block_system(Kc, M, Dseq, k0, k1, ns, rhs):
+    """The unit lower-triangular system of the steps k0 <= k < k1: L (m, m) with blocks -M_k Kc(k - j) D_j (j < k in
+    the block) and the identity on the diagonal; rhs (m, ncols) is multiplied by M_k block by block, in place."""
+    m = (k1 - k0) * ns
+    L = np.zeros((m, m))
+    for k in range(k0, k1):
+        r0 = (k - k0) * ns
+        rhs[r0:r0 + ns] = M[k] @ rhs[r0:r0 + ns]
+        for j in range(k0, k):
+            c0 = (j - k0) * ns
+            for a in range(ns):
+                for b in range(ns):
+                    acc = 0.0
+                    for t in range(ns):
+                        acc += M[k, a, t] * Kc[k - j, t, b]
+                    L[r0 + a, c0 + b] = -acc * Dseq[j, b]
         for a in range(ns):
             L[r0 + a, r0 + a] = 1.0
-    return L, F
+    return L
+
+
+def _volterra(omega2, Bq, h, N, Dseq, ncols, ge1):
+    """w_k = D_k dd_k for k = 0..N, ((N + 1) n_s, ncols): the Volterra system solved block by block, VOLTERRA_BLOCK
+    steps at a time: each earlier block enters by a matrix product, the block itself by a triangular solve (BLAS-3)."""
+    n = omega2.shape[0]
+    ns = Bq.shape[0]
+    Kc, M, F = _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1)
+    W = np.zeros(((N + 1) * ns, ncols))
+    W[:ns, :n] = Bq * Dseq[0][:, None]
+    for k0 in range(1, N + 1, VOLTERRA_BLOCK):
+        k1 = min(k0 + VOLTERRA_BLOCK, N + 1)
+        rhs = F[(k0 - 1) * ns:(k1 - 1) * ns]
+        for j0 in range(1, k0, VOLTERRA_BLOCK):          # the earlier blocks
+            j1 = min(j0 + VOLTERRA_BLOCK, k0)
+            rhs += _history(Kc, k0, k1, j0, j1, ns) @ W[j0 * ns:j1 * ns]
+        L = _block_system(Kc, M, Dseq, k0, k1, ns, rhs)
+        # L dd = rhs as dd^T L^T = rhs^T: L.T and rhs.T are Fortran-ordered views, solved in place by BLAS
+        dd = blas.dtrsm(1.0, L.T, rhs.T, side=1, lower=0, trans_a=0, diag=1, overwrite_b=1).T
+        W[k0 * ns:k1 * ns] = dd * Dseq[k0:k1].reshape(-1)[:, None]
+    return W
 
 
 def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
     """Exact derivative of the discrete flow map: (Sq, Sv) = d[q_N; v_N]/d[q0 (; v0)] (n, ncols) each.
 
-    The Volterra recursion (module docstring) is solved as one triangular system.  ncols = n: only the columns of dq0 (reversible orbits that start at rest); 2n:
+    ncols = n: only the columns of dq0 (reversible orbits that start at rest); 2n:
     all.  velocities=False skips Sv (returned as None): the shooting Jacobian of quarter-period shooting and the
     multipliers of reversible orbits need only Sq.
     """
@@ -132,13 +189,7 @@ def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
             Sv[idx, n + idx] = p22
     if ns == 0 or N == 0:
         return Sq, Sv
-    L, F = _volterra_system(omega2, Bq, h, N, Dseq, ncols, ge1)
-    # L dd = F as dd^T L^T = F^T: L.T and F.T are Fortran-ordered views (no copies), solved in place by BLAS
-    dd = blas.dtrsm(1.0, L.T, F.T, side=1, lower=0, trans_a=0, diag=1, overwrite_b=1).T
-    W = np.empty(((N + 1) * ns, ncols))          # w_k = D_k dd_k, k = 0..N
-    W[:ns] = 0.0
-    W[:ns, :n] = Bq * Dseq[0][:, None]
-    W[ns:] = dd * Dseq[1:].reshape(-1)[:, None]
+    W = _volterra(omega2, Bq, h, N, Dseq, ncols, ge1)   # w_k = D_k dd_k, k = 0..N
     Sst = W[:-ns] + W[ns:]                       # w_j + w_{j+1}, j = 0..N-1
     # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1}); column j ns + s of U is ge[N-1-j] * Bq[s]
     rev = ge1[::-1]

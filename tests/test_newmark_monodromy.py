@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from nnm_solver.newmark import _sweep_tangents, sweep_sensitivity, sweep_state
+from nnm_solver import newmark_monodromy
 from nnm_solver.newmark_monodromy import _linear_map, monodromy
 
 
@@ -110,8 +111,10 @@ def monodromy_recursive(omega2, Bq, h, nsteps, Dseq, ncols):
     return Sq, Sv
 
 
+@pytest.mark.parametrize("block", [128, 7])        # one block; several blocks of unequal length (25 = 3 x 7 + 4)
 @pytest.mark.parametrize("n, ns, N", [(7, 1, 9), (12, 3, 16), (30, 4, 25)])
-def test_triangular_assembly_matches_the_recursion(n, ns, N):
+def test_triangular_assembly_matches_the_recursion(n, ns, N, block, monkeypatch):
+    monkeypatch.setattr(newmark_monodromy, "VOLTERRA_BLOCK", block)
     rng = np.random.default_rng(n)
     omega2 = np.sort(rng.uniform(0.5, 400.0, n))
     Bq = rng.standard_normal((ns, n))
