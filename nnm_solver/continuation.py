@@ -161,7 +161,7 @@ def correct(problem, u_pred, p, settings, tol, w=None):
     return correct_factored(problem, u_pred, p, settings, tol, w)[:4]
 
 
-def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
+def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refresh=True):
     """``correct``, also returning the factorisation of [J; (w^2 p)^T] at the converged point (5th item):
     the tangent there and other solves with J reuse it (one QR per Jacobian evaluation).
 
@@ -169,7 +169,8 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
     the factorisation of [J_near; (w^2 p)^T] at a converged point next to it (e.g. the previous point of
     an event locator, whose hyperplanes are parallel): the chord iterations start there instead of at
     u_pred with a Jacobian there.  A fresh Jacobian is taken when they contract poorly, and always at the
-    converged point."""
+    converged point unless refresh=False (then J and the factorisation are None when the iterations converged on
+    an older Jacobian: for callers that need only the point)."""
     row = p if w is None else w * w * p
     u = u_pred.copy() if start is None else start[0].copy()
     factor = None if start is None else start[1]
@@ -186,6 +187,8 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None):
             raise CorrectorFailure("the time integration diverged (non-finite state)")
         err = problem.error(u, r)
         if err < tol:
+            if not fresh and not refresh:
+                return u, None, it, err, None
             if not fresh:  # the monodromy/Jacobian must belong to the converged point
                 r, J = problem.jacobian(u)
                 err = problem.error(u, r)

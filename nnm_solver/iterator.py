@@ -261,6 +261,11 @@ class NNMIterator:
         for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
             if not np.isnan(pt.floquet).any():
                 loc.spectra[float(sigma)] = (pt.floquet, getattr(pt, "_collision", None))
+        if self._refusals < MAX_REFUSALS and cp.step > 4 * self._cs.step_min and loc.jumped():
+            # the step's corrector landed on another branch alongside (near a tongue): half the step
+            self._refusals += 1
+            self._prev = prev
+            return None
 
         def record(sigma):
             u, J, p = loc.at(sigma)

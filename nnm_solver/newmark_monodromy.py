@@ -96,15 +96,20 @@ def _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1):
     for k in range(1, N + 1):
         p11, p12, p21, p22 = (a11 * p11 + a12 * p21, a11 * p12 + a12 * p22,
                               a21 * p11 + a22 * p21, a21 * p12 + a22 * p22)
-        M[k] = np.linalg.inv(eye - H[0] * Dseq[k][None, :])
+        if ns == 1:
+            M[k, 0, 0] = 1.0 / (1.0 - H[0, 0, 0] * Dseq[k, 0])
+        else:
+            M[k] = np.linalg.inv(eye - H[0] * Dseq[k][None, :])
         r0 = (k - 1) * ns
         for a in range(ns):
             for c in range(n):
-                F[r0 + a, c] = Bq[a, c] * p11[c]
+                acc = Bq[a, c] * p11[c]
+                for b in range(ns):
+                    acc += H[k - 1, a, b] * W0[b, c]
+                F[r0 + a, c] = acc
             if ncols > n:
                 for c in range(n):
                     F[r0 + a, n + c] = Bq[a, c] * p12[c]
-        F[r0:r0 + ns, :n] += H[k - 1] @ W0
     return Kc, M, F
 
 
@@ -128,9 +133,17 @@ def _block_system(Kc, M, Dseq, k0, k1, ns, rhs):
     the block) and the identity on the diagonal; rhs (m, ncols) is multiplied by M_k block by block, in place."""
     m = (k1 - k0) * ns
     L = np.zeros((m, m))
+    tmp = np.empty(ns)
     for k in range(k0, k1):
         r0 = (k - k0) * ns
-        rhs[r0:r0 + ns] = M[k] @ rhs[r0:r0 + ns]
+        for c in range(rhs.shape[1]):                 # rhs_k <- M_k rhs_k
+            for a in range(ns):
+                acc = 0.0
+                for b in range(ns):
+                    acc += M[k, a, b] * rhs[r0 + b, c]
+                tmp[a] = acc
+            for a in range(ns):
+                rhs[r0 + a, c] = tmp[a]
         for j in range(k0, k):
             c0 = (j - k0) * ns
             for a in range(ns):

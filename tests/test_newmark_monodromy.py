@@ -54,19 +54,10 @@ def monodromy_recursive(omega2, Bq, h, nsteps, Dseq, ncols):
     if ns == 0:
         return Sq, Sv
     # impulse responses of the deformations: H[m] = Bq diag(ge1[m]) Bq^T
-    H = np.zeros((N, ns, ns))
-    for m in range(N):
-        for a in range(ns):
-            for b in range(a, ns):
-                acc = 0.0
-                for i in range(n):
-                    acc += Bq[a, i] * ge1[m, i] * Bq[b, i]
-                H[m, a, b] = acc
-                H[m, b, a] = acc
+    H = np.einsum("ai,mi,bi->mab", Bq, ge1, Bq)
     # kernel of w_j in dd_k: H(k-1) for j = 0, Kc(k-j) = H(k-j) + H(k-j-1) for 0 < j < k, H(0) for j = k
     Kc = np.zeros((N, ns, ns))
-    for m in range(1, N):
-        Kc[m] = H[m] + H[m - 1]
+    Kc[1:] = H[1:] + H[:-1]
     # w_k = D_k dd_k, dd_k = Bq dq_k, for every column of [dq0, dv0]
     W = np.zeros((N + 1, ns, ncols))
     W[0, :, :n] = Bq * Dseq[0][:, None]

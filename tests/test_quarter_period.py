@@ -101,3 +101,27 @@ def test_the_two_dof_backbone_goes_all_round_the_5to1_tongue():
     for E in (4708.27, 285.607, 109148.2, 2356.36, 75849.1, 43884.9):
         assert min(abs(f / E - 1) for f in folds) < 1e-4, E
     assert b.status == "done" and b.energy[-1] == pytest.approx(3e5)
+
+
+def test_a_jump_onto_a_branch_alongside_is_caught_at_mid_step(monkeypatch):
+    """Without the period test, NNM 1 of the 2-DOF stepped from the 5:1 tongue's far side (73 kJ) onto the backbone
+    (89.6 kJ); the mid-step check (Locator.jumped: the branch's point half-way lies 0.39 step lengths off the
+    cubic interpolant of the ends) refuses that step too, and the branch goes round the tongue's inner loop."""
+    import nnm_solver.continuation as continuation
+    import nnm_solver.locator as locator
+    energy_only = continuation._unseen_turns
+
+    def no_period_test(energy, u, p, u_new, p_new, floor):
+        reason = energy_only(energy, u, p, u_new, p_new, floor)
+        return reason if reason.startswith("the energy") else ""
+
+    monkeypatch.setattr(continuation, "_unseen_turns", no_period_test)
+    calls = []
+    jumped = locator.Locator.jumped
+    monkeypatch.setattr(locator.Locator, "jumped", lambda self, *a: calls.append(jumped(self, *a)) or calls[-1])
+    b = nnm.continue_nnm(two_dof_model(), 1, 3e5)
+    folds = [e["energy"] for e in b.events if e["kind"] == "fold"]
+    for E in (109148.2, 2356.36, 75849.1, 43884.9):
+        assert min(abs(f / E - 1) for f in folds) < 1e-4, E
+    assert any("step lengths off" in c for c in calls)                    # the check refused a step
+    assert sum(bool(c) for c in calls) <= 3
