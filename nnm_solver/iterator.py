@@ -2,9 +2,11 @@ r"""The iteration over one branch's converged orbits: ``NNMIterator`` (created b
 
 Each ``next()`` runs the pseudo-arclength engine (continuation.py) to the next converged orbit and
 turns it into a ``Point``: energy, frequency, initial state, Floquet multipliers and stability
-(floquet.py), harmonic label (tongue_skip.py).  Around it: the events between consecutive points are
-located (events.py), the branch is cut exactly at energy_max, the stop reasons are checked (stops.py),
-and in ``tongues="skip"`` mode the internal-resonance tongues are jumped over or traversed unseen.
+(floquet.py), harmonic label (tongue_skip.py).  Around it: a step that jumped onto another branch (its
+mid-step point off the interpolant of its ends, locator.Locator.jumped) or whose events cannot be located is
+refused (the engine halves it), the events between consecutive points are located (events.py), the branch is
+cut exactly at energy_max, the stop reasons are checked (stops.py), and in ``tongues="skip"`` mode the
+internal-resonance tongues are jumped over or traversed unseen.
 """
 from __future__ import annotations
 

@@ -94,6 +94,9 @@ class Locator:
             return ""
         sigma = 0.5 * s
         u_pred = self.prediction(sigma)
+        r = self.problem.residual(u_pred)
+        if np.all(np.isfinite(r)) and self.problem.error(u_pred, r) < self.tol:
+            return ""                # the interpolant is on the branch already (most steps)
         try:
             u, J, _, _, factor = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w,
                                                   start=(u_pred, self.factors[float(s)]), refresh=False)
