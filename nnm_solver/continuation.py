@@ -34,10 +34,10 @@ when the corrector converges in few iterations, shrinks when it needs many, and 
 failure, when the new tangent turns by more than ``max_angle``, when the corrector lands far from the
 prediction (``max_correction``), when the energy or the period changed against the tangent's derivative
 of it at both ends of the step (an even number of turning points crossed unseen: a tongue stepped over,
-or a jump onto a branch alongside), or when the
-problem refuses the step (``check_step``); these guard against jumping between nearby branches and
-over the narrow entrance of internal-resonance tongues.  When small steps keep failing (a singular
-point, e.g. a branch point), one longer step is tried to step over it.
+or a jump onto a branch alongside), or when the problem refuses the step (``check_step``); these guard
+against jumping between nearby branches and over the narrow entrance of internal-resonance tongues.  When
+small steps keep failing (a singular point, e.g. a branch point), one longer step is tried to step over it,
+never longer than the problem's largest step.
 """
 from __future__ import annotations
 

@@ -81,12 +81,13 @@ class Locator:
         """A reason (str) if the step from a to its seeded end point b did not follow one branch, else ''.
 
         The branch's point at mid-step (on the hyperplane sigma = step / 2) is found by chord iterations from the
-        cubic Hermite interpolant of the two ends, with b's factorisation (no new Jacobian: a few state sweeps).  On a resolved branch it lies within a
-        few thousandths of the step of that interpolant; when the corrector of the step landed on another branch
-        running alongside (near a tongue), the interpolant joins two branches and the mid-step point is a
-        sizeable part of the step away from it (measured on the aircraft's NNM 20 and the 2-DOF's NNM 1:
-        legitimate steps at most 1.7e-3 and 1.3e-2 of the step, the two jumps found 0.22 and 0.39).  Not judged ('') when a tangent at an end is nearly parallel to the hyperplanes
-        (no Hermite interpolant: e.g. at a fold) or b was not seeded."""
+        cubic Hermite interpolant of the two ends, with b's factorisation (no new Jacobian: a few state sweeps).
+        On a resolved branch it lies within a few thousandths of the step of that interpolant.  When the step's
+        corrector landed on another branch running alongside (near a tongue), the interpolant joins two branches
+        and the mid-step point is a sizeable part of the step away from it.  Measured on the aircraft's NNM 20
+        and the 2-DOF's NNM 1: legitimate steps at most 1.7e-3 and 1.3e-2 of the step, the two jumps found 0.22
+        and 0.39.  Not judged ('') when a tangent at an end is nearly parallel to the hyperplanes (no Hermite
+        interpolant, e.g. at a fold) or b was not seeded."""
         s = self.step
         if s is None or float(s) not in self.factors or 0.0 not in self.cache:
             return ""
@@ -197,7 +198,8 @@ class Locator:
         so it is evaluated again when a later point was computed since (a cached u)."""
         last = getattr(self.problem, "_last_residual", None)
         # (quarter-period shooting sweeps the maps of its multipliers at the accepted point itself)
-        if getattr(self.problem, "stability_needs_jacobian", True) and last is not None and not np.array_equal(last[0], u):
+        needs = getattr(self.problem, "stability_needs_jacobian", True)
+        if needs and last is not None and not np.array_equal(last[0], u):
             _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
 
