@@ -37,7 +37,8 @@ condition <q_ref, v0> = 0 (an extremum of the motion along q_ref, which degenera
 extrema merge as the orbit's shape changes), the section stays transversal along the family.  The
 trivial orbit u = 0 is excluded by starting at finite amplitude and by the arclength condition.
 
-Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol (quarter period: ||q(T/4)|| / ||q0|| < tol).
+Convergence (eq. 11): ||H|| / ||[q0; v0/w_r]|| < tol, for quarter-period shooting too (on the half-period
+residual, by N/4 more state steps: ShootingProblem.error).
 
 Half-period shooting needs an odd f_nl (only odd powers in the element laws): the driver checks it.
 """
@@ -66,8 +67,6 @@ def discrete_linear_period(omega, nsteps_per_period, integrator="newmark"):
     when omega T / (2N) = tan(pi / N); Gauss collocation by 2 arg P(i omega h) (gauss.rotation).
     """
     return get_integrator(integrator).linear_period(omega, nsteps_per_period)
-
-
 
 
 class ShootingProblem(ShootingError, ShootingStability):
