@@ -239,6 +239,8 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
         balance; options ``harmonics``, ``samples``, ``basis``, see ``nnm_solver.hb``).
     steps_per_period : time steps per period; shooting.  The frequency error is O(steps^-order) (order 2
         for Newmark), largest for orbits with strong higher harmonics (branch.freq_error estimates it).
+        Rounded up to a multiple of 4 for the default quarter-period shooting of symmetric orbits (to an even
+        number for half-period shooting); the branch's settings record the number used.
     integrator : the shooting's time integrator, one of ``INTEGRATORS``: "newmark" (default; the seed
         paper's average-acceleration scheme, order 2), "gauss4" / "gauss6" (Gauss-Legendre collocation,
         orders 4 and 6, about 2x / 3x Newmark's cost per step; see integrators.py).
