@@ -284,8 +284,9 @@ def _volterra(Hom, H, G, Dseq, ncols):
     return W
 
 
-def _monodromy(k, Bq, nsteps, Dseq, ncols):
-    """Exact derivative of the discrete flow map d[q_N; v_N]/d[q0 (; v0)]: (Sq, Sv) (n, ncols) each.
+def _monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
+    """Exact derivative of the discrete flow map d[q_N; v_N]/d[q0 (; v0)]: (Sq, Sv) (n, ncols) each (Sv None
+    unless velocities).
 
     Per mode the linearised step is z_{k+1} = A z_k + E p_k, dQ_k = C z_k + F p_k, p_k = -Bq^T w_k with
     w_k = Dg_k dd_k the stage force perturbations (s n_s).  Only dd_k is propagated:
@@ -307,13 +308,12 @@ def _monodromy(k, Bq, nsteps, Dseq, ncols):
     diag_q = P[N, :, 0, :]   # (n, 2): dq_N / (dq0_m, dv0_m)
     diag_v = P[N, :, 1, :]
     cols = np.arange(n)
-    Sq = np.zeros((n, ncols))
-    Sv = np.zeros((n, ncols))
-    Sq[cols, cols] = diag_q[:, 0]
-    Sv[cols, cols] = diag_v[:, 0]
-    if ncols > n:
-        Sq[cols, n + cols] = diag_q[:, 1]
-        Sv[cols, n + cols] = diag_v[:, 1]
+    Sq, Sv = np.zeros((n, ncols)), (np.zeros((n, ncols)) if velocities else None)
+    for S, diag in ((Sq, diag_q), (Sv, diag_v)):
+        if S is not None:
+            S[cols, cols] = diag[:, 0]
+            if ncols > n:
+                S[cols, n + cols] = diag[:, 1]
     if ns == 0:
         return Sq, Sv
     CA = k.C[None] @ P[:N]                                # (N, n, s, 2): C A^r
@@ -328,13 +328,13 @@ def _monodromy(k, Bq, nsteps, Dseq, ncols):
     # final state: - sum_j A^(N-1-j) E Bq^T w_j
     AE = P[:N][::-1] @ k.E[None]                          # AE[j] = A^(N-1-j) E, (N, n, 2, s)
     Uq = (AE[:, :, 0, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m)
-    Uv = (AE[:, :, 1, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m)
     Sq -= Uq @ W
-    Sv -= Uv @ W
+    if velocities:
+        Sv -= (AE[:, :, 1, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m) @ W
     return Sq, Sv
 
 
-def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True):
+def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, velocities=True):
     """Integrate with the sensitivity of the final state (same outputs as newmark.sweep_sensitivity).
 
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n or n), Sv = dv_N/d[q0; v0], and
@@ -348,5 +348,5 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True):
                                            k.G, k.b, k.bbar, k.c, k.Abar, k.Minv)
     if not ok:
         return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False
-    Sq, Sv = _monodromy(k, Bq, nsteps, Dseq, ncols)
+    Sq, Sv = _monodromy(k, Bq, nsteps, Dseq, ncols, velocities)
     return q, v, Sq, Sv, sq, sv, True

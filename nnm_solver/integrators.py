@@ -8,7 +8,7 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
     record(system, q0, v0, h, nsteps)             -> (Q, V, ok)     every state
     sensitivity(system, q0, v0, h, nsteps, all, velocities)
                                                   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
-                                                     (velocities=False: Sv may be None, not assembled)
+                                                     (velocities=False: Sv is None, not assembled)
     linear_period(omega, steps_per_period)        -> T (s) whose discrete orbit closes for frequency omega
     relative_error(y)                             -> relative frequency error of a harmonic with h w = y
 
@@ -104,8 +104,7 @@ class _Gauss(Integrator):
         return gauss.sweep_record(q0, v0, h, nsteps, *self._args(system, h))
 
     def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
-        # (the velocity rows are assembled in any case)
-        return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns)
+        return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
 
 
 _REGISTRY = {
