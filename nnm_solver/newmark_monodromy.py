@@ -44,19 +44,25 @@ def _linear_map(omega2, h):
 
 @_jit
 def _powers(omega2, h, N):
-    """Per-mode powers of the linear map: (p11[N], p12[N], p21[N], p22[N]) (n,) and ge1, ge2 (N, n) with
-    (ge1[m], ge2[m]) = A^m e, m = 0..N-1."""
+    """Per-mode powers of the linear map A^k, k = 0..N: their first row P11, P12 (N + 1, n), the second row of A^N
+    (p21, p22 (n,)), and ge1, ge2 (N, n) with (ge1[m], ge2[m]) = A^m e, m = 0..N-1."""
     n = omega2.shape[0]
     a11, a12, a21, a22, e1, e2 = _linear_map(omega2, h)
+    P11 = np.empty((N + 1, n))
+    P12 = np.empty((N + 1, n))
     p11, p12, p21, p22 = np.ones(n), np.zeros(n), np.zeros(n), np.ones(n)
     ge1 = np.empty((N, n))
     ge2 = np.empty((N, n))
-    for m in range(N):
+    for m in range(N + 1):
+        P11[m] = p11
+        P12[m] = p12
+        if m == N:
+            break
         ge1[m] = p11 * e1 + p12 * e2
         ge2[m] = p21 * e1 + p22 * e2
         p11, p12, p21, p22 = (a11 * p11 + a12 * p21, a11 * p12 + a12 * p22,
                               a21 * p11 + a22 * p21, a21 * p12 + a22 * p22)
-    return p11, p12, p21, p22, ge1, ge2
+    return P11, P12, p21, p22, ge1, ge2
 
 
 #: time steps per block of the Volterra solve: one block (one triangular solve) for the usual 200 steps per period,
@@ -65,7 +71,7 @@ VOLTERRA_BLOCK = 128
 
 
 @_jit
-def _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1):
+def _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1):
     """The pieces of the Volterra recursion (module docstring) for the deformations' perturbations dd_k, k = 1..N:
 
         (I - H0 D_k) dd_k - sum_{0<j<k} Kc(k-j) D_j dd_j = F_k,   F_k = free_k + H(k-1) w_0,
@@ -73,9 +79,8 @@ def _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1):
     with H(m) = Bq diag(ge1[m]) Bq^T the impulse responses, Kc(m) = H(m) + H(m-1), free_k the response of the
     deformations to the initial state through the linear modes.  Returns (Kc (N, n_s, n_s), M (N + 1, n_s, n_s)
     with M_k = (I - H0 D_k)^-1, F (N n_s, ncols))."""
-    n = omega2.shape[0]
+    n = Bq.shape[1]
     ns = Bq.shape[0]
-    a11, a12, a21, a22, e1, e2 = _linear_map(omega2, h)
     H = np.zeros((N, ns, ns))
     for m in range(N):
         for a in range(ns):
@@ -91,11 +96,9 @@ def _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1):
     M = np.zeros((N + 1, ns, ns))
     F = np.empty((N * ns, ncols))
     W0 = Bq * Dseq[0][:, None]                  # w_0 = D_0 Bq dq0 (the dv0 columns have w_0 = 0)
-    p11, p12, p21, p22 = np.ones(n), np.zeros(n), np.zeros(n), np.ones(n)
     eye = np.eye(ns)
     for k in range(1, N + 1):
-        p11, p12, p21, p22 = (a11 * p11 + a12 * p21, a11 * p12 + a12 * p22,
-                              a21 * p11 + a22 * p21, a21 * p12 + a22 * p22)
+        p11, p12 = P11[k], P12[k]
         if ns == 1:
             M[k, 0, 0] = 1.0 / (1.0 - H[0, 0, 0] * Dseq[k, 0])
         else:
@@ -157,12 +160,12 @@ def _block_system(Kc, M, Dseq, k0, k1, ns, rhs):
     return L
 
 
-def _volterra(omega2, Bq, h, N, Dseq, ncols, ge1):
+def _volterra(Bq, N, Dseq, ncols, P11, P12, ge1):
     """w_k = D_k dd_k for k = 0..N, ((N + 1) n_s, ncols): the Volterra system solved block by block, VOLTERRA_BLOCK
     steps at a time: each earlier block enters by a matrix product, the block itself by a triangular solve (BLAS-3)."""
-    n = omega2.shape[0]
+    n = Bq.shape[1]
     ns = Bq.shape[0]
-    Kc, M, F = _volterra_terms(omega2, Bq, h, N, Dseq, ncols, ge1)
+    Kc, M, F = _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1)
     W = np.zeros(((N + 1) * ns, ncols))
     W[:ns, :n] = Bq * Dseq[0][:, None]
     for k0 in range(1, N + 1, VOLTERRA_BLOCK):
@@ -181,19 +184,19 @@ def _volterra(omega2, Bq, h, N, Dseq, ncols, ge1):
 def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
     """Exact derivative of the discrete flow map: (Sq, Sv) = d[q_N; v_N]/d[q0 (; v0)] (n, ncols) each.
 
-    ncols = n: only the columns of dq0 (reversible orbits that start at rest); 2n:
-    all.  velocities=False skips Sv (returned as None): the shooting Jacobian of quarter-period shooting and the
-    multipliers of reversible orbits need only Sq.
+    ncols = n: only the columns of dq0 (reversible orbits that start at rest); 2n: all.  velocities=False skips
+    Sv (returned as None): the shooting Jacobian of quarter-period shooting and the multipliers of reversible
+    orbits need only Sq.
     """
     n = omega2.shape[0]
     ns = Bq.shape[0]
     N = int(nsteps)
-    p11, p12, p21, p22, ge1, ge2 = _powers(omega2, h, N)
+    P11, P12, p21, p22, ge1, ge2 = _powers(omega2, h, N)
     Sq = np.zeros((n, ncols))
     idx = np.arange(n)
-    Sq[idx, idx] = p11
+    Sq[idx, idx] = P11[N]
     if ncols > n:
-        Sq[idx, n + idx] = p12
+        Sq[idx, n + idx] = P12[N]
     Sv = None
     if velocities:
         Sv = np.zeros((n, ncols))
@@ -202,7 +205,7 @@ def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
             Sv[idx, n + idx] = p22
     if ns == 0 or N == 0:
         return Sq, Sv
-    W = _volterra(omega2, Bq, h, N, Dseq, ncols, ge1)   # w_k = D_k dd_k, k = 0..N
+    W = _volterra(Bq, N, Dseq, ncols, P11, P12, ge1)    # w_k = D_k dd_k, k = 0..N
     Sst = W[:-ns] + W[ns:]                       # w_j + w_{j+1}, j = 0..N-1
     # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1}); column j ns + s of U is ge[N-1-j] * Bq[s]
     rev = ge1[::-1]
