@@ -75,9 +75,10 @@ class ShootingStability:
         this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
         nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
         ~10x cheaper); used to follow one Krein collision during event location."""
-        if not (self.symmetric and self.reversible) or self.stability_maps() is None:
+        maps = self.stability_maps() if self.symmetric and self.reversible else None
+        if maps is None:
             return None
-        A11 = self.stability_maps()[0][:, :self.n]
+        A11 = maps[0][:, :self.n]
         family = self.unpack(tangent)[0]
         C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
         if C.shape[0] <= 8 * k:
