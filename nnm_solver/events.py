@@ -104,7 +104,9 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                                        ends=[(p.stable, getattr(p, "_collision", None)) for p in (pa, pb)])
                 else:                                # no coordinates (e.g. Hill's method): bisection on the flag
                     lo, hi = loc.bisect(loc.stable, 0.0, s)
-                sig = 0.5 * (lo + hi)
+                # the bracket's end towards the step's unstable end (its spectrum is known, so the event's point
+                # costs no eigenproblem), within the energy tolerance of the flag's change
+                sig = max(lo, hi) if pa.stable else min(lo, hi)
             pe = record(sig)
         except CorrectorFailure:
             pe, located = pu, False

@@ -272,7 +272,8 @@ class NNMIterator:
         def record(sigma):
             u, J, p = loc.at(sigma)
             loc.refresh(u, J)
-            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem)[0]
+            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
+                                known=loc.spectra.get(float(sigma)))[0]
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
@@ -292,13 +293,20 @@ class NNMIterator:
             return end[1], self._problem.state(u)
         return point, state
 
-    def _record(self, cp, prob):
+    def _record(self, cp, prob, known=None):
+        """The Point of a converged ContinuationPoint and its modal state (q0, v0, T).  known : optional (sorted
+        multipliers, collision coordinates) already computed at it (e.g. by event location)."""
         sys_ = self._system
         q0, vq0, T = prob.state(cp.u)
         x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
-        if self.settings.floquet:
+        collision = None
+        if self.settings.floquet and known is not None:
+            mu, collision = known
+            stable = is_stable(mu, STABILITY_TOL)
+        elif self.settings.floquet:
             mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
             stable = is_stable(mu, STABILITY_TOL)
+            collision = getattr(prob, "collision", None)
         else:
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
@@ -308,7 +316,7 @@ class NNMIterator:
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point.steps = int(getattr(prob, "spp", 0))
-        point._collision = getattr(prob, "collision", None) if self.settings.floquet else None  # Krein location
+        point._collision = collision          # the Krein locator's coordinates
         point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit

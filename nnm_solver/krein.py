@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .floquet import krein_gap
+from .continuation import CorrectorFailure
+from .floquet import STABILITY_TOL, krein_gap
 
 __all__ = ["locate_collision", "candidates"]
 
@@ -44,21 +45,30 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     end, most unstable first) is followed by a secant on its smooth test function krein_gap (the squared
     half-distance of the two colliding coordinates, negative once they are a complex pair), evaluated by
     the problem's local eigen-solver (``local_collision``) where it has one.  Several pairs can collide
-    within one step: the stability changes at the collision nearest the stable end.  The result is
-    checked with the full flags around it; if they do not change there, bisection on the full flag.
+    within one step: the stability changes at the collision nearest the stable end, so a further candidate is
+    followed only if it is complex already on the stable side of the nearest collision found so far (one local
+    evaluation decides).  The full stability flag's change is then bracketed around that collision
+    (_flag_change_near: two full spectra in most cases); if it does not change there, bisection on the full flag.
     ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
     evaluation.  Returns (lo, hi) like bisect."""
     rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
     (f_lo, r_lo), (f_hi, r_hi) = ends or [(loc.stable(x), loc.collision(x)) for x in (lo, hi)]
-    brackets = []
+    best = None                    # the bracket of the collision nearest the stable end so far
     for rho_star in rho_stars:
-        bracket, local = _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi)
-        brackets.append(bracket)
+        if best is None:
+            far, r_far = hi if f_lo else lo, r_hi if f_lo else r_lo
+        else:                      # does this pair collide before the best one?  It is complex there already if so
+            far = min(best) if f_lo else max(best)
+            r_far = loc.local_collision(far, rho_star)
+            if r_far is None or not krein_gap(r_far, rho_star, _per_modulus(loc)) < 0:
+                continue
+        a, b = (lo, far) if f_lo else (far, hi)
+        ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
+        best, local = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
-    first = min if f_lo else max   # the change is at the boundary of the stable end's interval
-    blo, bhi = first(brackets, key=lambda b: min(b) if f_lo else max(b))
-    bracket = _flag_change_near(loc, lo, hi, blo, bhi)
+    blo, bhi = best
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo)
     if bracket is None:        # no pair followed changed the stability (e.g. a pair left through +-1 too)
         return loc.bisect(loc.stable, lo, hi)
     # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
@@ -76,15 +86,49 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     return bracket
 
 
-def _flag_change_near(loc, lo, hi, blo, bhi):
-    """The bracket (blo, bhi) of a followed collision if the full stability flag changes across it; else
-    (the tracked pair's threshold and the full flag's differ by round-off) a bracket of the flag's change
-    within 10 or 1000 times its width around it, by bisection; None if the flag does not change there."""
-    if loc.stable(blo) != loc.stable(bhi):
-        return blo, bhi
+def _per_modulus(loc):
+    return getattr(loc.problem, "collision_per_modulus", 1.0)
+
+
+#: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
+#: tolerance (the two margin points of _flag_change_near)
+MARGIN = 0.8
+
+#: the flag's round-off band at the margin points: relative to STABILITY_TOL, the modulus excess |mu| - 1 that counts
+#: as at the threshold (two eigen-solvers' imaginary parts of a pair near its collision differ by ~1e-4 relative)
+FLAG_BAND = 1e-3
+
+
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
+    """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
+    energy tolerance; None if the flag does not change there.
+
+    The tracked pair's threshold (its imaginary part at the stability tolerance) and the full flag's differ by
+    round-off: there the imaginary part grows like the square root of the distance from the collision, so the
+    two eigen-solvers' values, ~1e-4 apart relative, place the crossing up to ~1e-6 of the step apart.  The full
+    spectra are computed at two margin points around the collision, MARGIN x the energy tolerance apart: they
+    bracket the change when the stable side's largest modulus excess |mu| - 1 is within (1 + FLAG_BAND) x the
+    tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise (another
+    pair changed the flag nearby) a bisection on the flag within 10 or 1000 times the bracket's width around it.
+    f_lo : the flag at lo."""
     a, b = min(lo, hi), max(lo, hi)
+    width = abs(bhi - blo)
+    try:
+        E_lo, E_hi = loc.energy(blo), loc.energy(bhi)
+    except CorrectorFailure:
+        E_lo = E_hi = None
+    delta = 0.5 * width
+    if E_lo is not None and width > 0 and E_hi != E_lo:
+        delta = max(delta, 0.5 * MARGIN * loc.rtol * max(abs(E_lo), abs(E_hi)) * width / abs(E_hi - E_lo))
+    delta = min(delta, 1e-2 * (b - a))
+    c = 0.5 * (blo + bhi)
+    sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
+    x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
+    x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)         # the margin on the stable side, on the unstable side
+    if loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)) and not loc.stable(x_u, STABILITY_TOL * (1 - FLAG_BAND)):
+        return (x_lo, x_hi) if x_lo < x_hi else (x_hi, x_lo)
     for k in (10.0, 1000.0):
-        w = k * max(abs(bhi - blo), 1e-12 * max(1.0, abs(bhi)))
+        w = k * max(width, 1e-12 * max(1.0, abs(bhi)))
         x0, x1 = max(a, min(blo, bhi) - w), min(b, max(blo, bhi) + w)
         if loc.stable(x0) != loc.stable(x1):
             return loc.bisect(loc.stable, x0, x1)

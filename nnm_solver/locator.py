@@ -13,7 +13,7 @@ import copy
 import numpy as np
 
 from .continuation import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
-from .floquet import is_stable, real_crossing, sort_multipliers
+from .floquet import STABILITY_TOL, is_stable, real_crossing, sort_multipliers
 
 __all__ = ["Locator", "EVENT_RTOL", "event_rtol"]
 
@@ -156,23 +156,30 @@ class Locator:
 
     def _from_latest(self, sigma, u_pred):
         """The point at sigma from the latest located point when it is close (the root finders' last
-        iterations): first iterate that point moved to sigma's hyperplane (all the hyperplanes are parallel),
-        chord iterations with its factorisation, to a tolerance CHORD_TOL_FACTOR tighter (chord iterations stop
-        just below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The
-        result must continue the branch from that point (distance at most CHORD_CONTINUITY x |d sigma|: near a
-        tongue a hyperplane can cut the solution curve twice within a step); otherwise None (fresh Newton)."""
+        iterations): chord iterations with that point's factorisation (all the hyperplanes are parallel), from the
+        prediction (the interpolant of the known points), to a tolerance CHORD_TOL_FACTOR tighter (chord iterations
+        stop just below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The
+        result must continue the branch: within CHORD_CONTINUITY x |d sigma| of that point, and within JUMP_LIMIT x
+        the distance to the nearest known point (plus the corrector's accuracy) of the prediction.  Near a tongue
+        a hyperplane can cut the solution curve twice within a step, and another branch can run alongside a few
+        millionths away (the aircraft's NNM 20 at 37.6 J: chord iterations from the latest point moved along the
+        step's first tangent converged there).  Otherwise None (fresh Newton from the prediction)."""
         if self.latest is None or self.step is None:
             return None
         s_l, u_l, factor = self.latest
         ds = abs(sigma - s_l)
         if ds > CHORD_REACH * self.step:
             return None
+        tol = CHORD_TOL_FACTOR * self.tol
         try:
-            result = correct_factored(self.problem, u_pred, self.p_a, self.settings, CHORD_TOL_FACTOR * self.tol,
-                                      self.w, start=(u_l + (sigma - s_l) * self.p_a, factor))
+            result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
+                                      start=(u_pred, factor))
         except CorrectorFailure:
             return None
         if np.linalg.norm(self.w * (result[0] - u_l)) > CHORD_CONTINUITY * ds + 10 * self.tol:
+            return None
+        nearest = min(abs(sigma - k) for k in self.cache) if self.cache else ds
+        if np.linalg.norm(self.w * (result[0] - u_pred)) > JUMP_LIMIT * nearest + 10 * tol:
             return None
         return result
 
@@ -203,8 +210,9 @@ class Locator:
             _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
 
-    def stable(self, sigma):
-        return is_stable(self.multipliers(sigma))
+    def stable(self, sigma, tol=STABILITY_TOL):
+        """The stability flag at sigma (floquet.is_stable; tol: on the multipliers' modulus excess)."""
+        return is_stable(self.multipliers(sigma), tol)
 
     def local_collision(self, sigma, shift):
         """The problem's collision coordinates at sigma nearest ``shift`` (problem.local_collision), or None."""

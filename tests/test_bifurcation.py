@@ -242,9 +242,9 @@ def _synthetic_locator(coords):
         def local_collision(self, sigma, shift):
             return coords(sigma)
 
-        def stable(self, sigma):
+        def stable(self, sigma, tol=1e-5):
             c = coords(sigma)
-            return bool(np.all(np.abs(c.imag) <= 1e-5 * np.sqrt(np.clip(1 - c.real ** 2, 0, None))))
+            return bool(np.all(np.abs(c.imag) <= tol * np.sqrt(np.clip(1 - c.real ** 2, 0, None))))
 
     return Synthetic()
 
