@@ -70,14 +70,35 @@ def reversible_spectrum(A11, family=None):
     one, or (n,) without ``family``): stable orbits have every c real in [-1, 1]; a Krein collision is
     two real c meeting and leaving the real axis as a complex pair.
     """
+    C, deflated = reversible_matrix(A11, family)
+    return reversible_from_eigenvalues(eigenvalues(C), deflated)
+
+
+def reversible_matrix(A11, family=None):
+    """(C, deflated): the matrix whose eigenvalues c give the multipliers of a symmetric reversible orbit (A11
+    deflated by the family direction when given, else a copy of A11), for reversible_from_eigenvalues."""
     if family is not None and np.linalg.norm(family) > 0:
-        c_nontrivial = sla.eigvals(deflate(A11, np.asarray(family, dtype=float)[:, None]),
-                                   check_finite=False).astype(complex)
-        c = np.concatenate([c_nontrivial, [-1.0]])
-    else:
-        c = c_nontrivial = sla.eigvals(A11, check_finite=False).astype(complex)
+        return deflate(A11, np.asarray(family, dtype=float)[:, None]), True
+    return np.array(A11, dtype=float), False
+
+
+def reversible_from_eigenvalues(c_nontrivial, deflated):
+    """(multipliers (2n,), c) of a symmetric reversible orbit from the eigenvalues c of reversible_matrix's C (the
+    trivial c = -1 appended when C was deflated)."""
+    c_nontrivial = np.asarray(c_nontrivial, dtype=complex)
+    c = np.concatenate([c_nontrivial, [-1.0]]) if deflated else c_nontrivial
     root = np.sqrt(c * c - 1.0)
     return np.concatenate([(c + root) ** 2, (c - root) ** 2]), c_nontrivial
+
+
+def eigenvalues(C):
+    """Eigenvalues of a real square matrix (LAPACK geev through numpy, which releases the GIL: the multipliers of
+    one point are computed in a worker thread beside the continuation's next step); NaN if C is not finite or
+    the QR iterations fail."""
+    try:
+        return np.linalg.eigvals(C).astype(complex)
+    except np.linalg.LinAlgError:
+        return np.full(C.shape[0], np.nan, dtype=complex)
 
 
 def collision_coordinates(mu):

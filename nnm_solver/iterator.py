@@ -13,7 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from .branch import Branch, Point
-from .continuation import REFUSE, ContinuationPoint, CorrectorFailure, _energy_slope, correct, pseudo_arclength
+from .continuation import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
+from .engine_driver import EngineDriver
+from .refinement import StepRefinement
 from .events import Locator, locate_between
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .locator import event_rtol
@@ -21,15 +23,13 @@ from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
 from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record
 
-#: the most steps per period the freq_tol refinement goes to
-MAX_STEPS_PER_PERIOD = 20000
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
 
 __all__ = ["NNMIterator"]
 
 
-class NNMIterator:
+class NNMIterator(StepRefinement):
     """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
 
     Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
@@ -55,7 +55,7 @@ class NNMIterator:
         self.message = ""
         self._problem = problem
         self._system = system
-        self._engine = engine
+        self._engine = EngineDriver(engine, problem, continuation, tol)
         self._w_r = float(np.sqrt(system.omega2[mode - 1]))
         self._loops = LoopDetector(mirror=system.elements.odd)
         self._last = None
@@ -70,6 +70,8 @@ class NNMIterator:
         self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
         self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
         self._refusals = 0             # steps refused in a row because an event in them was not located
+        # the engine's next point, computed while the last point's multipliers are (in the worker thread)
+        self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
 
     def __iter__(self):
         return self
@@ -81,17 +83,19 @@ class NNMIterator:
         with blas_limited():
             command = None
             while True:
-                try:
-                    cp = self._engine.send(command) if command else next(self._engine)
-                except StopIteration as fin:
-                    self._failed(fin.value)
-                    raise StopIteration from None
+                kind, cp = self._engine.next(command, self._prev[0] if self._prev else None)
+                if kind == "stop":
+                    self._failed(cp)
+                    raise StopIteration
                 command = None
-                point, (q0, v0, T) = self._record(cp, self._problem)
+                point, (q0, v0, T) = self._record(cp, self._problem, later=self._ahead)
                 if self._refined(cp, point):
                     continue
                 if self.tongue_mode == "skip" and self._hidden(cp, point):
                     continue
+                if self._ahead:             # the next step runs while this point's eigenproblem does
+                    self._engine.ahead()
+                self._settle(point)
                 if not self.locate:
                     break
                 located = self._locate(cp, point, (q0, v0, T))
@@ -125,47 +129,14 @@ class NNMIterator:
         self._last = (q0, v0)
         return point
 
-    def _refined(self, cp, point):
-        """freq_tol: if the point's estimated frequency error exceeds it, raise the steps per period (aiming at
-        a quarter of the tolerance, by the scheme's order) and restart the continuation from this orbit, so
-        that the point is computed again with the finer step.  False if nothing was done."""
-        prob = self._problem
-        if not self.freq_tol or not hasattr(prob, "set_steps"):
-            return False
-        self._estimate_error(point)
-        est = getattr(point, "_disc_error", point.freq_error)   # what finer steps can reduce
-        if not est > self.freq_tol or prob.spp >= MAX_STEPS_PER_PERIOD:
-            return False
-        if self._refine_pause > 0:
-            self._refine_pause -= 1
-            return False
-        factor = min(max((est / (0.25 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
-        old = prob.spp
-        prob.set_steps(min(int(np.ceil(prob.spp * factor)), MAX_STEPS_PER_PERIOD))
-        try:                                    # the orbit with the finer step, near this one
-            correct(prob, cp.u, cp.tangent, self._cs, self._tol, prob.scale(cp.u))
-        except CorrectorFailure:                # e.g. next to a fold that the finer step moves: keep the
-            prob.set_steps(old)                 # coarse point and try again a few points later
-            self._refine_pause = 3
-            self.refine_failures += 1
-            return False
-        self._engine.close()
-        self._engine = pseudo_arclength(prob, cp.u, cp.tangent, self._cs, self._tol)
-        self._prev = None                       # no event is located across a change of time step
-        self._refusals = 0
-        return True
-
-    def _estimate_error(self, point):
-        """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
-        prob, u, J, p, factor = getattr(point, "_solution", None) or (None,) * 5
-        if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
-            if not np.isfinite(point.freq_error):
-                point.freq_error, point._disc_error = prob.frequency_error(u, J, p, factor)
-
-    @staticmethod
-    def _release(point):
-        """Drop the Jacobian and factorisation a kept point carried for its error estimate (O(n^2) each)."""
-        point._solution = None
+    def _settle(self, point):
+        """Wait for the multipliers of a point recorded with later=True and set its floquet, stable, _collision."""
+        job = getattr(point, "_spectrum", None)
+        if job is not None:
+            mu, point._collision = job()
+            point.floquet = sort_multipliers(mu)
+            point.stable = is_stable(point.floquet, STABILITY_TOL)
+            point._spectrum = None
 
     def _hidden(self, cp, point):
         """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
@@ -222,8 +193,7 @@ class NNMIterator:
             return False
         u, J, delta = jumped
         tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)))
-        self._engine.close()
-        self._engine = pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol)
+        self._engine.restart(pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol))
         self._prev = None          # no events are located across the jump
         self._refusals = 0
         return True
@@ -258,6 +228,8 @@ class NNMIterator:
         loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step,
                       rtol=event_rtol(getattr(ppoint, "_disc_error", ppoint.freq_error)))
         loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
+        if self._ahead:                    # the engine went on to the next point: its copy's state at this one again
+            loc.problem.accept(cp.u, cp.jacobian)
         if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
             loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
         for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
@@ -293,14 +265,18 @@ class NNMIterator:
             return end[1], self._problem.state(u)
         return point, state
 
-    def _record(self, cp, prob, known=None):
+    def _record(self, cp, prob, known=None, later=False):
         """The Point of a converged ContinuationPoint and its modal state (q0, v0, T).  known : optional (sorted
-        multipliers, collision coordinates) already computed at it (e.g. by event location)."""
+        multipliers, collision coordinates) already computed at it (e.g. by event location).  later : compute
+        the multipliers in the worker thread (problem.multipliers_later); _settle waits for them."""
         sys_ = self._system
         q0, vq0, T = prob.state(cp.u)
         x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
-        collision = None
-        if self.settings.floquet and known is not None:
+        collision = job = None
+        if self.settings.floquet and later:
+            job = prob.multipliers_later(cp.u, cp.tangent)
+            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
+        elif self.settings.floquet and known is not None:
             mu, collision = known
             stable = is_stable(mu, STABILITY_TOL)
         elif self.settings.floquet:
@@ -317,6 +293,7 @@ class NNMIterator:
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point.steps = int(getattr(prob, "spp", 0))
         point._collision = collision          # the Krein locator's coordinates
+        point._spectrum = job
         point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit

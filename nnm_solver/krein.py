@@ -74,7 +74,9 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
     # between the stable end and the collision; the first change found is the event
     start, stop = (lo, min(bracket)) if f_lo else (hi, max(bracket))
-    for x in start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1):
+    probes = start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1)
+    loc.prefetch(probes)
+    for x in probes:
         if not loc.stable(x):             # (the stable end's flag is True)
             r_x = loc.collision(x)
             cands = candidates(r_x) if r_x is not None and depth < 2 else []
@@ -125,6 +127,7 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
     sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
     x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
     x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)         # the margin on the stable side, on the unstable side
+    loc.prefetch([x_s, x_u])
     if loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)) and not loc.stable(x_u, STABILITY_TOL * (1 - FLAG_BAND)):
         return (x_lo, x_hi) if x_lo < x_hi else (x_hi, x_lo)
     for k in (10.0, 1000.0):

@@ -4,6 +4,9 @@ The dense problems here (n ~ 10..5000) gain little from BLAS threads on an idle 
 multi-threaded OpenBLAS slows down 5-20x when the cores are shared (measured: a 548 x 548 eigenvalue
 problem took 7.6 s with 2 threads and 0.36 s with 1 on a busy 2-core machine).  ``BLAS_THREADS``
 (None: leave the process setting alone) applies while each point is computed.
+
+``background`` runs a GIL-free call (a LAPACK eigenvalue problem) in one worker thread, so that the Floquet
+multipliers of a point are computed on the second core while the continuation computes the next point.
 """
 from __future__ import annotations
 
@@ -26,3 +29,17 @@ def blas_limited():
             from threadpoolctl import ThreadpoolController
             _controller = ThreadpoolController()
     return _controller.limit(limits=BLAS_THREADS, user_api="blas")
+
+
+_worker = None
+
+
+def background(fn, *args):
+    """fn(*args) in the package's worker thread (one, started on first use): a concurrent.futures.Future.  Worth it
+    for calls that release the GIL (numpy's LAPACK routines, numba's nogil kernels)."""
+    global _worker
+    with _lock:
+        if _worker is None:
+            from concurrent.futures import ThreadPoolExecutor
+            _worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="nnm-spectrum")
+    return _worker.submit(fn, *args)

@@ -14,9 +14,14 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
-from ..floquet import collision_coordinates, deflate, nontrivial_multipliers, reversible_spectrum
+from ..floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
+                       reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
+from ..threads import background
 
 __all__ = ["ShootingStability"]
+
+#: the fewest modes for which the multipliers' eigenproblem runs in the worker thread beside the next step
+BACKGROUND_MIN_N = 64
 
 
 class ShootingStability:
@@ -87,6 +92,33 @@ class ShootingStability:
             return eigs(C, k=k, sigma=shift, return_eigenvectors=False)
         except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
             return sla.eigvals(C, check_finite=False)
+
+    @property
+    def background_spectrum(self):
+        """Does multipliers_later compute the eigenvalues in the worker thread (symmetric reversible orbits of
+        BACKGROUND_MIN_N or more modes; below, the thread's overhead exceeds the eigenproblem)?"""
+        return bool(self.symmetric and self.reversible and self.n >= BACKGROUND_MIN_N)
+
+    def multipliers_later(self, u, tangent=None):
+        """The Floquet multipliers of the accepted point u (as ``multipliers``) computed in the worker thread
+        (threads.background): a callable returning (multipliers, collision coordinates) when they are needed.
+
+        The maps are swept, and the matrix deflated, here: they belong to the problem's current state, which the
+        continuation's next step changes.  Only the eigenvalue problem, which releases the GIL, runs beside that
+        step.  Formulations other than the symmetric reversible one compute the multipliers now."""
+        family = None if tangent is None else self.unpack(tangent)
+        maps = self.stability_maps()
+        if maps is None or not (self.symmetric and self.reversible):
+            mu = self.floquet_multipliers(family)
+            collision = self.collision
+            return lambda: (mu, collision)
+        C, deflated = reversible_matrix(maps[0][:, :self.n], None if family is None else family[0])
+        self.collision_per_modulus = 0.5
+        job = background(eigenvalues, C)
+
+        def result():
+            return reversible_from_eigenvalues(job.result(), deflated)
+        return result
 
     def floquet_multipliers(self, family=None):
         """Floquet multipliers (2n,) of the last accepted point.
