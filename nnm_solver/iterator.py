@@ -55,7 +55,6 @@ class NNMIterator(StepRefinement):
         self.message = ""
         self._problem = problem
         self._system = system
-        self._engine = EngineDriver(engine, problem, continuation, tol)
         self._w_r = float(np.sqrt(system.omega2[mode - 1]))
         self._loops = LoopDetector(mirror=system.elements.odd)
         self._last = None
@@ -72,6 +71,8 @@ class NNMIterator(StepRefinement):
         self._refusals = 0             # steps refused in a row because an event in them was not located
         # the engine's next point, computed while the last point's multipliers are (in the worker thread)
         self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
+        self._engine = EngineDriver(engine, problem, continuation, tol, launch=(
+            (lambda cp: problem.multipliers_later(cp.u, cp.tangent)) if self._ahead else None))
 
     def __iter__(self):
         return self
@@ -267,14 +268,15 @@ class NNMIterator(StepRefinement):
 
     def _record(self, cp, prob, known=None, later=False):
         """The Point of a converged ContinuationPoint and its modal state (q0, v0, T).  known : optional (sorted
-        multipliers, collision coordinates) already computed at it (e.g. by event location).  later : compute
-        the multipliers in the worker thread (problem.multipliers_later); _settle waits for them."""
+        multipliers, collision coordinates) already computed at it (e.g. by event location).  later : the
+        multipliers are computed in the worker threads (problem.multipliers_later, started by the engine driver);
+        _settle waits for them."""
         sys_ = self._system
         q0, vq0, T = prob.state(cp.u)
         x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
         collision = job = None
-        if self.settings.floquet and later:
-            job = prob.multipliers_later(cp.u, cp.tangent)
+        if self.settings.floquet and later:     # started when the engine gave the point (EngineDriver.launch)
+            job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         elif self.settings.floquet and known is not None:
             mu, collision = known

@@ -53,22 +53,23 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     evaluation.  Returns (lo, hi) like bisect."""
     rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
     (f_lo, r_lo), (f_hi, r_hi) = ends or [(loc.stable(x), loc.collision(x)) for x in (lo, hi)]
-    best = None                    # the bracket of the collision nearest the stable end so far
+    best = None                    # (bracket, root) of the collision nearest the stable end so far
     for rho_star in rho_stars:
         if best is None:
             far, r_far = hi if f_lo else lo, r_hi if f_lo else r_lo
         else:                      # does this pair collide before the best one?  It is complex there already if so
-            far = min(best) if f_lo else max(best)
+            far = best[1][0] if best[1] else (min(best[0]) if f_lo else max(best[0]))
             r_far = loc.local_collision(far, rho_star)
             if r_far is None or not krein_gap(r_far, rho_star, _per_modulus(loc)) < 0:
                 continue
         a, b = (lo, far) if f_lo else (far, hi)
         ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
-        best, local = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        bracket, local, root = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        best = (bracket, root)
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
-    blo, bhi = best
-    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo)
+    (blo, bhi), root = best
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root)
     if bracket is None:        # no pair followed changed the stability (e.g. a pair left through +-1 too)
         return loc.bisect(loc.stable, lo, hi)
     # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
@@ -101,7 +102,7 @@ MARGIN = 0.8
 FLAG_BAND = 1e-3
 
 
-def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None):
     """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
     energy tolerance; None if the flag does not change there.
 
@@ -112,18 +113,21 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
     bracket the change when the stable side's largest modulus excess |mu| - 1 is within (1 + FLAG_BAND) x the
     tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise (another
     pair changed the flag nearby) a bisection on the flag within 10 or 1000 times the bracket's width around it.
-    f_lo : the flag at lo."""
+    f_lo : the flag at lo; root : optional (centre, delta) of the margin points (else around the bracket)."""
     a, b = min(lo, hi), max(lo, hi)
     width = abs(bhi - blo)
-    try:
-        E_lo, E_hi = loc.energy(blo), loc.energy(bhi)
-    except CorrectorFailure:
-        E_lo = E_hi = None
-    delta = 0.5 * width
-    if E_lo is not None and width > 0 and E_hi != E_lo:
-        delta = max(delta, 0.5 * MARGIN * loc.rtol * max(abs(E_lo), abs(E_hi)) * width / abs(E_hi - E_lo))
+    if root is not None:
+        c, delta = root
+        width = 2 * delta
+    else:
+        try:
+            E_lo, E_hi = loc.energy(blo), loc.energy(bhi)
+        except CorrectorFailure:
+            E_lo = E_hi = None
+        c, delta = 0.5 * (blo + bhi), 0.5 * width
+        if E_lo is not None and width > 0 and E_hi != E_lo:
+            delta = max(delta, 0.5 * MARGIN * loc.rtol * max(abs(E_lo), abs(E_hi)) * width / abs(E_hi - E_lo))
     delta = min(delta, 1e-2 * (b - a))
-    c = 0.5 * (blo + bhi)
     sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
     x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
     x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)         # the margin on the stable side, on the unstable side
@@ -132,7 +136,7 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
         return (x_lo, x_hi) if x_lo < x_hi else (x_hi, x_lo)
     for k in (10.0, 1000.0):
         w = k * max(width, 1e-12 * max(1.0, abs(bhi)))
-        x0, x1 = max(a, min(blo, bhi) - w), min(b, max(blo, bhi) + w)
+        x0, x1 = max(a, min(c, blo, bhi) - w), min(b, max(c, blo, bhi) + w)
         if loc.stable(x0) != loc.stable(x1):
             return loc.bisect(loc.stable, x0, x1)
     return None
@@ -141,7 +145,9 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo):
 def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
     collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
-    flag had to be, i.e. the bracket is that of the flag's change)."""
+    flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
+    its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
+    centre -+ delta are MARGIN x the energy tolerance apart)."""
     pm = getattr(loc.problem, "collision_per_modulus", 1.0)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
@@ -154,7 +160,9 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         c = None
         if g1 is not None and g2 is not None and g1 != g2:
             c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
-        if c is None or not min(lo, hi) < c < max(lo, hi) or (len(widths) > 3 and widths[-1] > 0.5 * widths[-4]):
+        secant = c is not None and min(lo, hi) < c < max(lo, hi) and not (len(widths) > 3 and
+                                                                         widths[-1] > 0.5 * widths[-4])
+        if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
         r_c = loc.local_collision(c, rho_star)
         if r_c is not None:                  # this collision only: its test function is the flag
@@ -176,4 +184,10 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             hi = c
         last = [last[1], (c, g_c)]
         widths.append(abs(hi - lo))
-    return (lo, hi), local
+        if secant and local and g_c is not None:
+            # converged when the secant step moved the energy by less than a quarter of the margin: its root is
+            # then within the margin points of _flag_change_near around c, which check the flag there
+            E_c, E_2 = loc.energy(c), loc.energy(x2)
+            if abs(E_c - E_2) <= 0.25 * MARGIN * loc.rtol * abs(E_c) and E_c != E_2:
+                return (lo, hi), local, (c, 0.5 * MARGIN * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2))
+    return (lo, hi), local, None

@@ -5,8 +5,8 @@ multi-threaded OpenBLAS slows down 5-20x when the cores are shared (measured: a 
 problem took 7.6 s with 2 threads and 0.36 s with 1 on a busy 2-core machine).  ``BLAS_THREADS``
 (None: leave the process setting alone) applies while each point is computed.
 
-``background`` runs a GIL-free call (a LAPACK eigenvalue problem) in one worker thread, so that the Floquet
-multipliers of a point are computed on the second core while the continuation computes the next point.
+``background`` runs a GIL-free call (a LAPACK eigenvalue problem) in a worker thread (WORKERS of them), so that
+the Floquet multipliers of the points are computed beside the continuation's next steps, on both cores.
 """
 from __future__ import annotations
 
@@ -31,15 +31,18 @@ def blas_limited():
     return _controller.limit(limits=BLAS_THREADS, user_api="blas")
 
 
+#: worker threads of ``background``
+WORKERS = 2
+
 _worker = None
 
 
 def background(fn, *args):
-    """fn(*args) in the package's worker thread (one, started on first use): a concurrent.futures.Future.  Worth it
-    for calls that release the GIL (numpy's LAPACK routines, numba's nogil kernels)."""
+    """fn(*args) in one of the package's worker threads (started on first use): a concurrent.futures.Future.
+    Worth it for calls that release the GIL (numpy's LAPACK routines, numba's nogil kernels)."""
     global _worker
     with _lock:
         if _worker is None:
             from concurrent.futures import ThreadPoolExecutor
-            _worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="nnm-spectrum")
+            _worker = ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="nnm-spectrum")
     return _worker.submit(fn, *args)
