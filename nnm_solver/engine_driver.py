@@ -69,10 +69,13 @@ class EngineDriver:
 
     def restart(self, engine):
         """Go on with a new engine (a refined time step, a jump over a tongue, a refusal)."""
-        self.engine.close()
+        self.close()
         self.engine = engine
-        self.pending.clear()
 
     def close(self):
+        """Close the engine; the multipliers of the points computed ahead are dropped if not started."""
         self.engine.close()
+        for kind, cp in self.pending:
+            if kind == "point" and hasattr(getattr(cp, "spectrum", None), "cancel"):
+                cp.spectrum.cancel()
         self.pending.clear()

@@ -18,7 +18,7 @@ from ..floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_m
                        reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
 from ..threads import background
 
-__all__ = ["ShootingStability"]
+__all__ = ["ShootingStability", "PendingSpectrum"]
 
 #: the fewest modes for which the multipliers' eigenproblem runs in the worker thread beside the next step
 BACKGROUND_MIN_N = 64
@@ -100,8 +100,8 @@ class ShootingStability:
         return bool(self.symmetric and self.reversible and self.n >= BACKGROUND_MIN_N)
 
     def multipliers_later(self, u, tangent=None):
-        """The Floquet multipliers of the accepted point u (as ``multipliers``) computed in the worker thread
-        (threads.background): a callable returning (multipliers, collision coordinates) when they are needed.
+        """The Floquet multipliers of the accepted point u (as ``multipliers``) computed in a worker thread
+        (threads.background): a PendingSpectrum, called for (multipliers, collision coordinates) when needed.
 
         The maps are swept, and the matrix deflated, here: they belong to the problem's current state, which the
         continuation's next step changes.  Only the eigenvalue problem, which releases the GIL, runs beside that
@@ -109,16 +109,10 @@ class ShootingStability:
         family = None if tangent is None else self.unpack(tangent)
         maps = self.stability_maps()
         if maps is None or not (self.symmetric and self.reversible):
-            mu = self.floquet_multipliers(family)
-            collision = self.collision
-            return lambda: (mu, collision)
+            return PendingSpectrum(None, (self.floquet_multipliers(family), self.collision))
         C, deflated = reversible_matrix(maps[0][:, :self.n], None if family is None else family[0])
         self.collision_per_modulus = 0.5
-        job = background(eigenvalues, C)
-
-        def result():
-            return reversible_from_eigenvalues(job.result(), deflated)
-        return result
+        return PendingSpectrum(background(eigenvalues, C), deflated)
 
     def floquet_multipliers(self, family=None):
         """Floquet multipliers (2n,) of the last accepted point.
@@ -149,3 +143,20 @@ class ShootingStability:
         self.collision = None if self.symmetric else collision_coordinates(mu)
         self.collision_per_modulus = 1.0
         return mu
+
+
+class PendingSpectrum:
+    """The multipliers of one point being computed in a worker thread: call it for (multipliers, collision
+    coordinates) (it waits); ``cancel()`` drops it if it has not started (a point the continuation discards)."""
+
+    def __init__(self, job, deflated):
+        self.job, self.deflated = job, deflated     # without a job, ``deflated`` is the result itself
+
+    def __call__(self):
+        if self.job is None:
+            return self.deflated
+        return reversible_from_eigenvalues(self.job.result(), self.deflated)
+
+    def cancel(self):
+        if self.job is not None:
+            self.job.cancel()
