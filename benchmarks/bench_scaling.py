@@ -16,7 +16,9 @@ solver no longer has is simply not timed, its time then shows under "other"):
              (assembling J from the sweep)
   state      Integrator.state / .record: state-only sweeps (chord-Newton residuals, the orbit record)
   linalg     continuation.LeastSquares (QR factorisations and solves: corrector, tangent)
-  stability  ShootingProblem.multipliers / .floquet_multipliers (Floquet multipliers)
+  stability  ShootingProblem.multipliers / .floquet_multipliers / .multipliers_later and NNMIterator._settle
+             (Floquet multipliers; where their eigenproblems run in worker threads beside the next steps, the
+             main thread's part and its wait for them)
   events     everything inside events.locate_between (event location, all its sweeps/QRs/eigenproblems)
   error      everything inside ShootingProblem.frequency_error (the per-point error estimate)
   other      the rest of the point's wall time (Python, harmonic labels, energies, ...)
@@ -253,6 +255,10 @@ def install_timers(prof):
     prof.wrap(cont.LeastSquares, "solve", "linalg")
     prof.wrap(SP, "multipliers", "stability")
     prof.wrap(SP, "floquet_multipliers", "stability")
+    # the multipliers computed in worker threads beside the next steps: the main thread's part (maps, deflation)
+    # and its wait for them
+    prof.wrap(SP, "multipliers_later", "stability")
+    prof.wrap(iterator.NNMIterator, "_settle", "stability")
     prof.wrap(SP, "frequency_error", "error", phase="error")
     # the iterator calls the name it imported: wrap it there (and in events for any other caller)
     for mod in (iterator, events):

@@ -11,6 +11,7 @@ the Floquet multipliers of the points are computed beside the continuation's nex
 from __future__ import annotations
 
 import contextlib
+import os
 import threading
 
 BLAS_THREADS = 1
@@ -31,8 +32,9 @@ def blas_limited():
     return _controller.limit(limits=BLAS_THREADS, user_api="blas")
 
 
-#: worker threads of ``background``
-WORKERS = 2
+#: worker threads of ``background`` (environment NNM_SPECTRUM_WORKERS; 0: the multipliers are computed in turn,
+#: e.g. in a process of a sweep that already has one process per core)
+WORKERS = max(int(os.environ.get("NNM_SPECTRUM_WORKERS", "2") or 0), 0)
 
 _worker = None
 

@@ -100,7 +100,7 @@ def test_job_reports_solver_errors_without_raising_in_thread():
         yield
     m = two_dof_model()
     it = nnm.iter_nnm(m, 1, 1.0)
-    it._engine = boom()
+    it._engine.engine = boom()           # (the engine inside the iterator's EngineDriver)
     job = nnm.Job(it)
     job._thread.start()
     with pytest.raises(RuntimeError, match="exploded"):
@@ -120,14 +120,14 @@ def test_softening_duffing_stops_at_its_escape():
 
 def test_branch_that_stops_converging_keeps_its_points():
     it = nnm.iter_nnm(two_dof_model(), 1, 1e4)
-    engine = it._engine
+    engine = it._engine.engine
 
     def singular_after_ten():          # the engine gives up after 10 points, as at a singular point
         for _ in range(10):
             yield next(engine)
         return "16 consecutive failed steps (last: singular corrector system)"
 
-    it._engine = singular_after_ten()
+    it._engine.engine = singular_after_ten()
     list(it)
     b = it.branch()
     assert b.status == "failed" and len(b) == 10

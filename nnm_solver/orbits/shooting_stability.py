@@ -16,6 +16,7 @@ from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
 from ..floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
                        reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
+from .. import threads
 from ..threads import background
 
 __all__ = ["ShootingStability", "PendingSpectrum"]
@@ -96,8 +97,9 @@ class ShootingStability:
     @property
     def background_spectrum(self):
         """Does multipliers_later compute the eigenvalues in the worker thread (symmetric reversible orbits of
-        BACKGROUND_MIN_N or more modes; below, the thread's overhead exceeds the eigenproblem)?"""
-        return bool(self.symmetric and self.reversible and self.n >= BACKGROUND_MIN_N)
+        BACKGROUND_MIN_N or more modes; below, the thread's overhead exceeds the eigenproblem), with worker
+        threads allowed (threads.WORKERS)?"""
+        return bool(self.symmetric and self.reversible and self.n >= BACKGROUND_MIN_N and threads.WORKERS > 0)
 
     def multipliers_later(self, u, tangent=None):
         """The Floquet multipliers of the accepted point u (as ``multipliers``) computed in a worker thread
