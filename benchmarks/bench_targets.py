@@ -1,7 +1,9 @@
 """The end-to-end speed targets of issue 17, with a check that the answers did not change.
 
-Two runs, each repeated (median of ``--repeats``, default 3) in one process, BLAS limited to one thread,
-numba kernels warmed up first, the load average printed before and after every run:
+Two runs, each repeated (median of ``--repeats``, default 3) in one process, BLAS limited to one thread (the
+Floquet eigenproblems of the aircraft run in the solver's worker threads beside the next steps: both cores;
+NNM_SPECTRUM_WORKERS=0 for one), numba kernels warmed up first, the load average printed before and after every
+run:
 
 * ``2dof``: the 2-DOF benchmark (assets/two_dof.h5: M = I, K = [[2, -1], [-1, 2]], grounded cubic spring
   k3 = 0.5 on DOF 0), NNM 1 from low energy to 1e4 J: the complete FEP through the 3:1 tongue
@@ -23,6 +25,7 @@ differ, and the events (kind and relative energy difference).  Usage::
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import sys
@@ -130,7 +133,9 @@ def main(argv=None):
     nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0)   # warm-up
     cases = ["2dof", "paris"] if args.case == "all" else [args.case]
     out, ref = {}, (json.loads(Path(args.reference).read_text()) if args.reference else {})
-    print(f"bench_targets: {os.cpu_count()} cores, numpy {np.__version__}, BLAS 1 thread; "
+    threads = importlib.import_module("nnm_solver.threads")
+    print(f"bench_targets: {os.cpu_count()} cores, numpy {np.__version__}, BLAS 1 thread, "
+          f"{getattr(threads, 'WORKERS', 0)} worker threads for the multipliers (NNM_SPECTRUM_WORKERS); "
           f"{time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
     for name in cases:
         model = nnm.load_model(str(ROOT / "assets" / "two_dof.h5") if name == "2dof" else args.paris_file)

@@ -261,6 +261,9 @@ class NNMIterator(StepRefinement):
         self.events.extend(events)
         if end is not None:
             u, J, p = loc.at(end[0])
+            if J is None:                  # (not kept by the locator) the last point's error estimate needs it
+                J = loc.problem.jacobian(u)[1]
+                end[1]._solution = (loc.problem, u, J, p, None)
             self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
             self._landed = True
             return end[1], self._problem.state(u)

@@ -50,9 +50,10 @@ from .variants import as_variants, parse_modes
 __all__ = ["sweep", "load_sweep", "SweepProgress", "branch_name", "parse_branch_name", "WORKER_ENV"]
 
 #: environment of local worker processes: one BLAS / OpenMP thread each (the solver also limits
-#: BLAS threads itself while it computes points, threads.py)
+#: BLAS threads itself while it computes points, threads.py), and no worker threads for the multipliers (one
+#: process per core keeps every core busy already)
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              "NUMBA_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": "65536"}
+              "NUMBA_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": "65536", "NNM_SPECTRUM_WORKERS": "0"}
 
 #: least time (s) between two progress messages of one branch sent by a worker
 EVENT_INTERVAL = 0.25
