@@ -24,6 +24,10 @@ MAX_KREIN_PAIRS = 4
 #: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
 KREIN_PROBES = 3
 
+#: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
+#: with a complex shift (the local solver's window holds 6 eigenvalues)
+LOCAL_CROWD = 3
+
 
 def candidates(rho, most=MAX_KREIN_PAIRS):
     """Real parts of the complex collision coordinates rho (one per conjugate pair), the most unstable (largest
@@ -59,7 +63,7 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
             far, r_far = hi if f_lo else lo, r_hi if f_lo else r_lo
         else:                      # does this pair collide before the best one?  It is complex there already if so
             far = best[1][0] if best[1] else (min(best[0]) if f_lo else max(best[0]))
-            r_far = loc.local_collision(far, rho_star)
+            r_far = loc.local_collision(far, _shift(r_hi if f_lo else r_lo, rho_star))
             if r_far is None or not krein_gap(r_far, rho_star, _per_modulus(loc)) < 0:
                 continue
         a, b = (lo, far) if f_lo else (far, hi)
@@ -87,6 +91,23 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
             return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
                     locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
     return bracket
+
+
+def _shift(rho, rho_star):
+    """The local solver's shift for the pair around rho_star: rho_star itself, or the pair's complex coordinate when
+    it lies so far off the real axis that the real coordinates nearer to rho_star than it could fill the local
+    solver's window (a 1,100-mode plate: 0.0006 between eigenvalues and a pair 0.01 off the axis, which the
+    6 eigenvalues nearest its real part missed; a complex shift costs a complex LU, 4x a real one)."""
+    if rho is None:
+        return rho_star
+    rho = np.asarray(rho, dtype=complex)
+    z = rho[np.abs(rho.imag) > 1e-12]
+    if not len(z):
+        return rho_star
+    z = z[np.argmin(np.abs(z.real - rho_star))]
+    real = rho.real[np.abs(rho.imag) <= 1e-12]
+    crowded = np.count_nonzero(np.abs(real - rho_star) < abs(z.imag)) >= LOCAL_CROWD
+    return complex(rho_star, abs(z.imag)) if crowded and abs(z.real - rho_star) < 1e-6 + abs(z.imag) else rho_star
 
 
 def _per_modulus(loc):
@@ -150,6 +171,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     centre -+ delta are MARGIN x the energy tolerance apart)."""
     pm = getattr(loc.problem, "collision_per_modulus", 1.0)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
+    shift = _shift(r_hi if f_lo else r_lo, rho_star)     # the pair's coordinate at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
     widths = [abs(hi - lo)]
     local = True
@@ -164,7 +186,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                                                                          widths[-1] > 0.5 * widths[-4])
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
-        r_c = loc.local_collision(c, rho_star)
+        r_c = loc.local_collision(c, shift)
         if r_c is not None:                  # this collision only: its test function is the flag
             g_c = krein_gap(r_c, rho_star, pm)
             f_c = g_c > 0
@@ -177,7 +199,12 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 g_c = None                   # the test function disagrees with the flag: no secant from here
         if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
             z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
-            rho_star = float(z[np.argmin(np.abs(z.real - rho_star))].real)
+            z = z[np.argmin(np.abs(z.real - rho_star))]
+            rho_star = float(z.real)
+            if np.imag(shift) != 0:          # (a crowded pair: the shift keeps up with it)
+                shift = complex(z.real, abs(z.imag))
+            else:
+                shift = rho_star
         if f_c == f_lo:
             lo = c
         else:

@@ -86,3 +86,37 @@ def test_located_point_off_the_interpolant_is_computed_afresh(monkeypatch):
 
     monkeypatch.setattr(locator, "correct_factored", elsewhere)
     assert loc._from_latest(sigma, u_pred) is None
+
+
+@pytest.mark.parametrize("complex_shift", [True, False])
+def test_a_pair_far_off_the_axis_in_a_dense_spectrum_is_followed(monkeypatch, complex_shift):
+    """A dense real spectrum (0.0006 apart, as a 1,100-mode plate's) and a pair colliding at sigma = 0.3 that is
+    0.017 off the axis at the step's unstable end: the 6 eigenvalues nearest its real part (the local solver's
+    window) are all real there, so a real shift loses the pair and the flag is bisected (~20 full spectra); the
+    pair's complex coordinate as the shift keeps it (the margin spectra and the probes only)."""
+    if not complex_shift:
+        monkeypatch.setattr(krein, "LOCAL_CROWD", 10 ** 9)
+    dense = list(0.30 + 0.0006 * np.arange(300))
+
+    def coords(sigma):
+        return np.array(dense + _pair(0.3903, 4e-4 * (0.3 - sigma)), dtype=complex)
+
+    loc = _synthetic_locator(coords)
+    seen = []
+    stable = loc.stable
+
+    def counted(sigma, tol=1e-5):
+        seen.append(float(sigma))
+        return stable(sigma, tol)
+
+    loc.stable = counted
+    loc.local_collision = lambda sigma, shift: (lambda c: c[np.argsort(np.abs(c - shift))[:6]])(coords(sigma))
+    ends = [(loc.stable(x), coords(x)) for x in (0.0, 1.0)]
+    seen.clear()
+    lo, hi = krein.locate_collision(loc, 0.0, 1.0, krein.candidates(coords(1.0)), ends=ends)
+    threshold = 0.3 + (1e-5 * np.sqrt(1 - 0.3903 ** 2)) ** 2 / 4e-4
+    assert abs(0.5 * (lo + hi) - threshold) < 1e-6 and loc.stable(min(lo, hi)) and not loc.stable(max(lo, hi))
+    if complex_shift:
+        assert len(set(seen)) == 2 + krein.KREIN_PROBES
+    else:
+        assert len(set(seen)) > 2 + krein.KREIN_PROBES + 10

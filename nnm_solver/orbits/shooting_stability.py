@@ -80,7 +80,9 @@ class ShootingStability:
         """The k collision coordinates (events.py) of the last accepted point nearest ``shift``, or None when
         this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
         nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
-        ~10x cheaper); used to follow one Krein collision during event location."""
+        ~10x cheaper); used to follow one Krein collision during event location.  A complex shift (a complex
+        pair's coordinate: far from the real axis, the pair is not among the k eigenvalues nearest its real part
+        when the spectrum is dense there) takes a complex LU."""
         maps = self.stability_maps() if self.symmetric and self.reversible else None
         if maps is None:
             return None
@@ -90,7 +92,9 @@ class ShootingStability:
         if C.shape[0] <= 8 * k:
             return sla.eigvals(C, check_finite=False)
         try:
-            return eigs(C, k=k, sigma=shift, return_eigenvectors=False)
+            if np.imag(shift) != 0:
+                return eigs(C.astype(complex), k=k, sigma=complex(shift), return_eigenvectors=False)
+            return eigs(C, k=k, sigma=float(np.real(shift)), return_eigenvectors=False)
         except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
             return sla.eigvals(C, check_finite=False)
 
