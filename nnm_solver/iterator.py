@@ -15,10 +15,10 @@ import numpy as np
 from .branch import Branch, Point
 from .continuation import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
 from .engine_driver import EngineDriver
-from .refinement import StepRefinement
 from .events import Locator, locate_between
 from .floquet import STABILITY_TOL, is_stable, sort_multipliers
 from .locator import event_rtol
+from .refinement import StepRefinement
 from .stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from .threads import blas_limited
 from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record

@@ -169,7 +169,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
     its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
     centre -+ delta are MARGIN x the energy tolerance apart)."""
-    pm = getattr(loc.problem, "collision_per_modulus", 1.0)
+    pm = _per_modulus(loc)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
     shift = _shift(r_hi if f_lo else r_lo, rho_star)     # the pair's coordinate at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
