@@ -53,7 +53,9 @@ class EngineDriver:
             step = max(0.5 * self.last_step, self.settings.step_min)
             self.restart(pseudo_arclength(self.problem, before.u, before.tangent, replace(self.settings, step=step),
                                           self.tol))
-            out = self._step(None)                 # the point before again (converged already)
+            launch, self.launch = self.launch, None
+            out = self._step(None)                 # the point before again (converged already; no spectrum)
+            self.launch = launch
             if out[0] == "point":
                 out = self._step(None)
         else:
