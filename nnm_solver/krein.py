@@ -93,11 +93,33 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     return bracket
 
 
+def _spacing(rho, rho_star, count=8):
+    """The mean distance between the real coordinates of rho nearest rho_star (the local eigenvalue spacing), or
+    inf when there are too few."""
+    if rho is None:
+        return np.inf
+    rho = np.asarray(rho, dtype=complex)
+    real = rho.real[np.abs(rho.imag) <= 1e-12]
+    if len(real) < 3:
+        return np.inf
+    near = np.sort(real[np.argsort(np.abs(real - rho_star))[:count]])
+    return float((near[-1] - near[0]) / (len(near) - 1)) or np.inf
+
+
+def _shift_for(z, spacing):
+    """The local solver's shift for a pair at the complex coordinate z: its real part, or z itself when the pair
+    lies so far off the real axis that the real eigenvalues nearer to its real part could fill the local solver's
+    window of 6 (LOCAL_CROWD of them within |Im z|, at the local spacing).  A 1,100-mode plate: 0.0006 between
+    eigenvalues and a pair 0.01 off the axis, which the 6 eigenvalues nearest its real part missed.  A complex
+    shift costs a complex LU (4x a real one) and more Arnoldi iterations, so near the collision the real part
+    is used again."""
+    b = abs(complex(z).imag)
+    return complex(complex(z).real, b) if 2 * b >= LOCAL_CROWD * spacing else float(complex(z).real)
+
+
 def _shift(rho, rho_star):
-    """The local solver's shift for the pair around rho_star: rho_star itself, or the pair's complex coordinate when
-    it lies so far off the real axis that the real coordinates nearer to rho_star than it could fill the local
-    solver's window (a 1,100-mode plate: 0.0006 between eigenvalues and a pair 0.01 off the axis, which the
-    6 eigenvalues nearest its real part missed; a complex shift costs a complex LU, 4x a real one)."""
+    """The local solver's shift for the pair around rho_star, from the coordinates rho of a point where it is complex
+    (_shift_for; rho_star itself if rho has no complex coordinate near it)."""
     if rho is None:
         return rho_star
     rho = np.asarray(rho, dtype=complex)
@@ -105,9 +127,9 @@ def _shift(rho, rho_star):
     if not len(z):
         return rho_star
     z = z[np.argmin(np.abs(z.real - rho_star))]
-    real = rho.real[np.abs(rho.imag) <= 1e-12]
-    crowded = np.count_nonzero(np.abs(real - rho_star) < abs(z.imag)) >= LOCAL_CROWD
-    return complex(rho_star, abs(z.imag)) if crowded and abs(z.real - rho_star) < 1e-6 + abs(z.imag) else rho_star
+    if abs(z.real - rho_star) > 1e-6 + abs(z.imag):
+        return rho_star
+    return _shift_for(complex(rho_star, z.imag), _spacing(rho, rho_star))
 
 
 def _per_modulus(loc):
@@ -171,7 +193,8 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     centre -+ delta are MARGIN x the energy tolerance apart)."""
     pm = _per_modulus(loc)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
-    shift = _shift(r_hi if f_lo else r_lo, rho_star)     # the pair's coordinate at the unstable end
+    r_u = r_hi if f_lo else r_lo
+    shift, spacing = _shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
     widths = [abs(hi - lo)]
     local = True
@@ -200,11 +223,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
             z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
             z = z[np.argmin(np.abs(z.real - rho_star))]
-            rho_star = float(z.real)
-            if np.imag(shift) != 0:          # (a crowded pair: the shift keeps up with it)
-                shift = complex(z.real, abs(z.imag))
-            else:
-                shift = rho_star
+            rho_star, shift = float(z.real), _shift_for(z, spacing)
         if f_c == f_lo:
             lo = c
         else:
