@@ -34,7 +34,16 @@ def blas_limited():
 
 #: worker threads of ``background`` (environment NNM_SPECTRUM_WORKERS; 0: the multipliers are computed in turn,
 #: e.g. in a process of a sweep that already has one process per core)
-WORKERS = max(int(os.environ.get("NNM_SPECTRUM_WORKERS", "2") or 0), 0)
+def _workers_from_environment():
+    text = os.environ.get("NNM_SPECTRUM_WORKERS", "2").strip() or "0"
+    try:
+        return max(int(text), 0)
+    except ValueError:
+        raise ValueError(f"NNM_SPECTRUM_WORKERS must be a whole number of threads (0 turns them off), "
+                         f"not {text!r}") from None
+
+
+WORKERS = _workers_from_environment()
 
 _worker = None
 

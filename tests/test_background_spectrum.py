@@ -66,3 +66,18 @@ def test_krein_collisions_located_with_prefetched_spectra(monkeypatch):
     got, ahead, _ = _run(monkeypatch, True, **kw)
     assert ahead > 0 and [e["kind"] for e in got.events].count("torus") == 2
     _same(ref, got)
+
+
+def test_spectrum_workers_from_the_environment(monkeypatch):
+    """NNM_SPECTRUM_WORKERS: a whole number (0: the multipliers computed in turn), anything else one clear error;
+    with no worker threads the problem does not compute in the background."""
+    import nnm_solver.threads as threads
+    for text, n in (("0", 0), ("3", 3), (" 1 ", 1), ("", 0), ("-2", 0)):
+        monkeypatch.setenv("NNM_SPECTRUM_WORKERS", text)
+        assert threads._workers_from_environment() == n
+    monkeypatch.setenv("NNM_SPECTRUM_WORKERS", "two")
+    with pytest.raises(ValueError, match="NNM_SPECTRUM_WORKERS must be a whole number"):
+        threads._workers_from_environment()
+    monkeypatch.setattr(shooting_stability, "BACKGROUND_MIN_N", 1)
+    monkeypatch.setattr(threads, "WORKERS", 0)
+    assert _run(monkeypatch, True, energy=10.0)[1] == 0       # (_run sets BACKGROUND_MIN_N = 1 itself)

@@ -118,10 +118,10 @@ class ShootingStability:
         family = None if tangent is None else self.unpack(tangent)
         maps = self.stability_maps()
         if maps is None or not (self.symmetric and self.reversible):
-            return PendingSpectrum(None, (self.floquet_multipliers(family), self.collision))
+            return PendingSpectrum(result=(self.floquet_multipliers(family), self.collision))
         C, deflated = reversible_matrix(maps[0][:, :self.n], None if family is None else family[0])
         self.collision_per_modulus = 0.5
-        return PendingSpectrum(background(eigenvalues, C), deflated)
+        return PendingSpectrum(job=background(eigenvalues, C), deflated=deflated)
 
     def floquet_multipliers(self, family=None):
         """Floquet multipliers (2n,) of the last accepted point.
@@ -158,12 +158,14 @@ class PendingSpectrum:
     """The multipliers of one point being computed in a worker thread: call it for (multipliers, collision
     coordinates) (it waits); ``cancel()`` drops it if it has not started (a point the continuation discards)."""
 
-    def __init__(self, job, deflated):
-        self.job, self.deflated = job, deflated     # without a job, ``deflated`` is the result itself
+    def __init__(self, job=None, deflated=False, result=None):
+        """job : a Future of the eigenvalues c of reversible_matrix's C (deflated: whether C was); or result : the
+        (multipliers, collision coordinates) computed already."""
+        self.job, self.deflated, self.result = job, deflated, result
 
     def __call__(self):
         if self.job is None:
-            return self.deflated
+            return self.result
         return reversible_from_eigenvalues(self.job.result(), self.deflated)
 
     def cancel(self):
