@@ -12,7 +12,7 @@ For every n, in a fresh subprocess (so that the memory and the BLAS state are it
 around the solver's public / semi-public entry points (nothing in nnm_solver is edited; a name the
 solver no longer has is simply not timed, its time then shows under "other"):
 
-  sweep      Integrator.sensitivity (the exact sensitivity sweep) + ShootingProblem.jacobian's own work
+  sweep      Integrator.sensitivity / .sensitivity_factors (the exact sensitivity sweep) + ShootingProblem.jacobian's own work
              (assembling J from the sweep)
   state      Integrator.state / .record: state-only sweeps (chord-Newton residuals, the orbit record)
   linalg     continuation.LeastSquares (QR factorisations and solves: corrector, tangent)
@@ -247,6 +247,8 @@ def install_timers(prof):
             continue
         seen.add(cls)
         prof.wrap(cls, "sensitivity", "sweep")
+        if hasattr(cls, "sensitivity_factors"):
+            prof.wrap(cls, "sensitivity_factors", "sweep")
         prof.wrap(cls, "state", "state")
         prof.wrap(cls, "record", "state")
     prof.wrap(SP, "jacobian", "sweep")

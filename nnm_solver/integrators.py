@@ -9,6 +9,7 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
     sensitivity(system, q0, v0, h, nsteps, all, velocities)
                                                   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
                                                      (velocities=False: Sv is None, not assembled)
+    sensitivity_factors(system, q0, v0, h, nsteps) -> (q, v, dq_N/dq0 as diagonal + low rank, ok) or None
     linear_period(omega, steps_per_period)        -> T (s) whose discrete orbit closes for frequency omega
     relative_error(y)                             -> relative frequency error of a harmonic with h w = y
 
@@ -80,6 +81,11 @@ class Integrator:
     def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
         raise NotImplementedError  # pragma: no cover
 
+    def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        """(q, v, dq_N/dq0 as a lowrank.DiagonalPlusLowRank, ok), or None where the scheme does not keep that
+        form (then use sensitivity)."""
+        return None
+
 
 class _Newmark(Integrator):
     def state(self, system, q0, v0, h, nsteps):
@@ -90,6 +96,9 @@ class _Newmark(Integrator):
 
     def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
         return newmark.sweep_sensitivity(q0, v0, h, nsteps, *system.kernel, all_columns, velocities)
+
+    def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        return newmark.sweep_factors(q0, v0, h, nsteps, *system.kernel)
 
 
 class _Gauss(Integrator):

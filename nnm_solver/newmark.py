@@ -34,7 +34,8 @@ import numpy as np
 
 from .laws import law_force, law_force_tangent, law_scalar
 from .jit import jit as _jit
-from .newmark_monodromy import monodromy as _monodromy
+from .lowrank import DiagonalPlusLowRank
+from .newmark_monodromy import monodromy as _monodromy, monodromy_factors as _monodromy_factors
 
 NEWTON_MAX = 40
 NEWTON_RTOL = 1e-13
@@ -245,6 +246,15 @@ def sweep_sensitivity(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, all_
         return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq_h, sv_h, False
     Sq, Sv = _monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities)
     return q, v, Sq, Sv, sq_h, sv_h, True
+
+
+def sweep_factors(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks):
+    """Integrate with dq_N/dq0 kept as a diagonal plus a low-rank term: (q, v, DiagonalPlusLowRank, ok), the
+    same map as sweep_sensitivity's Sq with all_columns=False (lowrank.py; None when the sweep fails)."""
+    q, v, Dseq, _, _, ok = _sweep_tangents(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks)
+    if not ok:
+        return q, v, None, False
+    return q, v, DiagonalPlusLowRank(*_monodromy_factors(omega2, Bq, h, nsteps, Dseq)), True
 
 
 @_jit

@@ -181,6 +181,30 @@ def _volterra(Bq, N, Dseq, ncols, P11, P12, ge1):
     return W
 
 
+def _low_rank(Bq, N, Dseq, ncols, P11, P12, ge1):
+    """(U1 (n, N n_s), Sst (N n_s, ncols)): the elements' part of dq_N / d[q0 (; v0)] is U1 @ Sst."""
+    n = Bq.shape[1]
+    ns = Bq.shape[0]
+    W = _volterra(Bq, N, Dseq, ncols, P11, P12, ge1)    # w_k = D_k dd_k, k = 0..N
+    Sst = W[:-ns] + W[ns:]                       # w_j + w_{j+1}, j = 0..N-1
+    # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1}); column j ns + s of U is ge[N-1-j] * Bq[s]
+    rev = ge1[::-1]
+    U1 = (rev[:, None, :] * Bq[None, :, :]).reshape(N * ns, n).T
+    return U1, Sst
+
+
+def monodromy_factors(omega2, Bq, h, nsteps, Dseq):
+    """dq_N / dq0 as (d (n,), U (n, r), Vt (r, n)) with dq_N / dq0 = diag(d) + U @ Vt, r = nsteps n_s: the
+    diagonal is the linear modes' map, the low-rank term the elements' (lowrank.DiagonalPlusLowRank)."""
+    N = int(nsteps)
+    P11, P12, p21, p22, ge1, ge2 = _powers(omega2, h, N)
+    if Bq.shape[0] == 0 or N == 0:
+        n = omega2.shape[0]
+        return P11[N].copy(), np.zeros((n, 0)), np.zeros((0, n))
+    U1, Sst = _low_rank(Bq, N, Dseq, omega2.shape[0], P11, P12, ge1)
+    return P11[N].copy(), U1, Sst
+
+
 def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
     """Exact derivative of the discrete flow map: (Sq, Sv) = d[q_N; v_N]/d[q0 (; v0)] (n, ncols) each.
 
@@ -205,11 +229,7 @@ def monodromy(omega2, Bq, h, nsteps, Dseq, ncols, velocities=True):
             Sv[idx, n + idx] = p22
     if ns == 0 or N == 0:
         return Sq, Sv
-    W = _volterra(Bq, N, Dseq, ncols, P11, P12, ge1)    # w_k = D_k dd_k, k = 0..N
-    Sst = W[:-ns] + W[ns:]                       # w_j + w_{j+1}, j = 0..N-1
-    # final state: sum_j A^(N-1-j) e b^T (w_j + w_{j+1}); column j ns + s of U is ge[N-1-j] * Bq[s]
-    rev = ge1[::-1]
-    U1 = (rev[:, None, :] * Bq[None, :, :]).reshape(N * ns, n).T
+    U1, Sst = _low_rank(Bq, N, Dseq, ncols, P11, P12, ge1)
     Sq += U1 @ Sst
     if velocities:
         U2 = (ge2[::-1][:, None, :] * Bq[None, :, :]).reshape(N * ns, n).T

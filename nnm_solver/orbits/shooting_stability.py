@@ -17,6 +17,7 @@ from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 from ..floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
                        reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
 from .. import threads
+from ..lowrank import DiagonalPlusLowRank
 from ..threads import background
 
 __all__ = ["ShootingStability", "PendingSpectrum"]
@@ -26,6 +27,20 @@ __all__ = ["ShootingStability", "PendingSpectrum"]
 #: the end (measured, 13-40 points, workers on / off: beam n = 70-300 0.14/0.12 .. 0.73/0.68 s, plate n = 300
 #: 0.55/0.47 s; plate n = 550 1.24/1.69 s, aircraft n = 548 4.63/7.21 s)
 BACKGROUND_MIN_N = 400
+
+#: the half-period map is kept as diagonal + low rank (lowrank.py) when its rank, n_s times the steps of half a
+#: period, is at most this share of n: the Krein follower's shifted solves then skip the n x n LU (setup
+#: O(n r^2) against O(n^3 / 3))
+LOW_RANK_SHARE = 1.0 / 3.0
+
+#: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
+#: (relative to max(1, max |diag A|)); above it the dense LU is used
+RESIDUAL_TOL = 1e-9
+
+#: restarts of the Krein follower's shift-invert Arnoldi (ARPACK's maxiter; its default, 10 n, let a complex shift
+#: far from a dense real spectrum run for hours at n = 2,200: the k nearest eigenvalues all lie at nearly the same
+#: distance).  Converged calls take a few restarts, slow ones ~20 (measured at n = 2,200)
+ARPACK_RESTARTS = 50
 
 
 class ShootingStability:
@@ -60,12 +75,28 @@ class ShootingStability:
         stale = maps is None or (self.all_columns and maps[0].shape[1] < 2 * self.n)
         if stale and getattr(self, "quarter", False) and hasattr(self, "accepted_u"):
             q0, v0, T = self.unpack(self.accepted_u)
-            # the multipliers of reversible orbits need only dq(T/2)/dq0; the monodromy (all_columns) needs all
-            out = self.integrator.sensitivity(self.sys, q0, v0, T / self.spp, self.spp // 2, self.all_columns,
-                                              self.all_columns)
-            if out[-1]:
-                self._accepted_maps = (out[2], out[3])
+            h, half = T / self.spp, self.spp // 2
+            factored = getattr(self.integrator, "sensitivity_factors", None)
+            if not self.all_columns and factored and self.sys.Bq.shape[0] * half <= LOW_RANK_SHARE * self.n:
+                out = factored(self.sys, q0, v0, h, half)       # diagonal + low rank (lowrank.py)
+            else:
+                out = None
+            if out is not None:
+                if out[-1]:
+                    self._accepted_maps = (out[2].dense(), None)
+                    self._accepted_factors = (out[2], self._accepted_maps[0])
+            else:
+                # the multipliers of reversible orbits need only dq(T/2)/dq0; the monodromy (all_columns): all
+                out = self.integrator.sensitivity(self.sys, q0, v0, h, half, self.all_columns, self.all_columns)
+                if out[-1]:
+                    self._accepted_maps = (out[2], out[3])
         return self._accepted_maps
+
+    def _low_rank_a11(self, maps):
+        """The accepted point's A11 as a lowrank.DiagonalPlusLowRank when stability_maps kept that form for
+        these maps, else None."""
+        kept = getattr(self, "_accepted_factors", None)
+        return kept[0] if kept is not None and kept[1] is maps[0] else None
 
     def multipliers(self, u, tangent=None):
         """Floquet multipliers of the accepted point u (from the exact monodromy of the last sweep),
@@ -83,23 +114,32 @@ class ShootingStability:
         """The k collision coordinates (events.py) of the last accepted point nearest ``shift``, or None when
         this formulation has none: for symmetric reversible orbits the eigenvalues c of the deflated A11
         nearest shift, by shift-invert Arnoldi (an LU of the n x n matrix instead of its full eigenproblem,
-        ~10x cheaper); used to follow one Krein collision during event location.  A complex shift (a complex
-        pair's coordinate: far from the real axis, the pair is not among the k eigenvalues nearest its real part
-        when the spectrum is dense there) takes a complex LU."""
+        ~10x cheaper; with A11 kept as diagonal + low rank, an r x r LU: nearest_eigenvalues); used to follow
+        one Krein collision during event location.  A complex shift (a complex pair's coordinate: far from the
+        real axis, the pair is not among the k eigenvalues nearest its real part when the spectrum is dense
+        there) takes a complex LU; if Arnoldi stalls there, the real part, then the full spectrum."""
         maps = self.stability_maps() if self.symmetric and self.reversible else None
         if maps is None:
             return None
-        A11 = maps[0][:, :self.n]
         family = self.unpack(tangent)[0]
-        C = deflate(A11, family[:, None]) if np.linalg.norm(family) > 0 else A11
-        if C.shape[0] <= 8 * k:
-            return sla.eigvals(C, check_finite=False)
-        try:
-            if np.imag(shift) != 0:
-                return eigs(C.astype(complex), k=k, sigma=complex(shift), return_eigenvectors=False)
-            return eigs(C, k=k, sigma=float(np.real(shift)), return_eigenvectors=False)
-        except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. shift on an eigenvalue
-            return sla.eigvals(C, check_finite=False)
+        deflated = np.linalg.norm(family) > 0
+        low = self._low_rank_a11(maps) if self.n > 8 * k + 1 else None
+        C = None
+        if low is not None:
+            low = low.deflated(family) if deflated else low
+        else:
+            A11 = maps[0][:, :self.n]
+            C = deflate(A11, family[:, None]) if deflated else A11
+            if C.shape[0] <= 8 * k:
+                return sla.eigvals(C, check_finite=False)
+        # a complex shift far from a dense real spectrum (the pair has gone back to the axis) can stall Arnoldi:
+        # then the shift's real part, and the full spectrum if that fails too
+        shifts = ([complex(shift)] if np.imag(shift) != 0 else []) + [float(np.real(shift))]
+        for sigma in shifts:
+            c = nearest_eigenvalues(low if low is not None else C, sigma, k)
+            if c is not None:
+                return c
+        return sla.eigvals(C if C is not None else low.dense(), check_finite=False)
 
     @property
     def background_spectrum(self):
@@ -152,6 +192,30 @@ class ShootingStability:
         self.collision = None if self.symmetric else collision_coordinates(mu)
         self.collision_per_modulus = 1.0
         return mu
+
+
+def nearest_eigenvalues(A, sigma, k):
+    """The k eigenvalues of A nearest sigma by shift-invert Arnoldi (at most ARPACK_RESTARTS restarts), or None
+    (the caller tries another shift or the full spectrum) when ARPACK fails or the shift sits on an eigenvalue.
+    A is a dense matrix (an n x n LU, complex for a complex sigma) or a lowrank.DiagonalPlusLowRank (the
+    Woodbury solve, no n x n LU; its Ritz pairs are checked against A: residuals above RESIDUAL_TOL relative to
+    max(1, max |diag A|) give None)."""
+    low = isinstance(A, DiagonalPlusLowRank)
+    try:
+        if not low:
+            A = A.astype(complex) if isinstance(sigma, complex) else A
+            return eigs(A, k=k, sigma=sigma, maxiter=ARPACK_RESTARTS, return_eigenvectors=False)
+        OPinv = A.shift_invert(sigma)
+        if OPinv is None:
+            return None
+        c, X = eigs(A.operator(OPinv.dtype), k=k, sigma=sigma, OPinv=OPinv, maxiter=ARPACK_RESTARTS)
+    except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. a shift on an eigenvalue
+        return None
+    AX = np.column_stack([A.matvec(x) for x in X.T])
+    residual = np.linalg.norm(AX - X * c[None, :], axis=0) / np.linalg.norm(X, axis=0)
+    if not np.all(residual <= RESIDUAL_TOL * max(1.0, float(np.max(np.abs(A.d))))):
+        return None
+    return c
 
 
 class PendingSpectrum:
