@@ -111,3 +111,26 @@ def test_newmark_factors_are_the_sensitivity_map():
     assert ok and ok1 and F.rank == ns * N
     assert np.array_equal(q, q1) and np.array_equal(v, v1)
     assert np.abs(F.dense() - Sq).max() <= 1e-13 * np.abs(Sq).max()
+
+
+def test_a_stalled_complex_shift_is_not_tried_again(monkeypatch):
+    """The follower asks with the same complex shift at every step of one collision: once it stalled, the next
+    calls go straight to its real part."""
+    n = 800
+    rng = np.random.default_rng(2)
+    A = DiagonalPlusLowRank(np.linspace(-0.9, 0.9, n), 1e-4 * rng.standard_normal((n, 4)),
+                            1e-4 * rng.standard_normal((4, n)))
+    asked = []
+    nearest = shooting_stability.nearest_eigenvalues
+
+    def counted(M, sigma, k):
+        asked.append(sigma)
+        return nearest(M, sigma, k)
+
+    monkeypatch.setattr(shooting_stability, "nearest_eigenvalues", counted)
+    point = _Point(A, True)
+    tangent = np.concatenate([np.eye(n)[0], np.zeros(n), [0.1]])
+    for _ in range(3):
+        c = point.local_collision(tangent, 0.1 + 0.08j)
+        assert _same_set(c, _nearest(A.deflated(tangent[:n]).dense(), 0.1, 6), 1e-9)
+    assert [isinstance(s, complex) for s in asked] == [True, False, False, False]

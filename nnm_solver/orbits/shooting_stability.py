@@ -134,11 +134,16 @@ class ShootingStability:
                 return sla.eigvals(C, check_finite=False)
         # a complex shift far from a dense real spectrum (the pair has gone back to the axis) can stall Arnoldi:
         # then the shift's real part, and the full spectrum if that fails too
+        # (a complex shift that stalled is not tried again: the follower asks with the same shift at every step)
         shifts = ([complex(shift)] if np.imag(shift) != 0 else []) + [float(np.real(shift))]
         for sigma in shifts:
+            if isinstance(sigma, complex) and sigma == getattr(self, "_stalled_shift", None):
+                continue
             c = nearest_eigenvalues(low if low is not None else C, sigma, k)
             if c is not None:
                 return c
+            if isinstance(sigma, complex):
+                self._stalled_shift = sigma
         return sla.eigvals(C if C is not None else low.dense(), check_finite=False)
 
     @property
