@@ -34,7 +34,8 @@ BACKGROUND_MIN_N = 400
 LOW_RANK_SHARE = 1.0 / 3.0
 
 #: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
-#: (relative to max(1, max |diag A|)); above it the dense LU is used
+#: (relative to max(1, max |diag A|)); above it the call counts as failed (local_collision: the shift's real part,
+#: then the full spectrum)
 RESIDUAL_TOL = 1e-9
 
 #: restarts of the Krein follower's shift-invert Arnoldi (ARPACK's maxiter; its default, 10 n, let a complex shift
