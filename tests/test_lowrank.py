@@ -115,7 +115,8 @@ def test_newmark_factors_are_the_sensitivity_map():
 
 def test_a_stalled_complex_shift_is_not_tried_again(monkeypatch):
     """The follower asks with the same complex shift at every step of one collision: once it stalled, the next
-    calls go straight to its real part."""
+    calls go straight to its real part.  (The stall is imposed: ARPACK's random start vector, which depends on
+    the calls before in the process, occasionally converges there.)"""
     n = 800
     rng = np.random.default_rng(2)
     A = DiagonalPlusLowRank(np.linspace(-0.9, 0.9, n), 1e-4 * rng.standard_normal((n, 4)),
@@ -125,7 +126,7 @@ def test_a_stalled_complex_shift_is_not_tried_again(monkeypatch):
 
     def counted(M, sigma, k):
         asked.append(sigma)
-        return nearest(M, sigma, k)
+        return None if isinstance(sigma, complex) else nearest(M, sigma, k)
 
     monkeypatch.setattr(shooting_stability, "nearest_eigenvalues", counted)
     point = _Point(A, True)
