@@ -122,14 +122,14 @@ def build_family(sizes, log=print):
     """Build (or find in the cache) the reduced model of every size; returns {n: path}.
 
     Craig-Bampton with the 4 mount nodes retained: the constraint modes from
-    nnm_solver.reduction.craig_bampton (n_modes=0, sparse), the fixed-interface modes of the one FE model
+    nnm_solver.model.reduction.craig_bampton (n_modes=0, sparse), the fixed-interface modes of the one FE model
     from a single dense generalized eigenproblem (7,806 internal DOFs, ~1-2 min) shared by every size:
     Lanczos (craig_bampton's eigsh) for 4,376 of 7,806 modes would take far longer.  Checked against
     craig_bampton itself at the smallest size (its reduced frequencies are printed side by side).
     """
     import scipy.linalg as sla
     import nnm_solver
-    from nnm_solver.reduction import craig_bampton
+    from nnm_solver.model.reduction import craig_bampton
     CACHE.mkdir(exist_ok=True)
     paths = {n: model_path(n) for n in sizes}
     missing = [n for n in sizes if not paths[n].exists()]
@@ -169,7 +169,7 @@ def build_family(sizes, log=print):
             f_own = np.sqrt(np.abs(sla.eigvalsh(Kr, Mr)))[:20] / 2 / np.pi
             f_cb = np.sqrt(np.abs(sla.eigvalsh(Kc, Mc)))[:20] / 2 / np.pi
             check = float(np.max(np.abs(f_own / f_cb - 1)))
-            log(f"check at n = {n}: first 20 frequencies vs nnm_solver.reduction.craig_bampton: max rel. diff "
+            log(f"check at n = {n}: first 20 frequencies vs nnm_solver.model.reduction.craig_bampton: max rel. diff "
                 f"{check:.1e}")
         springs = [nnm_solver.CubicSpring(dof=6 * a + 2, k3=PLATE["k3"]) for a in range(len(mounts))]
         labels = [f"mount {a + 1} {c}" for a in range(len(mounts)) for c in ("ux", "uy", "uz", "rx", "ry", "rz")]
@@ -234,10 +234,10 @@ class Profile:
 
 def install_timers(prof):
     """Wrap the solver's entry points (public or semi-public names only; none is edited)."""
-    import nnm_solver.continuation as cont
-    import nnm_solver.events as events
-    import nnm_solver.integrators as integ
-    import nnm_solver.iterator as iterator
+    import nnm_solver.continuation.engine as cont
+    import nnm_solver.stability.events as events
+    import nnm_solver.integrators.registry as integ
+    import nnm_solver.driver.iterator as iterator
     from nnm_solver.orbits import shooting
     SP = shooting.ShootingProblem
     seen = set()
@@ -295,7 +295,7 @@ def run_size(n, plan, mode=MODE, energy_max=ENERGY_MAX, spp=200):
     backbone, the others short repeats); a dict of results."""
     import resource
     import nnm_solver
-    from nnm_solver.modal import modal_system
+    from nnm_solver.model.modal import modal_system
     out = dict(n=n, load_start=os.getloadavg(), plan=plan)
     t = time.perf_counter()
     warm = nnm_solver.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm_solver.CubicSpring(dof=0, k3=0.5)])

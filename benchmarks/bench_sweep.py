@@ -60,10 +60,10 @@ def main():
     import distributed
 
     import nnm_solver as nnm
-    sweeps = sys.modules["nnm_solver.sweeps"]
+    sweeps = sys.modules["nnm_solver.sweeps.dask_sweep"]
 
     model = nnm.load_model(args.file)
-    from nnm_solver.variants import parse_modes
+    from nnm_solver.sweeps.spec import parse_modes
 
     modes = parse_modes(args.modes)
     opts = dict(max_points=args.max_points, steps_per_period=args.steps_per_period)

@@ -39,8 +39,8 @@ if str(ROOT) not in sys.path:
 
 import nnm_solver as nnm  # noqa: E402
 from nnm_fem import DOF_NAMES, FEModel  # noqa: E402
-from nnm_solver.importers.abaqus import write_abaqus_matrix  # noqa: E402
-from nnm_solver.importers.common import DofMap  # noqa: E402
+from nnm_solver.files.importers.abaqus import write_abaqus_matrix  # noqa: E402
+from nnm_solver.files.importers.common import DofMap  # noqa: E402
 
 E, G, RHO = 70e9, 26e9, 2700.0          # aluminium (Pa, Pa, kg/m^3)
 LENGTH, ELEMENTS = 1.0, 6               # m

@@ -44,7 +44,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 import nnm_solver as nnm  # noqa: E402
 from nnm_solver import analysis  # noqa: E402
-from nnm_solver.h5file import atomic_file  # noqa: E402
+from nnm_solver.files.h5file import atomic_file  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DPI = 100

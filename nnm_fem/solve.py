@@ -6,7 +6,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from nnm_solver.errors import NNMInputError
-from nnm_solver.sparse import SparseSolver
+from nnm_solver.model.sparse import SparseSolver
 
 
 def modes(K, M, n_modes, sigma=None, fixed=None, tol=0.0, xyz=None):

@@ -10,33 +10,35 @@ Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
     nnm.save_branch("file.h5", branch); nnm.load_branches("file.h5")
 """
 from .errors import NNMFileError, NNMInputError
-from .element_set import ElementSet
-from .elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring
-from .mesh import DisplayMesh
-from .model import Model
-from .modal import ModalSystem, modal_system
-from .io import load_branches, load_extra, load_model, save_branch, save_model
-from .importers import DofMap, import_model
-from .importers.matlab import load_mat_model
-from .importers.toml import load_toml_model
-from .importers.ansys import load_full_model
-from .exports import Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit
-from .branch import STATUSES, Branch, Point
-from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
-from .floquet import STABILITY_TOL
+from .model import (CubicSpring, DisplayMesh, ElementSet, ModalSystem, Model, PiecewiseLinearSpring,
+                    PolynomialSpring, Variant, craig_bampton, cubic_scaling, mac, modal_system, variant_grid)
 from .integrators import INTEGRATORS
-from .driver import METHODS, NNMIterator, continue_nnm, continue_tongue, iter_nnm
-from .switching import switch_branch
-from .jobs import Job, start_branch
-from .plotting import plot_atlas, plot_fep
-from .reduction import craig_bampton, mac
+from .stability import STABILITY_TOL
+from .results import STATUSES, Branch, HarmonicBalanceSettings, MethodSettings, Point, ShootingSettings, plot_atlas, plot_fep
 from .fourier import fourier_amplitudes, fourier_coefficients
-from .scaling import cubic_scaling
-from .variants import Variant, load_sweep_file, variant_grid
-from .sweeps import SweepProgress, load_sweep, sweep
+from .driver import METHODS, Job, NNMIterator, continue_nnm, continue_tongue, iter_nnm, start_branch, switch_branch
+from .files import (Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit,
+                    load_branches, load_extra, load_model, save_branch, save_model)
+from .files.importers import DofMap, import_model
+from .files.importers.matlab import load_mat_model
+from .files.importers.toml import load_toml_model
+from .files.importers.ansys import load_full_model
+from .sweeps import SweepProgress, load_sweep, load_sweep_file, sweep
 from . import analysis, hb
 from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmonic, find_tongues, mac_orbits,
                        mass_mac, orbit_shape)
+from ._moved import MOVED as _MOVED
+from ._moved import install as _install_moved
+
+_install_moved()
+
+
+def __getattr__(name):
+    """The modules' old places as attributes (``nnm_solver.io``, ``nnm_solver.importers``): _moved.py."""
+    if name in _MOVED:
+        import importlib
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
     # models

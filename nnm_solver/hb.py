@@ -34,9 +34,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .driver import HILL_AUTO_SIZE, continue_nnm
+from .driver.api import HILL_AUTO_SIZE, continue_nnm
 from .errors import NNMInputError
-from .settings import HarmonicBalanceSettings
+from .results.settings import HarmonicBalanceSettings
 
 __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion", "HILL_AUTO_SIZE"]
 

@@ -25,9 +25,6 @@ from .layout import Layout
 from .state import scaling_law_holds
 from .worker import one_line
 
-#: auto amplification: the peak displacement is shown as this fraction of the model size
-AUTO_PEAK_FRACTION = 0.12
-
 #: controls that set one state field from their value: handle -> (field, type, redraws)
 SIMPLE_CONTROLS = {
     "h_along": ("s", float, ("fep", "sliders:energy", "point")),
@@ -194,7 +191,7 @@ class Session(ComputeActions, DownloadActions):
             return 1.0, 0.0
         peak = anim.peak_max * cubic_scaling(self.ratio).amplitude
         if self.auto_amp:
-            amp = AUTO_PEAK_FRACTION * self.geom.size / peak if peak > 0 else 1.0
+            amp = sc.auto_amplification(self.geom, peak)
         else:
             amp = 10.0 ** self.amp_log
         return float(amp), float(peak)

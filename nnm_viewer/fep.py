@@ -61,7 +61,7 @@ def event_kind(event):
 def event_style(kind):
     """(matplotlib marker, colour) of an event kind, as in the solver's FEP plots."""
     try:
-        from nnm_solver.plotting import EVENT_MARKERS
+        from nnm_solver.results import EVENT_MARKERS
     except ImportError:  # pragma: no cover
         EVENT_MARKERS = {}
     return EVENT_MARKERS.get(kind, ("o", "k"))

@@ -89,10 +89,8 @@ class PointView:
 
     def compute_linear(self, k):
         """Linear mode ``k`` as the point shown: its amplitude a is chosen so that its peak vertex
-        displacement is the auto amplification's (AUTO_PEAK_FRACTION of the model size), so that it looks
+        displacement is the auto amplification's (scene.AUTO_PEAK_FRACTION of the model size), so that it looks
         the same with a manual amplification of 1; True."""
-        from .controls import AUTO_PEAK_FRACTION
-
         s = self.session
         key = ("linear", int(k))
         cached = self._anim_cache.get(key)
@@ -101,7 +99,7 @@ class PointView:
             verts, faces, mapper = s.mesh.vertices, s.mesh.faces, s.shared.mapper
             unit = linear_mode_point(s.model, k, freqs, shapes, 1.0)
             peak = orbit_animation(verts, faces, mapper, unit.t, unit.x, unit.period).peak_max
-            a = AUTO_PEAK_FRACTION * s.geom.size / peak if peak > 0 else 1.0
+            a = sc.auto_amplification(s.geom, peak)
             pd = linear_mode_point(s.model, k, freqs, shapes, a)
             cached = (pd, orbit_animation(verts, faces, mapper, pd.t, pd.x, pd.period))
             if len(self._anim_cache) > ANIM_CACHE:

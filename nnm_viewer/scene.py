@@ -20,6 +20,16 @@ CAMERA_DIR = np.array([0.9, -1.25, 0.75])
 FALLBACK_MAX_DOF = 400
 
 
+#: auto amplification: the peak displacement is shown as this fraction of the model size
+AUTO_PEAK_FRACTION = 0.12
+
+
+def auto_amplification(geom, peak):
+    """The display amplification that shows a physical peak displacement ``peak`` (m) as
+    AUTO_PEAK_FRACTION of the model size (1 for a motion at rest)."""
+    return AUTO_PEAK_FRACTION * geom.size / peak if peak > 0 else 1.0
+
+
 def fallback_mesh(n):
     """A mesh for models that have none: one small box per DOF along x, each moving
     vertically (z) with its DOF (1 m of x_j = 1 m of motion)."""

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-import nnm_solver.engine_driver as engine_driver
-import nnm_solver.locator as locator
+import nnm_solver.continuation.engine_driver as engine_driver
+import nnm_solver.stability.locator as locator
 import nnm_solver.orbits.shooting_stability as shooting_stability
 from conftest import two_dof_model
 

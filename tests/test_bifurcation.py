@@ -6,7 +6,7 @@ import pytest
 
 import nnm_solver as nnm
 from conftest import two_dof_model
-from nnm_solver.events import classify_multipliers, stability_changes
+from nnm_solver.stability.events import classify_multipliers, stability_changes
 
 
 @pytest.fixture(scope="module")
@@ -127,7 +127,7 @@ def test_events_labels_and_tongues_survive_the_file(tmp_path):
 
 
 def test_a_tongue_re_entered_while_skipping_is_one_record():
-    from nnm_solver.tongue_skip import same_tongue
+    from nnm_solver.driver.tongue_skip import same_tongue
     a = dict(order=9, partner_mode=263, entry_energy=12.20, entry_frequency_hz=33.9984, exit_energy=12.45)
     again = dict(order=9, partner_mode=263, entry_energy=12.51, entry_frequency_hz=33.9981)
     assert same_tongue(a, again)
@@ -152,7 +152,7 @@ def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
     gauss6 shooting, match harmonic balance (Hill's multipliers, flag bisection) to 1e-6, and the same
     shooting branch located by bisection on the stability flag gives the same energies with more
     corrector runs."""
-    import nnm_solver.events as ev
+    import nnm_solver.stability.events as ev
     m = _combination_resonance_model()
     hb = nnm.continue_nnm(m, 1, 3.0, method="hb", harmonics=15, max_points=400)
     runs = []
@@ -226,7 +226,7 @@ def _synthetic_locator(coords):
     """An events.Locator whose branch is sigma itself (E = 1 + sigma) and whose collision coordinates are
     coords(sigma): the Krein locator's logic on a known spectrum."""
     import types
-    from nnm_solver.locator import Locator
+    from nnm_solver.stability.locator import Locator
 
     class Synthetic(Locator):
         def __init__(self):
@@ -261,7 +261,7 @@ def test_krein_locator_finds_the_first_of_several_collisions_in_a_step(reverse):
     0.3 and separates again at 0.6 (real at both ends): the stability changes first at 0.3, which the
     Krein locator must report (following A alone gives 0.8).  Reversed: the stable end is sigma = 1 and
     the change nearest it is at 1 - 0.3."""
-    import nnm_solver.krein as krein
+    import nnm_solver.stability.krein as krein
 
     def coords(sigma):
         s = 1.0 - sigma if reverse else sigma
@@ -314,8 +314,8 @@ def _fold_and_crossing_step(s_fold, s_cross):
     """A synthetic step sigma 0 -> 1: the energy 1 - 1e-3 (sigma - s_fold)^2 (a fold at s_fold) and a real pair
     through +1 at s_cross.  Returns (locator, point(sigma), slope(sigma))."""
     import types
-    from nnm_solver.floquet import is_stable, sort_multipliers
-    from nnm_solver.locator import Locator
+    from nnm_solver.stability.floquet import is_stable, sort_multipliers
+    from nnm_solver.stability.locator import Locator
 
     def energy(s):
         return 1.0 - 1e-3 * (s - s_fold) ** 2
@@ -361,7 +361,7 @@ def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
     """A pair through +1 at the fold is the fold's stability change; one 15 % of the step further along the
     branch is a branch point of its own, although its energy is within 3e-5 of the fold's (energy is flat at a
     fold: it once was merged by energy)."""
-    from nnm_solver.events import locate_between
+    from nnm_solver.stability.events import locate_between
     loc, point, slope = _fold_and_crossing_step(0.3, s_cross)
     events, _ = locate_between(loc, 1.0, (point(0.0), slope(0.0)), (point(1.0), slope(1.0)), 5, point)
     kinds = [e["kind"] for e in events]
@@ -376,7 +376,7 @@ def test_locator_prediction_is_on_its_hyperplane_and_exact_for_a_cubic_branch():
     """Between two known points the locator predicts by cubic Hermite interpolation in sigma (values and
     tangents, du/dsigma = p / (w^2 p_a . p)): on sigma's hyperplane, and exact for a branch that is a cubic in
     sigma; outside the known points, the nearest point's tangent line."""
-    from nnm_solver.locator import Locator
+    from nnm_solver.stability.locator import Locator
     rng = np.random.default_rng(3)
     n = 6
     w = rng.uniform(0.5, 2.0, n)

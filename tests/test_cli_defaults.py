@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 import nnm_solver as nnm
-from nnm_solver import cli
+from nnm_solver.cli import solve as cli
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "nnm_viewer" / "data" / "two_dof.h5"

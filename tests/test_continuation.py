@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-from nnm_solver.modal import modal_system
+from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import duffing_model, two_dof_model
@@ -178,7 +178,7 @@ def test_general_phase_condition_agrees_with_reversible(two_dof):
 def test_engine_refuses_a_point_and_retries_with_half_the_step():
     """send(REFUSE) takes the engine back to the point before the refused one and steps again with half the
     step: the new point lies on the branch between the two."""
-    import nnm_solver.continuation as co
+    import nnm_solver.continuation.engine as co
     m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=1.0)])
     it = nnm.iter_nnm(m, 1, 10.0)
     next(it)

@@ -206,8 +206,8 @@ def _monodromy_and_fd(model, branch, i, mode=1, delta=1e-7):
     """Exact monodromy (2n, 2n) of point i (ShootingProblem: square of the half-period sensitivity
     of newmark.sweep_sensitivity) and central finite differences of the full-period discrete map, in
     modal coordinates [q; v]."""
-    from nnm_solver.modal import modal_system
-    from nnm_solver.newmark import sweep_state
+    from nnm_solver.model.modal import modal_system
+    from nnm_solver.integrators.newmark import sweep_state
     from nnm_solver.orbits.shooting import ShootingProblem
     ms = modal_system(model)
     N = branch.settings.steps_per_period
@@ -445,7 +445,7 @@ def test_bad_element_input_is_one_line(make, match):
 
 def _kernels_match(el, rows):
     """The numba kernels (law_force, law_force_tangent) give the element set's numpy force and tangent."""
-    from nnm_solver.laws import law_force, law_force_tangent
+    from nnm_solver.model.laws import law_force, law_force_tangent
     for row in rows:
         np.testing.assert_allclose(law_force(row, el.powers, el.coefficients, el.kinks), el.force(row), rtol=1e-12,
                                    atol=1e-15)

@@ -9,7 +9,7 @@ import pytest
 
 import nnm_solver as nnm
 from nnm_solver import NNMInputError
-from nnm_solver.cli import main as solve_main
+from nnm_solver.cli.solve import main as solve_main
 
 from conftest import two_dof_model
 

@@ -7,9 +7,10 @@ from scipy.special import ellipk
 
 import nnm_solver as nnm
 from nnm_solver.hb import continue_nnm_hb, hb_coefficients, hb_motion
-from nnm_solver.orbits.harmonic_balance import HBBasis, HBProblem
-from nnm_solver.modal import modal_system
-from nnm_solver.events import stability_changes
+from nnm_solver.orbits.harmonic_balance import HBProblem
+from nnm_solver.orbits.hb_basis import HBBasis
+from nnm_solver.model.modal import modal_system
+from nnm_solver.stability.events import stability_changes
 
 
 def duffing_period(k, A):

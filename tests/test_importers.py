@@ -15,8 +15,8 @@ import scipy.sparse as sp
 
 import nnm_solver as nnm
 from nnm_solver import NNMFileError, NNMInputError
-from nnm_solver.cli import main as solve_main
-from nnm_solver.importers.ansys import reader_available
+from nnm_solver.cli.solve import main as solve_main
+from nnm_solver.files.importers.ansys import reader_available
 
 ROOT = Path(__file__).resolve().parents[1]
 MAX_POINTS = 15
@@ -361,7 +361,7 @@ def test_ansys_full_file_shipped_with_the_reader(tmp_path):
 
 
 def test_full_without_reader_says_how_to_install(tmp_path, monkeypatch):
-    import nnm_solver.importers.ansys as ansys
+    import nnm_solver.files.importers.ansys as ansys
     monkeypatch.setattr(ansys, "reader_available", lambda: (False, "ImportError: no module"))
     (tmp_path / "x.full").write_bytes(b"\0" * 64)
     with pytest.raises(NNMInputError, match=r'x\.full: reading ANSYS \.full files needs .*pip install "nnm\[ansys\]"'):

@@ -6,8 +6,8 @@ import pytest
 import scipy.linalg as sla
 
 import nnm_solver as nnm
-from nnm_solver.integrators import get_integrator
-from nnm_solver.modal import modal_system
+from nnm_solver.integrators.registry import get_integrator
+from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import duffing_model, two_dof_model

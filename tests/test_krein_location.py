@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-import nnm_solver.krein as krein
+import nnm_solver.stability.krein as krein
 from test_bifurcation import _pair, _synthetic_locator
 
 
@@ -59,9 +59,9 @@ def test_located_point_off_the_interpolant_is_computed_afresh(monkeypatch):
     """A located point whose chord iterations from the latest point converge 0.2 x d sigma off the interpolant of
     the known points (a branch alongside) is refused (None: computed afresh); on the interpolant it is kept."""
     import nnm_solver as nnm
-    import nnm_solver.locator as locator
+    import nnm_solver.stability.locator as locator
     from conftest import two_dof_model
-    from nnm_solver.continuation import ContinuationSettings
+    from nnm_solver.continuation.engine import ContinuationSettings
 
     it = nnm.iter_nnm(two_dof_model(), 1, 10.0)
     pts = [next(it) for _ in range(6)]

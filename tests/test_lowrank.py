@@ -7,9 +7,9 @@ import scipy.linalg as sla
 from scipy.sparse.linalg import LinearOperator
 
 import nnm_solver.orbits.shooting_stability as shooting_stability
-from nnm_solver.floquet import deflate
-from nnm_solver.lowrank import DiagonalPlusLowRank
-from nnm_solver.newmark import sweep_factors, sweep_sensitivity
+from nnm_solver.stability.floquet import deflate
+from nnm_solver.integrators.lowrank import DiagonalPlusLowRank
+from nnm_solver.integrators.newmark import sweep_factors, sweep_sensitivity
 from nnm_solver.orbits.shooting_stability import ShootingStability, nearest_eigenvalues
 
 

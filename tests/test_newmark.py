@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nnm_solver.newmark import sweep_record, sweep_sensitivity, sweep_state
-from nnm_solver.modal import modal_system
+from nnm_solver.integrators.newmark import sweep_record, sweep_sensitivity, sweep_state
+from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import two_dof_model

@@ -3,9 +3,9 @@ Volterra recursion (monodromy_recursive) and against finite differences of the s
 import numpy as np
 import pytest
 
-from nnm_solver.newmark import _sweep_tangents, sweep_sensitivity, sweep_state
-from nnm_solver import newmark_monodromy
-from nnm_solver.newmark_monodromy import _linear_map, monodromy
+from nnm_solver.integrators.newmark import _sweep_tangents, sweep_sensitivity, sweep_state
+from nnm_solver.integrators import newmark_monodromy
+from nnm_solver.integrators.newmark_monodromy import _linear_map, monodromy
 
 
 def monodromy_recursive(omega2, Bq, h, nsteps, Dseq, ncols):

@@ -16,55 +16,126 @@ def test_import_nnm_solver_does_not_import_fem_aircraft_or_viewer():
     assert not bad, f"import nnm_solver imported {bad}"
 
 
-def _module_imports(root):
-    """{module: set of nnm_solver modules it imports at module level} from the source (ast)."""
+#: the solver's layers, lowest first: a module may import its own layer and the layers before it.  The base
+#: modules (errors, jit, threads, fourier) sit below everything; hb and matio are facades at the top.
+LAYERS = ["errors", "jit", "threads", "fourier", "_moved", "model", "integrators", "continuation", "stability",
+          "orbits", "results", "analysis", "driver", "files", "sweeps", "cli", "hb", "matio"]
+#: at most this many modules at the top level of nnm_solver (besides __init__.py): the folders say the layers
+TOP_LEVEL_MAX = 10
+
+
+def import_graph(root):
+    """{module: set of modules of the same package it imports}, from the source of the package at ``root``
+    (a folder), counting imports at any depth (module level and inside functions).  An import of one of a
+    module's own parent packages is left out (a package's __init__ imports its modules)."""
     import ast
     from pathlib import Path
 
     pkg = Path(root)
-    graph = {}
-    for path in pkg.rglob("*.py"):
-        rel = path.relative_to(pkg.parent).with_suffix("")
-        parts = list(rel.parts)
-        if parts[-1] == "__init__":
+    mods = {}
+    for path in sorted(pkg.rglob("*.py")):
+        parts = list(path.relative_to(pkg.parent).with_suffix("").parts)
+        is_init = parts[-1] == "__init__"
+        if is_init:
             parts = parts[:-1]
-        name = ".".join(parts)
-        base = parts if path.name == "__init__.py" else parts[:-1]
+        base = parts if is_init else parts[:-1]
         deps = set()
-        for node in ast.parse(path.read_text()).body:          # module level only: lazy imports are fine
+        for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
                 if node.level:
                     target = base[:len(base) - node.level + 1] + (node.module.split(".") if node.module else [])
                 else:
                     target = (node.module or "").split(".")
-                if target and target[0] == "nnm_solver":
+                if target and target[0] == pkg.name:
                     deps.add(".".join(target))
                     deps.update(".".join(target + [a.name]) for a in node.names)
             elif isinstance(node, ast.Import):
-                deps.update(a.name for a in node.names if a.name.startswith("nnm_solver"))
-        graph[name] = deps
-    return {m: {d for d in deps if d in graph and d != m} for m, deps in graph.items()}
+                deps.update(a.name for a in node.names if a.name.split(".")[0] == pkg.name)
+        mods[".".join(parts)] = deps
+
+    def resolve(name):                     # a name -> the module that defines it (a.b.func -> a.b)
+        while name and name not in mods:
+            name = name.rpartition(".")[0]
+        return name
+
+    return {m: {r for r in map(resolve, deps) if r and r != m and not m.startswith(r + ".")}
+            for m, deps in mods.items()}
 
 
-def test_no_import_cycle_inside_the_solver():
-    from pathlib import Path
-
-    graph = _module_imports(Path(__file__).resolve().parents[1] / "nnm_solver")
-    graph = {m: {d for d in deps if not m.startswith(d + ".")} for m, deps in graph.items()}  # parents' __init__
-    state, cycle = {}, []
+def find_cycles(graph):
+    """Import cycles of a graph {module: imported modules}, each as [m1, m2, ..., m1]."""
+    state, cycles = {}, []
 
     def visit(m, stack):
         state[m] = 1
-        for d in sorted(graph[m]):
-            if d == "nnm_solver" or m == "nnm_solver":
-                continue
+        stack.append(m)
+        for d in sorted(graph.get(m, ())):
             if state.get(d) == 1:
-                cycle.append(stack[stack.index(d):] + [d] if d in stack else [m, d])
+                cycles.append(stack[stack.index(d):] + [d])
             elif d not in state:
-                visit(d, stack + [d])
+                visit(d, stack)
+        stack.pop()
         state[m] = 2
 
     for m in sorted(graph):
         if m not in state:
-            visit(m, [m])
-    assert not cycle, f"import cycles: {cycle[:3]}"
+            visit(m, [])
+    return cycles
+
+
+def _root(name):
+    from pathlib import Path
+    return Path(__file__).resolve().parents[1] / name
+
+
+def test_no_import_cycle_in_the_solver_or_the_viewer():
+    for pkg in ("nnm_solver", "nnm_viewer"):
+        cycles = find_cycles(import_graph(_root(pkg)))
+        assert not cycles, f"{pkg}: import cycles {[' -> '.join(c) for c in cycles[:3]]}"
+
+
+def test_the_cycle_check_finds_a_cycle_through_a_function_level_import(tmp_path):
+    pkg = tmp_path / "demo_pkg"
+    (pkg / "low").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "low" / "__init__.py").write_text("")
+    (pkg / "low" / "a.py").write_text("from ..high import b\n")
+    (pkg / "high.py").write_text("def f():\n    from .low.a import g\n    return g\n")
+    (pkg / "other.py").write_text("import demo_pkg.high\n")
+    graph = import_graph(pkg)
+    assert graph["demo_pkg.other"] == {"demo_pkg.high"}
+    assert find_cycles(graph) == [["demo_pkg.high", "demo_pkg.low.a", "demo_pkg.high"]]
+    (pkg / "high.py").write_text("def f():\n    return 1\n")
+    assert find_cycles(import_graph(pkg)) == []
+
+
+def test_layers_import_only_the_layers_below_them():
+    graph = import_graph(_root("nnm_solver"))
+    layer = {m: m.split(".")[1] for m in graph if m != "nnm_solver"}
+    assert set(layer.values()) <= set(LAYERS), f"modules outside the known layers: {set(layer.values()) - set(LAYERS)}"
+    upward = sorted(f"{m} -> {d}" for m, deps in graph.items() if m in layer for d in deps
+                    if d in layer and LAYERS.index(layer[d]) > LAYERS.index(layer[m]))
+    assert not upward, f"imports of a higher layer: {upward[:5]}"
+
+
+def test_top_level_holds_few_modules_and_each_subpackage_says_its_layer():
+    root = _root("nnm_solver")
+    top = sorted(p.name for p in root.glob("*.py") if p.name != "__init__.py")
+    assert len(top) <= TOP_LEVEL_MAX, f"{len(top)} modules at the top of nnm_solver: {top}"
+    for sub in sorted(p for p in root.iterdir() if (p / "__init__.py").exists()):
+        doc = (sub / "__init__.py").read_text()
+        assert "Layer:" in doc, f"nnm_solver/{sub.name}/__init__.py does not say what its layer may import"
+
+
+def test_old_module_paths_still_import_as_the_same_modules():
+    code = ("import nnm_solver.newmark as a, nnm_solver.integrators.newmark as b\n"
+            "import nnm_solver.importers.abaqus as c, nnm_solver.files.importers.abaqus as d\n"
+            "from nnm_solver.model import CubicSpring\n"
+            "from nnm_solver.io import load_model\n"
+            "from nnm_solver.matio import load_mat_model\n"
+            "from nnm_solver.hb import continue_nnm_hb\n"
+            "from nnm_solver.continuation import pseudo_arclength\n"
+            "assert a is b and c is d and a.__spec__.name == 'nnm_solver.integrators.newmark'\n"
+            "print('ok')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-from nnm_solver.continuation import ContinuationSettings, LeastSquares, _unseen_turns, correct
-from nnm_solver.modal import modal_system
+from nnm_solver.continuation.engine import ContinuationSettings, LeastSquares, _unseen_turns, correct
+from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits.shooting import ShootingProblem
 
 from conftest import two_dof_model
@@ -107,8 +107,8 @@ def test_a_jump_onto_a_branch_alongside_is_caught_at_mid_step(monkeypatch):
     """Without the period test, NNM 1 of the 2-DOF stepped from the 5:1 tongue's far side (73 kJ) onto the backbone
     (89.6 kJ); the mid-step check (Locator.jumped: the branch's point half-way lies 0.39 step lengths off the
     cubic interpolant of the ends) refuses that step too, and the branch goes round the tongue's inner loop."""
-    import nnm_solver.continuation as continuation
-    import nnm_solver.locator as locator
+    import nnm_solver.continuation.engine as continuation
+    import nnm_solver.stability.locator as locator
     energy_only = continuation._unseen_turns
 
     def no_period_test(energy, u, p, u_new, p_new, floor):

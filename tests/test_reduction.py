@@ -5,7 +5,7 @@ import scipy.linalg as sla
 
 from nnm_fem import FEModel
 from nnm_solver import NNMInputError
-from nnm_solver.reduction import craig_bampton, mac
+from nnm_solver.model.reduction import craig_bampton, mac
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,8 @@ import pytest
 
 import nnm_solver as nnm
 from conftest import duffing_model, two_dof_model
-from nnm_solver.floquet import deflate, nontrivial_multipliers, reversible_multipliers
-from nnm_solver.stops import LoopDetector
+from nnm_solver.stability.floquet import deflate, nontrivial_multipliers, reversible_multipliers
+from nnm_solver.results.stops import LoopDetector
 from reference_models import (cantilever_beam, multipliers_ivp, periodic_orbit_ivp, softening_saddle_energy,
                               tip_dof)
 
@@ -176,8 +176,8 @@ def test_loop_detector_on_a_circle_and_on_a_fold():
 def test_restoring_ratio_along_an_orbit():
     """r = |q + g(q)| / |q| for x'' + x - x^3 = 0 is 1 - q^2; over an orbit, the smallest value among the
     configurations with at least half the largest amplitude (passages through 0 do not count)."""
-    from nnm_solver.modal import modal_system
-    from nnm_solver.stops import restoring_ratio
+    from nnm_solver.model.modal import modal_system
+    from nnm_solver.results.stops import restoring_ratio
 
     ms = modal_system(duffing_model(-1.0))
     assert restoring_ratio(ms, np.array([0.5])) == pytest.approx(0.75)
@@ -189,7 +189,7 @@ def test_restoring_ratio_along_an_orbit():
 def test_local_collision_coordinates_match_the_full_eigenproblem():
     """ShootingProblem.local_collision (shift-invert Arnoldi on the deflated half map, used to follow a Krein
     collision during event location) returns the eigenvalues of the full problem nearest the shift."""
-    from nnm_solver.modal import ModalSystem
+    from nnm_solver.model.modal import ModalSystem
     from nnm_solver.orbits.shooting import ShootingProblem
     beam = cantilever_beam(n_el=40)                       # 80 DOF: above the size where the full problem is used
     s = ModalSystem(beam)

@@ -15,7 +15,7 @@ import pytest
 import nnm_solver as nnm
 from conftest import two_dof_model
 
-sweeps = importlib.import_module("nnm_solver.sweeps")
+sweeps = importlib.import_module("nnm_solver.sweeps.dask_sweep")
 
 SHORT = dict(steps_per_period=64, max_points=40)            # ~0.1-0.5 s per branch
 LONG = dict(energy_max=1e4, steps_per_period=200, max_points=200)   # 2-DOF NNM1 through the 3:1 tongue (~1 s)

@@ -572,7 +572,7 @@ def test_fep_and_orbit_csv_downloads(server, demo_file):
     import csv
     import io
 
-    from nnm_solver.exports import CSV_COLUMNS
+    from nnm_solver.files.exports import CSV_COLUMNS
     from nnm_viewer.downloads import orbit_csv
 
     s, shared = make_session(server, demo_file)

@@ -1,6 +1,8 @@
 """Tools to read a computed NNM branch: harmonic content of its orbits (harmonics.py),
 internal-resonance tongues (tongues.py), and the shapes of orbits and their MAC (shapes.py: ``mass_mac(model, a, b)``, the
 mass-weighted MAC used everywhere).
+
+Layer: imports ``nnm_solver.results`` and the layers below it.
 """
 from .harmonics import (DISTORTION_FRACTION, RESONANCE_FRACTION, HarmonicContent, describe_orbit,
                         dominant_harmonic, harmonic_coefficients, harmonic_fractions, harmonic_shape, orbit_samples)

@@ -20,10 +20,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..branch import Branch
+from ..results.branch import Branch
 from ..errors import NNMInputError
 from ..fourier import fourier_coefficients
-from ..modal import modal_system
+from ..model.modal import modal_system
+from ..model.reduction import mass_mac
 
 #: a harmonic k > 1 carrying at least this fraction of the amplitude marks an internal resonance
 RESONANCE_FRACTION = 0.15
@@ -151,7 +152,6 @@ def harmonic_shape(branch, i, k, n=None):
 
 
 def closest_mode(branch, shape):
-    from .shapes import mass_mac   # shapes.py imports this module
     _, Phi = branch.model.linear_modes()
     m = mass_mac(branch.model, shape, Phi)[0]
     r = int(np.argmax(m))

@@ -8,34 +8,11 @@ meaningless: on assets/paris.h5 the mass-orthogonal linear modes 19 and 513 have
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import NNMInputError
-from ..modal import modal_system
-from ..reduction import mac
+from ..model.modal import modal_system
+from ..model.reduction import mac, mass_mac  # noqa: F401  (mass_mac: this module's public name too)
 from .harmonics import check_branch, harmonic_shape, orbit_samples
-
-def mass_mac(model, a, b):
-    """Mass-weighted modal assurance criterion between shapes of ``model`` (seed eq. 19 with M):
-
-        MAC(a, b) = (a^T M b)^2 / ((a^T M a) (b^T M b)),   in [0, 1].
-
-    model : an nnm Model (its mass matrix ``model.M`` is used) or a mass matrix (n, n), dense or
-        scipy.sparse (e.g. a full FE mass matrix, to compare recovered physical displacements).
-    a, b : two shapes (n,) -> a float; or sets of shapes (n, na), (n, nb) (columns) -> the MAC matrix
-        (na, nb); a 1-D and a 2-D argument -> (1, nb) or (na, 1).
-    Distinct linear modes of the model give 0, a shape and any multiple of it give 1.
-    """
-    M = getattr(model, "M", model)
-    if M is None or not (sp.issparse(M) or np.ndim(M) == 2):
-        raise NNMInputError("mass_mac needs a Model or a mass matrix (n, n) as its first argument")
-    n = M.shape[0]
-    for name, v in (("a", a), ("b", b)):
-        if np.shape(v)[:1] != (n,):
-            raise NNMInputError(f"mass_mac: {name} has shape {np.shape(v)}, expected ({n},) or ({n}, k) rows "
-                                f"matching the mass matrix")
-    return mac(a, b, M)
-
 
 def orbit_shape(branch, i, kind="peak", samples=None):
     """Shape (n_dof,) of the orbit of point i.

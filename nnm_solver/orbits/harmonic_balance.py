@@ -39,40 +39,10 @@ from __future__ import annotations
 
 import numpy as np
 
-BASES = ("odd", "full")
-
-
-class HBBasis:
-    """Harmonic basis and its time sampling: orders h (N_b,), sine (N_b,) bool, E (N, N_b), P (N_b, N)."""
-
-    def __init__(self, harmonics, kind="odd", samples=None):
-        H = int(harmonics)
-        if kind == "odd":
-            self.h = np.arange(1, H + 1, 2)
-            self.sine = np.zeros(len(self.h), dtype=bool)
-        else:
-            self.h = np.concatenate([[0], np.repeat(np.arange(1, H + 1), 2)])
-            self.sine = np.concatenate([[False], np.tile([False, True], H)])
-        self.kind = kind
-        self.harmonics = H
-        self.samples = int(samples) if samples is not None else 4 * H + 4
-        theta = 2.0 * np.pi * np.arange(self.samples) / self.samples
-        self.E = self.functions(theta)
-        w = np.where(self.h == 0, 1.0, 2.0) / self.samples
-        self.P = self.E.T * w[:, None]
-
-    def __len__(self):
-        return len(self.h)
-
-    def functions(self, theta):
-        """c_j(theta) (len(theta), N_b)."""
-        ht = np.outer(np.asarray(theta, dtype=float), self.h)
-        return np.where(self.sine, np.sin(ht), np.cos(ht))
-
-    def derivatives(self, theta):
-        """d c_j / d theta (len(theta), N_b)."""
-        ht = np.outer(np.asarray(theta, dtype=float), self.h)
-        return np.where(self.sine, np.cos(ht), -np.sin(ht)) * self.h
+from ..integrators.registry import record_orbit
+from ..stability.floquet import without_nearest_to_one
+from .hb_basis import BASES, HBBasis  # noqa: F401
+from .hill import hill_multipliers
 
 
 class HBProblem:
@@ -112,8 +82,6 @@ class HBProblem:
     def multipliers(self, u, tangent=None):
         """Floquet multipliers of the orbit u by Hill's method (hill.py), the two nearest to +1 (the
         trivial pair) set to exactly 1."""
-        from ..floquet import without_nearest_to_one
-        from .hill import hill_multipliers
         return without_nearest_to_one(hill_multipliers(self, u))
 
     def coefficients(self, u):
@@ -216,7 +184,7 @@ def recover_coefficients(system, mode_index, basis, x0, v0, period, tol):
     q0, v0 = system.to_modal(x0), system.to_modal(v0)
     problem.q_ref = q0 / max(np.linalg.norm(q0), 1e-300)
     sub = 16
-    Q, _, _ = system.orbit(q0, v0, period, basis.samples * sub)
+    Q, _, _ = record_orbit(system, q0, v0, period, basis.samples * sub)
     u = problem.pack(basis.P @ Q[:-1:sub], 2 * np.pi / period)
     c0, s0 = basis.functions([0.0])[0], basis.derivatives([0.0])[0]
     n = problem.n

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from .harmonic_balance import HBBasis
+from .hb_basis import HBBasis
 
 
 def derivative_matrix(basis):

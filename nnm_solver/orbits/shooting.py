@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..fourier import resample_periodic
-from ..integrators import get_integrator
+from ..integrators.registry import get_integrator, record_orbit
 from .shooting_error import ShootingError
 from .shooting_stability import ShootingStability
 
@@ -285,7 +285,7 @@ class ShootingProblem(ShootingError, ShootingStability):
         """Modal displacements (N, n) of the orbit u at its N = steps_per_period time steps over a period."""
         q0, v0, T = self.unpack(u)
         nsteps = self.spp // 2 if self.symmetric else self.spp
-        Q, _, ok = self.sys.orbit(q0, v0, T * nsteps / self.spp, nsteps, self.integrator.name)
+        Q, _, ok = record_orbit(self.sys, q0, v0, T * nsteps / self.spp, nsteps, self.integrator.name)
         if not ok:
             return None
         Q = Q[:-1]
@@ -311,7 +311,7 @@ def shooting_orbit(system, x0, v0, period, steps_per_period, symmetric, samples,
     spp = int(steps_per_period)
     symmetric = bool(symmetric) and spp % 2 == 0
     nsteps = spp // 2 if symmetric else spp
-    Q, V, ok = system.orbit(system.to_modal(x0), system.to_modal(v0), period * nsteps / spp, nsteps, integrator)
+    Q, V, ok = record_orbit(system, system.to_modal(x0), system.to_modal(v0), period * nsteps / spp, nsteps, integrator)
     if not ok:
         raise RuntimeError("time integration of the orbit failed")
     Q, V = Q[:-1], V[:-1]

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..continuation import LeastSquares, stacked
+from ..continuation.engine import LeastSquares, stacked
 
 __all__ = ["ShootingError", "FOLD_COSINE"]
 

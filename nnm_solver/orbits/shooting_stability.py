@@ -14,10 +14,10 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
-from ..floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
+from ..stability.floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
                        reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
 from .. import threads
-from ..lowrank import DiagonalPlusLowRank
+from ..integrators.lowrank import DiagonalPlusLowRank
 from ..threads import background
 
 __all__ = ["ShootingStability", "PendingSpectrum"]

@@ -1,0 +1,316 @@
+"""nnm-solve: list the linear modes of a model file, or compute and save an NNM branch.
+
+    nnm-solve FILE --list-modes
+    nnm-solve FILE --mode N --energy-max E [--out OUT.h5] [--plot fep.png]
+    nnm-solve FILE --modes 10-24 --energy-max E [--sweep SWEEP.toml] [--workers N | --scheduler ADDRESS]
+
+    nnm-solve FILE --mode N --energy-max E [--csv T.csv] [--uff S.uff] [--backbone B.csv --backbone-dof DOF]
+    nnm-solve import MODEL.toml --out MODEL.h5      nnm-solve export FILE.h5 [--branch NAME] --csv ...
+
+FILE is an nnm HDF5 file, a MATLAB .mat file (M, K, springs = [dof other k3], 1-based), a model
+description .toml (MatrixMarket / Abaqus / ANSYS / MATLAB matrices, springs, units, display mesh)
+or an ANSYS .full file (docs/import.md).
+Ctrl-C stops the continuation and saves the points computed so far.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import NNMInputError, run_reporting_errors
+
+
+def _load(path):
+    from ..files.importers import is_import_path
+    from ..files.io import load_extra, load_model
+
+    p = Path(path)
+    model = load_model(p)          # nnm HDF5, or an import by suffix (.mat, .toml, .full)
+    return model, None if is_import_path(p) else load_extra(p, "reference")
+
+
+def accuracy_line(branch):
+    """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator."""
+    s = branch.settings
+    err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
+    ok = np.isfinite(err)
+    if s.method != "shooting" or not ok.any():
+        return "  accuracy: no per-point error estimate"
+    i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
+    steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
+    more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
+    return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "
+            f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
+
+
+def list_modes(model, reference=None, count=30, out=sys.stdout):
+    freqs, _ = model.linear_modes()
+    labels = model.mode_labels or []
+    table = None
+    if reference and "table2_hz" in reference:
+        table = np.asarray(reference["table2_hz"], dtype=float)
+    head = f"{'mode':>4}  {'freq (Hz)':>11}"
+    if table is not None:
+        head += f"  {'reference':>10}  {'diff':>7}"
+    print(head + "  label", file=out)
+    for k in range(min(count, model.n)):
+        line = f"{k + 1:>4}  {freqs[k]:>11.4f}"
+        if table is not None:
+            if k < len(table):
+                line += f"  {table[k]:>10.4f}  {100 * (freqs[k] / table[k] - 1):>+6.2f}%"
+            else:
+                line += " " * 21
+        label = labels[k] if k < len(labels) else ""
+        print(line + ("  " + label if label else ""), file=out)
+
+
+def _progress(job, stream, interval=0.2):
+    """One progress line, rewritten in place until the job is done (the latest point's E and f once
+    there is one; before it, the time waited: the first run after installing compiles the solver)."""
+    width = 30
+    t0 = time.perf_counter()
+    last = 0
+    while not job.done:
+        f = job.progress
+        pts = job.points()
+        bar = "#" * int(width * f) + "-" * (width - int(width * f))
+        if len(pts):
+            text = (f"[{bar}] {100 * f:5.1f}%  {len(pts):4d} points  E = {pts.energy[-1]:.3e} J  "
+                    f"f = {pts.frequency_hz[-1]:.5f} Hz")
+        else:
+            text = (f"[{bar}] waiting for the first point ({time.perf_counter() - t0:.0f} s; the first run "
+                    f"compiles the solver)")
+        stream.write("\r" + text.ljust(last))
+        last = len(text)
+        stream.flush()
+        time.sleep(interval)
+    stream.write("\n")
+
+
+#: the example files shipped with the viewer (nnm_viewer/data), never written to by default
+SHIPPED_EXAMPLES = ("paris.h5", "two_dof.h5")
+
+
+def _is_shipped_example(path):
+    """True if ``path`` is one of the example files shipped in the nnm_viewer package (found
+    without importing the viewer)."""
+    import importlib.util
+
+    try:
+        spec = importlib.util.find_spec("nnm_viewer")
+        p = Path(path).resolve()
+    except (ImportError, ValueError, OSError):
+        return False
+    if spec is None or not spec.submodule_search_locations or p.name not in SHIPPED_EXAMPLES:
+        return False
+    return any(p == (Path(loc) / "data" / p.name).resolve() for loc in spec.submodule_search_locations)
+
+
+def _default_out(path):
+    """(the file a branch computed on ``path`` is appended to, the reason it is not ``path`` or ''):
+    ``path`` itself (FILE.h5 for a .mat file), unless it is a shipped example or cannot be written;
+    then ``<stem>_branches.h5`` in the current folder."""
+    import os
+
+    from ..files.importers import is_import_path
+
+    p = Path(path)
+    out = p.with_suffix(".h5") if is_import_path(p) else p
+    folder = out.parent if str(out.parent) else Path(".")
+    if _is_shipped_example(out):
+        reason = f"{out.name} is a shipped example"
+    elif not os.access(folder, os.W_OK) or (out.exists() and not os.access(out, os.W_OK)):
+        reason = f"{out} is not writable"
+    else:
+        return out, ""
+    return Path.cwd() / f"{p.stem}_branches.h5", reason
+
+
+def main(argv=None):
+    from . import exchange as cli_exchange
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in cli_exchange.SUBCOMMANDS:     # nnm-solve import ... / nnm-solve export ...
+        return cli_exchange.main(argv)
+    parser = argparse.ArgumentParser(prog="nnm-solve", description=__doc__.split("\n\n")[0],
+                                     epilog="nnm-solve import MODEL --out MODEL.h5 / nnm-solve export FILE.h5 ...: "
+                                     "see nnm-solve import -h, nnm-solve export -h")
+    parser.add_argument("file", help="model file: .h5 nnm file, .mat, .toml model description or ANSYS .full")
+    parser.add_argument("--list-modes", action="store_true", help="print the linear natural frequencies")
+    parser.add_argument("--count", type=int, default=24, help="number of modes listed (default 24)")
+    parser.add_argument("--mode", type=int, help="linear mode to continue (1-based)")
+    parser.add_argument("--energy-max", type=float, help="energy (J) where the continuation stops")
+    parser.add_argument("--energy-min", type=float, default=None, help="energy (J) of the first point")
+    parser.add_argument("--method", choices=("shooting", "hb"), default="shooting", help="shooting (default; "
+                        "Newmark or Gauss time integration, the seed paper's method) or hb (harmonic balance)")
+    parser.add_argument("--harmonics", type=int, default=7, help="hb: highest harmonic (default 7)")
+    parser.add_argument("--condensed", action="store_true", help="hb: solve the harmonic balance condensed onto "
+                        "the nonlinear elements (unknowns: their deformations per harmonic; for models of any size "
+                        "whose nonlinearity is localized)")
+    parser.add_argument("--steps-per-period", type=int, default=200)
+    parser.add_argument("--integrator", default="newmark", help="time integrator of the shooting: newmark "
+                        "(default, order 2), gauss4 or gauss6 (Gauss-Legendre, orders 4 and 6)")
+    parser.add_argument("--freq-tol", type=float, default=None, help="raise the steps per period where a "
+                        "point's estimated relative frequency error exceeds this (e.g. 1e-6)")
+    parser.add_argument("--tol", type=float, default=None, help="relative periodicity tolerance (default 1e-6; "
+                        "hb: relative residual, default 1e-8)")
+    parser.add_argument("--max-points", type=int, default=500)
+    parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat; "
+                        "./STEM_branches.h5 if that is a shipped example or not writable)")
+    parser.add_argument("--plot", help="save the frequency-energy plot to this image file")
+    parser.add_argument("--modes", help="sweep: modes to compute in parallel on Dask, e.g. 10-24 or 1,3,5-7")
+    parser.add_argument("--sweep", metavar="SWEEP.toml", help="sweep: model variants (and modes, energy_max, "
+                        "options) from a TOML file (docs/sweep.md)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="sweep: local worker processes (default: one per core)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="sweep: address of a running Dask scheduler, "
+                       "e.g. tcp://host:8786")
+    cli_exchange.add_export_arguments(parser)
+    args = parser.parse_args(argv)
+    if args.modes or args.sweep:
+        return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
+    return run_reporting_errors("nnm-solve", _run, args)
+
+
+def _output_file(args, notice):
+    """The HDF5 file results go to: --out (an importable model path becomes <stem>.h5), else FILE, or
+    ./<stem>_branches.h5 when FILE is a shipped example or cannot be written (``notice`` says so)."""
+    from ..files.importers import is_import_path
+
+    if args.out:
+        out = Path(args.out)
+        return out.with_suffix(".h5") if is_import_path(out) else out
+    out, reason = _default_out(args.file)
+    if reason:
+        print(f"nnm-solve: {reason}: " + notice.format(out=out), flush=True)
+    return out
+
+
+def _method_arguments(args):
+    """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
+    if args.method == "shooting":
+        if args.condensed:
+            raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
+        return dict(steps_per_period=args.steps_per_period, integrator=args.integrator, freq_tol=args.freq_tol)
+    given = [flag for flag, value, default in (("--steps-per-period", args.steps_per_period, 200),
+                                               ("--integrator", args.integrator, "newmark"),
+                                               ("--freq-tol", args.freq_tol, None)) if value != default]
+    if given:
+        raise NNMInputError(f"{', '.join(given)} belong(s) to --method shooting; harmonic balance has no time steps "
+                            f"(raise --harmonics instead)")
+    return dict(method="hb", harmonics=args.harmonics, condensed=args.condensed)
+
+
+def _run(args):
+    from . import exchange as cli_exchange
+    from ..files.io import save_branch
+    from ..driver.jobs import start_branch
+
+    model, ref = _load(args.file)
+    if args.list_modes:
+        list_modes(model, ref, args.count)
+        return 0
+    if args.mode is None or args.energy_max is None:
+        raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
+    out = _output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
+    if args.plot and not Path(args.plot).resolve().parent.is_dir():
+        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    cli_exchange.check_exports(args, model)
+    job = start_branch(model, args.mode, args.energy_max, tol=args.tol, max_points=args.max_points,
+                       energy_min=args.energy_min, **_method_arguments(args))
+    t0 = time.perf_counter()
+    try:
+        _progress(job, sys.stderr)
+    except KeyboardInterrupt:
+        sys.stderr.write("\ninterrupted: stopping after the current point and saving the points computed so far\n")
+        job.cancel()
+    try:
+        branch = job.result()
+    except KeyboardInterrupt:
+        branch = job.points()
+    except NNMInputError:
+        raise
+    except Exception as exc:  # a solver failure: keep what was computed
+        print(f"nnm-solve: the continuation failed: {exc}", file=sys.stderr)
+        branch = job.points()
+    dt = time.perf_counter() - t0
+    print(f"mode {args.mode}: {len(branch)} points in {dt:.1f} s, energy {branch.energy.min():.3e}.."
+          f"{branch.energy.max():.3e} J, frequency {branch.frequency_hz[0]:.5f} -> {branch.frequency_hz[-1]:.5f} Hz; "
+          f"{branch.status}: {branch.message}" if len(branch) else f"no point converged: {branch.message}")
+    for e in branch.events:
+        print(f"  {e['kind']:<12} at point {e['index']:>4}: E = {e['energy']:.4e} J, f = {e['frequency_hz']:.5f} Hz"
+              f"  ({e['detail']})")
+    print(accuracy_line(branch))
+    if len(branch):
+        name = save_branch(out, branch)
+        print(f"saved as /branches/{name} in {out}")
+        if args.plot:
+            from ..results.plotting import plot_fep
+            plot_fep(branch, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM {args.mode}")
+            print(f"FEP written to {args.plot}")
+        cli_exchange.write_exports(args, branch)
+    # a branch that ends by its own physics (escape to a saddle, a closed loop) is a result, not an error
+    return 1 if branch.status == "failed" else 0
+
+
+def _run_sweep(args, parser):
+    """nnm-solve FILE --modes ... : many branches (modes x variants) in parallel on Dask (nnm_solver.sweep)."""
+    from ..sweeps.dask_sweep import sweep
+    from ..sweeps.spec import load_sweep_file
+
+    if args.mode is not None:
+        raise NNMInputError("give --mode N for one branch or --modes for a sweep, not both")
+    if args.list_modes:
+        raise NNMInputError("--list-modes does not go with --modes / --sweep")
+    if args.workers is not None and args.workers < 1:
+        raise NNMInputError(f"--workers must be at least 1, got {args.workers}")
+    spec = load_sweep_file(args.sweep) if args.sweep else None
+    modes = args.modes if args.modes is not None else (spec.modes if spec else None)
+    energy_max = args.energy_max if args.energy_max is not None else (spec.energy_max if spec else None)
+    if modes is None or energy_max is None:
+        raise NNMInputError("a sweep needs --modes (e.g. 10-24) and --energy-max E, on the command line or as "
+                            "modes = ... and energy_max = ... in the sweep file")
+    options = dict(spec.options) if spec else {}
+    for key in ("steps_per_period", "tol", "max_points", "energy_min"):   # explicit flags win over the file
+        value = getattr(args, key)
+        if key not in options or value != parser.get_default(key):
+            if value is not None:
+                options[key] = value
+    model, _ = _load(args.file)
+    out = _output_file(args, "the branches will be saved to {out} (--out chooses another file)")
+    if args.plot and not Path(args.plot).resolve().parent.is_dir():
+        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    client = args.scheduler or args.workers
+    t0 = time.perf_counter()
+    try:
+        branches = sweep(model, modes, energy_max, variants=spec.variants if spec else None, client=client, out=out,
+                         progress=True, **options)
+    except KeyboardInterrupt:
+        sys.stderr.write(f"\ninterrupted: the finished branches are saved in {out}; run the same command again to "
+                         f"compute the others\n")
+        return 130
+    dt = time.perf_counter() - t0
+    print(f"{'branch':<28} {'points':>6}  {'energy (J)':<19}  {'frequency (Hz)':<21}  {'time':>7}  status")
+    for b in branches:
+        info = getattr(b, "sweep_info", {})
+        took = f"{info['seconds']:6.1f}s" if info.get("seconds") is not None else f"{info.get('source', ''):>7}"
+        span = (f"{b.energy.min():.2e}..{b.energy.max():.2e}  {b.frequency_hz[0]:9.5f} -> {b.frequency_hz[-1]:9.5f}"
+                if len(b) else f"{'-':<19}  {'-':<21}")
+        print(f"{b.name:<28} {len(b):>6}  {span}  {took}  {b.status}: {b.message}")
+    computed = sum(getattr(b, "sweep_info", {}).get("source") == "computed" for b in branches)
+    in_file = sum(getattr(b, "sweep_info", {}).get("source") == "file" for b in branches)
+    failed = sum(b.status == "failed" for b in branches)
+    print(f"{len(branches)} branches in {dt:.1f} s: {computed} computed, {in_file} already in {out}"
+          f"{f', {failed} failed' if failed else ''}; saved as /branches/<variant>:mode<N> in {out}")
+    if args.plot and any(len(b) for b in branches):
+        from ..results.plotting import plot_atlas
+        plot_atlas(branches, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM atlas")
+        print(f"atlas written to {args.plot}")
+    return 1 if failed else 0
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

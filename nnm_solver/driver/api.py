@@ -1,0 +1,353 @@
+r"""The NNM driver: one branch from a linear mode at low energy up to a target energy, for any method.
+
+    iter_nnm(model, mode, energy_max, method="shooting" | "hb", ...)   an iterator of converged Points
+    continue_nnm(...)                                                  the Branch: a loop over iter_nnm
+
+The driver checks the arguments, builds the method's periodic-orbit problem (orbits/) on the modal
+system (modal.py) from a nearly linear first orbit, and hands it to an ``NNMIterator`` (iterator.py),
+which runs the generic pseudo-arclength engine (continuation.py) and turns each converged point into a
+``Point`` (energy J, frequency Hz, period s, initial state, Floquet multipliers and stability).  A user's own stopping rule is a
+``break`` out of the loop; ``iterator.branch()`` then holds every point seen.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..results.branch import Point
+from ..continuation.engine import ContinuationSettings, pseudo_arclength
+from ..errors import NNMInputError
+from .iterator import NNMIterator
+from .tongue_skip import leaves_backbone
+from ..model.modal import modal_system
+from ..model.model import Model
+from ..orbits.condensed_hb import CondensedHBProblem
+from ..orbits.harmonic_balance import HBProblem
+from ..orbits.hb_basis import BASES, HBBasis
+from ..integrators.registry import INTEGRATORS, get_integrator
+from ..orbits.shooting import ShootingProblem
+from ..results.settings import HarmonicBalanceSettings, ShootingSettings
+
+__all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
+
+#: fraction of the linear potential energy carried by the springs at the first point
+START_NONLINEARITY = 1e-5
+
+#: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
+METHODS = ("shooting", "hb")
+
+#: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
+HILL_AUTO_SIZE = 1000
+
+_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None, integrator="newmark")
+_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None, condensed=False)
+
+
+def check_positive(name, value, integer=False):
+    """NNMInputError unless ``value`` is a positive finite number (an integer if ``integer``)."""
+    ok = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.number))
+    if not ok or isinstance(value, bool) or not np.isfinite(value) or value <= 0:
+        raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
+
+
+def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min):
+    """Validate the arguments every branch computation shares; returns the 0-based mode index."""
+    if not isinstance(model, Model):
+        raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
+    check_positive("energy_max", energy_max)
+    check_positive("tol", tol)
+    check_positive("max_points", max_points, integer=True)
+    if energy_min is not None:
+        check_positive("energy_min", energy_min)
+        if energy_min >= energy_max:
+            raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    return model.check_mode(mode)
+
+
+def start_amplitude(system, k, energy_max, energy_min=None):
+    """Modal amplitude a (sqrt(kg) m) of the first point along linear mode k (0-based).
+
+    With energy_min: the linear amplitude of that energy.  Otherwise nearly linear: the springs hold
+    START_NONLINEARITY of the linear potential w^2 a^2 / 2, and the energy stays below 1 % of energy_max.
+    """
+    w2 = system.omega2[k]
+    if energy_min is not None:
+        return math.sqrt(2.0 * energy_min / w2)
+    a_cap = math.sqrt(2.0 * energy_max * 1e-2 / w2)
+    b = np.abs(system.Bq[:, k])
+    C = np.abs(system.coefficients)
+    touched = b > 0
+    if not np.any(C * touched[:, None]) and not np.any((system.kinks[..., 0] != 0) * touched[:, None]):
+        return math.sqrt(2.0 * energy_max * 1e-6 / w2)
+    elements = system.elements
+
+    def share(a):  # bound on (nonlinear potential) / (linear potential) at amplitude a; grows with a
+        with np.errstate(over="ignore"):      # inf at huge energy_max amplitudes: above the threshold anyway
+            return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
+
+    lo, hi = 1e-30, a_cap
+    if share(hi) <= START_NONLINEARITY:
+        return a_cap
+    for _ in range(200):  # bisection in log a
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if share(mid) < START_NONLINEARITY else (lo, mid)
+        if hi / lo < 1 + 1e-12:
+            break
+    return hi
+
+
+def _method_options(method, options):
+    """Split the method-specific options; NNMInputError for an option of the other method."""
+    if method == "harmonic_balance":
+        method = "hb"
+    if method not in METHODS:
+        raise NNMInputError(f"method must be one of {METHODS}, got {method!r}")
+    own, other = (_SHOOTING_OPTIONS, _HB_OPTIONS) if method == "shooting" else (_HB_OPTIONS, _SHOOTING_OPTIONS)
+    for key in options:
+        if key not in own:
+            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'!r}" if key in other else ""
+            raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
+    return method, {**own, **options}
+
+
+def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
+    spp = opts["steps_per_period"]
+    check_positive("steps_per_period", spp, integer=True)
+    if spp < 8:
+        raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
+    odd = system.elements.odd
+    symmetric = odd if opts["symmetric"] is None else bool(opts["symmetric"])
+    if symmetric and not odd:
+        raise NNMInputError("symmetric=True (half-period shooting) needs odd nonlinear forces; "
+                            "use symmetric=False (or leave it unset) for elements with even powers or an asymmetric "
+                            "piecewise-linear law")
+    reversible = opts["reversible"]
+    if reversible is None and opts["symmetric"] is None and not symmetric:
+        reversible = True                      # even forces: full period, orbits still start at rest
+    integrator = get_integrator(opts["integrator"])
+    problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
+                              reversible=reversible, max_rel_period_step=opts["max_period_step"],
+                              integrator=integrator)
+    n = system.n
+    q0 = np.zeros(n)
+    q0[k] = a0
+    u0 = problem.pack(q0, np.zeros(n), integrator.linear_period(math.sqrt(system.omega2[k]), problem.spp))
+    p0 = problem.pack(q0 / a0, np.zeros(n), 0.0)
+    settings = ShootingSettings(steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
+                                reversible=problem.reversible, energy_max=energy_max, integrator=integrator.name,
+                                floquet=True if floquet is None else bool(floquet))
+    return problem, u0, p0, settings
+
+
+def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
+    basis, harmonics, samples = opts["basis"], opts["harmonics"], opts["samples"]
+    if basis is None:
+        basis = "odd" if system.elements.odd else "full"
+    if basis not in BASES:
+        raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
+    check_positive("harmonics", harmonics, integer=True)
+    if samples is not None:
+        check_positive("samples", samples, integer=True)
+        if samples < 2 * harmonics + 1:
+            raise NNMInputError(f"samples={samples} is too few for {harmonics} harmonics; use at least "
+                                f"{2 * harmonics + 1} (more than {4 * harmonics} avoids aliasing of the cubic)")
+    if basis == "odd" and not system.elements.odd:
+        raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers "
+                            "or an asymmetric piecewise-linear law")
+    condensed = opts["condensed"]
+    if not isinstance(condensed, (bool, np.bool_)):
+        raise NNMInputError(f"condensed must be True or False, got {condensed!r}")
+    hb = HBBasis(harmonics, basis, samples)
+    steps = dict(max_rel_step=opts["max_rel_step"], max_rel_period_step=opts["max_period_step"])
+    if condensed:                              # unknowns: the elements' deformations per harmonic (condensed_hb.py)
+        problem = CondensedHBProblem(system, k, hb, **steps)
+        u0, p0 = problem.start(a0)
+    else:
+        problem = HBProblem(system, k, hb, **steps)
+        A0 = np.zeros((len(hb), system.n))
+        A0[int(np.flatnonzero((hb.h == 1) & ~hb.sine)[0]), k] = a0
+        u0 = problem.pack(A0, problem.w_r)
+        p0 = np.zeros_like(u0)
+        p0[:-1] = A0.ravel() / a0
+    if floquet is None:
+        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
+    settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
+                                       energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed))
+    return problem, u0, p0, settings
+
+
+def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
+             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
+             locate_events=True, tongues="follow", error_estimate=True, freq_tol=None, _start=None, **method_options):
+    """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
+
+    Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
+    ``Point`` objects (energy J, frequency_hz Hz, period s, x0, v0, floquet, stable, ...); returns an
+    NNMIterator, whose ``branch()`` collects them (see ``continue_nnm`` for the arguments)::
+
+        it = nnm.iter_nnm(model, 1, 1e3)
+        for p in it:
+            if p.frequency_hz > 1.2 * it.points[0].frequency_hz:
+                break                       # a stopping rule of one's own
+        branch = it.branch()                # status 'stopped'
+
+    tongues : "follow" (the continuation follows the internal-resonance tongues it meets) or "skip"
+    (it jumps over them and returns the backbone; each tongue passed is listed in branch.tongues and
+    can be computed with ``continue_tongue``); see tongue_skip.py.  locate_events : locate folds and
+    stability changes between points (events.py).
+
+    Bad arguments raise NNMInputError here, before any computation.
+    """
+    if tongues not in ("follow", "skip"):
+        raise NNMInputError(f"tongues must be 'follow' or 'skip', got {tongues!r}")
+    method, opts = _method_options(method, method_options)
+    if tol is None:
+        tol = 1e-6 if method == "shooting" else 1e-8
+    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
+    for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step),
+                        ("max_period_step", max_period_step)):
+        check_positive(name, value)
+    if step is not None:
+        check_positive("step", step)
+    if freq_tol is not None:
+        check_positive("freq_tol", freq_tol)
+        if method != "shooting":
+            raise NNMInputError("freq_tol refines the time step of shooting; harmonic balance has none "
+                                "(raise harmonics instead)")
+    system = modal_system(model)
+    a0 = start_amplitude(system, k, energy_max, energy_min)
+    build = _shooting_problem if method == "shooting" else _hb_problem
+    problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
+                                      tol, energy_max, floquet)
+    if _start is not None:                     # start at a given orbit, towards another (continue_tongue)
+        (xa, va, Ta), (xb, vb, Tb) = _start
+        u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
+        p0 = problem.pack(system.to_modal(xb), system.to_modal(vb), Tb) - u0
+        problem.accept(u0, None)
+    cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
+                              max_angle=max_angle, max_correction=max_correction)
+    engine = pseudo_arclength(problem, u0, p0, cs, tol)
+    if freq_tol is not None:
+        settings = settings.replace(freq_tol=float(freq_tol))
+    it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
+                     locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol)
+    it._start_is_low = _start is None
+    return it
+
+
+def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
+                 stop=None, energy_min=None, symmetric=None, floquet=None, step=None, max_angle=0.35,
+                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
+                 method="shooting", tongues="follow", locate_events=True, integrator="newmark", error_estimate=True,
+                 freq_tol=None, **hb_options):
+    """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
+
+    Parameters
+    ----------
+    method : "shooting" (Newmark shooting, the seed paper's method; default) or "hb" (harmonic
+        balance; options ``harmonics``, ``samples``, ``basis``, ``condensed``, see ``nnm_solver.hb``).
+        ``condensed=True`` solves the HB equations condensed exactly onto the nonlinear elements'
+        deformations (orbits/condensed_hb.py): n_s (H + 1) / 2 + 2 unknowns whatever the model size, the
+        same orbits as the uncondensed HB away from exact internal resonances.
+    steps_per_period : time steps per period; shooting.  The frequency error is O(steps^-order) (order 2
+        for Newmark), largest for orbits with strong higher harmonics (branch.freq_error estimates it).
+        Rounded up to a multiple of 4 for the default quarter-period shooting of symmetric orbits (to an even
+        number for half-period shooting); the branch's settings record the number used.
+    integrator : the shooting's time integrator, one of ``INTEGRATORS``: "newmark" (default; the seed
+        paper's average-acceleration scheme, order 2), "gauss4" / "gauss6" (Gauss-Legendre collocation,
+        orders 4 and 6, about 2x / 3x Newmark's cost per step; see integrators.py).
+    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11); default 1e-6 (HB: 1e-8 on
+        the relative residual).
+    max_points : largest number of points kept.
+    on_point : optional callable(point: Point) called after each converged point.
+    stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
+    energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
+    symmetric : half-period shooting (valid for odd nonlinear forces; see orbits/shooting.py).  Default:
+        True when every element's force is odd, else full-period shooting (then ``reversible``
+        defaults to True: orbits start at rest).
+    reversible : orbits starting at rest (v0 = 0, default with symmetric) or general orbits with a
+        phase condition (False); see orbits.shooting.ShootingProblem.
+    floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when
+        the Hill matrix has at most HILL_AUTO_SIZE rows).
+    step : first step length, relative to the orbit (default 0.5: half the starting amplitude); steps
+        are measured in the balanced norm of continuation.py (state relative to its norm, period
+        relative to itself).
+    max_angle : largest turn (rad) of the branch tangent between two points.
+    max_correction : largest corrector displacement, relative to the step length.
+    max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
+    max_period_step : largest relative change of the period between two points (keeps the
+        continuation from stepping over the entrance of internal-resonance tongues).
+    tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
+        each computable with ``continue_tongue``).
+    locate_events : locate folds and stability changes between points (default True).
+    error_estimate : estimate each point's relative frequency error from the time discretisation
+        (branch.freq_error; shooting, by step doubling: about 2 residual evaluations per point).
+    freq_tol : if given (e.g. 1e-6), the steps per period are raised wherever a point's estimated
+        frequency error exceeds it, and the point is computed again (branch.steps has each point's).
+
+    Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
+    point computed before a failure is kept.
+    """
+    if method == "shooting":
+        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible,
+                    integrator=integrator, **hb_options)
+    elif integrator != "newmark":
+        raise NNMInputError("integrator= belongs to method='shooting' (harmonic balance has no time steps)")
+    else:
+        opts = dict(hb_options)
+    it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
+                  floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
+                  max_rel_step=max_rel_step, max_period_step=max_period_step, tongues=tongues,
+                  locate_events=locate_events, error_estimate=error_estimate, freq_tol=freq_tol, **opts)
+    while True:
+        if stop is not None and stop.is_set():
+            it.cancel()
+        try:
+            point = next(it)
+        except StopIteration:
+            return it.branch()
+        if on_point is not None:
+            on_point(point)
+
+
+def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
+    """The internal-resonance tongue ``tongue`` (one of ``branch.tongues``, or its index) as its own branch.
+
+    branch : a backbone computed with ``continue_nnm(..., tongues="skip")`` (shooting).  The
+    continuation restarts at the tongue's entry orbit, heads into the tongue and follows it through
+    its turning points until it is back on the backbone above the entry energy (message: where), closes
+    a loop, or reaches energy_max (default: 100 x the entry energy).  Points are labelled by their
+    harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
+    branch's own steps_per_period, symmetric and tol are the defaults).
+    """
+    tongue = branch.pick("tongues", tongue)
+    if "entry_x0" not in tongue:
+        raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
+    s = branch.settings
+    if s.method != "shooting":
+        raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
+    for key in ("steps_per_period", "symmetric", "tol", "integrator"):
+        options.setdefault(key, getattr(s, key))
+    E_in = float(tongue["entry_energy"])
+    energy_max = 100 * E_in if energy_max is None else energy_max
+    start = ((np.asarray(tongue["entry_x0"]), np.asarray(tongue["entry_v0"]), tongue["entry_period"]),
+             (np.asarray(tongue["inside_x0"]), np.asarray(tongue["inside_v0"]), tongue["inside_period"]))
+    tol = options.pop("tol")
+    it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
+                  _start=start, **options)
+    entry = Point(E_in, tongue["entry_frequency_hz"], tongue["entry_period"], start[0][0], start[0][1],
+                  np.full(2 * branch.model.n, np.nan, dtype=complex), True)
+    last, inside = E_in, False
+    for p in it:
+        inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
+        if inside and p.energy > E_in and p.energy > last and not leaves_backbone(p, entry):
+            it.cancel(f"back on the backbone at E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz, above the "
+                      f"tongue's entry at {E_in:.6g} J")
+            break
+        last = p.energy
+    out = it.branch()
+    if out.status == "cancelled":
+        out.status = "done"
+    out.name = f"{branch.name or f'NNM {branch.mode}'}: {tongue['label']} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
+    return out

@@ -1,0 +1,336 @@
+r"""The iteration over one branch's converged orbits: ``NNMIterator`` (created by ``iter_nnm``).
+
+Each ``next()`` runs the pseudo-arclength engine (continuation.py) to the next converged orbit and
+turns it into a ``Point``: energy, frequency, initial state, Floquet multipliers and stability
+(floquet.py), harmonic label (tongue_skip.py).  Around it: a step that jumped onto another branch (its
+mid-step point off the interpolant of its ends, locator.Locator.jumped) or whose events cannot be located is
+refused (the engine halves it), the events between consecutive points are located (events.py), the branch is
+cut exactly at energy_max, the stop reasons are checked (stops.py), and in ``tongues="skip"`` mode the
+internal-resonance tongues are jumped over or traversed unseen.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..results.branch import Branch, Point
+from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
+from ..continuation.engine_driver import EngineDriver
+from ..stability.events import Locator, locate_between
+from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
+from ..stability.locator import event_rtol
+from .refinement import StepRefinement
+from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
+from ..threads import blas_limited
+from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record
+
+#: steps refused in a row when an event inside them cannot be located (the step is halved each time)
+MAX_REFUSALS = 3
+
+__all__ = ["NNMIterator"]
+
+
+class NNMIterator(StepRefinement):
+    """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
+
+    Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
+    The iteration ends by itself at energy_max, at max_points, when the branch returns to low
+    energy, escapes, closes a loop, or when the continuation cannot go on; ``status`` and ``message``
+    then say why (stops.py lists the statuses).  ``cancel()`` (or a ``break`` followed by ``branch()``) ends it
+    early ('cancelled' / 'stopped').  ``branch()`` returns the Branch of every point so far.
+    """
+
+    def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
+                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None):
+        self.model = model
+        self.freq_tol = None if not freq_tol else float(freq_tol)
+        self._refine_pause = 0
+        self.refine_failures = 0
+        self.error_estimate = bool(error_estimate) or self.freq_tol is not None
+        self.mode = int(mode)
+        self.settings = settings
+        self.energy_max = float(energy_max)
+        self.max_points = int(max_points)
+        self.points = []
+        self.status = "running"
+        self.message = ""
+        self._problem = problem
+        self._system = system
+        self._w_r = float(np.sqrt(system.omega2[mode - 1]))
+        self._loops = LoopDetector(mirror=system.elements.odd)
+        self._last = None
+        self._prev = None              # (ContinuationPoint, Point, dE/ds) of the last point
+        self._cs, self._tol = continuation, tol
+        self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
+        self.events = []
+        self._landed = False
+        self.tongue_mode = tongues
+        self.tongues = []
+        self._tongue = None            # the tongue being traversed (skip mode)
+        self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
+        self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
+        self._refusals = 0             # steps refused in a row because an event in them was not located
+        # the engine's next point, computed while the last point's multipliers are (in the worker thread)
+        self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
+        self._engine = EngineDriver(engine, problem, continuation, tol, launch=(
+            (lambda cp: problem.multipliers_later(cp.u, cp.tangent)) if self._ahead else None))
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if self.status != "running":
+            raise StopIteration
+        N = len(self.points)
+        with blas_limited():
+            command = None
+            while True:
+                kind, cp = self._engine.next(command, self._prev[0] if self._prev else None)
+                if kind == "stop":
+                    self._failed(cp)
+                    raise StopIteration
+                command = None
+                point, (q0, v0, T) = self._record(cp, self._problem, later=self._ahead)
+                if self._refined(cp, point):
+                    continue
+                if self.tongue_mode == "skip" and self._hidden(cp, point):
+                    continue
+                if self._ahead:             # the next step runs while this point's eigenproblem does
+                    self._engine.ahead()
+                self._settle(point)
+                if not self.locate:
+                    break
+                located = self._locate(cp, point, (q0, v0, T))
+                if located is not None:
+                    point, (q0, v0, T) = located
+                    break
+                command = REFUSE                # an event could not be located: a shorter step
+            if self.tongue_mode == "skip":
+                self._last_backbone = (cp, point)
+            self._estimate_error(point)
+            self._release(point)
+        loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
+        if loop is not None:
+            p = self.points[loop]
+            self._finish("closed_loop", f"closed loop: from point {N - 1} on the continuation re-traverses points "
+                                        f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
+                                        f"one lap is kept")
+            raise StopIteration
+        self.points.append(point)
+        E, E0 = point.energy, self.points[0].energy
+        ratio = min(self._turning_ratio(q0, v0), getattr(point, "_restoring", 1.0))
+        if ratio < ESCAPE_RATIO:
+            self._finish("escape", escape_message(point, ratio))
+        elif E >= self.energy_max or self._landed:
+            self._finish("done", f"reached energy_max = {self.energy_max:g} J")
+        elif N + 1 >= self.max_points:
+            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
+                                       f"raise max_points to go on")
+        elif N + 1 > 3 and E < 0.5 * E0 and self._start_is_low:
+            self._finish("done", "the branch returned to low energy")
+        self._last = (q0, v0)
+        return point
+
+    def _settle(self, point):
+        """Wait for the multipliers of a point recorded with later=True and set its floquet, stable, _collision."""
+        job = getattr(point, "_spectrum", None)
+        if job is not None:
+            mu, point._collision = job()
+            point.floquet = sort_multipliers(mu)
+            point.stable = is_stable(point.floquet, STABILITY_TOL)
+            point._spectrum = None
+
+    def _hidden(self, cp, point):
+        """Skip mode: True if ``point`` is not a backbone point to return (the continuation jumped over
+        a tongue, or is traversing one it could not jump over)."""
+        t = self._tongue
+        if t is not None:                       # traversing a tongue: back on the backbone above its entry?
+            rising = point.energy > t["last_energy"]
+            t["last_energy"] = point.energy
+            trend_ok = (point.frequency_hz - t["entry_frequency_hz"]) * t["trend"] >= -1e-4 * t["entry_frequency_hz"]
+            if rising and trend_ok and point.energy > t["entry_energy"] and not leaves_backbone(point, t["backbone"]):
+                t.update(exit_energy=point.energy, exit_frequency_hz=point.frequency_hz)
+                self._tongue = None
+                self._prev = None              # no event is located across the tongue
+                return False
+            t["hidden_points"] += 1
+            if t["hidden_points"] > self.max_points:
+                self._failed(f"the {t['label']} tongue at {t['entry_energy']:.4g} J could not be passed "
+                             f"({t['hidden_points']} points inside it)")
+                raise StopIteration
+            return True
+        if self._last_backbone is None or not leaves_backbone(point, self._last_backbone[1]):
+            return False
+        bpoint = self._last_backbone[1]
+        trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
+        if self._skip(cp, point):
+            return True
+        t = self.tongues[-1]
+        # the backbone resumes beyond the tongue with its frequency moving the same way as before it
+        t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint, trend=float(trend))
+        self._tongue = t
+        return True
+
+    def _skip(self, cp, point):
+        """Jump over the tongue that ``point`` entered (tongue_skip.py); True if the continuation now
+        restarts beyond it."""
+        bcp, bpoint = self._last_backbone
+        Q = self._problem.modal_orbit(cp.u)
+        k = harmonic_label(Q)[1] if Q is not None else 1
+        tongue = tongue_record(self._system, Q, k, bpoint, point, len(self.points) - 1)
+        self._last_backbone = None
+        E_base = max(bpoint.energy, point.energy)
+        jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
+        previous = self.tongues[-1] if self.tongues else None
+        if previous is not None and same_tongue(previous, tongue):
+            # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
+            previous["reentries"] = previous.get("reentries", 0) + 1
+            previous.pop("exit_energy", None)
+            previous.pop("exit_frequency_hz", None)
+            tongue = previous
+        else:
+            self.tongues.append(tongue)
+        if jumped is None:
+            tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
+            return False
+        u, J, delta = jumped
+        tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)))
+        self._engine.restart(pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol))
+        self._prev = None          # no events are located across the jump
+        self._refusals = 0
+        return True
+
+    def _turning_ratio(self, q0, v0):
+        """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
+        if np.linalg.norm(v0) > 1e-6 * self._w_r * np.linalg.norm(q0):
+            return 1.0
+        return restoring_ratio(self._system, q0)
+
+    def _failed(self, reason):
+        N = len(self.points)
+        ratio = min(self._turning_ratio(*self._last), getattr(self.points[-1], "_restoring", 1.0)) if N else 1.0
+        if ratio < 0.1:
+            self._finish("escape", escape_message(self.points[-1], ratio) +
+                         f" (the continuation could not go further: {reason})")
+            return
+        where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
+                 f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
+        self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
+                               f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
+
+    def _locate(self, cp, point, state):
+        """Locate the events between the previous point and this one (events.py); cut the branch at
+        energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
+        could not be located and the step should be refused (at most MAX_REFUSALS times in a row)."""
+        slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
+        prev, self._prev = self._prev, (cp, point, slope)
+        if prev is None:
+            return point, state
+        pcp, ppoint, pslope = prev
+        loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step,
+                      rtol=event_rtol(getattr(ppoint, "_disc_error", ppoint.freq_error)))
+        loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
+        if self._ahead:                    # the engine went on to the next point: its copy's state at this one again
+            loc.problem.accept(cp.u, cp.jacobian)
+        if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
+            loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
+        for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
+            if not np.isnan(pt.floquet).any():
+                loc.spectra[float(sigma)] = (pt.floquet, getattr(pt, "_collision", None))
+        if self._refusals < MAX_REFUSALS and cp.step > 4 * self._cs.step_min and loc.jumped():
+            # the step's corrector landed on another branch alongside (near a tongue): half the step
+            self._refusals += 1
+            self._prev = prev
+            return None
+
+        def record(sigma):
+            u, J, p = loc.at(sigma)
+            loc.refresh(u, J)
+            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
+                                known=loc.spectra.get(float(sigma)))[0]
+
+        events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
+                                     self.energy_max)
+        if (any(not e["located"] for e in events) and self._refusals < MAX_REFUSALS
+                and cp.step > 4 * self._cs.step_min):
+            # the corrector failed inside the step: it jumped over a feature of the branch (e.g. a fold and a
+            # branch point, or three folds, next to each other); the engine retries with half the step
+            self._refusals += 1
+            self._prev = prev
+            return None
+        self._refusals = 0
+        self.events.extend(events)
+        if end is not None:
+            u, J, p = loc.at(end[0])
+            if J is None:                  # (not kept by the locator) the last point's error estimate needs it
+                J = loc.problem.jacobian(u)[1]
+                end[1]._solution = (loc.problem, u, J, p, None)
+            self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
+            self._landed = True
+            return end[1], self._problem.state(u)
+        return point, state
+
+    def _record(self, cp, prob, known=None, later=False):
+        """The Point of a converged ContinuationPoint and its modal state (q0, v0, T).  known : optional (sorted
+        multipliers, collision coordinates) already computed at it (e.g. by event location).  later : the
+        multipliers are computed in the worker threads (problem.multipliers_later, started by the engine driver);
+        _settle waits for them."""
+        sys_ = self._system
+        q0, vq0, T = prob.state(cp.u)
+        x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
+        collision = job = None
+        if self.settings.floquet and later:     # started when the engine gave the point (EngineDriver.launch)
+            job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
+            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
+        elif self.settings.floquet and known is not None:
+            mu, collision = known
+            stable = is_stable(mu, STABILITY_TOL)
+        elif self.settings.floquet:
+            mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
+            stable = is_stable(mu, STABILITY_TOL)
+            collision = getattr(prob, "collision", None)
+        else:
+            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
+        A = prob.coefficients(cp.u)
+        Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
+        label, k, frac, _ = harmonic_label(Q)
+        point = Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0,
+                      v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
+                      coefficients=None if A is None else sys_.to_physical(A), label=label)
+        point.steps = int(getattr(prob, "spp", 0))
+        point._collision = collision          # the Krein locator's coordinates
+        point._spectrum = job
+        point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
+        point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
+        point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
+        return point, (q0, vq0, T)
+
+    def _finish(self, status, message):
+        self.status, self.message = status, message
+        self._engine.close()
+
+    def cancel(self, message=""):
+        """End the iteration now (status 'cancelled'); the points so far are kept."""
+        if self.status == "running":
+            self._finish("cancelled", message or f"cancelled after {len(self.points)} points")
+
+    def branch(self):
+        """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
+        if self.status == "running":
+            self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
+        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
+        message = self.message
+        if self.freq_tol:
+            over = [p for p in self.points if p.freq_error > self.freq_tol]
+            steps = [p for p in over if getattr(p, "_disc_error", 0.0) > self.freq_tol]
+            if steps:
+                message += (f"; {len(steps)} points exceed freq_tol = {self.freq_tol:g} (the finer step did not "
+                            f"converge next to them, e.g. near a fold: see freq_error)")
+            if len(over) > len(steps):
+                message += (f"; {len(over) - len(steps)} points exceed freq_tol = {self.freq_tol:g} because of the "
+                            f"corrector's tolerance: lower tol (now {self._tol:g})")
+        if not self.settings.floquet and self.points:
+            message += ("; stability was not computed (floquet off: the points are not known to be stable, and "
+                        "stability changes and branch points are not detected; pass floquet=True)")
+        return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
+                                  status=self.status, message=message,
+                                  events=self.events if self.locate else None, tongues=tongues)

@@ -1,0 +1,162 @@
+r"""Internal-resonance tongues met during a continuation: point labels, skipping, and tongue branches.
+
+Label.  Each converged orbit's harmonic content is measured in mass-normalised modal coordinates
+(the amplitude of harmonic k is |a_k| with q(t) = sum Re(a_k e^{i k w t}); analysis/harmonics.py
+explains the weighting).  An orbit whose strongest harmonic k >= 2 carries at least RESONANCE_FRACTION
+of the amplitude is labelled ``"tongue k:1"`` (a k:1 internal resonance with a mode near k times its
+frequency), otherwise ``"backbone"``.
+
+Skip (``continue_nnm(..., tongues="skip")``).  When the continuation steps from a backbone orbit into
+a tongue, the tongue is recorded (ratio k:1, the partner mode: the linear mode closest to the k-th
+harmonic's shape, entry energy and frequency, and the entry orbit) and the continuation jumps over
+it: from the last backbone orbit, energy targets E_b (1 + delta), delta = 2 %, 5 %, 10 %, 20 %, 50 %,
+are tried; the guess is the backbone orbit rescaled to that energy with its period extrapolated along
+the backbone's tangent, corrected on the hyperplane tangent to the energy level set (so the energy
+stays ~E_t); the jump is accepted when the corrected orbit is labelled ``backbone`` again.  The
+continuation then restarts there, with the backbone's direction.  If no target works, the branch
+follows the tongue (and says so in the tongue record).
+
+A tongue as its own branch (``continue_tongue(branch, tongue)``): the continuation restarts at the
+tongue's entry orbit towards the tongue and follows it through its turning points until it is back
+on the backbone above the entry energy (or closes a loop, or reaches energy_max).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..analysis.harmonics import RESONANCE_FRACTION
+from ..continuation.engine import CorrectorFailure, correct
+from ..fourier import fourier_coefficients
+
+__all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION", "leaves_backbone", "same_tongue", "tongue_record"]
+
+#: highest harmonic looked at for labels
+LABEL_HARMONICS = 25
+
+#: relative energy jumps tried over a tongue
+JUMPS = (0.02, 0.05, 0.1, 0.2, 0.5)
+
+#: skip mode: a harmonic k >= 2 growing to this fraction of the amplitude marks a tongue's entrance
+SKIP_FRACTION = 0.05
+
+
+def harmonic_label(Q, n=LABEL_HARMONICS):
+    """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof)."""
+    if Q is None:
+        return "backbone", 1, 0.0, None
+    amps = np.linalg.norm(fourier_coefficients(Q, n), axis=1)
+    tot = float(np.sum(amps[1:]))
+    if not tot > 0:
+        return "backbone", 1, 0.0, amps
+    fr = amps / tot
+    k = int(np.argmax(fr[2:]) + 2) if len(fr) > 2 else 1
+    if k > 1 and fr[k] >= RESONANCE_FRACTION:
+        return f"tongue {k}:1", k, float(fr[k]), amps
+    return "backbone", k, float(fr[k]), amps
+
+
+def partner_mode(system, Q, k):
+    """1-based linear mode whose shape is closest (MAC, modal coordinates are mass-normalised) to the
+    k-th harmonic of the modal orbit Q, and that MAC."""
+    a = fourier_coefficients(Q, k)[k]
+    A = np.column_stack([a.real, a.imag])
+    U, S, _ = np.linalg.svd(A, full_matrices=False)
+    shape = U[:, 0]
+    m = shape ** 2 / max(shape @ shape, 1e-300)        # MAC with each unit modal vector
+    r = int(np.argmax(m))
+    return r + 1, float(m[r])
+
+
+def tongue_record(system, Q, k, bpoint, point, entry_index):
+    """The record of a k:1 tongue entered from the backbone point ``bpoint`` (index entry_index) into ``point``
+    (Q: its modal orbit): ratio, partner mode (partner_mode) and the entry and inside orbits."""
+    mode, mac = partner_mode(system, Q, k) if Q is not None else (0, float("nan"))
+    return dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
+                entry_index=entry_index, entry_energy=bpoint.energy, entry_frequency_hz=bpoint.frequency_hz,
+                entry_period=bpoint.period, entry_x0=np.asarray(bpoint.x0).tolist(),
+                entry_v0=np.asarray(bpoint.v0).tolist(), inside_x0=np.asarray(point.x0).tolist(),
+                inside_v0=np.asarray(point.v0).tolist(), inside_period=point.period)
+
+
+def harmonic_content(point):
+    """(k, fraction) of the strongest harmonic k >= 2 of a point's orbit (measured when it was recorded)."""
+    return getattr(point, "_content", (1, 0.0))
+
+
+def leaves_backbone(point, bpoint):
+    """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy turned back (a
+    backbone continued in energy has no fold), or a harmonic k >= 2 carries SKIP_FRACTION of its amplitude and
+    grew by half since the last backbone point."""
+    if point.energy < bpoint.energy:
+        return True
+    k, frac = harmonic_content(point)
+    kb, frac_b = harmonic_content(bpoint)
+    return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
+
+
+def same_tongue(a, b):
+    """Is tongue record b the tongue a entered again?  Same order and partner mode, entry frequency within
+    0.1 %, and b's entry at most 10 % above a's exit (or a's entry when it has no exit)."""
+    E_out = a.get("exit_energy", a["entry_energy"])
+    return (a["order"] == b["order"] and a["partner_mode"] == b["partner_mode"]
+            and abs(b["entry_frequency_hz"] / a["entry_frequency_hz"] - 1) < 1e-3
+            and b["entry_energy"] <= 1.1 * E_out)
+
+
+class TongueSkipper:
+    """Jumps over a tongue from the last backbone point (see the module docstring)."""
+
+    def __init__(self, problem, settings, tol):
+        self.problem = problem
+        self.settings = settings
+        self.tol = tol
+
+    def jump(self, u_b, p_b, E_b, E_base=None, k=None):
+        """A backbone orbit u beyond the tongue, from the backbone point u_b (tangent p_b, energy E_b):
+        energies E_base (1 + delta) are tried (E_base >= E_b: the highest energy seen at the tongue's
+        entrance); the landing orbit must have less than SKIP_FRACTION in harmonic k.  Returns
+        (u, J, delta) or None."""
+        E_base = E_b if E_base is None else E_base
+        prob = self.problem
+        w = prob.scale(u_b) if hasattr(prob, "scale") else np.ones(len(u_b))
+        slope = (prob.energy(u_b + 1e-6 * p_b) - prob.energy(u_b - 1e-6 * p_b)) / 2e-6
+        for delta in JUMPS:
+            E_t = E_base * (1 + delta)
+            guess = self._guess(u_b, p_b, slope, E_b, E_t)
+            if guess is None:
+                continue
+            g = prob.energy_gradient(guess)
+            row = g / (w * w)                          # correct() constrains (w^2 row)^T (u - guess) = 0
+            try:
+                u, J, _, _ = correct(prob, guess, row / np.linalg.norm(w * row), self.settings, self.tol, w)
+            except CorrectorFailure:
+                continue
+            label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
+            tot = np.sum(amps[1:]) if amps is not None else 0.0
+            frac_k = amps[k] / tot if (k is not None and amps is not None and tot > 0 and k < len(amps)) else frac
+            if label == "backbone" and frac_k < SKIP_FRACTION and prob.energy(u) > E_base:
+                return u, J, delta
+        return None
+
+    def _guess(self, u_b, p_b, slope, E_b, E_t):
+        """The backbone orbit scaled to energy E_t, its period (last entry) moved along the tangent."""
+        prob = self.problem
+        u = u_b.copy()
+        lo, hi = 0.0, 1.0                               # log of the amplitude factor c with E(c u) = E_t
+        while True:
+            trial = u_b.copy()
+            trial[:-1] *= np.exp(hi)
+            if prob.energy(trial) >= E_t or hi > 10:
+                break
+            hi *= 2
+        if hi > 10:
+            return None
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            trial = u_b.copy()
+            trial[:-1] *= np.exp(mid)
+            lo, hi = (mid, hi) if prob.energy(trial) < E_t else (lo, mid)
+        u[:-1] *= np.exp(hi)
+        if slope != 0:
+            u[-1] = u_b[-1] + p_b[-1] * (E_t - E_b) / slope
+        return u

@@ -1,0 +1,144 @@
+"""The time integrators of the shooting method, by name: one object per scheme with the same four calls.
+
+``INTEGRATORS`` lists the names; "newmark" (average acceleration, order 2, the seed paper's scheme) is
+first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legendre collocation methods
+(orders 4 and 6, symplectic and symmetric; gauss.py).  Each integrator gives, for a ModalSystem:
+
+    state(system, q0, v0, h, nsteps)              -> (q, v, ok)
+    record(system, q0, v0, h, nsteps)             -> (Q, V, ok)     every state
+    sensitivity(system, q0, v0, h, nsteps, all, velocities)
+                                                  -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
+                                                     (velocities=False: Sv is None, not assembled)
+    sensitivity_factors(system, q0, v0, h, nsteps) -> (q, v, dq_N/dq0 as diagonal + low rank, ok) or None
+    linear_period(omega, steps_per_period)        -> T (s) whose discrete orbit closes for frequency omega
+    relative_error(y)                             -> relative frequency error of a harmonic with h w = y
+
+All share the low-rank treatment of the localised nonlinearity (the implicit solve is on the element
+deformations only), so a step costs O(n n_s) for every scheme.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import gauss, newmark
+from ..errors import NNMInputError
+
+__all__ = ["INTEGRATORS", "Integrator", "get_integrator", "record_orbit"]
+
+
+class Integrator:
+    """A one-step scheme for q'' = -Omega^2 q - Bq^T g(Bq q) with s implicit stages (Newmark: s = 1).
+
+    name : the name users pass (``continue_nnm(..., integrator=name)``); order : the convergence order
+    of the frequency error (2 for Newmark, 2s for Gauss); stages : implicit stages per step (the cost
+    of one step relative to Newmark, roughly).
+    """
+
+    def __init__(self, name, order, stages, description):
+        self.name, self.order, self.stages, self.description = name, order, stages, description
+
+    def __repr__(self):
+        return f"Integrator({self.name!r}, order {self.order})"
+
+    # -- the angle of one step of the linear discrete map: 2 arg P(i h w) (gauss.rotation)
+    def rotation(self, y):
+        return gauss.rotation(y, self.stages)
+
+    def relative_error(self, y):
+        """Relative frequency error of a harmonic resolved with h w = y per step (y < pi): a linear mode of
+        frequency w is integrated at the frequency rotation(y) / h, so the error is rotation(y) / y - 1
+        (negative: the discrete motion is slower; e.g. Newmark -y^2 / 12)."""
+        y = np.asarray(y, dtype=float)
+        safe = np.where(y > 0, y, 1.0)
+        return np.where(y > 0, self.rotation(safe) / safe - 1.0, 0.0)
+
+    def linear_period(self, omega, steps_per_period):
+        """Period T (s) for which the discrete map of a linear mode of frequency omega (rad/s) closes
+        after exactly steps_per_period steps: N rotation(omega T / N) = 2 pi."""
+        N = int(steps_per_period)
+        if self.stages == 1:                     # 2 atan(w h / 2) = 2 pi / N
+            return 2.0 * N / omega * math.tan(math.pi / N)
+        T = 2 * math.pi / omega
+        for _ in range(20):                      # Newton on N rotation(w T / N) - 2 pi (rotation' ~ 1)
+            y = omega * T / N
+            r = float(self.rotation(y)) - 2 * math.pi / N
+            dy = 1e-7 * y
+            dr = (float(self.rotation(y + dy)) - float(self.rotation(y - dy))) / (2 * dy)
+            T -= r / dr * N / omega
+            if abs(r) < 1e-16:
+                break
+        return T
+
+    # -- sweeps
+    def state(self, system, q0, v0, h, nsteps):
+        raise NotImplementedError  # pragma: no cover
+
+    def record(self, system, q0, v0, h, nsteps):
+        raise NotImplementedError  # pragma: no cover
+
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        raise NotImplementedError  # pragma: no cover
+
+    def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        """(q, v, dq_N/dq0 as a lowrank.DiagonalPlusLowRank, ok), or None where the scheme does not keep that
+        form (then use sensitivity)."""
+        return None
+
+
+class _Newmark(Integrator):
+    def state(self, system, q0, v0, h, nsteps):
+        return newmark.sweep_state(q0, v0, h, nsteps, *system.kernel)
+
+    def record(self, system, q0, v0, h, nsteps):
+        return newmark.sweep_record(q0, v0, h, nsteps, *system.kernel)
+
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        return newmark.sweep_sensitivity(q0, v0, h, nsteps, *system.kernel, all_columns, velocities)
+
+    def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        return newmark.sweep_factors(q0, v0, h, nsteps, *system.kernel)
+
+
+class _Gauss(Integrator):
+    def _args(self, system, h):
+        k = gauss.constants(system, h, self.stages)
+        return (*system.kernel, k.C1, k.Cc, k.F, k.G, k.b, k.bbar, k.c)
+
+    def state(self, system, q0, v0, h, nsteps):
+        return gauss.sweep_state(q0, v0, h, nsteps, *self._args(system, h))
+
+    def record(self, system, q0, v0, h, nsteps):
+        return gauss.sweep_record(q0, v0, h, nsteps, *self._args(system, h))
+
+    def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
+
+
+_REGISTRY = {
+    "newmark": _Newmark("newmark", 2, 1, "Newmark average acceleration (trapezoidal rule), order 2: the seed paper's scheme"),
+    "gauss4": _Gauss("gauss4", 4, 2, "2-stage Gauss-Legendre collocation, order 4, symplectic"),
+    "gauss6": _Gauss("gauss6", 6, 3, "3-stage Gauss-Legendre collocation, order 6, symplectic"),
+}
+
+#: the available integrator names (a contract): "newmark" first, the default
+INTEGRATORS = tuple(_REGISTRY)
+
+
+def get_integrator(name):
+    """The Integrator called ``name`` (one of INTEGRATORS); NNMInputError otherwise."""
+    if isinstance(name, Integrator):
+        return name
+    try:
+        return _REGISTRY[name]
+    except (KeyError, TypeError):
+        raise NNMInputError(f"integrator must be one of {', '.join(INTEGRATORS)}; got {name!r}") from None
+
+
+def record_orbit(system, q0, v0, duration, nsteps, integrator="newmark"):
+    """States of ``system`` (a ``ModalSystem``) from the modal state (q0, v0) at nsteps + 1 equally spaced
+    times over ``duration`` (s), integrated with ``integrator`` (a name of INTEGRATORS; default Newmark):
+    (Q, V, ok), Q and V (nsteps + 1, n)."""
+    return get_integrator(integrator).record(system, np.ascontiguousarray(q0, dtype=float),
+                                             np.ascontiguousarray(v0, dtype=float), duration / nsteps, int(nsteps))

@@ -1,0 +1,256 @@
+r"""Harmonic balance condensed exactly onto the nonlinear elements' coordinates.
+
+The uncondensed equations (``harmonic_balance.py``), in mass-normalised modal coordinates, are for
+every mode k and basis function j (harmonic h_j, frequency omega in rad/s)
+
+    (w_k^2 - h_j^2 omega^2) A[j, k] + b_k . F[j] = 0,      F = P g(E D),   D[j] = sum_k b_k A[j, k]
+
+with b_k = B phi_k (n_s,) the element deformations of mode k (column k of Bq) and D (N_b, n_s) the
+Fourier coefficients of the element deformations d = B x (m).  The force coefficients F (N) depend on
+the amplitudes only through D, so every amplitude but the followed mode r's fundamental is
+
+    A[j, k] = -b_k . F[j] / (w_k^2 - h_j^2 omega^2)
+
+and D obeys n_s equations per basis function (the dynamic flexibility of the linear structure at
+the elements, G_j, times the element forces):
+
+    R_D[j] = D[j] - delta_{j,cos 1} a b_r + G_j(omega) F[j] = 0,
+    G_j(omega) = sum_{k, not (k = r and h_j = 1)} b_k b_k^T / (w_k^2 - h_j^2 omega^2)     (m/N)
+    R_a[j]  = (w_r^2 - omega^2) alpha_j + b_r . F[j] = 0,   j with h_j = 1
+
+with alpha_{cos 1} = a (sqrt(kg) m) the followed mode's fundamental amplitude (alpha_{sin 1} = 0 in
+the full basis: its time origin, the phase condition).  Unknowns: D, a and omega, N_b n_s + 2 numbers
+whatever the number of modes n; the eliminated amplitudes are recovered exactly by the formula above,
+so the condensed and the uncondensed equations have the same solutions (the same branch to round-off)
+wherever no h_j omega equals a w_k (an exact internal resonance, where the uncondensed amplitude A[j, k]
+is free and the condensed equations have a pole).
+
+The linear part (``LinearPart``) is the modes' (w_k^2, b_k, phi_k) and, for a truncated modal basis of a
+large model (``truncated_linear_part``), the residual flexibility of the modes left out,
+R0 + Omega^2 R1 with R0 = B (K^-1 - sum phi phi^T / w^2) B^T and R1 = B (K^-1 M K^-1 - sum phi phi^T / w^4) B^T:
+exact at Omega = 0, relative error O((Omega / w_cut)^4) for the left-out modes above w_cut.
+
+Unknowns (scaled, all in m): u = [D.ravel(); a beta; omega / w_r], beta = |b_r| (1 if mode r does not
+deform the elements); residuals [R_D; R_a beta / w_r^2] in m.  Each evaluation costs
+O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..stability.floquet import without_nearest_to_one
+from .harmonic_balance import HBProblem
+from .hill import hill_multipliers
+
+__all__ = ["LinearPart", "CondensedHBProblem"]
+
+
+class LinearPart:
+    """The linear structure as seen from its nonlinear elements.
+
+    omega2 (m,) rad^2/s^2, Bq (n_s, m) element deformations of the modes (b_k = Bq[:, k]), Phi (n, m)
+    mode shapes (None: no physical reconstruction here), R0 / R1 (n_s, n_s) the residual flexibility of
+    the modes left out (m/N and m s^2/N; None: the basis is complete), Psi0 / Psi1 (n, n_s) the same as
+    displacement fields (x of a unit element force), for the reconstruction.
+    """
+
+    def __init__(self, omega2, Bq, Phi=None, R0=None, R1=None, Psi0=None, Psi1=None):
+        self.omega2 = np.asarray(omega2, dtype=float)
+        self.Bq = np.asarray(Bq, dtype=float)
+        self.Phi = Phi
+        ns = self.Bq.shape[0]
+        self.R0 = np.zeros((ns, ns)) if R0 is None else np.asarray(R0, dtype=float)
+        self.R1 = np.zeros((ns, ns)) if R1 is None else np.asarray(R1, dtype=float)
+        self.Psi0, self.Psi1 = Psi0, Psi1
+        self.complete = R0 is None
+
+    @property
+    def m(self):
+        return len(self.omega2)
+
+    def weights(self, Omega2, r, fundamental):
+        """W[j, k] = 1 / (w_k^2 - Omega2_j) (N_b, m), zero for the followed mode r at the fundamental."""
+        with np.errstate(divide="ignore"):
+            W = 1.0 / (self.omega2[None, :] - Omega2[:, None])
+        W[fundamental, r] = 0.0
+        return W
+
+    def flexibility(self, W, Omega2):
+        """G_j = Bq diag(W[j]) Bq^T + R0 + Omega2_j R1: (N_b, n_s, n_s) m/N."""
+        G = np.einsum("sk,jk,tk->jst", self.Bq, W, self.Bq, optimize=True)
+        return G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
+
+    def flexibility_slope(self, W, Omega2):
+        """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
+        return np.einsum("sk,jk,tk->jst", self.Bq, W * W, self.Bq, optimize=True) + self.R1[None]
+
+
+class CondensedHBProblem:
+    """Condensed harmonic-balance equations of one NNM branch (module docstring), for the
+    pseudo-arclength engine; the same protocol and the same orbits as ``HBProblem``.
+
+    system : the ModalSystem (its elements' force laws; for a complete basis also its modes);
+    linear : the LinearPart (default: every mode of ``system``, exact); r : the followed mode's index
+    in it; basis : the HBBasis.
+    """
+
+    def __init__(self, system, r, basis, linear=None, max_rel_step=0.4, max_rel_period_step=np.inf):
+        self.sys = system
+        self.lin = linear or LinearPart(system.omega2, system.Bq, system.Phi)
+        self.r = int(r)
+        self.basis = basis
+        self.nb = len(basis)
+        self.ns = self.lin.Bq.shape[0]
+        self.n = system.n
+        self.w_r = float(np.sqrt(self.lin.omega2[self.r]))
+        self.b_r = self.lin.Bq[:, self.r].copy()
+        nrm = float(np.linalg.norm(self.b_r))
+        self.beta = nrm if nrm > 0 else 1.0
+        self.h2 = basis.h.astype(float) ** 2
+        self.fund = np.flatnonzero(basis.h == 1)                      # cos 1 (and sin 1 in the full basis)
+        self.cos1 = int(np.flatnonzero((basis.h == 1) & ~basis.sine)[0])
+        self.max_rel_step = max_rel_step
+        self.max_rel_period_step = max_rel_period_step
+        self.q_ref = None
+
+    # --------------------------------------------------------------- packing
+    def pack(self, D, a, omega):
+        return np.concatenate([np.asarray(D, dtype=float).ravel(), [a * self.beta, omega / self.w_r]])
+
+    def unpack(self, u):
+        """(D (N_b, n_s) m, a sqrt(kg) m, omega rad/s)."""
+        return u[:-2].reshape(self.nb, self.ns), u[-2] / self.beta, u[-1] * self.w_r
+
+    def start(self, a0):
+        """u of the linear mode r at modal amplitude a0, and the direction of growing amplitude."""
+        D = np.zeros((self.nb, self.ns))
+        D[self.cos1] = a0 * self.b_r
+        u0 = self.pack(D, a0, self.w_r)
+        p0 = np.zeros_like(u0)
+        p0[:-1] = u0[:-1] / a0
+        return u0, p0
+
+    # --------------------------------------------------------------- equations
+    def _forces(self, D):
+        d = self.basis.E @ D                                     # (N, n_s) deformations at the samples
+        return d, self.basis.P @ self.sys.force(d)                # F (N_b, n_s) element force coefficients
+
+    def _parts(self, u):
+        D, a, w = self.unpack(u)
+        Omega2 = self.h2 * w * w
+        W = self.lin.weights(Omega2, self.r, self.fund)
+        G = self.lin.flexibility(W, Omega2)
+        d, F = self._forces(D)
+        RD = D + np.einsum("jst,jt->js", G, F)
+        RD[self.cos1] -= a * self.b_r
+        alpha = np.zeros(len(self.fund))
+        alpha[self.fund == self.cos1] = a
+        Ra = (self.w_r ** 2 - w * w) * alpha + F[self.fund] @ self.b_r
+        r = np.concatenate([RD.ravel(), Ra * self.beta / self.w_r ** 2])
+        return D, a, w, Omega2, W, G, d, F, r
+
+    def residual(self, u):
+        return self._parts(u)[-1]
+
+    def jacobian(self, u):
+        D, a, w, Omega2, W, G, d, F, r = self._parts(u)
+        bs, nb, ns = self.basis, self.nb, self.ns
+        C = np.einsum("jk,ks,kl->sjl", bs.P, self.sys.tangent(d), bs.E)       # dF[j, s] / dD[l, s]
+        nD = nb * ns
+        J = np.zeros((len(r), len(u)))
+        # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
+        JD = np.einsum("jst,tjl->jslt", G, C).reshape(nD, nD)
+        JD[np.diag_indices(nD)] += 1.0
+        J[:nD, :nD] = JD
+        J[self.cos1 * ns:(self.cos1 + 1) * ns, nD] = -self.b_r / self.beta
+        dG = self.lin.flexibility_slope(W, Omega2)                             # dG / dOmega2
+        J[:nD, nD + 1] = (np.einsum("jst,jt->js", dG, F) * (2 * self.h2 * w)[:, None]).ravel() * self.w_r
+        c = self.beta / self.w_r ** 2
+        for i, j in enumerate(self.fund):
+            row = nD + i
+            J[row, :nD] = c * (self.b_r[:, None] * C[:, j, :]).T.ravel()
+            if j == self.cos1:
+                J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
+                J[row, nD + 1] = -2.0 * w * a * c * self.w_r
+        return r, J
+
+    def error(self, u, r):
+        """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
+        return float(np.linalg.norm(r) / max(np.linalg.norm(u[:-1]), 1e-300))
+
+    def accept(self, u, J):
+        pass
+
+    def scale(self, u):
+        """Weights of the balanced step norm: 1 / |(D, a beta)| on those, w_r / omega on the frequency."""
+        s = np.full(len(u), 1.0 / max(np.linalg.norm(u[:-1]), 1e-300))
+        s[-1] = 1.0 / u[-1]
+        return s
+
+    def max_step(self, u, p):
+        from .shooting import balanced_max_step
+        return balanced_max_step(self.scale(u) * p, self.max_rel_step, self.max_rel_period_step)
+
+    def check_step(self, u_old, u_new):
+        change = abs(u_old[-1] / u_new[-1] - 1)
+        if change > self.max_rel_period_step:
+            return f"the period changed by {100 * change:.2f} % in one step"
+        return ""
+
+    # --------------------------------------------------------------- the eliminated amplitudes
+    def amplitudes(self, u):
+        """The modal Fourier coefficients A (N_b, m) of the orbit u in the LinearPart's modes (the
+        eliminated amplitudes recovered exactly), and the frequency omega (rad/s)."""
+        D, a, w = self.unpack(u)
+        Omega2 = self.h2 * w * w
+        W = self.lin.weights(Omega2, self.r, self.fund)
+        F = self._forces(D)[1]
+        A = -W * (F @ self.lin.Bq)
+        A[self.cos1, self.r] = a
+        return A, w, F, Omega2
+
+    def coefficients(self, u):
+        """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m), for a complete basis."""
+        return self.amplitudes(u)[0] if self.lin.complete else None
+
+    def state(self, u):
+        """(q0, v0, T): modal initial state (complete basis) and period (s) of the orbit u."""
+        A, w, _, _ = self.amplitudes(u)
+        c0, s0 = self.basis.functions([0.0])[0], self.basis.derivatives([0.0])[0]
+        return c0 @ A, w * (s0 @ A), 2 * np.pi / w
+
+    def modal_orbit(self, u, samples=None):
+        """Modal displacements (samples, m) over one period (default: the AFT samples)."""
+        samples = samples or max(self.basis.samples, 4 * self.basis.harmonics + 4)
+        theta = 2 * np.pi * np.arange(samples) / samples
+        return self.basis.functions(theta) @ self.amplitudes(u)[0]
+
+    def energy(self, u):
+        """Energy (J) of the orbit u: the modes' kinetic and linear potential energy at t = 0 plus the
+        element potentials (and the left-out modes' share through R0, R1 for a truncated basis)."""
+        A, w, F, Omega2 = self.amplitudes(u)
+        c0, s0 = self.basis.functions([0.0])[0], self.basis.derivatives([0.0])[0]
+        q0, v0 = c0 @ A, w * (s0 @ A)
+        E = 0.5 * v0 @ v0 + 0.5 * q0 @ (self.lin.omega2 * q0)
+        D = self.unpack(u)[0]
+        E += float(np.sum(self.sys.elements.potential(c0 @ D)))
+        if not self.lin.complete:
+            # left-out modes: q_k(0) = -sum_j c_j(0) b_k . F_j / (w_k^2 - Omega2_j) to first order in Omega2 / w_k^2
+            f0, f1 = c0 @ F, (c0 * Omega2) @ F
+            E += 0.5 * (f0 @ self.lin.R0 @ f0 + 2 * f0 @ self.lin.R1 @ f1)
+            g = w * (s0 @ F)
+            E += 0.5 * g @ self.lin.R1 @ g
+        return float(E)
+
+    # --------------------------------------------------------------- stability
+    def uncondensed(self, u):
+        """(HBProblem, u) of the same orbit in the uncondensed equations (complete basis only)."""
+        full = HBProblem(self.sys, self.r, self.basis)
+        A, w, _, _ = self.amplitudes(u)
+        return full, full.pack(A, w)
+
+    def multipliers(self, u, tangent=None):
+        """Floquet multipliers (2n,) by Hill's method on the reconstructed orbit: the uncondensed
+        HB orbit's multipliers (hill.py), the trivial pair set to exactly 1."""
+        full, uf = self.uncondensed(u)
+        return without_nearest_to_one(hill_multipliers(full, uf))

@@ -1,0 +1,52 @@
+r"""The harmonic basis of harmonic balance and its time sampling (AFT), shared by the HB equations
+(``harmonic_balance.py``) and Hill's method (``hill.py``).
+
+A periodic orbit of angular frequency omega is x(t) = sum_j A[j] c_j(theta), theta = omega t, with
+c_j = cos(h_j theta) or sin(h_j theta):
+
+* ``"odd"``: cosines of the odd harmonics 1, 3, ..., <= H (the symmetric NNMs of odd springs);
+* ``"full"``: the mean and cosines and sines of 1..H (general periodic orbits).
+
+E (N, N_b) samples the basis at N equispaced instants of one period; P (N_b, N) is its projector
+(Galerkin weights 1/N for the mean, 2/N otherwise), so P E = I.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["BASES", "HBBasis"]
+
+BASES = ("odd", "full")
+
+
+class HBBasis:
+    """Harmonic basis and its time sampling: orders h (N_b,), sine (N_b,) bool, E (N, N_b), P (N_b, N)."""
+
+    def __init__(self, harmonics, kind="odd", samples=None):
+        H = int(harmonics)
+        if kind == "odd":
+            self.h = np.arange(1, H + 1, 2)
+            self.sine = np.zeros(len(self.h), dtype=bool)
+        else:
+            self.h = np.concatenate([[0], np.repeat(np.arange(1, H + 1), 2)])
+            self.sine = np.concatenate([[False], np.tile([False, True], H)])
+        self.kind = kind
+        self.harmonics = H
+        self.samples = int(samples) if samples is not None else 4 * H + 4
+        theta = 2.0 * np.pi * np.arange(self.samples) / self.samples
+        self.E = self.functions(theta)
+        w = np.where(self.h == 0, 1.0, 2.0) / self.samples
+        self.P = self.E.T * w[:, None]
+
+    def __len__(self):
+        return len(self.h)
+
+    def functions(self, theta):
+        """c_j(theta) (len(theta), N_b)."""
+        ht = np.outer(np.asarray(theta, dtype=float), self.h)
+        return np.where(self.sine, np.sin(ht), np.cos(ht))
+
+    def derivatives(self, theta):
+        """d c_j / d theta (len(theta), N_b)."""
+        ht = np.outer(np.asarray(theta, dtype=float), self.h)
+        return np.where(self.sine, np.cos(ht), -np.sin(ht)) * self.h

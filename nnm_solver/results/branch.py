@@ -1,0 +1,320 @@
+"""A computed NNM branch: one row per converged periodic orbit (a Point), plus tools to look at the orbits."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import NNMInputError
+from ..stability.floquet import detect_events
+from ..fourier import fourier_amplitudes
+from ..model.reduction import mac
+from ..model.scaling import cubic_scaling
+from .settings import settings_from_dict
+from .stops import STOP_STATUSES
+
+__all__ = ["Branch", "Point", "STATUSES"]
+
+#: why a branch stopped (stops.py documents each)
+STATUSES = STOP_STATUSES
+
+
+@dataclass
+class Point:
+    """One converged periodic orbit of a branch (a row of a Branch).
+
+    energy J; frequency_hz Hz; period s; x0, v0 (n,) initial state (m, m/s, t = 0 at the phase
+    condition); floquet (2n,) complex multipliers, largest modulus first (NaN if not computed);
+    stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
+    for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py);
+    freq_error: estimated relative error of frequency_hz from the discretisation (NaN: not estimated;
+    see ShootingProblem.frequency_error); steps: time steps per period this point was computed with
+    (0: the branch settings' steps_per_period).  ``point["energy"]`` works too (first-release rows).
+    """
+
+    energy: float
+    frequency_hz: float
+    period: float
+    x0: np.ndarray
+    v0: np.ndarray
+    floquet: np.ndarray
+    stable: bool
+    iterations: int = 0
+    coefficients: np.ndarray | None = field(default=None, repr=False)
+    label: str = "backbone"
+    freq_error: float = float("nan")
+    steps: int = 0
+
+    def __getitem__(self, key):
+        try:
+            return getattr(self, key)
+        except AttributeError:
+            raise KeyError(key) from None
+
+
+class Branch:
+    """NNM branch of a model (columns have one row per converged point).
+
+    energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
+    each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus
+    first), stable (N,) bool, coefficients (N, N_b, n) Fourier coefficients (m) of harmonic-balance
+    branches (None otherwise), labels (N,) str ("backbone" / "tongue k:1"), events: list of dicts
+    (kind, index, energy, frequency_hz, detail; located events also x0, v0, period), tongues: the
+    tongues passed by a ``tongues="skip"`` continuation (dicts: ratio, order, partner_mode, entry_energy,
+    entry_frequency_hz, ...).  freq_error (N,) estimated relative frequency error of each point (NaN where
+    not estimated, e.g. files written before it existed); steps (N,) int, the time steps per period of each
+    shooting point (0: settings.steps_per_period; a branch refined with freq_tol has several).
+    status: one of STATUSES; message: why it stopped.
+    settings: the method's typed settings (settings.py; a plain dict is converted).
+    """
+
+    def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
+                 events=None, status="done", message="", settings=None, name="", coefficients=None, labels=None,
+                 tongues=None, freq_error=None, steps=None):
+        self.model = model
+        self.mode = int(mode)
+        self.settings = settings_from_dict(settings)
+        self.status = str(status)
+        self.message = str(message)
+        self.name = str(name)
+        self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels, freq_error,
+                          steps)
+        self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
+                           if events is None else events)
+        self.tongues = list(tongues or [])
+
+    def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None,
+                     freq_error=None, steps=None):
+        n = self.model.n
+        self.energy = np.asarray(energy, dtype=float).reshape(-1)
+        N = len(self.energy)
+        self.frequency_hz = np.asarray(frequency_hz, dtype=float).reshape(N)
+        self.period = np.asarray(period, dtype=float).reshape(N)
+        self.x0 = np.asarray(x0, dtype=float).reshape(N, n)
+        self.v0 = np.asarray(v0, dtype=float).reshape(N, n)
+        self.floquet = (np.full((N, 2 * n), np.nan, dtype=complex) if floquet is None
+                        else np.asarray(floquet, dtype=complex).reshape(N, 2 * n))
+        self.stable = np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N)
+        self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
+        self.labels = (np.full(N, "backbone", dtype=object) if labels is None
+                       else np.asarray([str(x) for x in np.asarray(labels, dtype=object).reshape(N)], dtype=object))
+        self.freq_error = (np.full(N, np.nan) if freq_error is None
+                           else np.asarray(freq_error, dtype=float).reshape(N))
+        self.steps = np.zeros(N, dtype=int) if steps is None else np.asarray(steps, dtype=int).reshape(N)
+
+    # ------------------------------------------------------------------ building from points
+    @classmethod
+    def from_points(cls, model, mode, points, settings=None, status="done", message="", name="", events=None,
+                    tongues=None):
+        """Branch whose rows are ``points`` (a sequence of Point); events: located events (events.py),
+        or None to bracket them from the rows (floquet.detect_events)."""
+        b = cls(model, mode, [], [], [], [], [], settings=settings, status=status, message=message, name=name,
+                tongues=tongues)
+        b.extend(points)
+        if events is not None:
+            b.events = sorted(events, key=lambda e: (e["index"], e["energy"]))
+        return b
+
+    def extend(self, points):
+        """Append rows (Points) in place; the events are recomputed."""
+        points = list(points)
+        if not points:
+            return self
+        n = self.model.n
+
+        def col(key, shape=(), dtype=float):
+            return np.array([getattr(p, key) for p in points], dtype=dtype).reshape((len(points),) + shape)
+
+        coeffs = None
+        if points[0].coefficients is not None and (self.coefficients is not None or len(self) == 0):
+            coeffs = np.concatenate([np.zeros((0,) + points[0].coefficients.shape) if self.coefficients is None
+                                     else self.coefficients, col("coefficients", points[0].coefficients.shape)])
+        self._set_columns(np.r_[self.energy, col("energy")], np.r_[self.frequency_hz, col("frequency_hz")],
+                          np.r_[self.period, col("period")], np.vstack([self.x0, col("x0", (n,))]),
+                          np.vstack([self.v0, col("v0", (n,))]),
+                          np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
+                          np.r_[self.stable, col("stable", dtype=bool)], coeffs,
+                          np.r_[self.labels, col("label", dtype=object)], np.r_[self.freq_error, col("freq_error")],
+                          np.r_[self.steps, col("steps", dtype=int)])
+        self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
+        return self
+
+    def point(self, i):
+        """Row i as a Point."""
+        i = self.check_index(i)
+        return Point(float(self.energy[i]), float(self.frequency_hz[i]), float(self.period[i]), self.x0[i].copy(),
+                     self.v0[i].copy(), self.floquet[i].copy(), bool(self.stable[i]),
+                     coefficients=None if self.coefficients is None else self.coefficients[i].copy(),
+                     label=str(self.labels[i]), freq_error=float(self.freq_error[i]), steps=int(self.steps[i]))
+
+    @property
+    def hb_coefficients(self):
+        """Fourier coefficients (N, N_b, n) of a harmonic-balance branch (first-release name of
+        ``coefficients``)."""
+        return self.coefficients
+
+    def __len__(self):
+        return len(self.energy)
+
+    def __repr__(self):
+        return (f"Branch(mode={self.mode}, points={len(self)}, "
+                f"energy={self.energy.min() if len(self) else 0:.3g}..{self.energy.max() if len(self) else 0:.3g} J, "
+                f"status={self.status!r})")
+
+    # ------------------------------------------------------------------ selection
+    def pick(self, what, item):
+        """One of the branch's ``events`` or ``tongues`` (``what``), given as the dict itself or its index."""
+        items = getattr(self, what)
+        if isinstance(item, (int, np.integer)) and not isinstance(item, bool):
+            if not -len(items) <= item < len(items):
+                raise NNMInputError(f"{what[:-1]} {item} is out of range: the branch lists {len(items)} {what}")
+            return items[int(item)]
+        if not isinstance(item, dict):
+            raise NNMInputError(f"give one of branch.{what} (a dict) or its index, got {type(item).__name__}")
+        return item
+
+    def check_index(self, i):
+        """Validate a point index (negative counts from the end); returns it in 0..N-1."""
+        if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not -len(self) <= i < len(self):
+            raise NNMInputError(f"point index {i!r} is out of range: the branch has {len(self)} points")
+        return int(i) % len(self)
+
+    def subset(self, index):
+        """Branch made of the rows ``index`` (slice, index array or boolean mask)."""
+        return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
+                      self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
+                      self.message, self.settings, self.name,
+                      None if self.coefficients is None else self.coefficients[index], self.labels[index],
+                      self.tongues, self.freq_error[index], self.steps[index])
+
+    def interpolate(self, s):
+        """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
+        N = len(self)
+        if N == 0:
+            raise NNMInputError("the branch is empty")
+        s = float(s)
+        if not 0 <= s <= N - 1:
+            raise NNMInputError(f"fractional index {s} is outside 0..{N - 1}")
+        j = min(int(np.floor(s)), max(N - 2, 0))
+        w = s - j if N > 1 else 0.0
+        k = min(j + 1, N - 1)
+
+        def lerp(a):
+            return (1 - w) * a[j] + w * a[k]
+
+        x0, v0 = _match_energy(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
+        near = j if w < 0.5 else k
+        return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
+                      [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
+                      [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
+                      self.name, None if self.coefficients is None else lerp(self.coefficients)[None],
+                      [self.labels[near]], None, [lerp(self.freq_error)], [self.steps[near]])
+
+    def at_energy(self, energy):
+        """One-point Branch at energy (J): the first crossing of that energy along the branch."""
+        E = self.energy
+        for j in range(len(E) - 1):
+            lo, hi = sorted((E[j], E[j + 1]))
+            if lo <= energy <= hi:
+                w = 0.0 if hi == lo else (energy - E[j]) / (E[j + 1] - E[j])
+                return self.interpolate(j + w)
+        if len(E) and energy == E[-1]:
+            return self.interpolate(len(E) - 1)
+        raise NNMInputError(f"energy {energy:.4g} J is outside the branch's range "
+                            f"{E.min():.4g}..{E.max():.4g} J" if len(E) else "the branch is empty")
+
+    # ------------------------------------------------------------------ orbits
+    def motion(self, i, samples=256):
+        """The periodic orbit of point i over one period: (t (samples,) s, x (samples, n) m)."""
+        t, x, _ = self.orbit(i, samples)
+        return t, x
+
+    def velocity(self, i, samples=256):
+        """Velocities (samples, n) m/s along the orbit of point i, at the times of motion()."""
+        return self.orbit(i, samples)[2]
+
+    def orbit(self, i, samples=256):
+        """Orbit of point i: (t (samples,) s, x, v (samples, n) m, m/s), t = k T / samples.
+
+        Rebuilt by the branch's method (``settings.orbit``): shooting branches re-integrate the
+        discrete orbit with their own Newmark step (half a period when half-period shooting was used)
+        and resample it by Fourier interpolation, which reproduces the converged orbit even when it
+        is strongly unstable; harmonic-balance branches evaluate their Fourier series.
+        """
+        i = self.check_index(i)
+        samples = int(samples)
+        if samples < 2:
+            raise NNMInputError("samples must be at least 2")
+        try:
+            x, v = self.settings.orbit(self, i, samples)
+        except RuntimeError as exc:
+            raise RuntimeError(f"point {i}: {exc}") from None
+        return np.arange(samples) * self.period[i] / samples, x, v
+
+    def coefficients_at(self, i):
+        """Fourier coefficients (N_b, n) m of point i of a harmonic-balance branch (stored, or
+        recomputed for branches of first-release files)."""
+        i = self.check_index(i)
+        if self.coefficients is not None:
+            return self.coefficients[i]
+        from ..model.modal import modal_system
+        from ..orbits.harmonic_balance import recover_coefficients
+        s = self.settings
+        return recover_coefficients(modal_system(self.model), self.mode - 1, s.hb_basis(), self.x0[i], self.v0[i],
+                                    self.period[i], s.tol)
+
+    def harmonics(self, i, n=15):
+        """Fourier amplitudes (n+1, n_dof) of the orbit of point i: row k = harmonic k (k=0: mean), m."""
+        n = int(n)
+        if n < 1:
+            raise NNMInputError("n (number of harmonics) must be at least 1")
+        samples = max(256, 4 * (n + 1))
+        return fourier_amplitudes(self.motion(i, samples)[1], n)
+
+    def mac_to_linear(self, i):
+        """Mass-weighted MAC (n_modes,) of the NNM shape x0 of point i with each linear mode
+        (index k-1: mode k): (phi_k^T M x0)^2 / ((phi_k^T M phi_k)(x0^T M x0))."""
+        i = self.check_index(i)
+        _, shapes = self.model.linear_modes()
+        return mac(self.x0[i], shapes, self.model.M)[0]
+
+    # ------------------------------------------------------------------ scaling
+    def scaled(self, factor):
+        """The branch of the same model with every k3 multiplied by ``factor`` (> 0).
+
+        Exact for cubic springs (scaling.py): frequencies and multipliers unchanged, displacements
+        and velocities / sqrt(factor), energies / factor.
+        """
+        sc = cubic_scaling(factor)
+        el = self.model.elements
+        if len(el) and not el.cubic_only:
+            raise NNMInputError("the scaling law holds for cubic springs only; compute the branch of the scaled model")
+        events = [dict(e, energy=e["energy"] * sc.energy) for e in self.events]
+        settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio)
+        return Branch(self.model.scaled(sc.ratio), self.mode, self.energy * sc.energy, self.frequency_hz,
+                      self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
+                      self.status, self.message, settings, self.name,
+                      None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
+                      [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues], self.freq_error,
+                      self.steps)
+
+
+def _match_energy(model, x, v, energy):
+    """Scale (x, v) by c > 0 so that its energy is ``energy`` (J): secant iteration on E(c x, c v) = energy from
+    c = 1, for any element law; (x, v) unchanged if it does not converge to 1e-9."""
+    if energy <= 0 or not model.energy(x, v) > 0:
+        return x, v
+    f = lambda c: float(model.energy(c * x, c * v)) - energy
+    c0, c1 = 1.0, 1.0 + 1e-3
+    f0, f1 = f(c0), f(c1)
+    for _ in range(60):
+        if f1 == f0:
+            break
+        c2 = c1 - f1 * (c1 - c0) / (f1 - f0)
+        c2 = c2 if c2 > 0 else 0.5 * c1
+        c0, f0, c1, f1 = c1, f1, c2, f(c2)
+        if abs(f1) <= 1e-12 * energy:
+            break
+    if not abs(f1) <= 1e-9 * energy:
+        return x, v
+    return c1 * x, c1 * v

@@ -1,0 +1,239 @@
+"""Krein collisions located inside a continuation step.
+
+Two Floquet multipliers of opposite Krein signature meet on the unit circle and leave it as a complex
+quadruple.  In the coordinates where they are real before the collision (the eigenvalues c of the reversible
+half map's A11 block, or rho = (mu + 1/mu) / 2 of a full-period monodromy) the test function is the
+discriminant of the colliding pair (floquet.krein_gap), linear in the branch parameter through a generic
+collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
+(shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
+stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
+neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..continuation.engine import CorrectorFailure
+from .floquet import STABILITY_TOL, krein_gap
+
+__all__ = ["locate_collision", "candidates"]
+
+#: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the stability)
+MAX_KREIN_PAIRS = 4
+
+#: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
+KREIN_PROBES = 3
+
+#: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
+#: with a complex shift (the local solver's window holds 6 eigenvalues)
+LOCAL_CROWD = 3
+
+
+def candidates(rho, most=MAX_KREIN_PAIRS):
+    """Real parts of the complex collision coordinates rho (one per conjugate pair), the most unstable (largest
+    imaginary part) first, at most ``most``."""
+    rho = np.asarray(rho, dtype=complex)
+    z = rho[rho.imag > 1e-9]
+    z = z[np.argsort(-z.imag, kind="stable")]
+    out = []
+    for x in z.real:
+        if all(abs(x - y) > 1e-9 for y in out):
+            out.append(float(x))
+    return out[:most]
+
+
+def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
+    """sigma at a Krein collision between lo and hi (stable at one end, complex pairs at the other).
+
+    Each candidate pair (rho_stars: the real parts of the complex collision coordinates at the unstable
+    end, most unstable first) is followed by a secant on its smooth test function krein_gap (the squared
+    half-distance of the two colliding coordinates, negative once they are a complex pair), evaluated by
+    the problem's local eigen-solver (``local_collision``) where it has one.  Several pairs can collide
+    within one step: the stability changes at the collision nearest the stable end, so a further candidate is
+    followed only if it is complex already on the stable side of the nearest collision found so far (one local
+    evaluation decides).  The full stability flag's change is then bracketed around that collision
+    (_flag_change_near: two full spectra in most cases); if it does not change there, bisection on the full flag.
+    ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
+    evaluation.  Returns (lo, hi) like bisect."""
+    rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
+    (f_lo, r_lo), (f_hi, r_hi) = ends or [(loc.stable(x), loc.collision(x)) for x in (lo, hi)]
+    best = None                    # (bracket, root) of the collision nearest the stable end so far
+    for rho_star in rho_stars:
+        if best is None:
+            far, r_far = hi if f_lo else lo, r_hi if f_lo else r_lo
+        else:                      # does this pair collide before the best one?  It is complex there already if so
+            far = best[1][0] if best[1] else (min(best[0]) if f_lo else max(best[0]))
+            r_far = loc.local_collision(far, _shift(r_hi if f_lo else r_lo, rho_star))
+            if r_far is None or not krein_gap(r_far, rho_star, _per_modulus(loc)) < 0:
+                continue
+        a, b = (lo, far) if f_lo else (far, hi)
+        ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
+        bracket, local, root = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        best = (bracket, root)
+        if not local:              # followed with the full flags: its bracket is the flag's change already
+            break
+    (blo, bhi), root = best
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root)
+    if bracket is None:        # no pair followed changed the stability (e.g. a pair left through +-1 too)
+        return loc.bisect(loc.stable, lo, hi)
+    # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
+    # between the stable end and the collision; the first change found is the event
+    start, stop = (lo, min(bracket)) if f_lo else (hi, max(bracket))
+    probes = start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1)
+    loc.prefetch(probes)
+    for x in probes:
+        if not loc.stable(x):             # (the stable end's flag is True)
+            r_x = loc.collision(x)
+            cands = candidates(r_x) if r_x is not None and depth < 2 else []
+            if not cands:
+                return loc.bisect(loc.stable, start, x)
+            stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
+            return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
+                    locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
+    return bracket
+
+
+def _spacing(rho, rho_star, count=8):
+    """The mean distance between the real coordinates of rho nearest rho_star (the local eigenvalue spacing), or
+    inf when there are too few."""
+    if rho is None:
+        return np.inf
+    rho = np.asarray(rho, dtype=complex)
+    real = rho.real[np.abs(rho.imag) <= 1e-12]
+    if len(real) < 3:
+        return np.inf
+    near = np.sort(real[np.argsort(np.abs(real - rho_star))[:count]])
+    return float((near[-1] - near[0]) / (len(near) - 1)) or np.inf
+
+
+def _shift_for(z, spacing):
+    """The local solver's shift for a pair at the complex coordinate z: its real part, or z itself when the pair
+    lies so far off the real axis that the real eigenvalues nearer to its real part could fill the local solver's
+    window of 6 (LOCAL_CROWD of them within |Im z|, at the local spacing).  A 1,100-mode plate: 0.0006 between
+    eigenvalues and a pair 0.01 off the axis, which the 6 eigenvalues nearest its real part missed.  A complex
+    shift costs a complex LU (4x a real one) and more Arnoldi iterations, so near the collision the real part
+    is used again."""
+    b = abs(complex(z).imag)
+    return complex(complex(z).real, b) if 2 * b >= LOCAL_CROWD * spacing else float(complex(z).real)
+
+
+def _shift(rho, rho_star):
+    """The local solver's shift for the pair around rho_star, from the coordinates rho of a point where it is complex
+    (_shift_for; rho_star itself if rho has no complex coordinate near it)."""
+    if rho is None:
+        return rho_star
+    rho = np.asarray(rho, dtype=complex)
+    z = rho[np.abs(rho.imag) > 1e-12]
+    if not len(z):
+        return rho_star
+    z = z[np.argmin(np.abs(z.real - rho_star))]
+    if abs(z.real - rho_star) > 1e-6 + abs(z.imag):
+        return rho_star
+    return _shift_for(complex(rho_star, z.imag), _spacing(rho, rho_star))
+
+
+def _per_modulus(loc):
+    return getattr(loc.problem, "collision_per_modulus", 1.0)
+
+
+#: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
+#: tolerance (the two margin points of _flag_change_near)
+MARGIN = 0.8
+
+#: the flag's round-off band at the margin points: relative to STABILITY_TOL, the modulus excess |mu| - 1 that counts
+#: as at the threshold (two eigen-solvers' imaginary parts of a pair near its collision differ by ~1e-4 relative)
+FLAG_BAND = 1e-3
+
+
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None):
+    """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
+    energy tolerance; None if the flag does not change there.
+
+    The tracked pair's threshold (its imaginary part at the stability tolerance) and the full flag's differ by
+    round-off: there the imaginary part grows like the square root of the distance from the collision, so the
+    two eigen-solvers' values, ~1e-4 apart relative, place the crossing up to ~1e-6 of the step apart.  The full
+    spectra are computed at two margin points around the collision, MARGIN x the energy tolerance apart: they
+    bracket the change when the stable side's largest modulus excess |mu| - 1 is within (1 + FLAG_BAND) x the
+    tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise (another
+    pair changed the flag nearby) a bisection on the flag within 10 or 1000 times the bracket's width around it.
+    f_lo : the flag at lo; root : optional (centre, delta) of the margin points (else around the bracket)."""
+    a, b = min(lo, hi), max(lo, hi)
+    width = abs(bhi - blo)
+    if root is not None:
+        c, delta = root
+        width = 2 * delta
+    else:
+        try:
+            E_lo, E_hi = loc.energy(blo), loc.energy(bhi)
+        except CorrectorFailure:
+            E_lo = E_hi = None
+        c, delta = 0.5 * (blo + bhi), 0.5 * width
+        if E_lo is not None and width > 0 and E_hi != E_lo:
+            delta = max(delta, 0.5 * MARGIN * loc.rtol * max(abs(E_lo), abs(E_hi)) * width / abs(E_hi - E_lo))
+    delta = min(delta, 1e-2 * (b - a))
+    sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
+    x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
+    x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)         # the margin on the stable side, on the unstable side
+    loc.prefetch([x_s, x_u])
+    if loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)) and not loc.stable(x_u, STABILITY_TOL * (1 - FLAG_BAND)):
+        return (x_lo, x_hi) if x_lo < x_hi else (x_hi, x_lo)
+    for k in (10.0, 1000.0):
+        w = k * max(width, 1e-12 * max(1.0, abs(bhi)))
+        x0, x1 = max(a, min(c, blo, bhi) - w), min(b, max(c, blo, bhi) + w)
+        if loc.stable(x0) != loc.stable(x1):
+            return loc.bisect(loc.stable, x0, x1)
+    return None
+
+
+def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
+    """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
+    collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
+    flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
+    its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
+    centre -+ delta are MARGIN x the energy tolerance apart)."""
+    pm = _per_modulus(loc)
+    g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
+    r_u = r_hi if f_lo else r_lo
+    shift, spacing = _shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
+    last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
+    widths = [abs(hi - lo)]
+    local = True
+    for _ in range(60):
+        if loc._converged(lo, hi):
+            break
+        (x1, g1), (x2, g2) = last
+        c = None
+        if g1 is not None and g2 is not None and g1 != g2:
+            c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
+        secant = c is not None and min(lo, hi) < c < max(lo, hi) and not (len(widths) > 3 and
+                                                                         widths[-1] > 0.5 * widths[-4])
+        if not secant:
+            c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
+        r_c = loc.local_collision(c, shift)
+        if r_c is not None:                  # this collision only: its test function is the flag
+            g_c = krein_gap(r_c, rho_star, pm)
+            f_c = g_c > 0
+        else:
+            local = False
+            f_c = loc.stable(c)
+            r_c = loc.collision(c)
+            g_c = krein_gap(r_c, rho_star, pm)
+            if g_c is not None and (g_c > 0) != f_c:
+                g_c = None                   # the test function disagrees with the flag: no secant from here
+        if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
+            z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
+            z = z[np.argmin(np.abs(z.real - rho_star))]
+            rho_star, shift = float(z.real), _shift_for(z, spacing)
+        if f_c == f_lo:
+            lo = c
+        else:
+            hi = c
+        last = [last[1], (c, g_c)]
+        widths.append(abs(hi - lo))
+        if secant and local and g_c is not None:
+            # converged when the secant step moved the energy by less than a quarter of the margin: its root is
+            # then within the margin points of _flag_change_near around c, which check the flag there
+            E_c, E_2 = loc.energy(c), loc.energy(x2)
+            if abs(E_c - E_2) <= 0.25 * MARGIN * loc.rtol * abs(E_c) and E_c != E_2:
+                return (lo, hi), local, (c, 0.5 * MARGIN * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2))
+    return (lo, hi), local, None

@@ -1,0 +1,334 @@
+r"""The branch between two converged points of the continuation, for event location.
+
+Between two consecutive points u_a and u_b of the continuation (u_b reached by a step s along the
+tangent p_a of u_a), the branch is parametrised by the pseudo-arclength sigma in [0, s]: u(sigma)
+solves F(u) = 0 on the hyperplane (w^2 p_a)^T (u - u_a - sigma p_a) = 0, by the same corrector as the
+continuation (continuation.correct_factored).  ``Locator`` gives the points (cached), their energy, energy
+slope and Floquet multipliers, and the scalar root finders the event locators use (events.py, krein.py).
+"""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..continuation.engine import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
+from .floquet import STABILITY_TOL, is_stable, real_crossing, sort_multipliers
+
+__all__ = ["Locator", "EVENT_RTOL", "event_rtol"]
+
+#: relative energy tolerance of located events (the finest; see event_rtol)
+EVENT_RTOL = 1e-8
+#: ... the coarsest, where the time discretisation's error is large anyway
+EVENT_RTOL_MAX = 5e-7
+
+
+def event_rtol(freq_error):
+    """Relative energy tolerance of the events of a step whose points have the estimated relative frequency error
+    freq_error (the time discretisation's, ShootingProblem.frequency_error): a hundredth of it, within
+    [EVENT_RTOL, EVENT_RTOL_MAX] (EVENT_RTOL when there is no estimate).  Locating far below the discretisation
+    error would only cost corrector runs."""
+    if not np.isfinite(freq_error):
+        return EVENT_RTOL
+    return float(min(max(0.01 * freq_error, EVENT_RTOL), EVENT_RTOL_MAX))
+
+#: a step whose mid-step point lies farther than this from the cubic interpolant of its ends (relative to the step,
+#: balanced norm) jumped onto another branch (Locator.jumped)
+JUMP_LIMIT = 0.05
+
+#: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
+CHORD_REACH = 1.0
+#: ... to a corrector tolerance this much tighter than the continuation's
+CHORD_TOL_FACTOR = 1e-2
+#: ... and must lie within this many times the pseudo-arclength difference from it (the same cut of the curve)
+CHORD_CONTINUITY = 3.0
+
+
+class Locator:
+    """Points of the branch between a converged point a and the next one, for event location.
+
+    problem : the continuation's problem (a shallow copy is used, so the continuation's own state --
+    phase reference, last monodromy -- is untouched); settings, tol : the continuation's.
+    """
+
+    #: relative energy tolerance of the located events (set per step: event_rtol)
+    rtol = EVENT_RTOL
+
+    def __init__(self, problem, settings, tol, u_a, p_a, step=None, rtol=EVENT_RTOL):
+        """step : the continuation's step from a to the next point (scaled units): located points closer
+        than CHORD_REACH x step to the latest one start from it (chord iterations with its factorisation).
+        rtol : relative energy tolerance of the events (event_rtol)."""
+        self.step = step
+        self.rtol = rtol            # relative energy tolerance of located events (event_rtol)
+        self.latest = None          # (sigma, u, factorisation of [J; (w^2 p_a)^T]) of the latest located point
+        self.problem = copy.copy(problem)
+        self.settings = settings
+        self.tol = tol
+        self.u_a = u_a
+        self.p_a = p_a
+        self.w = problem.scale(u_a) if hasattr(problem, "scale") else np.ones(len(u_a))
+        self.cache = {}
+        self.factors = {}           # sigma -> factorisation of [J; (w^2 p_a)^T] of a seeded point
+        self.spectra = {}           # sigma -> (multipliers, collision coordinates)
+
+    def seed(self, sigma, u, J, factor):
+        """Record a converged point at sigma (e.g. the two points of the continuation's step, so that they
+        are not computed again); factor : the factorisation of [J; (w^2 p_a)^T] at it."""
+        self.cache[float(sigma)] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])   # (the engine's J)
+        self.factors[float(sigma)] = factor
+
+    def jumped(self, limit=JUMP_LIMIT):
+        """A reason (str) if the step from a to its seeded end point b did not follow one branch, else ''.
+
+        The branch's point at mid-step (on the hyperplane sigma = step / 2) is found by chord iterations from the
+        cubic Hermite interpolant of the two ends, with b's factorisation (no new Jacobian: a few state sweeps).
+        On a resolved branch it lies within a few thousandths of the step of that interpolant.  When the step's
+        corrector landed on another branch running alongside (near a tongue), the interpolant joins two branches
+        and the mid-step point is a sizeable part of the step away from it.  Measured on the aircraft's NNM 20
+        and the 2-DOF's NNM 1: legitimate steps at most 1.7e-3 and 1.3e-2 of the step, the two jumps found 0.22
+        and 0.39.  Not judged ('') when a tangent at an end is nearly parallel to the hyperplanes (no Hermite
+        interpolant, e.g. at a fold) or b was not seeded."""
+        s = self.step
+        if s is None or float(s) not in self.factors or 0.0 not in self.cache:
+            return ""
+        if self._slope(0.0) is None or self._slope(float(s)) is None:
+            return ""
+        sigma = 0.5 * s
+        u_pred = self.prediction(sigma)
+        r = self.problem.residual(u_pred)
+        if np.all(np.isfinite(r)) and self.problem.error(u_pred, r) < self.tol:
+            return ""                # the interpolant is on the branch already (most steps)
+        try:
+            u, J, _, _, factor = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w,
+                                                  start=(u_pred, self.factors[float(s)]), refresh=False)
+        except CorrectorFailure as exc:
+            return f"no convergence at mid-step ({exc})"
+        if J is not None:           # (a fresh Jacobian was needed on the way: keep the point for event location)
+            self.latest = (sigma, u, factor)
+            self._keep(sigma, u, J, factor)
+        d = np.linalg.norm(self.w * (u - u_pred)) / abs(s)
+        return f"the mid-step point lies {d:.2f} step lengths off the ends' interpolant" if d > limit else ""
+
+    def _slope(self, key):
+        """d u / d sigma at a known point, or None where its tangent is nearly parallel to the hyperplanes."""
+        _, _, p = self.cache[key]
+        d = (self.w * self.w * self.p_a) @ p
+        return p / d if abs(d) > 0.3 * np.linalg.norm(self.w * p) else None
+
+    def prediction(self, sigma):
+        """A first iterate on sigma's hyperplane: the cubic Hermite interpolant of the known points around
+        sigma (values and tangents, with d u / d sigma = p / ((w^2 p_a) . p)), or the tangent line of the
+        nearest known point when sigma is outside them (the tangent line of a when none is known).  The
+        interpolant lies on the hyperplane exactly (sigma is linear in u)."""
+        known = sorted(self.cache)
+        if not known:
+            return self.u_a + sigma * self.p_a
+        def slope(key):
+            return self.cache[key][0], self._slope(key)
+
+        left = [k for k in known if k <= sigma]
+        right = [k for k in known if k > sigma]
+        if left and right:
+            k0, k1 = left[-1], right[0]
+            (u0, d0), (u1, d1) = slope(k0), slope(k1)
+            h, t = k1 - k0, (sigma - k0) / (k1 - k0)
+            if d0 is None or d1 is None:            # the tangent turns across sigma's hyperplane: the chord
+                return u0 + t * (u1 - u0)
+            return ((2 * t ** 3 - 3 * t ** 2 + 1) * u0 + (t ** 3 - 2 * t ** 2 + t) * h * d0
+                    + (3 * t ** 2 - 2 * t ** 3) * u1 + (t ** 3 - t ** 2) * h * d1)
+        k = left[-1] if left else right[0]
+        u, d = slope(k)
+        return u + (sigma - k) * (self.p_a if d is None else d)
+
+    def at(self, sigma):
+        """(u, J, p) on the branch at pseudo-arclength sigma from point a (CorrectorFailure if the
+        corrector does not converge there); J is None where it is not kept (_keep)."""
+        key = float(sigma)
+        if key not in self.cache:
+            u_pred = self.prediction(key)
+            result = self._from_latest(sigma, u_pred)
+            if result is None:
+                result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
+            u, J, _, _, factor = result
+            self.latest = (key, u, factor)
+            self._keep(key, u, J, factor)
+        return self.cache[key]
+
+    def _keep(self, key, u, J, factor):
+        """Cache a located point: u, its Jacobian (only where the multipliers need it: problem.
+        stability_needs_jacobian; else None, since a located point's Jacobian, n x (n + 1), is not used again once
+        its tangent is known: at n = 4,400 a Krein collision's ~30 points kept 4.6 GB of them) and its tangent."""
+        p = tangent_factored(J, self.p_a, self.w, factor)[0]
+        keep = getattr(self.problem, "stability_needs_jacobian", True)
+        self.cache[key] = (u, J if keep else None, p)
+
+    def _from_latest(self, sigma, u_pred):
+        """The point at sigma from the latest located point when it is close (the root finders' last
+        iterations): chord iterations with that point's factorisation, from that point moved to sigma's hyperplane
+        (all the hyperplanes are parallel), to a tolerance CHORD_TOL_FACTOR tighter (chord iterations stop just
+        below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The result must
+        continue the branch: within CHORD_CONTINUITY x |d sigma| of that point, and within JUMP_LIMIT x the
+        distance to the nearest known point (plus the corrector's accuracy) of the prediction (the interpolant of
+        the known points).  Near a tongue a hyperplane can cut the solution curve twice within a step, and another
+        branch can run alongside a few millionths away: on the aircraft's NNM 20 at 37.6 J the chord iterations
+        converged there, 0.16 d sigma off the prediction (points on the branch: below 0.01).  Otherwise None
+        (fresh Newton from the prediction).  (Starting the chord iterations at the prediction instead was tried:
+        on the 2-DOF's 5:1 tongue it placed a branch point 14 % off and lost the tongue's inner loop.)"""
+        if self.latest is None or self.step is None:
+            return None
+        s_l, u_l, factor = self.latest
+        ds = abs(sigma - s_l)
+        if ds > CHORD_REACH * self.step:
+            return None
+        tol = CHORD_TOL_FACTOR * self.tol
+        try:
+            result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
+                                      start=(u_l + (sigma - s_l) * self.p_a, factor))
+        except CorrectorFailure:
+            return None
+        if np.linalg.norm(self.w * (result[0] - u_l)) > CHORD_CONTINUITY * ds + 10 * self.tol:
+            return None
+        nearest = min(abs(sigma - k) for k in self.cache) if self.cache else ds
+        if np.linalg.norm(self.w * (result[0] - u_pred)) > JUMP_LIMIT * nearest + 10 * tol:
+            return None
+        return result
+
+    def energy(self, sigma):
+        return self.problem.energy(self.at(sigma)[0])
+
+    def slope(self, sigma):
+        u, _, p = self.at(sigma)
+        return _energy_slope(self.problem.energy, u, p)
+
+    def multipliers(self, sigma):
+        """Floquet multipliers at sigma (sorted, computed once per point)."""
+        key = float(sigma)
+        if key not in self.spectra:
+            u, J, p = self.at(sigma)
+            self.refresh(u, J)
+            mu = sort_multipliers(self.problem.multipliers(u, p))
+            self.spectra[key] = (mu, getattr(self.problem, "collision", None))
+        return self.spectra[key][0]
+
+    def prefetch(self, sigmas):
+        """Compute the multipliers at several sigmas with their eigenproblems side by side: all but the last in
+        the worker thread (problem.multipliers_later), the last in this one.  Only where the problem computes them
+        in the background (problem.background_spectrum); else nothing is done here (multipliers computes each one
+        when asked)."""
+        todo = [float(x) for x in sigmas if float(x) not in self.spectra]
+        if len(todo) < 2 or not getattr(self.problem, "background_spectrum", False):
+            return
+        jobs = []
+        for key in todo[:-1]:
+            u, J, p = self.at(key)
+            self.refresh(u, J)
+            jobs.append((key, self.problem.multipliers_later(u, p)))
+        self.multipliers(todo[-1])
+        for key, job in jobs:
+            mu, collision = job()
+            self.spectra[key] = (sort_multipliers(mu), collision)
+
+    def refresh(self, u, J):
+        """Make u the problem's accepted point; its monodromy is that of the latest Jacobian evaluation,
+        so it is evaluated again when a later point was computed since (a cached u)."""
+        last = getattr(self.problem, "_last_residual", None)
+        # (quarter-period shooting sweeps the maps of its multipliers at the accepted point itself)
+        needs = getattr(self.problem, "stability_needs_jacobian", True)
+        if needs and last is not None and not np.array_equal(last[0], u):
+            _, J = self.problem.jacobian(u)
+        self.problem.accept(u, J)
+
+    def stable(self, sigma, tol=STABILITY_TOL):
+        """The stability flag at sigma (floquet.is_stable; tol: on the multipliers' modulus excess)."""
+        return is_stable(self.multipliers(sigma), tol)
+
+    def local_collision(self, sigma, shift):
+        """The problem's collision coordinates at sigma nearest ``shift`` (problem.local_collision), or None."""
+        if not hasattr(self.problem, "local_collision"):
+            return None
+        u, J, p = self.at(sigma)
+        self.refresh(u, J)
+        return self.problem.local_collision(p, shift)
+
+    def collision(self, sigma):
+        """Collision coordinates of the multipliers at sigma (problem.collision), or None."""
+        self.multipliers(sigma)
+        return self.spectra[float(sigma)][1]
+
+    def real_crossing(self, sigma):
+        """max_i |Re rho_i| - 1, rho = (mu + 1/mu) / 2 over the non-trivial multipliers:
+        smooth through a real pair's collision at +1 or -1 (rho = cos(theta) on the circle, cosh or
+        -cosh off it), negative while stable; its zero is where the pair leaves the circle."""
+        return real_crossing(self.multipliers(sigma))
+
+    def root(self, g, lo, hi, g_lo=None, g_hi=None, max_iter=60, converged=None):
+        """sigma in [lo, hi] where g changes sign (Illinois variant of regula falsi).  converged(a, b, fa, fb)
+        : when to stop (default: the energies at the bracket's ends agree to the locator's rtol)."""
+        converged = converged or (lambda a_, b_, fa_, fb_: self._converged(a_, b_))
+        a, fa = lo, (g(lo) if g_lo is None else g_lo)
+        b, fb = hi, (g(hi) if g_hi is None else g_hi)
+        side = 0
+        for _ in range(max_iter):
+            if fa == 0.0 or fb == 0.0 or converged(a, b, fa, fb):
+                break
+            c = (a * fb - b * fa) / (fb - fa)
+            if not min(a, b) < c < max(a, b):
+                c = 0.5 * (a + b)
+            fc = g(c)
+            if fc * fb > 0:
+                b, fb = c, fc
+                if side == -1:
+                    fa *= 0.5
+                side = -1
+            elif fc * fa > 0:
+                a, fa = c, fc
+                if side == 1:
+                    fb *= 0.5
+                side = 1
+            else:
+                return c
+        return a if abs(fa) <= abs(fb) else b
+
+    def fold_converged(self, a, b, ga, gb):
+        """Stop rule of a fold's root on the energy slope g = dE/dsigma: the energy of the better end lies
+        below the extremum by about g^2 / (2 |dg/dsigma|) (the parabola through the extremum), within
+        rtol / 10 of it.  (Equal energies at the bracket's ends are no test here: two points on either
+        side of an extremum have them while far from it.)"""
+        if abs(b - a) <= 1e-12 * max(1.0, abs(b)):
+            return True
+        curvature = abs((gb - ga) / (b - a))
+        best = min(abs(ga), abs(gb))
+        try:
+            E = abs(self.energy(a if abs(ga) <= abs(gb) else b))
+        except CorrectorFailure:
+            return False
+        return curvature > 0 and best * best / (2 * curvature) <= 0.1 * self.rtol * E
+
+    def around(self, sigma):
+        """The known points nearest sigma on each side (sigma keys; None where there is none)."""
+        keys = sorted(k for k in self.cache if k != float(sigma))
+        left = [k for k in keys if k < sigma]
+        right = [k for k in keys if k > sigma]
+        return (left[-1] if left else None), (right[0] if right else None)
+
+    def bisect(self, flag, lo, hi, max_iter=60):
+        """sigma at the change of a boolean flag between lo and hi (flag(lo) != flag(hi))."""
+        f_lo = flag(lo)
+        for _ in range(max_iter):
+            if self._converged(lo, hi):
+                break
+            mid = 0.5 * (lo + hi)
+            if flag(mid) == f_lo:
+                lo = mid
+            else:
+                hi = mid
+        return lo, hi
+
+    def _converged(self, lo, hi):
+        if abs(hi - lo) <= 1e-12 * max(1.0, abs(hi)):
+            return True
+        try:
+            E_lo, E_hi = self.energy(lo), self.energy(hi)
+        except CorrectorFailure:
+            return False
+        return abs(E_hi - E_lo) <= self.rtol * max(abs(E_lo), abs(E_hi))
