@@ -6,14 +6,21 @@ dominated by the mode's fundamental, passing the internal-resonance tongues it m
 computed once from its entry through its turning points.  Reported: the frequency change along the
 backbone, the mass-weighted MAC between the low- and high-energy shapes, and for each tongue its ratio,
 partner mode (and its kind), entry, folds and tip.  Figures like the seed paper's Figs. 8-12; the
-results table of docs/paris_results.md (between its ``paris_fep`` markers); the branches written into
-the model file (atomically, thinned to keep it under 25 MB) so that ``nnm-view`` opens with them.
+branches written (atomically, thinned to keep it under 25 MB) into a copy of the model file so that
+``nnm-view`` opens with them.
 
-    python examples/paris_fep.py                  # modes 10, 13, 19, 20 -> docs/img/paris_*.png, table, assets/paris.h5
-    python examples/paris_fep.py --integrator gauss6 --steps 200   # as shipped (converged tongues; docs/paris_results.md)
+A run writes into the current folder and leaves the shipped results alone: the model and the new
+branches go to ``--out`` (default ``./paris_fep.h5``, the model copied from ``--model``, by default
+assets/paris.h5), the figures to ``--out-dir`` (default ``./paris_fep_figures/``).  The shipped file
+assets/paris.h5 (the ``paris.h5`` that ``nnm-view`` lists), docs/img and the tables of
+docs/paris_results.md are only written with ``--update-shipped`` (maintainers, regenerating them).
+
     python examples/paris_fep.py --fast           # modes 13 and 20, 40 steps/period, no tongues, no Floquet (~1 min)
-    python examples/paris_fep.py --from-file      # no computation: tables and figures from the branches in the file
-    nnm-view assets/paris.h5
+    nnm-view paris_fep.h5                         # the model with the branches just computed
+    python examples/paris_fep.py                  # modes 10, 13, 19, 20 -> ./paris_fep.h5, ./paris_fep_figures/
+    python examples/paris_fep.py --from-file      # no computation: tables and figures from the shipped branches
+    python examples/paris_fep.py --integrator gauss6 --steps 200 --update-shipped
+        # maintainers: the shipped results (converged tongues) -> assets/paris.h5, docs/img, docs/paris_results.md
 
 Paper mode numbers (Table 2) are mapped to this model's modes by their labels (first wing bending,
 first tail bending, first symmetric / anti-symmetric wing torsion) when the file has mode labels;
@@ -47,6 +54,12 @@ from nnm_solver import analysis  # noqa: E402
 from nnm_solver.files.h5file import atomic_file  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the shipped model file (nnm_viewer/data links to assets/: ``nnm-view paris.h5`` shows it); written only
+#: with --update-shipped
+SHIPPED = ROOT / "assets" / "paris.h5"
+#: defaults of a run without --update-shipped: files in the current folder
+DEFAULT_OUT = "paris_fep.h5"
+DEFAULT_FIGURES = "paris_fep_figures"
 DPI = 100
 
 #: what the paper says about each mode (seed paper, section 4.2)
@@ -598,9 +611,39 @@ def branch_names(m, mm):
     return base
 
 
-def main(argv=None):
+def same_file(a, b):
+    a, b = Path(a), Path(b)
+    try:
+        return a.resolve() == b.resolve() or (a.exists() and b.exists() and a.samefile(b))
+    except OSError:
+        return False
+
+
+def output_file(args):
+    """The nnm file this run writes (None: nothing is saved), or the one-line reason why it is refused.
+
+    Without --update-shipped the shipped assets/paris.h5 is never written: the default is ./paris_fep.h5
+    in the current folder (the model copied from --model), and an --out naming the shipped file is refused.
+    """
+    if args.update_shipped and args.out is not None and not same_file(args.out, SHIPPED):
+        return (f"--update-shipped writes {SHIPPED} and --out writes {args.out}: give one of them")
+    if args.no_save or args.from_file:
+        return None
+    if args.update_shipped:
+        return SHIPPED
+    target = Path(args.out or DEFAULT_OUT)
+    if same_file(target, SHIPPED):
+        return (f"{target} is the shipped example (nnm-view shows it as paris.h5): write your branches to another "
+                f"file with --out PATH (default ./{DEFAULT_OUT}), or regenerate the shipped file with --update-shipped")
+    if not target.resolve().parent.is_dir():
+        return f"cannot write {target}: folder {target.parent} does not exist"
+    return target
+
+
+def build_parser():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--model", default=str(ROOT / "assets" / "paris.h5"), help="nnm file with the aircraft model")
+    p.add_argument("--model", default=str(SHIPPED), help="nnm file with the aircraft model (default: the shipped "
+                   "assets/paris.h5, only read)")
     p.add_argument("--fast", action="store_true", help="modes 13 and 20 only, coarse time steps, no tongue branches")
     p.add_argument("--modes", default=None, help="paper modes to compute, e.g. 10,13,19,20")
     p.add_argument("--map", nargs="*", help="paper=model mode overrides, e.g. 13=14")
@@ -611,12 +654,19 @@ def main(argv=None):
     p.add_argument("--max-points", type=int, default=None, help="points per backbone (default 120, fast 30)")
     p.add_argument("--tongue-points", type=int, default=80, help="points per tongue branch (default 80)")
     p.add_argument("--no-tongues", action="store_true", help="backbones only (default with --fast)")
-    p.add_argument("--out-dir", default=str(ROOT / "docs" / "img"), help="folder of the PNG figures")
-    p.add_argument("--save-to", default=None, help="nnm file written with the model and the branches (default: --model)")
+    p.add_argument("--out-dir", default=None, help=f"folder of the PNG figures (default: ./{DEFAULT_FIGURES}; "
+                   "docs/img with --update-shipped)")
+    p.add_argument("--out", "--save-to", dest="out", default=None, metavar="PATH",
+                   help=f"nnm file written with the model (copied from --model) and the branches (default: "
+                        f"./{DEFAULT_OUT} in the current folder)")
+    p.add_argument("--update-shipped", action="store_true",
+                   help="maintainers: regenerate the shipped results, i.e. write the branches into assets/paris.h5 "
+                        "(the file nnm-view shows as paris.h5), the figures into docs/img and, for a full run, the "
+                        "tables into docs/paris_results.md")
     p.add_argument("--no-save", action="store_true", help="do not save the branches")
     p.add_argument("--keep-all", action="store_true", help="save every point (no thinning to keep the file small)")
-    p.add_argument("--doc", default=None, help="markdown file whose generated table is replaced (default: "
-                   "docs/paris_results.md for a full run, none with --fast)")
+    p.add_argument("--doc", default=None, help="markdown file whose generated table is replaced (default: none; "
+                   "docs/paris_results.md for a full run with --update-shipped)")
     p.add_argument("--from-file", action="store_true",
                    help="no computation: analyse and draw the branches already saved in --model")
     p.add_argument("--branches-from", nargs="+", default=None, metavar="FILE",
@@ -626,11 +676,19 @@ def main(argv=None):
     p.add_argument("--times-from", nargs="*", default=None, metavar="JSON",
                    help="with --branches-from: the --summary files of those runs (for the run times)")
     p.add_argument("--summary", default=None, help="JSON file with the numbers")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
     t_all = time.perf_counter()
     model_path = Path(args.model)
     if not model_path.exists():
         print(f"error: {model_path} does not exist (build it with examples/build_paris.py)", file=sys.stderr)
+        return 2
+    target = output_file(args)
+    if isinstance(target, str):                      # a refusal, before anything is computed
+        print(f"error: {target}", file=sys.stderr)
         return 2
     model = nnm.load_model(model_path)
     wanted = [int(m) for m in args.modes.split(",")] if args.modes else ([13, 20] if args.fast else [10, 13, 19, 20])
@@ -642,7 +700,7 @@ def main(argv=None):
     do_tongues = not (args.fast or args.no_tongues)
     integrator = args.integrator
     opts = dict(steps_per_period=spp, tol=tol, floquet=floquet, integrator=integrator)
-    out_dir = Path(args.out_dir)
+    out_dir = Path(args.out_dir or (ROOT / "docs" / "img" if args.update_shipped else DEFAULT_FIGURES))
     out_dir.mkdir(parents=True, exist_ok=True)
     freqs, _ = model.linear_modes()
     how = ("settings of the saved branches" if args.from_file or args.branches_from
@@ -748,11 +806,10 @@ def main(argv=None):
         tol = getattr(first.settings, "tol", tol)
         integrator = getattr(first.settings, "integrator", integrator)
     table = results_table(results, times, spp, tol, integrator)
-    doc = args.doc or (None if args.fast else str(ROOT / "docs" / "paris_results.md"))
+    doc = args.doc or (str(ROOT / "docs" / "paris_results.md") if args.update_shipped and not args.fast else None)
     if doc and not args.from_file:
         update_doc(doc, [table, table2_markdown(model)])
-    if not args.no_save and not args.from_file:
-        target = Path(args.save_to or model_path)
+    if target is not None:
         every, keep = [], []
         for m in wanted:
             every.append(branches[m])
@@ -769,6 +826,8 @@ def main(argv=None):
     print(table)
     for f in figs:
         print(f"wrote {f} ({f.stat().st_size // 1024} kB)")
+    if target is not None:
+        print(f"open the branches with: nnm-view {target}")
     print(f"total {total:.1f} s; load average {os.getloadavg()[0]:.2f}")
     return 0
 

@@ -29,6 +29,10 @@ from .analysis import (HarmonicContent, Tongue, describe_orbit, dominant_harmoni
                        mass_mac, orbit_shape)
 from ._moved import MOVED as _MOVED
 from ._moved import install as _install_moved
+from .results.forced import ForcedResponse
+from .analysis.energy_balance import energy_balance
+from .driver.forced import forced_response
+from .files.forced_io import load_forced_responses, save_forced_response
 
 _install_moved()
 
@@ -61,6 +65,8 @@ __all__ = [
     "mac_orbits", "mass_mac", "orbit_shape",
     # errors
     "NNMInputError", "NNMFileError",
+    # forced responses (docs/forced.md)
+    "forced_response", "energy_balance", "ForcedResponse", "save_forced_response", "load_forced_responses",
 ]
 
 __version__ = "0.1.0"

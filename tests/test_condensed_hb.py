@@ -118,3 +118,68 @@ def test_bad_condensed_option_is_one_clear_error():
         nnm.continue_nnm(two_dof(), 1, 1.0, method="hb", condensed="yes")
     with pytest.raises(nnm.NNMInputError, match="condensed"):
         nnm.continue_nnm(two_dof(), 1, 1.0, condensed=True)          # shooting has no condensed form
+
+
+def sparse_cantilever(n_el, length=1.0, EI=43.75, rhoA=0.78, k3=1e7):
+    """A clamped-free Euler-Bernoulli beam of n_el Hermite elements as sparse matrices (2 n_el DOFs), with a
+    grounded cubic spring at the tip deflection (the strip of reference_models, defaults)."""
+    import scipy.sparse as sp
+    h = length / n_el
+    ke = EI / h ** 3 * np.array([[12.0, 6 * h, -12.0, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                                 [-12.0, -6 * h, 12.0, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]])
+    me = rhoA * h / 420.0 * np.array([[156.0, 22 * h, 54.0, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+                                      [54.0, 13 * h, 156.0, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]])
+    idx = 2 * np.arange(n_el)[:, None] + np.arange(4)[None, :]
+    rows = np.repeat(idx, 4, axis=1).ravel()
+    cols = np.tile(idx, (1, 4)).ravel()
+    N = 2 * (n_el + 1)
+    K = sp.csr_matrix((np.tile(ke.ravel(), n_el), (rows, cols)), shape=(N, N))[2:, 2:]
+    M = sp.csr_matrix((np.tile(me.ravel(), n_el), (rows, cols)), shape=(N, N))[2:, 2:]
+    return nnm.Model(M.tocsr(), K.tocsr(), [nnm.CubicSpring(dof=2 * n_el - 2, k3=k3)])
+
+
+def test_ritz_basis_equals_the_full_basis_on_a_model_where_both_run():
+    """A 300-element cantilever (600 DOFs): the Ritz basis (modes below 2 H f + residual flexibility) gives the
+    full basis's frequencies to 1e-8 and its orbits to 1e-5 at the tip; the basis holds the exact low modes."""
+    from nnm_solver.model.ritz import ritz_system
+    model = sparse_cantilever(300)
+    a = nnm.continue_nnm(model, 1, 5e-3, method="hb", harmonics=5, condensed=True, floquet=False, modal_basis="full")
+    b = nnm.continue_nnm(model, 1, 5e-3, method="hb", harmonics=5, condensed=True, floquet=False, modal_basis="ritz")
+    assert a.status == b.status == "done"
+    assert b.settings.modal_basis == "ritz" and b.settings.cutoff_hz > 9 * a.frequency_hz[0]
+    assert abs(b.frequency_hz[-1] / a.frequency_hz[-1] - 1) < 1e-8
+    assert abs(a.frequency_hz[-1] / a.frequency_hz[0] - 1) > 1e-3                # nonlinear enough to matter
+    tip = 598
+    assert abs(b.x0[-1, tip] / a.x0[-1, tip] - 1) < 1e-5
+    system = ritz_system(model, 1, 5)
+    lam, _ = model.eigensolution
+    m = system.exact_modes
+    assert np.allclose(system.omega2[:m], lam[:m], rtol=1e-9)
+    assert system.n == m + 2 * len(model.springs) and np.all(system.omega2[m:] >= lam[m] * (1 - 1e-9))
+
+
+def lattice(N=100, k=1e4, m=0.5, k3=1e9):
+    """N x N unit cells of masses m (kg) moving out of plane, springs k (N/m) to the four neighbours and to the
+    fixed frame, a grounded cubic spring k3 (N/m^3) at a node near the centre: N^2 DOFs, sparse.  Linear
+    eigenvalues in closed form: (k / m) (4 sin^2(p pi / (2 (N + 1))) + 4 sin^2(q pi / (2 (N + 1))))."""
+    import scipy.sparse as sp
+    T = sp.diags([-np.ones(N - 1), 2 * np.ones(N), -np.ones(N - 1)], [-1, 0, 1])
+    I = sp.identity(N)
+    K = (k * (sp.kron(T, I) + sp.kron(I, T))).tocsr()
+    return nnm.Model(m * sp.identity(N * N, format="csr"), K, [nnm.CubicSpring(dof=(N // 2) * N + N // 2, k3=k3)])
+
+
+@pytest.mark.slow
+def test_a_ten_thousand_dof_lattice_runs_with_its_first_point_at_the_exact_linear_frequency():
+    N, k, m = 100, 1e4, 0.5
+    model = lattice(N, k, m)                       # 10,000 DOFs: above the dense eigensolution's limit
+    b = nnm.continue_nnm(model, 1, 2e-2, method="hb", harmonics=5, condensed=True, floquet=False)
+    assert b.status == "done" and b.settings.modal_basis == "ritz", b.message
+    f1 = np.sqrt(k / m * 8 * np.sin(np.pi / (2 * (N + 1))) ** 2) / (2 * np.pi)
+    from nnm_solver.model.ritz import ritz_system
+    assert abs(np.sqrt(ritz_system(model, 1, 5).omega2[0]) / (2 * np.pi) / f1 - 1) < 1e-10
+    # the first point holds START_NONLINEARITY = 1e-5 of its energy in the spring: a shift of that order
+    assert 0 < b.frequency_hz[0] / f1 - 1 < 2e-5
+    assert b.frequency_hz[-1] > 1.003 * b.frequency_hz[0]                   # the spring hardens it (0.5 %)
+    assert b.x0.shape == (len(b), N * N)
+    assert np.isclose(model.energy(b.x0[-1], b.v0[-1]), 2e-2, rtol=1e-6)

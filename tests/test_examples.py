@@ -1,7 +1,9 @@
 """The examples' fast modes run end to end and show what they demonstrate."""
+import hashlib
 import importlib.util
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +16,28 @@ from nnm_solver import analysis
 
 ROOT = Path(__file__).resolve().parents[1]
 PARIS = ROOT / "assets" / "paris.h5"
+
+
+def sha256(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def paris_copy(tmp_path):
+    """A copy of the repository's layout for examples/paris_fep.py (the script and assets/paris.h5): the
+    script's ROOT is then the copy, so that whatever it writes cannot touch the real assets/ or docs/."""
+    repo = tmp_path / "repo"
+    (repo / "examples").mkdir(parents=True)
+    (repo / "assets").mkdir()
+    shutil.copy(ROOT / "examples" / "paris_fep.py", repo / "examples" / "paris_fep.py")
+    shutil.copy(PARIS, repo / "assets" / "paris.h5")
+    return repo
+
+
+def run_paris(repo, *args, timeout=300):
+    # a separate process, so that the script's one-thread BLAS setting applies (see examples/paris_fep.py)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    return subprocess.run([sys.executable, "examples/paris_fep.py", *map(str, args)], cwd=repo, env=env,
+                          capture_output=True, text=True, timeout=timeout)
 
 
 def load_example(name):
@@ -60,12 +84,14 @@ def test_paris_fast(tmp_path):
         pytest.skip("assets/paris.h5 is not there (built by examples/build_paris.py)")
     summary = tmp_path / "summary.json"
     out = tmp_path / "paris_branches.h5"
+    shipped = sha256(PARIS)
     # a separate process, so that the script's one-thread BLAS setting applies (see examples/paris_fep.py)
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     run = subprocess.run([sys.executable, str(ROOT / "examples" / "paris_fep.py"), "--fast", "--out-dir",
-                          str(tmp_path), "--save-to", str(out), "--summary", str(summary)],
+                          str(tmp_path), "--out", str(out), "--summary", str(summary)],
                          env=env, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
+    assert sha256(PARIS) == shipped
     s = json.loads(summary.read_text())["modes"]
     m13, m20 = s["13"], s["20"]
     # tail bending: frequency unchanged (< 0.5 %) over the energy range where wing torsion softens
@@ -78,6 +104,69 @@ def test_paris_fast(tmp_path):
     assert len(nnm.load_branches(out)) == 2
     for png in tmp_path.glob("*.png"):
         assert png.stat().st_size < 150_000, png
+
+
+@pytest.mark.slow
+def test_paris_tutorial_command_leaves_the_shipped_file_alone(tmp_path):
+    """docs/tutorial.md's `python examples/paris_fep.py --fast` (issue 32, item 1) writes ./paris_fep.h5 and
+    ./paris_fep_figures/ in the current folder; assets/paris.h5 (what `nnm-view paris.h5` shows) stays
+    byte-identical, and docs/ is not written.  Run on a copy of the layout, so the test cannot damage anything;
+    the real file is checked too.  Only --update-shipped writes the shipped file."""
+    if not PARIS.exists():
+        pytest.skip("assets/paris.h5 is not there (built by examples/build_paris.py)")
+    real = sha256(PARIS)
+    repo = paris_copy(tmp_path)
+    shipped = repo / "assets" / "paris.h5"
+    before = sha256(shipped)
+    run = run_paris(repo, "--fast")                      # exactly the tutorial's command, from the repository root
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "wrote 2 branches to paris_fep.h5" in run.stdout
+    assert "open the branches with: nnm-view paris_fep.h5" in run.stdout
+    assert sha256(shipped) == before and sha256(PARIS) == real
+    assert not (repo / "docs").exists()                  # neither docs/img figures nor docs/paris_results.md
+    assert sorted(f.name for f in (repo / "paris_fep_figures").glob("*.png")) == [
+        "paris_fep_mode13.png", "paris_fep_mode20.png", "paris_fep_overview.png"]
+    out = repo / "paris_fep.h5"
+    model = nnm.load_model(out)                          # the shipped model, copied ...
+    ref = nnm.load_model(shipped)
+    assert model.n == ref.n and model.springs == ref.springs and model.mesh is not None
+    assert sorted(b.name for b in nnm.load_branches(out, model)) == ["mode13", "mode20"]    # ... with the new branches
+    assert len(nnm.load_branches(shipped, ref)) == 8                                         # the shipped ones kept
+    # the maintainers' regeneration, asked for explicitly (here from the branches just computed: no computation)
+    run = run_paris(repo, "--branches-from", "paris_fep.h5", "--modes", "13,20", "--fast", "--update-shipped")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert f"wrote 2 branches to {shipped}" in run.stdout
+    assert sorted(b.name for b in nnm.load_branches(shipped)) == ["mode13", "mode20"]
+    assert (repo / "docs" / "img" / "paris_fep_overview.png").exists()
+    assert sha256(PARIS) == real
+
+
+def test_paris_refuses_to_write_the_shipped_file_without_update_shipped(tmp_path, monkeypatch, capsys):
+    """An --out naming the shipped file is refused before anything is computed (exit 2, one line).  The
+    script of the copied layout runs in this process (its ROOT is the copy)."""
+    if not PARIS.exists():
+        pytest.skip("assets/paris.h5 is not there (built by examples/build_paris.py)")
+    repo = paris_copy(tmp_path)
+    shipped = repo / "assets" / "paris.h5"
+    before = sha256(shipped)
+    spec = importlib.util.spec_from_file_location("example_paris_fep_copy", repo / "examples" / "paris_fep.py")
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    assert ex.SHIPPED == shipped
+    monkeypatch.chdir(repo)
+    for args, msg in [(("--fast", "--out", "assets/paris.h5"),
+                       "assets/paris.h5 is the shipped example (nnm-view shows it as paris.h5): write your branches "
+                       "to another file with --out PATH (default ./paris_fep.h5), or regenerate the shipped file "
+                       "with --update-shipped"),
+                      (("--fast", "--save-to", shipped), "is the shipped example"),
+                      (("--fast", "--update-shipped", "--out", "mine.h5"), "give one of them")]:
+        assert ex.main([str(a) for a in args]) == 2, args
+        out, err = capsys.readouterr()
+        err = err.strip()
+        assert "\n" not in err and err.startswith("error: ") and msg in err, err
+        assert out == ""                                    # refused before loading the model or computing
+    assert sha256(shipped) == before
+    assert sorted(p.name for p in repo.iterdir()) == ["assets", "examples"]
 
 
 def test_bilinear_attachment_two_dof(tmp_path):

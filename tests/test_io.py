@@ -157,3 +157,125 @@ def test_written_files_have_normal_permissions(tmp_path):
     os.chmod(p, 0o640)
     nnm.save_model(p, two_dof_model())
     assert p.stat().st_mode & 0o777 == 0o640
+
+
+# ---------------------------------------------------------------------- a branch of another model (issue 32, item 2)
+K2 = np.array([[2.0, -1.0], [-1.0, 2.0]])
+OTHER_MODELS = {
+    "other K": (nnm.Model(np.eye(2), 3 * K2, [nnm.CubicSpring(dof=0, k3=0.5)]), "K differs by up to 66.7 % of its largest entry"),
+    "other M": (nnm.Model(2 * np.eye(2), K2, [nnm.CubicSpring(dof=0, k3=0.5)]), "M differs"),
+    "other spring position": (nnm.Model(np.eye(2), K2, [nnm.CubicSpring(dof=1, k3=0.5)]),
+                              "spring 0 joins DOFs 1-ground in the file, 0-ground in the branch's model"),
+    "relative spring": (nnm.Model(np.eye(2), K2, [nnm.CubicSpring(dof=0, other=1, k3=0.5)]),
+                        "spring 0 joins DOFs 0-1 in the file, 0-ground"),
+    "other spring count": (nnm.Model(np.eye(2), K2, [nnm.CubicSpring(dof=0, k3=0.5),
+                                                     nnm.CubicSpring(dof=1, k3=1.0)]),
+                           "the file's model has 2 springs, the branch's 1"),
+    "other spring law": (nnm.Model(np.eye(2), K2, [nnm.PolynomialSpring(dof=0, coefficients={3: 0.5, 5: 1.0})]),
+                         "spring 0 is a PolynomialSpring in the file, a CubicSpring"),
+    "other DOF count": (nnm.Model(np.eye(3), np.diag([2.0, 2.0, 2.0]), [nnm.CubicSpring(dof=0, k3=0.5)]),
+                        "the file's model has 3 DOFs but the branch has 2"),
+    "sparse K": (nnm.Model(sp.identity(2, format="csr"), sp.csr_matrix(3 * K2), [nnm.CubicSpring(dof=0, k3=0.5)]),
+                 "K differs"),
+}
+
+
+@pytest.mark.parametrize("case", list(OTHER_MODELS))
+def test_branch_of_another_model_is_refused_and_file_untouched(tmp_path, two_dof_nnm1, case):
+    other, what = OTHER_MODELS[case]
+    p = tmp_path / "chain.h5"
+    nnm.save_model(p, other)
+    before = p.read_bytes()
+    with pytest.raises(NNMInputError) as err:
+        nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 5)))
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"{p} holds another model than this branch's (")
+    assert what in msg
+    assert "the file was left unchanged: save the branch to another file name, e.g. " in msg
+    assert p.read_bytes() == before
+    assert [f for f in os.listdir(tmp_path) if f != "chain.h5"] == []      # no temporary file left either
+    assert nnm.load_branches(p) == []
+
+
+def test_file_with_branches_refuses_a_branch_of_another_model(tmp_path, two_dof_nnm1):
+    """The issue's case: chain.h5 made from one description, then a branch of another model saved there."""
+    p = tmp_path / "chain.h5"
+    nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 5)))
+    before = p.read_bytes()
+    b = two_dof_nnm1.subset(slice(0, 5))
+    b.model = nnm.Model(2 * np.eye(2), 3 * K2, [nnm.CubicSpring(dof=1, k3=1.5)])
+    with pytest.raises(NNMInputError, match=r"spring 0 joins DOFs 0-ground in the file, 1-ground in the branch's "
+                                            r"model; M differs by up to 50 % of its largest entry; K differs by up to "
+                                            r"66\.7 % of its largest entry\); the file was left unchanged"):
+        nnm.save_branch(p, b)
+    assert p.read_bytes() == before
+    assert [x.name for x in nnm.load_branches(p)] == ["mode1"]
+
+
+def test_refusal_names_a_free_file_name(tmp_path, two_dof_nnm1):
+    p = tmp_path / "chain.h5"
+    nnm.save_model(p, OTHER_MODELS["other K"][0])
+    with pytest.raises(NNMInputError,
+                       match=r"another file name, e\.g\. .*chain_2\.h5 \(nnm-solve: --out .*chain_2\.h5\)$"):
+        nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 3)))
+    (tmp_path / "chain_2.h5").write_bytes(b"taken")
+    with pytest.raises(NNMInputError, match=r"e\.g\. .*chain_3\.h5"):
+        nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 3)))
+    # the remedy works: the named file takes the branch
+    nnm.save_branch(tmp_path / "chain_3.h5", two_dof_nnm1.subset(slice(0, 3)))
+    assert len(nnm.load_branches(tmp_path / "chain_3.h5")) == 1
+
+
+def test_branch_of_the_same_model_with_another_k3_is_appended(tmp_path, two_dof_nnm1):
+    """The viewer's stiffness slider and scaled branches: only the cubic springs' k3 differ, and each branch
+    is read back with its own k3."""
+    p = tmp_path / "b.h5"
+    nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 5)))
+    scaled = two_dof_nnm1.subset(slice(0, 5)).scaled(3.0)
+    own = two_dof_nnm1.subset(slice(0, 5))
+    own.model = two_dof_model(k3=-2.0)                  # rebuilt with another k3 (equal matrices, another object)
+    nnm.save_branch(p, scaled)
+    nnm.save_branch(p, own, name="softened")
+    bs = nnm.load_branches(p)
+    assert [b.model.k3[0] for b in bs] == [pytest.approx(0.5), pytest.approx(1.5), pytest.approx(-2.0)]
+    assert bs[2].name == "softened"
+    assert nnm.load_model(p).k3[0] == pytest.approx(0.5)      # the file's model is unchanged
+
+
+def test_same_model_read_back_from_the_file_is_accepted(tmp_path, two_dof_nnm1):
+    """A branch computed on the model loaded from the file (sparse or dense matrices) is appended."""
+    p = tmp_path / "s.h5"
+    m = nnm.Model(sp.identity(2, format="csr"), sp.csr_matrix(K2), [nnm.CubicSpring(dof=0, k3=0.5)])
+    nnm.save_model(p, m)
+    b = two_dof_nnm1.subset(slice(0, 4))
+    b.model = nnm.load_model(p)
+    nnm.save_branch(p, b)
+    b.model = two_dof_model()                           # the same numbers as dense matrices
+    nnm.save_branch(p, b)
+    assert len(nnm.load_branches(p)) == 2
+
+
+def test_sweep_branch_of_a_recorded_variant_is_accepted(tmp_path, two_dof_nnm1):
+    """A sweep branch ``<variant>:mode<N>`` carries its variant's model (other K, M, springs) and is read back
+    with it; the same name with a model that is not the variant's is refused."""
+    from nnm_solver.sweeps import prepare_file
+
+    base = two_dof_model()
+    v = nnm.Variant(name="stiff", spring_factor=2.0, added_stiffness=[(1, 0.3)], mass_factor=1.5)
+    p = tmp_path / "sweep.h5"
+    prepare_file(p, base, [v], 1.0, {"stiff:mode1"})
+    b = two_dof_nnm1.subset(slice(0, 4))
+    b.model = v.apply(base)
+    b.name = "stiff:mode1"
+    nnm.save_branch(p, b)
+    back = nnm.load_branches(p)[0]
+    assert back.name == "stiff:mode1" and np.allclose(back.model.K, v.apply(base).K)
+    before = p.read_bytes()
+    wrong = two_dof_nnm1.subset(slice(0, 4))
+    wrong.name = "stiff:mode1"                          # the base model under the variant's name
+    with pytest.raises(NNMInputError, match="with sweep variant 'stiff'"):
+        nnm.save_branch(p, wrong)
+    assert p.read_bytes() == before
+    # a branch of the base model under another name is fine
+    nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 4)))
+    assert len(nnm.load_branches(p)) == 2

@@ -207,7 +207,7 @@ def _method_arguments(args):
 
 def _run(args):
     from . import exchange as cli_exchange
-    from ..files.io import save_branch
+    from ..files.io import check_branch_file, save_branch
     from ..driver.jobs import start_branch
 
     model, ref = _load(args.file)
@@ -217,6 +217,7 @@ def _run(args):
     if args.mode is None or args.energy_max is None:
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
     out = _output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
+    check_branch_file(out, model)              # a file of another model: refused before anything is computed
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     cli_exchange.check_exports(args, model)

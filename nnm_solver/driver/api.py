@@ -21,6 +21,7 @@ from ..errors import NNMInputError
 from .iterator import NNMIterator
 from .tongue_skip import leaves_backbone
 from ..model.modal import modal_system
+from ..model.ritz import ritz_system
 from ..model.model import Model
 from ..orbits.condensed_hb import CondensedHBProblem
 from ..orbits.harmonic_balance import HBProblem
@@ -41,7 +42,11 @@ METHODS = ("shooting", "hb")
 HILL_AUTO_SIZE = 1000
 
 _SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None, integrator="newmark")
-_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None, condensed=False)
+_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None, condensed=False, modal_basis=None)
+
+#: harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs
+RITZ_MIN_DOF = 2000
+MODAL_BASES = ("full", "ritz")
 
 
 def check_positive(name, value, integer=False):
@@ -51,8 +56,9 @@ def check_positive(name, value, integer=False):
         raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
 
 
-def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min):
-    """Validate the arguments every branch computation shares; returns the 0-based mode index."""
+def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=True):
+    """Validate the arguments every branch computation shares; returns the 0-based mode index.
+    modes_known=False: the mode number is only checked against the DOF count (the Ritz basis checks the rest)."""
     if not isinstance(model, Model):
         raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
     check_positive("energy_max", energy_max)
@@ -62,6 +68,10 @@ def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
         check_positive("energy_min", energy_min)
         if energy_min >= energy_max:
             raise NNMInputError(f"energy_min ({energy_min:g} J) must be below energy_max ({energy_max:g} J)")
+    if not modes_known:
+        if not isinstance(mode, (int, np.integer)) or isinstance(mode, bool) or not 1 <= mode <= model.n:
+            raise NNMInputError(f"mode must be an integer in 1..{model.n} (1-based), got {mode!r}")
+        return int(mode) - 1
     return model.check_mode(mode)
 
 
@@ -109,6 +119,16 @@ def _method_options(method, options):
             where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'!r}" if key in other else ""
             raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
     return method, {**own, **options}
+
+
+def _modal_basis(model, opts):
+    """The modal basis harmonic balance works in: "full" (every mode, exact) or "ritz" (model/ritz.py)."""
+    basis = opts.get("modal_basis")
+    if basis is None:
+        return "ritz" if model.n > RITZ_MIN_DOF else "full"
+    if basis not in MODAL_BASES:
+        raise NNMInputError(f"modal_basis must be one of {MODAL_BASES} or None (automatic), got {basis!r}")
+    return basis
 
 
 def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
@@ -172,8 +192,11 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
         p0[:-1] = A0.ravel() / a0
     if floquet is None:
         floquet = 2 * system.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
+    cutoff = getattr(system, "cutoff_hz", None)
     settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
-                                       energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed))
+                                       energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed),
+                                       modal_basis="full" if cutoff is None else "ritz",
+                                       cutoff_hz=0.0 if cutoff is None else float(cutoff))
     return problem, u0, p0, settings
 
 
@@ -204,7 +227,8 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     method, opts = _method_options(method, method_options)
     if tol is None:
         tol = 1e-6 if method == "shooting" else 1e-8
-    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min)
+    ritz = method == "hb" and _modal_basis(model, opts) == "ritz"
+    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=not ritz)
     for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step),
                         ("max_period_step", max_period_step)):
         check_positive(name, value)
@@ -215,7 +239,11 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
         if method != "shooting":
             raise NNMInputError("freq_tol refines the time step of shooting; harmonic balance has none "
                                 "(raise harmonics instead)")
-    system = modal_system(model)
+    if ritz:                                   # the modes below a cutoff + residual flexibility (model/ritz.py)
+        check_positive("harmonics", opts["harmonics"], integer=True)
+        system = ritz_system(model, mode, opts["harmonics"])
+    else:
+        system = modal_system(model)
     a0 = start_amplitude(system, k, energy_max, energy_min)
     build = _shooting_problem if method == "shooting" else _hb_problem
     problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),

@@ -24,13 +24,14 @@ class ModalSystem:
     omega2 (n,) rad^2/s^2; Phi (n, n) mode shapes (x = Phi q); PhiT_M (n, n) (q = Phi^T M x);
     Bq (n_s, n); powers, coefficients, kinks: the element force laws (elements.ElementSet);
     kernel = (omega2, Bq, powers, coefficients, kinks): the arguments of the Newmark kernels.
-    Omega^2 are the eigenvalues of the linear model (M, Model.K_linear).
+    Omega^2 are the eigenvalues of the linear model (M, Model.K_linear); ``eigensolution`` (lam, Phi) gives
+    another M-orthonormal basis diagonalising K_linear (a Ritz basis of fewer columns, ritz.py).
     """
 
-    def __init__(self, model):
-        lam, Phi = model.eigensolution
+    def __init__(self, model, eigensolution=None):
+        lam, Phi = model.eigensolution if eigensolution is None else eigensolution
         self.model = model
-        self.n = model.n
+        self.n = len(lam)                        # modal coordinates: model.n, or fewer in a Ritz basis (ritz.py)
         self.elements = model.elements
         self.omega2 = np.ascontiguousarray(lam, dtype=float)
         self.Phi = np.ascontiguousarray(Phi)

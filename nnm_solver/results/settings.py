@@ -93,7 +93,9 @@ class ShootingSettings(MethodSettings):
 @dataclass(frozen=True)
 class HarmonicBalanceSettings(MethodSettings):
     """Harmonic balance (orbits/harmonic_balance.py): highest harmonic, basis "odd"/"full", AFT samples;
-    ``condensed``: the equations were condensed onto the elements' deformations (orbits/condensed_hb.py)."""
+    ``condensed``: the equations were condensed onto the elements' deformations (orbits/condensed_hb.py);
+    ``modal_basis``: "full" (every mode) or "ritz" (the modes below ``cutoff_hz`` (Hz) plus the residual
+    flexibility of the others, model/ritz.py)."""
 
     method: ClassVar[str] = "harmonic_balance"
     tol: float = 1e-8
@@ -101,6 +103,8 @@ class HarmonicBalanceSettings(MethodSettings):
     basis: str = "odd"
     samples: int | None = None
     condensed: bool = False
+    modal_basis: str = "full"
+    cutoff_hz: float = 0.0
 
     def hb_basis(self):
         from ..orbits.hb_basis import HBBasis

@@ -1,0 +1,100 @@
+"""A new user's first day (issue 32, items 1 and 2): the tutorial's commands leave the shipped example
+alone, and nnm-solve does not append a branch of another model to an existing file."""
+import hashlib
+import importlib.util
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+
+import nnm_solver as nnm
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def sha256(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def paris_fep():
+    spec = importlib.util.spec_from_file_location("example_paris_fep_doc", ROOT / "examples" / "paris_fep.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def tutorial_commands(script):
+    """The argument lists of the `python examples/<script>` commands in docs/tutorial.md's code blocks."""
+    out, inside = [], False
+    for line in (ROOT / "docs" / "tutorial.md").read_text().splitlines():
+        if line.startswith("```"):
+            inside = not inside
+            continue
+        words = shlex.split(line.split("#")[0]) if inside else []
+        if words[:2] == ["python", f"examples/{script}"]:
+            out.append(words[2:])
+    return out
+
+
+def test_tutorial_paris_commands_write_into_the_current_folder(tmp_path, monkeypatch):
+    """Every paris_fep.py command of the tutorial writes ./paris_fep.h5 and ./paris_fep_figures/, not the
+    shipped assets/paris.h5 nor docs/ (checked on the script's own argument parsing, nothing is run);
+    --update-shipped, the maintainers' flag, is the one way to the shipped file."""
+    ex = paris_fep()
+    commands = tutorial_commands("paris_fep.py")
+    assert ["--fast"] in commands
+    monkeypatch.chdir(tmp_path)
+    for argv in commands:
+        args = ex.build_parser().parse_args(argv)
+        target = ex.output_file(args)
+        assert not isinstance(target, str), (argv, target)
+        if "--update-shipped" in argv:
+            assert target in (None, ex.SHIPPED)
+            continue
+        assert target == Path("paris_fep.h5") and not ex.same_file(target, ex.SHIPPED), argv
+        assert args.out_dir is None and args.doc is None, argv   # figures: ./paris_fep_figures, no doc table
+    text = (ROOT / "docs" / "tutorial.md").read_text()
+    assert "nnm-view paris_fep.h5" in text and "--update-shipped" in text
+    assert "branches into assets/paris.h5" not in text
+    args = ex.build_parser().parse_args(["--fast", "--update-shipped"])
+    assert ex.output_file(args) == ex.SHIPPED
+
+
+def run(*args, cwd, timeout=180):
+    return subprocess.run([sys.executable, "-m", "nnm_solver.cli", *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, cwd=cwd)
+
+
+def test_solve_refuses_a_branch_of_another_model_in_the_same_file(tmp_path):
+    """`nnm-solve chain.toml --mode 1 ...` then `nnm-solve chain.mat --mode 1 ...` (other M, K and spring)
+    in the same folder: both default to chain.h5; the second is refused (exit 2, one line naming the file,
+    what differs and another file name) and chain.h5 stays byte-identical.  The same model again is fine."""
+    K = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
+    scipy.io.mmwrite(tmp_path / "M.mtx", np.eye(3))
+    scipy.io.mmwrite(tmp_path / "K.mtx", K)
+    (tmp_path / "chain.toml").write_text('name = "chain"\n[matrices]\nformat = "matrixmarket"\nmass = "M.mtx"\n'
+                                         'stiffness = "K.mtx"\n[[springs]]\ndof = 0\nk3 = 0.5\n')
+    scipy.io.savemat(tmp_path / "chain.mat", {"M": 2 * np.eye(3), "K": 3 * K, "springs": np.array([[2, 0, 1.5]])})
+    r = run("chain.toml", "--mode", 1, "--energy-max", 1, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    h5 = tmp_path / "chain.h5"
+    before = sha256(h5)
+    r = run("chain.mat", "--mode", 1, "--energy-max", 1, cwd=tmp_path)
+    assert r.returncode == 2, (r.stdout, r.stderr)
+    err = [line for line in r.stderr.replace("\r", "\n").splitlines() if "error" in line]
+    assert err == ["nnm-solve: error: chain.h5 holds another model than this branch's (spring 0 joins DOFs "
+                   "0-ground in the file, 1-ground in the branch's model; M differs by up to 50 % of its largest "
+                   "entry; K differs by up to 66.7 % of its largest entry); the file was left unchanged: save the "
+                   "branch to another file name, e.g. chain_2.h5 (nnm-solve: --out chain_2.h5)"], r.stderr
+    assert "Traceback" not in r.stderr
+    assert sha256(h5) == before
+    # the remedy, and the same model again
+    r = run("chain.mat", "--mode", 1, "--energy-max", 1, "--out", "chain_2.h5", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    r = run("chain.toml", "--mode", 2, "--energy-max", 1, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert [b.mode for b in nnm.load_branches(h5)] == [1, 2]
+    assert nnm.load_model(tmp_path / "chain_2.h5").k3[0] == 1.5
