@@ -13,7 +13,7 @@ try:
 
     jit = numba.njit(cache=True, nogil=True)
     #: small kernels called from other kernels: inlined into their callers (also across modules)
-    jit_inline = numba.njit(cache=True, nogil=True, inline="always")
+    jit_inline = jit
 except ImportError:  # pragma: no cover - the same source runs uncompiled
     numba = None
 

@@ -156,8 +156,11 @@ def test_linear_response_phase_amplitude_and_multipliers():
     """No nonlinear element: amplitude |F / (1 - w^2 + 2 i zeta w)|, phase of the fundamental -atan2(2 zeta w, 1 - w^2)
     (-pi/2 at resonance, unwrapped past it), Hill's multipliers exp((-zeta +- i sqrt(1 - zeta^2)) T)."""
     z = 0.02
-    r = nnm.forced_response(nnm.Model(np.eye(1), np.eye(1)), [2.0], (hz(0.5), hz(1.8)), z, harmonics=3, tol=1e-12)
+    seen = []
+    r = nnm.forced_response(nnm.Model(np.eye(1), np.eye(1)), [2.0], (hz(0.5), hz(1.8)), z, harmonics=3, tol=1e-12,
+                            on_point=seen.append)
     assert r.status == "done" and not r.folds
+    assert [p["index"] for p in seen] == list(range(len(r))) and seen[-1]["frequency_hz"] == r.frequency_hz[-1]
     w = 2 * np.pi * r.frequency_hz
     H = 2.0 / (1 - w * w + 2j * z * w)
     assert np.allclose(r.amplitude(0), np.abs(H), rtol=1e-10)
@@ -172,7 +175,8 @@ def test_linear_response_phase_amplitude_and_multipliers():
 @pytest.mark.parametrize("zeta", [0.001, 0.01])
 def test_energy_balance_predicts_the_peak(zeta):
     """Light damping: the peak of the forced response (frequency and amplitude) against the energy balance along the
-    conservative backbone (HB), within 1 %."""
+    conservative backbone (HB), within 1 %, and its phase-resonance point within 0.1 % (measured: 3e-5 and 1e-4,
+    the linear interpolations between points)."""
     model = duffing()
     force = 2 * zeta * 1.0                         # a peak amplitude near 1 (linear: F / (2 zeta))
     backbone = nnm.continue_nnm(model, 1, 2.0, method="hb", harmonics=9, floquet=False)
@@ -184,6 +188,11 @@ def test_energy_balance_predicts_the_peak(zeta):
     assert pred is not None and 0.5 < peak["amplitude"] < 2
     assert abs(peak["frequency_hz"] / pred["frequency_hz"] - 1) < 0.01
     assert abs(peak["amplitude"] / pred["amplitude"] - 1) < 0.01
+    # energy balance predicts the phase-resonance point (force along the velocity): closer still
+    pr = r.phase_resonance(0)
+    assert len(pr) == 1
+    assert abs(pr[0]["frequency_hz"] / pred["frequency_hz"] - 1) < 1e-3
+    assert abs(pr[0]["amplitude"] / pred["amplitude"] - 1) < 1e-3
     # the single-mode formula at small amplitude: alpha = 2 zeta w a / F for the unit force pattern
     a0 = eb.amplitude(0)[0]
     assert np.isclose(eb.force_scale[0] * force, 2 * zeta * 2 * np.pi * eb.frequency_hz[0] * a0, rtol=1e-3)
@@ -243,15 +252,15 @@ def test_damping_matrix_proportional_and_coupling():
     force = np.array([0.05, 0.0])
     w = np.sqrt(modal_system(model).omega2)
     al, be = 0.01, 0.02
-    ray = nnm.forced_response(model, force, (0.12, 0.2), 0.0, damping_matrix=al * np.eye(2) + be * model.K,
-                              condensed=True, harmonics=5, tol=1e-12)
-    mod = nnm.forced_response(model, force, (0.12, 0.2), al / (2 * w) + be * w / 2, condensed=True, harmonics=5,
-                              tol=1e-12)
+    kw = dict(condensed=True, harmonics=5, tol=1e-12, stability="none")
+    ray = nnm.forced_response(model, force, (0.15, 0.17), 0.0, damping_matrix=al * np.eye(2) + be * model.K, **kw)
+    mod = nnm.forced_response(model, force, (0.15, 0.17), al / (2 * w) + be * w / 2, **kw)
     assert np.allclose(ray.coefficients[-1], mod.coefficients[-1], atol=1e-12)
     C = np.diag([0.03, 0.0])
     with pytest.raises(nnm.NNMInputError, match="couples the modes"):
         nnm.forced_response(model, force, (0.12, 0.2), 0.01, damping_matrix=C, condensed=True)
-    r = nnm.forced_response(model, force, (0.12, 0.2), 0.01, damping_matrix=C, harmonics=7, tol=1e-12)
+    r = nnm.forced_response(model, force, (0.14, 0.18), 0.01, damping_matrix=C, harmonics=7, tol=1e-12,
+                            stability="fold")
     assert r.status == "done" and not r.condensed
     i = int(np.argmax(r.amplitude(0)))
     wi = 2 * np.pi * r.frequency_hz[i]
@@ -348,3 +357,65 @@ def test_bad_input_elements_and_energy_balance():
         nnm.energy_balance(backbone, [1.0], 0.01)
     with pytest.raises(nnm.NNMInputError, match="damping is -1"):
         nnm.energy_balance(backbone, [1.0, 0.0], -1)
+
+
+def test_sweep_down_and_a_curve_leaving_the_range():
+    """Down the frequency range: the same curve (folds to 1e-10, the end points' amplitudes); started on the lower
+    branch inside the bistable range and swept down, the curve turns at the fold and leaves through f_start."""
+    up = nnm.forced_response(duffing(), [F], (hz(0.8), hz(1.5)), ZETA, harmonics=5, tol=1e-12, stability="fold")
+    down = nnm.forced_response(duffing(), [F], (hz(1.5), hz(0.8)), ZETA, harmonics=5, tol=1e-12, stability="fold")
+    assert up.status == down.status == "done"
+    assert np.allclose(up.fold_frequencies_hz, down.fold_frequencies_hz[::-1], rtol=1e-10, atol=0)
+    assert np.allclose(up.amplitude(0)[[0, -1]], down.amplitude(0)[[-1, 0]], rtol=1e-10)
+    back = nnm.forced_response(duffing(), [F], (hz(1.18), hz(0.8)), ZETA, harmonics=5, tol=1e-12, stability="fold")
+    assert back.status == "left_range" and len(back.folds) == 1 and "left the range" in back.message
+    assert np.all(2 * np.pi * back.frequency_hz <= 1.18 + 1e-12)
+
+
+def nlvib_02():
+    """NLvib's example 02 (Krack & Gross, Harmonic Balance for Nonlinear Vibration Problems, 2019): a chain of two
+    masses (1, 0.05) with springs (1, 0.0453), dampers (0.002, 0.013) coupling the modes, a cubic spring 1 at DOF 0
+    and 0.0042 between the DOFs, 0.11 cos(w t) on DOF 0; turning points and Neimark-Sacker bifurcations."""
+    M = np.diag([1.0, 0.05])
+    K = np.array([[1.0453, -0.0453], [-0.0453, 0.0453]])
+    C = np.array([[0.015, -0.013], [-0.013, 0.013]])
+    springs = [nnm.CubicSpring(dof=0, k3=1.0), nnm.CubicSpring(dof=0, other=1, k3=0.0042)]
+    return nnm.Model(M, K, springs), C
+
+
+@pytest.mark.slow
+def test_hill_multipliers_against_the_monodromy_of_dop853():
+    """Hill's multipliers with a damping matrix that couples the modes, against the monodromy matrix of the variational
+    equations integrated with DOP853 over one period (rtol 1e-12) from the HB orbit: a stable orbit, one unstable
+    through a complex pair (Neimark-Sacker: the fold test does not see it) and one between the folds (real > 1)."""
+    model, C = nlvib_02()
+    r = nnm.forced_response(model, [0.11, 0.0], (hz(1.0), hz(1.25)), 0.0, damping_matrix=C, harmonics=11, tol=1e-12,
+                            basis="full")
+    assert r.stability == "hill" and not r.condensed and len(r.folds) == 2
+    M, K = model.M, model.K
+    Minv = np.linalg.inv(M)
+    w = 2 * np.pi * r.frequency_hz
+
+    def variational(t, Y, om):
+        x, v, Phi = Y[:2], Y[2:4], Y[4:].reshape(4, 4)
+        d = x[0] - x[1]
+        fnl = np.array([x[0] ** 3 + 0.0042 * d ** 3, -0.0042 * d ** 3])
+        kd = 3 * 0.0042 * d * d
+        Kt = K + np.array([[3 * x[0] ** 2 + kd, -kd], [-kd, kd]])
+        A = np.block([[np.zeros((2, 2)), np.eye(2)], [-Minv @ Kt, -Minv @ C]])
+        acc = Minv @ (np.array([0.11 * np.cos(om * t), 0.0]) - C @ v - K @ x - fnl)
+        return np.concatenate([v, acc, (A @ Phi).ravel()])
+
+    kinds = []
+    for target in (1.05, 1.15, 1.21):
+        i = int(np.argmin(np.abs(w - target)))
+        _, x, v = r.orbit(i, 4)
+        sol = solve_ivp(variational, (0.0, 2 * np.pi / w[i]), np.concatenate([x[0], v[0], np.eye(4).ravel()]),
+                        method="DOP853", rtol=1e-12, atol=1e-14, args=(w[i],))
+        assert np.linalg.norm(sol.y[:4, -1] - sol.y[:4, 0]) < 1e-9             # the HB orbit is periodic
+        mu = np.sort_complex(np.linalg.eigvals(sol.y[4:, -1].reshape(4, 4)))
+        assert np.max(np.abs(np.sort_complex(r.floquet[i]) - mu)) < 1e-8
+        top = r.floquet[i][0]
+        kinds.append((bool(r.stable[i]), abs(top.imag) > 1e-6, int(r.fold_sign[i])))
+    assert [k[0] for k in kinds] == [True, False, False] and [k[2] for k in kinds] == [1, 1, -1]
+    assert kinds[1][1] and not kinds[2][1]           # unstable by a complex pair, then by a real multiplier

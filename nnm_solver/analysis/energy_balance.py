@@ -128,7 +128,7 @@ def energy_balance(backbone, force, damping, damping_matrix=None, samples=256):
     samples = int(samples)
     if samples < 8:
         raise NNMInputError("samples must be at least 8")
-    zeta, _, Cq = modal_damping(model, damping, damping_matrix)
+    zeta, c_modal, Cq = modal_damping(model, damping, damping_matrix)
     system = modal_system(model)
     N = len(backbone)
     Wd, Wf, amps = np.zeros(N), np.zeros(N), np.zeros((N, n))
@@ -137,7 +137,8 @@ def energy_balance(backbone, force, damping, damping_matrix=None, samples=256):
         t, x, v = backbone.orbit(i, samples)
         T = float(backbone.period[i])
         qd = system.to_modal(v)                                   # modal velocities (samples, n)
-        Wd[i] = T * float(np.mean(np.einsum("si,ij,sj->s", qd, Cq, qd)))
+        power = (qd * qd) @ c_modal if c_modal is not None else np.sum((qd @ Cq) * qd, axis=1)   # v^T C v
+        Wd[i] = T * float(np.mean(power))
         g = v @ f                                                 # f^T v(t)
         G1 = 2.0 * np.mean(g * np.exp(-1j * theta))
         Wf[i] = 0.5 * T * abs(G1)

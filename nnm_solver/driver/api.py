@@ -19,6 +19,7 @@ from ..results.branch import Point
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
 from .iterator import NNMIterator
+from .skeleton import skeleton
 from .tongue_skip import leaves_backbone
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
@@ -258,10 +259,33 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
     if freq_tol is not None:
         settings = settings.replace(freq_tol=float(freq_tol))
+    guide = _skeleton_guide(model, mode, energy_max) if tongues == "skip" and model.springs else None
     it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
-                     locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol)
+                     locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol,
+                     skeleton=guide)
     it._start_is_low = _start is None
     return it
+
+
+def _skeleton_branch(model, mode, energy):
+    """The skeleton's branch (driver/skeleton.py): condensed single-harmonic HB, no stability, no events."""
+    return continue_nnm(model, mode, energy, method="hb", harmonics=1, condensed=True, floquet=False,
+                        locate_events=False, max_points=400)
+
+
+def _skeleton_guide(model, mode, energy_max):
+    """A callable giving the Skeleton of the branch (computed at its first call, when a tongue is met), or
+    None when it cannot be computed (the jumps then rescale the backbone's orbits only)."""
+    found = []
+
+    def guide():
+        if not found:
+            try:
+                found.append(skeleton(model, mode, energy_max, _skeleton_branch))
+            except (NNMInputError, np.linalg.LinAlgError, ValueError, RuntimeError):
+                found.append(None)
+        return found[0]
+    return guide
 
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,

@@ -154,8 +154,9 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
     lam = system.omega2
     rigid = lam <= 10 * n * np.finfo(float).eps * max(lam[-1], 1e-300)
     if basis == "full" and np.any(rigid):
-        raise NNMInputError(f"mode {int(np.flatnonzero(rigid)[0]) + 1} is a rigid-body mode: with basis='full' its mean "
-                            f"displacement is undetermined; use basis='odd' (odd elements) or ground the structure")
+        raise NNMInputError(f"mode {int(np.flatnonzero(rigid)[0]) + 1} is a rigid-body mode: with basis='full' its "
+                            f"mean displacement is undetermined; use basis='odd' (odd elements) or ground the "
+                            f"structure")
     ns = len(el)
     if condensed is None:
         condensed = bool(ns > 0 and ns * CONDENSE_RATIO < n and c_modal is not None)
@@ -191,8 +192,8 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
                     max_rel_step=float(max_rel_step), max_freq_step=max_freq_step, max_angle=float(max_angle),
                     f_range_hz=[f0, f1])
     u0, message = _first_orbit(problem, w0, tol)
-    result_args = dict(harmonics=H, basis=basis, samples=samples, damping=zeta, damping_matrix=None if damping_matrix is None
-                       else _dense(damping_matrix), name=str(name),
+    result_args = dict(harmonics=H, basis=basis, samples=samples, damping=zeta,
+                       damping_matrix=None if damping_matrix is None else _dense(damping_matrix), name=str(name),
                        condensed=condensed, stability=method, settings=settings)
     if u0 is None:
         return ForcedResponse(model, force, [], np.zeros((0, len(fb), n)), status="failed", message=message,

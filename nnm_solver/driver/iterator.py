@@ -10,6 +10,8 @@ internal-resonance tongues are jumped over or traversed unseen.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..results.branch import Branch, Point
@@ -40,7 +42,7 @@ class NNMIterator(StepRefinement):
     """
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None):
+                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None, skeleton=None):
         self.model = model
         self.freq_tol = None if not freq_tol else float(freq_tol)
         self._refine_pause = 0
@@ -64,6 +66,7 @@ class NNMIterator(StepRefinement):
         self.events = []
         self._landed = False
         self.tongue_mode = tongues
+        self._skeleton = skeleton      # a callable giving the branch's Skeleton (skeleton.py), for skip mode
         self.tongues = []
         self._tongue = None            # the tongue being traversed (skip mode)
         self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
@@ -153,9 +156,8 @@ class NNMIterator(StepRefinement):
                 self._prev = None              # no event is located across the tongue
                 return False
             t["hidden_points"] += 1
-            if t["hidden_points"] > self.max_points:
-                self._failed(f"the {t['label']} tongue at {t['entry_energy']:.4g} J could not be passed "
-                             f"({t['hidden_points']} points inside it)")
+            if point.energy >= self.energy_max or t["hidden_points"] > self.max_points:
+                self._inside_tongue(t, point)
                 raise StopIteration
             return True
         if self._last_backbone is None or not leaves_backbone(point, self._last_backbone[1]):
@@ -179,7 +181,10 @@ class NNMIterator(StepRefinement):
         tongue = tongue_record(self._system, Q, k, bpoint, point, len(self.points) - 1)
         self._last_backbone = None
         E_base = max(bpoint.energy, point.energy)
-        jumped = TongueSkipper(self._problem, self._cs, self._tol).jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k)
+        partner = tongue.get("partner_mode", 0)
+        partner_hz = math.sqrt(self._system.omega2[partner - 1]) / (2 * math.pi) if partner >= 1 else None
+        skipper = TongueSkipper(self._problem, self._cs, self._tol, self._system, self._skeleton)
+        jumped = skipper.jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k, partner_hz)
         previous = self.tongues[-1] if self.tongues else None
         if previous is not None and same_tongue(previous, tongue):
             # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
@@ -192,12 +197,21 @@ class NNMIterator(StepRefinement):
         if jumped is None:
             tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
             return False
-        u, J, delta = jumped
-        tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)))
+        u, J, how = jumped
+        tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)), jump=how)
         self._engine.restart(pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol))
         self._prev = None          # no events are located across the jump
         self._refusals = 0
         return True
+
+    def _inside_tongue(self, t, point):
+        """Skip mode: the continuation is inside tongue t and cannot come back onto the backbone (it reached
+        energy_max or max_points inside it): status 'tongue'."""
+        where = (f"the backbone entered the {t['label']} internal resonance with mode {t.get('partner_mode', 0)} "
+                 f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
+        why = "energy_max inside it" if point.energy >= self.energy_max else f"{t['hidden_points']} points inside it"
+        self._finish("tongue", f"{where} and could not be jumped over ({why}); the points on the backbone below it "
+                               f"are kept (continue_tongue(branch, {len(self.tongues) - 1}) follows the tongue)")
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""

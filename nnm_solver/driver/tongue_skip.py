@@ -39,6 +39,10 @@ JUMPS = (0.02, 0.05, 0.1, 0.2, 0.5)
 #: skip mode: a harmonic k >= 2 growing to this fraction of the amplitude marks a tongue's entrance
 SKIP_FRACTION = 0.05
 
+#: a jump from the skeleton lands on the backbone family within this relative frequency of the skeleton
+#: (the single-harmonic truncation: 0.1-0.3 % on the aircraft's mode 20 at 8-12 J)
+FAMILY_TOL = 0.01
+
 
 def harmonic_label(Q, n=LABEL_HARMONICS):
     """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof)."""
@@ -103,40 +107,95 @@ def same_tongue(a, b):
             and b["entry_energy"] <= 1.1 * E_out)
 
 
-class TongueSkipper:
-    """Jumps over a tongue from the last backbone point (see the module docstring)."""
+def level_set(prob, guess, settings, tol, w=None):
+    """(u, J): the orbit of ``prob`` nearest ``guess`` on its energy level set (corrected on the hyperplane
+    tangent to it), or (None, None) when the corrector fails."""
+    w = prob.scale(guess) if w is None else w
+    row = prob.energy_gradient(guess) / (w * w)          # correct() constrains (w^2 row)^T (u - guess) = 0
+    try:
+        u, J, _, _ = correct(prob, guess, row / np.linalg.norm(w * row), settings, tol, w)
+    except CorrectorFailure:
+        return None, None
+    return u, J
 
-    def __init__(self, problem, settings, tol):
+
+class TongueSkipper:
+    """Jumps over a tongue from the last backbone point (see the module docstring).
+
+    system : the branch's ModalSystem; skeleton : a callable returning the branch's Skeleton (skeleton.py),
+    or None (then only the rescaled backbone orbits are tried).
+    """
+
+    def __init__(self, problem, settings, tol, system=None, skeleton=None):
         self.problem = problem
         self.settings = settings
         self.tol = tol
+        self.system = system
+        self.skeleton = skeleton
 
-    def jump(self, u_b, p_b, E_b, E_base=None, k=None):
+    def jump(self, u_b, p_b, E_b, E_base=None, k=None, partner_hz=None):
         """A backbone orbit u beyond the tongue, from the backbone point u_b (tangent p_b, energy E_b):
-        energies E_base (1 + delta) are tried (E_base >= E_b: the highest energy seen at the tongue's
-        entrance); the landing orbit must have less than SKIP_FRACTION in harmonic k.  Returns
-        (u, J, delta) or None."""
+        first the skeleton's orbits where its k f has left the band around the partner's frequency
+        partner_hz (Hz), then energies E_base (1 + delta) from the rescaled backbone orbit (E_base >= E_b:
+        the highest energy seen at the tongue's entrance); the landing orbit must have less than
+        SKIP_FRACTION in harmonic k (and, from the skeleton, lie on its side of the band).  Returns
+        (u, J, how) (how: "skeleton at E J" or the relative energy jump) or None."""
         E_base = E_b if E_base is None else E_base
         prob = self.problem
         w = prob.scale(u_b) if hasattr(prob, "scale") else np.ones(len(u_b))
+        for guess, how, side in self._skeleton_guesses(E_b, k, partner_hz):
+            u, J = self._level_set(guess, w)
+            # beyond the band the k-th harmonic may still exceed SKIP_FRACTION (the partner is near): the orbit
+            # must be labelled backbone, on the skeleton's side of the band and near the skeleton's frequency
+            if (u is not None and self._lands(u, k, E_b, RESONANCE_FRACTION)
+                    and self._on_side(u, k, partner_hz, side) and self._near_skeleton(u)):
+                return u, J, how
         slope = (prob.energy(u_b + 1e-6 * p_b) - prob.energy(u_b - 1e-6 * p_b)) / 2e-6
         for delta in JUMPS:
-            E_t = E_base * (1 + delta)
-            guess = self._guess(u_b, p_b, slope, E_b, E_t)
+            guess = self._guess(u_b, p_b, slope, E_b, E_base * (1 + delta))
             if guess is None:
                 continue
-            g = prob.energy_gradient(guess)
-            row = g / (w * w)                          # correct() constrains (w^2 row)^T (u - guess) = 0
-            try:
-                u, J, _, _ = correct(prob, guess, row / np.linalg.norm(w * row), self.settings, self.tol, w)
-            except CorrectorFailure:
-                continue
-            label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
-            tot = np.sum(amps[1:]) if amps is not None else 0.0
-            frac_k = amps[k] / tot if (k is not None and amps is not None and tot > 0 and k < len(amps)) else frac
-            if label == "backbone" and frac_k < SKIP_FRACTION and prob.energy(u) > E_base:
-                return u, J, delta
+            u, J = self._level_set(guess, w)
+            if u is not None and self._lands(u, k, E_base):
+                return u, J, f"a jump of {100 * delta:g} % in energy"
         return None
+
+    def _skeleton_guesses(self, E_base, k, partner_hz):
+        """(u guess, description, side of the band) for the skeleton's orbits beyond the k:1 band."""
+        prob = self.problem
+        if self.skeleton is None or not partner_hz or k is None or k < 2 or not hasattr(prob, "from_state"):
+            return
+        sk = self.skeleton()
+        if sk is None:
+            return
+        for E_t in sk.targets(E_base, k, partner_hz):
+            side = np.sign(k * sk.frequency_at(E_t) / partner_hz - 1.0)
+            refined = sk.family_orbit(self.system, E_t, self.settings, self.tol)
+            if refined is None:
+                continue
+            q0, v0, T = refined
+            yield prob.from_state(q0, v0, T), f"the skeleton's orbit at {E_t:.4g} J", side
+
+    def _level_set(self, guess, w):
+        return level_set(self.problem, guess, self.settings, self.tol, w)
+
+    def _near_skeleton(self, u):
+        """Is the orbit u's frequency within FAMILY_TOL of the skeleton's at its energy?"""
+        f_sk = self.skeleton().frequency_at(self.problem.energy(u))
+        return bool(abs(1.0 / self.problem.state(u)[2] / f_sk - 1.0) <= FAMILY_TOL)
+
+    def _lands(self, u, k, E_base, limit=SKIP_FRACTION):
+        """Is u a backbone orbit (label, less than ``limit`` in harmonic k) above E_base?"""
+        prob = self.problem
+        label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
+        tot = np.sum(amps[1:]) if amps is not None else 0.0
+        frac_k = amps[k] / tot if (k is not None and amps is not None and tot > 0 and k < len(amps)) else frac
+        return label == "backbone" and frac_k < limit and prob.energy(u) > E_base
+
+    def _on_side(self, u, k, partner_hz, side):
+        """Is the orbit u's k f on the far side of the band (the side the skeleton moved to)?"""
+        f = 1.0 / self.problem.state(u)[2]
+        return np.sign(k * f / partner_hz - 1.0) == side
 
     def _guess(self, u_b, p_b, slope, E_b, E_t):
         """The backbone orbit scaled to energy E_t, its period (last entry) moved along the tangent."""

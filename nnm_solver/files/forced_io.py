@@ -141,7 +141,8 @@ def _model_difference(f, path, model):
     for i, (s, t) in enumerate(zip(a, b)):
         if (s.dof, s.other) != (t.dof, t.other) or type(s) is not type(t) or not _close(spring_law_json(s),
                                                                                         spring_law_json(t)):
-            return f"element {i} differs ({json.dumps(spring_law_json(s))} in the file, {json.dumps(spring_law_json(t))})"
+            return (f"element {i} differs ({json.dumps(spring_law_json(s))} in the file, "
+                    f"{json.dumps(spring_law_json(t))})")
     return ""
 
 

@@ -34,9 +34,11 @@ def modal_damping(model, damping, damping_matrix=None):
         try:
             zeta = np.asarray(damping, dtype=float)
         except (TypeError, ValueError):
-            raise NNMInputError(f"damping must be a ratio or one ratio per mode, got {type(damping).__name__}") from None
+            what = type(damping).__name__
+            raise NNMInputError(f"damping must be a ratio or one ratio per mode, got {what}") from None
         if zeta.ndim != 1 or len(zeta) != n:
-            raise NNMInputError(f"damping has {zeta.size} ratios, the model has {n} modes: give one ratio or one per mode")
+            raise NNMInputError(f"damping has {zeta.size} ratios, the model has {n} modes: give one ratio or one "
+                                f"per mode")
         bad = np.flatnonzero(~np.isfinite(zeta))
         if len(bad):
             raise NNMInputError(f"damping ratio of mode {bad[0] + 1} is {zeta[bad[0]]}: ratios must be finite")

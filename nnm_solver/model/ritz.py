@@ -104,20 +104,22 @@ def ritz_basis(model, f_cut_hz=None, first=24, mode=None, harmonics=None):
         lam, Phi = lowest_modes(K, M, count, solver)
     m = max(int(np.searchsorted(lam, w_cut2, side="right")), min(int(first), len(lam)))
     lam, Phi = lam[:m], Phi[:, :m]
-    X = Phi
+    X = np.zeros((n, 0))
     if B.shape[0]:
         P0 = solver.solve(np.ascontiguousarray(B.T))
-        P1 = solver.solve(np.asarray(M @ P0))
-        X = np.hstack([Phi, P0, P1])
-    # Rayleigh-Ritz on the whole space: an M-orthonormal basis of it (directions it holds twice dropped),
-    # then K projected and diagonalised, so that Phi^T M Phi = I and Phi^T K Phi = diag(lam) hold for the
-    # model's own matrices (the energies of x = Phi q are the modal ones) whatever the Lanczos accuracy
-    G = X.T @ (M @ X)
-    g, V = sla.eigh(0.5 * (G + G.T))
-    keep = g > 1e-12 * max(g.max(), 1e-300)
-    X = X @ (V[:, keep] / np.sqrt(g[keep]))
-    Kx = X.T @ (K @ X)
-    lam, W = sla.eigh(0.5 * (Kx + Kx.T))
+        X = np.hstack([P0, solver.solve(np.asarray(M @ P0))])
+        for _ in range(2):                            # M-orthogonal to the modes (twice: round-off)
+            X -= Phi @ (Phi.T @ (M @ X))
+        X /= np.sqrt(np.maximum(np.einsum("ij,ij->j", X, M @ X), 1e-300))     # unit columns, then
+        g, V = sla.eigh(X.T @ (M @ X))                # an M-orthonormal basis of what the modes do not hold
+        keep = g > 1e-10 * max(g.max(), 1e-300)
+        X = X @ (V[:, keep] / np.sqrt(g[keep]))
+        X -= Phi @ (Phi.T @ (M @ X))
+    # Rayleigh-Ritz on the whole space [Phi, X]: Phi^T M Phi = I and Phi^T K Phi = diag(lam) then hold for
+    # the model's own matrices (the energies of x = Phi q are the modal ones) whatever the Lanczos accuracy
+    X = np.hstack([Phi, X])
+    Mx, Kx = X.T @ (M @ X), X.T @ (K @ X)
+    lam, W = sla.eigh(0.5 * (Kx + Kx.T), 0.5 * (Mx + Mx.T))
     Phi = X @ W
     # the first m Ritz pairs are the modes kept: the others lie above lam_(m+1) (Courant-Fischer: they are
     # M-orthogonal to the first m eigenvectors)

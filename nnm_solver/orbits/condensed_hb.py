@@ -121,6 +121,15 @@ class CondensedHBProblem:
         """(D (N_b, n_s) m, a sqrt(kg) m, omega rad/s)."""
         return u[:-2].reshape(self.nb, self.ns), u[-2] / self.beta, u[-1] * self.w_r
 
+    energy_gradient = HBProblem.energy_gradient          # dE/du by central differences (it needs only energy)
+
+    def from_state(self, q0, v0, T):
+        """u of a first guess from a modal state at rest (q0, v0 = 0) and a period T (s): its fundamental."""
+        q0 = np.asarray(q0, dtype=float)
+        D = np.zeros((self.nb, self.ns))
+        D[self.cos1] = self.lin.Bq @ q0
+        return self.pack(D, q0[self.r], 2 * np.pi / T)
+
     def start(self, a0):
         """u of the linear mode r at modal amplitude a0, and the direction of growing amplitude."""
         D = np.zeros((self.nb, self.ns))

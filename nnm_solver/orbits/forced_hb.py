@@ -304,17 +304,21 @@ class CondensedForcedHBProblem(_ForcedProtocol):
         D, w = self.unpack(u)
         z, dz = self._z(w)
         W = 1.0 / z
-        G = np.einsum("sk,hk,tk->hst", self.Bq, W, self.Bq, optimize=True)     # (n_h, n_s, n_s) complex
+        G = self._flex(W)                                                      # (n_h, n_s, n_s) complex
         d = self.basis.E @ D
         F = self.basis.P @ self.sys.force(d)                                   # (N_b, n_s)
         Fh = F[self.jc] - 1j * F[self.js]
-        Rh = (D[self.jc] - 1j * D[self.js]) + np.einsum("hst,ht->hs", G, Fh)
+        Rh = (D[self.jc] - 1j * D[self.js]) + (G @ Fh[:, :, None])[:, :, 0]
         Rh[self.i1] -= self.load * (self.Bf @ W[self.i1])
         R = np.zeros((self.nb, self.ns))
         R[self.jc], R[self.js] = Rh.real, -Rh.imag
         if self.mean is not None:
             R[self.mean] = D[self.mean] + self.G0 @ F[self.mean]
         return D, w, z, dz, W, G, d, F, Fh, R.ravel()
+
+    def _flex(self, W):
+        """sum_k b_k b_k^T W[h, k] (n_h, n_s, n_s) for weights W (n_h, m)."""
+        return (self.Bq[None, :, :] * W[:, None, :]) @ self.Bq.T
 
     def residual(self, u):
         return self._parts(u)[-1]
@@ -341,8 +345,7 @@ class CondensedForcedHBProblem(_ForcedProtocol):
         JD = np.einsum("jsat,tal->jslt", self.flexibility(G), C).reshape(nD, nD)
         JD[np.diag_indices(nD)] += 1.0
         dW = -dz * W * W                                                          # d(1/z) / domega
-        dG = np.einsum("sk,hk,tk->hst", self.Bq, dW, self.Bq, optimize=True)
-        dRh = np.einsum("hst,ht->hs", dG, Fh)
+        dRh = (self._flex(dW) @ Fh[:, :, None])[:, :, 0]
         dRh[self.i1] -= self.load * (self.Bf @ dW[self.i1])
         dR = np.zeros((nb, ns))
         dR[self.jc], dR[self.js] = dRh.real, -dRh.imag

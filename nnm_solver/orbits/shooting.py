@@ -126,6 +126,10 @@ class ShootingProblem(ShootingError, ShootingStability):
         """Unknown vector u from the initial state (modal) and the period (s)."""
         return np.concatenate([q0, v0 / self.w_r, [T / self.T_r]])[self.free]
 
+    def from_state(self, q0, v0, T):
+        """u of a first guess from a modal state (q0, v0) and a period T (s): ``pack``."""
+        return self.pack(q0, v0, T)
+
     def unpack(self, u):
         """(q0, v0, T) from the unknown vector u."""
         n = self.n

@@ -146,6 +146,22 @@ class ForcedResponse:
         ph = np.angle(X[:, c1] - 1j * X[:, c1 + 1])
         return np.unwrap(ph) if len(ph) else ph
 
+    def phase_resonance(self, dof, phase=-np.pi / 2):
+        """The points where the fundamental at ``dof`` lags the force by 90 degrees (``phase``): a list of
+        dict(index (fractional row), frequency_hz, amplitude (m)), linear interpolation between the two rows
+        bracketing each crossing of the unwrapped phase (the phase-resonance criterion of a test)."""
+        ph = self.phase(dof)
+        a = self.amplitude(dof)
+        out = []
+        for j in range(len(ph) - 1):
+            d0, d1 = ph[j] - phase, ph[j + 1] - phase
+            if d0 == 0 or d0 * d1 < 0:
+                w = d0 / (d0 - d1)
+                f = (1 - w) * self.frequency_hz[j] + w * self.frequency_hz[j + 1]
+                amp = (1 - w) * a[j] + w * a[j + 1]
+                out.append(dict(index=float(j + w), frequency_hz=float(f), amplitude=float(amp)))
+        return out
+
     def peak(self, dof):
         """The resonance peak at ``dof``: dict(index, frequency_hz, amplitude) at the largest amplitude,
         refined by a parabola through the neighbouring points (in their chord length)."""

@@ -10,6 +10,9 @@ where there is one, the remedy:
                   energy the motion is unbounded and no NNM exists.  Nothing to fix: the family ends
 * ``closed_loop`` the continuation came back onto points it had already computed (a loop of the
                   solution set); one lap is kept
+* ``tongue``      (``tongues="skip"``) the backbone entered an internal-resonance tongue it could not jump
+                  over and reached energy_max or max_points inside it: the backbone's points below it are
+                  kept, the message names the k:1 resonance, the partner mode and the entry energy
 * ``failed``      the corrector could not converge at the smallest step (a singular point, or too
                   coarse a time discretisation: try a larger steps_per_period or tol)
 * ``cancelled``   cancelled through ``stop`` / ``Job.cancel``;  ``stopped``: the caller left the
@@ -29,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-STOP_STATUSES = ("done", "max_points", "escape", "closed_loop", "failed", "cancelled", "stopped", "running")
+STOP_STATUSES = ("done", "max_points", "escape", "closed_loop", "tongue", "failed", "cancelled", "stopped", "running")
 
 #: restoring force at the turning point relative to the linear one below which the orbit has escaped
 ESCAPE_RATIO = 1e-2
