@@ -29,6 +29,9 @@ __all__ = ["Skeleton", "skeleton"]
 #: the skeleton is computed up to this multiple of the branch's energy_max
 REACH = 10.0
 
+#: the skeleton is at a k:1 band where k f is within this relative distance of the partner's frequency
+ENTRY_BAND = 0.01
+
 #: harmonics of the family's orbit refined from the skeleton before the branch's own method corrects it
 FAMILY_HARMONICS = 9
 
@@ -70,7 +73,7 @@ class Skeleton:
         return (1 - t) * self.x0[j] + t * self.x0[j + 1], 1.0 / self.frequency_at(E)
 
     def family_orbit(self, system, E, settings, tol, harmonics=FAMILY_HARMONICS):
-        """(q0, v0, T): the orbit of the family at energy E (J) with ``harmonics`` (condensed HB on ``system``,
+        """(problem, u): the orbit of the family at energy E (J) with ``harmonics`` (condensed HB on ``system``,
         the branch's modal system), corrected on the energy level set from the skeleton's orbit there (its
         fundamental); None where that does not converge.  A first guess for the branch's own method, close
         to it by the truncation of the higher harmonics only."""
@@ -85,18 +88,24 @@ class Skeleton:
         prob = CondensedHBProblem(system, self.branch.mode - 1, HBBasis(harmonics, kind))
         q0 = system.to_modal(x0)
         u, _ = level_set(prob, prob.from_state(q0, np.zeros_like(q0), T), settings, min(tol, 1e-9))
-        return None if u is None else prob.state(u)
+        return None if u is None else (prob, u)
 
     def targets(self, E_entry, k, f_partner, margins=(0.003, 0.01, 0.03, 0.1)):
-        """Energies (J) above E_entry where the skeleton's k f has left the k:1 band around f_partner (Hz) by
-        the relative ``margins``, on the side the family moves to (where it ends up); [] when the skeleton
-        does not leave the band above E_entry."""
+        """Energies (J) above E_entry where the skeleton's k f crosses and leaves the k:1 band around f_partner
+        (Hz, the partner's linear frequency) by the relative ``margins``, on the side the family moves to;
+        [] when the skeleton does not cross it above E_entry."""
         E, f = self.energy, self.frequency_hz
         above = E > E_entry
         if k < 2 or not np.any(above) or not f_partner > 0:
             return []
         kf = k * f[above] / f_partner - 1.0                 # relative distance of k f from the partner
         side = np.sign(kf[-1])
+        at_entry = k * self.frequency_at(E_entry) / f_partner - 1.0
+        if np.all(np.sign(kf) == side) and not abs(at_entry) < ENTRY_BAND:
+            # the skeleton neither crosses the band nor enters it where the branch did: the partner's frequency has moved with the amplitude (a
+            # strongly nonlinear partner, e.g. the 2-DOF benchmark's) and the linear one says nothing; the
+            # tongue is traversed or jumped by rescaled backbone orbits (tongue_skip.py)
+            return []
         out = []
         for m in margins:
             past = np.flatnonzero((np.sign(kf) == side) & (np.abs(kf) >= m))

@@ -114,7 +114,7 @@ def level_set(prob, guess, settings, tol, w=None):
     row = prob.energy_gradient(guess) / (w * w)          # correct() constrains (w^2 row)^T (u - guess) = 0
     try:
         u, J, _, _ = correct(prob, guess, row / np.linalg.norm(w * row), settings, tol, w)
-    except CorrectorFailure:
+    except (CorrectorFailure, np.linalg.LinAlgError):      # no convergence, or a singular Jacobian on the way
         return None, None
     return u, J
 
@@ -163,7 +163,8 @@ class TongueSkipper:
     def _skeleton_guesses(self, E_base, k, partner_hz):
         """(u guess, description, side of the band) for the skeleton's orbits beyond the k:1 band."""
         prob = self.problem
-        if self.skeleton is None or not partner_hz or k is None or k < 2 or not hasattr(prob, "from_state"):
+        if self.skeleton is None or not partner_hz or k is None or k < 2 or not (
+                hasattr(prob, "from_state") or hasattr(prob, "from_family")):
             return
         sk = self.skeleton()
         if sk is None:
@@ -173,8 +174,13 @@ class TongueSkipper:
             refined = sk.family_orbit(self.system, E_t, self.settings, self.tol)
             if refined is None:
                 continue
-            q0, v0, T = refined
-            yield prob.from_state(q0, v0, T), f"the skeleton's orbit at {E_t:.4g} J", side
+            fam, u = refined
+            if hasattr(prob, "from_family"):           # harmonic balance: the family's harmonics as they are
+                guess = prob.from_family(fam, u)
+            else:
+                q0, v0, T = fam.state(u)
+                guess = prob.from_state(q0, v0, T)
+            yield guess, f"the skeleton's orbit at {E_t:.4g} J", side
 
     def _level_set(self, guess, w):
         return level_set(self.problem, guess, self.settings, self.tol, w)

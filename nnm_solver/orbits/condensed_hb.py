@@ -40,6 +40,7 @@ import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
 from .harmonic_balance import HBProblem
+from .hb_basis import harmonics_in
 from .hill import hill_multipliers
 
 __all__ = ["LinearPart", "CondensedHBProblem"]
@@ -129,6 +130,13 @@ class CondensedHBProblem:
         D = np.zeros((self.nb, self.ns))
         D[self.cos1] = self.lin.Bq @ q0
         return self.pack(D, q0[self.r], 2 * np.pi / T)
+
+    def from_family(self, other, u):
+        """u of this problem for the orbit u of another condensed problem ``other`` of the same system (its
+        harmonics that this basis has; the others are left out)."""
+        A, w, _, _ = other.amplitudes(u)
+        mine = harmonics_in(self.basis, other.basis, A)
+        return self.pack(mine @ self.lin.Bq.T, mine[self.cos1, self.r], w)
 
     def start(self, a0):
         """u of the linear mode r at modal amplitude a0, and the direction of growing amplitude."""

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..integrators.registry import record_orbit
 from ..stability.floquet import without_nearest_to_one
-from .hb_basis import BASES, HBBasis  # noqa: F401
+from .hb_basis import BASES, HBBasis, harmonics_in  # noqa: F401
 from .hill import hill_multipliers
 
 
@@ -67,6 +67,12 @@ class HBProblem:
 
     def unpack(self, u):
         return u[:-1].reshape(self.nb, self.n), u[-1] * self.w_r
+
+    def from_family(self, other, u):
+        """u of this problem for the orbit u of a condensed problem ``other`` of the same system
+        (condensed_hb.py; the harmonics this basis has)."""
+        A, w, _, _ = other.amplitudes(u)
+        return self.pack(harmonics_in(self.basis, other.basis, A), w)
 
     def initial_state(self, u):
         """Modal displacement and velocity at t = 0: (q0, v0)."""

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BASES", "HBBasis"]
+__all__ = ["BASES", "HBBasis", "harmonics_in"]
 
 BASES = ("odd", "full")
 
@@ -50,3 +50,15 @@ class HBBasis:
         """d c_j / d theta (len(theta), N_b)."""
         ht = np.outer(np.asarray(theta, dtype=float), self.h)
         return np.where(self.sine, np.cos(ht), -np.sin(ht)) * self.h
+
+
+def harmonics_in(basis, source_basis, A):
+    """The rows of coefficients A (on source_basis) for the functions of ``basis`` (zero where it has one
+    that the source has not)."""
+    out = np.zeros((len(basis), A.shape[1]))
+    where = {(int(h), bool(s)): j for j, (h, s) in enumerate(zip(source_basis.h, source_basis.sine))}
+    for i, (h, s) in enumerate(zip(basis.h, basis.sine)):
+        j = where.get((int(h), bool(s)))
+        if j is not None:
+            out[i] = A[j]
+    return out
