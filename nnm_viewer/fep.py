@@ -24,7 +24,7 @@ EVENT_LABELS = {"fold": "fold (energy turns back)", "branch_point": "branch poin
                 "period_doubling": "period doubling (multiplier -1)", "torus": "torus (complex multipliers)"}
 #: how a branch ended (Branch.status), marked at its last point: (marker, colour, legend text)
 END_MARKERS = {"failed": ("X", "#d62728", "end: solver failed"), "escape": ("X", "#ff7f0e", "end: escape"),
-               "closed_loop": ("P", "#9467bd", "end: closed loop")}
+               "closed_loop": ("P", "#9467bd", "end: closed loop"), "tongue": ("X", "#8c564b", "end: inside a tongue")}
 
 
 def branch_color(k):

@@ -16,10 +16,11 @@ from .worker import one_line
 
 #: how a branch ended (Branch.status, nnm_solver/stops.py), as said in the branch dropdown
 STATUS_WORDS = {"failed": "failed", "escape": "escape", "closed_loop": "closed loop", "max_points": "max points",
-                "cancelled": "stopped", "stopped": "stopped"}
+                "tongue": "ends in a tongue", "cancelled": "stopped", "stopped": "stopped"}
 #: ... and in the branch information under the selection
 STATUS_TEXT = {"done": "done", "max_points": "stopped at max_points", "escape": "escape: the NNM family ends",
-               "closed_loop": "closed loop", "failed": "**failed**", "cancelled": "stopped by the user",
+               "closed_loop": "closed loop", "tongue": "the backbone ends inside an internal-resonance tongue",
+               "failed": "**failed**", "cancelled": "stopped by the user",
                "stopped": "stopped", "running": "running"}
 #: events by kind, in words (singular)
 EVENT_NAMES = {"fold": "fold", "branch_point": "branch point", "period_doubling": "period doubling",
