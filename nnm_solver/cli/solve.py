@@ -165,6 +165,15 @@ def main(argv=None):
     parser.add_argument("--modes", help="sweep: modes to compute in parallel on Dask, e.g. 10-24 or 1,3,5-7")
     parser.add_argument("--sweep", metavar="SWEEP.toml", help="sweep: model variants (and modes, energy_max, "
                         "options) from a TOML file (docs/sweep.md)")
+    forced = parser.add_argument_group("forced response (docs/forced.md)")
+    forced.add_argument("--forced", action="store_true", help="compute a forced response (harmonic balance with "
+                        "modal damping) instead of an NNM branch; saved under /forced in the output file")
+    forced.add_argument("--force-dof", type=int, action="append", metavar="DOF", help="forced DOF (0-based; "
+                        "repeat for several)")
+    forced.add_argument("--force", type=float, action="append", metavar="N", help="force amplitude (N) at each "
+                        "--force-dof, in the same order (one value: the same at every DOF)")
+    forced.add_argument("--f-range", type=float, nargs=2, metavar=("F_START", "F_END"), help="frequency range (Hz)")
+    forced.add_argument("--damping", type=float, default=0.01, help="modal damping ratio of every mode (default 0.01)")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="sweep: local worker processes (default: one per core)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="sweep: address of a running Dask scheduler, "
@@ -173,6 +182,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.modes or args.sweep:
         return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
+    if args.forced:
+        return run_reporting_errors("nnm-solve", _run_forced, args)
     return run_reporting_errors("nnm-solve", _run, args)
 
 
@@ -203,6 +214,35 @@ def _method_arguments(args):
         raise NNMInputError(f"{', '.join(given)} belong(s) to --method shooting; harmonic balance has no time steps "
                             f"(raise --harmonics instead)")
     return dict(method="hb", harmonics=args.harmonics, condensed=args.condensed)
+
+
+def _run_forced(args):
+    """nnm-solve FILE --forced --force-dof D --force F --f-range A B [--damping Z] [--harmonics H]."""
+    from ..driver.forced import forced_response
+    from ..files.forced_io import save_forced_response
+
+    model, _ = _load(args.file)
+    dofs, values = args.force_dof or [], args.force or []
+    if not dofs or not values or args.f_range is None:
+        raise NNMInputError("--forced needs --force-dof DOF, --force N and --f-range F_START F_END")
+    if len(values) not in (1, len(dofs)):
+        raise NNMInputError(f"give one --force for each --force-dof ({len(dofs)}) or a single one, got {len(values)}")
+    force = np.zeros(model.n)
+    for d, v in zip(dofs, values * len(dofs) if len(values) == 1 else values):
+        if not 0 <= d < model.n:
+            raise NNMInputError(f"--force-dof {d} is not a DOF of the model (0..{model.n - 1})")
+        force[d] += v
+    out = _output_file(args, "the response will be saved to {out} (--out chooses another file)")
+    t0 = time.perf_counter()
+    r = forced_response(model, force, tuple(args.f_range), args.damping, harmonics=args.harmonics)
+    dof = int(dofs[0])
+    pk = r.peak(dof) if len(r) else None
+    print(f"forced response: {len(r)} points in {time.perf_counter() - t0:.1f} s, {r.status}: {r.message}")
+    if pk is not None:
+        print(f"  peak at DOF {dof}: {pk['amplitude']:.4e} m at {pk['frequency_hz']:.6g} Hz; folds: {len(r.folds)}")
+    if len(r):
+        print(f"saved as /forced/{save_forced_response(out, r)} in {out}")
+    return 1 if r.status == "failed" else 0
 
 
 def _run(args):

@@ -47,9 +47,15 @@ def _dense(A):
 
 
 def _check_symmetric(name, A):
-    D = _dense(A)
-    scale = np.max(np.abs(D)) if D.size else 0.0
-    asym = np.max(np.abs(D - D.T)) if D.size else 0.0
+    if sp.issparse(A):                 # without the dense form (a 64,000-DOF FE model's would be 33 GB)
+        A = sp.csr_matrix(A)
+        scale = float(np.max(np.abs(A.data))) if A.nnz else 0.0
+        S = (A - A.T).tocsr()
+        asym = float(np.max(np.abs(S.data))) if S.nnz else 0.0
+    else:
+        D = A
+        scale = np.max(np.abs(D)) if D.size else 0.0
+        asym = np.max(np.abs(D - D.T)) if D.size else 0.0
     if asym > 1e-8 * max(scale, 1e-300):
         raise NNMInputError(
             f"{name} is not symmetric (max |{name}-{name}^T| = {asym:.3g} vs max |{name}| = {scale:.3g}); "
@@ -204,14 +210,44 @@ class Model:
         if not 1 <= mode <= self.n:
             raise NNMInputError(f"mode {mode} is out of range: this model has modes 1..{self.n}")
         lam, _ = self.eigensolution
-        # a rigid-body eigenvalue is zero to the eigen-solver's round-off, ~ n eps lam_max; elastic modes can be
-        # far below lam_max (a stiff link next to a soft mode: 1e-12 of it is a 1e6 frequency ratio)
-        if lam[mode - 1] <= 10 * self.n * np.finfo(float).eps * max(lam[-1], 1e-300):
+        bound = self._zero_frequency_bound(mode - 1)
+        if lam[mode - 1] <= bound:
             raise NNMInputError(
-                f"mode {mode} is a rigid-body (zero-frequency) mode: its eigenvalue {lam[mode - 1]:.2e} is at the "
-                f"round-off of the eigen-solver (highest {lam[-1]:.2e}); it has no periodic NNM: pick an elastic "
-                f"mode or ground the structure")
+                f"mode {mode} is a rigid-body (zero-frequency) mode: its eigenvalue {lam[mode - 1]:.2e} is within "
+                f"its round-off error bound {bound:.2e} of zero (highest eigenvalue {lam[-1]:.2e}); it has no "
+                f"periodic NNM: pick an elastic mode or ground the structure (a mode meant to be elastic needs a "
+                f"smaller stiffness range, e.g. a coarser mesh)")
         return mode - 1
+
+    def _zero_frequency_bound(self, index):
+        """Largest eigenvalue (rad^2/s^2) mode ``index`` (0-based) can have and still be a rigid-body mode.
+
+        The old test, lam <= 10 n eps lam_max, refused elastic modes of fine FE meshes (300 beam elements:
+        lam_1 = 1.9e3 eps lam_max < 6e3 eps lam_max).  Now the larger of
+        (1) 2 (eta + eps |phi|^T |K| |phi|), this mode's own error bound.  Krylov-Weinstein: with
+            phi^T M phi = 1 the pencil (K, M) has an eigenvalue within eta = ||K phi - lam M phi||_{M^-1}
+            (= ||Phi^T r||, M^-1 = Phi Phi^T) of lam, so a computed rigid mode has lam <= eta however the
+            solver erred (a floating part of a stiff mesh: lam ~ 0.1 eps lam_max but far above eps times its
+            own stiffness); eps |phi|^T |K| |phi| is what relative changes of eps in K's entries move lam by
+            (first order) and covers the round-off of r itself (a singular K can give r = 0, lam ~ 1e-17);
+            times 2 because the computed bound is an estimate.  A fine mesh's elastic modes have
+            lam / bound ~ 1e3..1e5 and their frequencies are right to eta / (2 lam).
+        (2) 10 eps lam_max, the eigen-solver's resolution (LAPACK's approximate bound is eps lam_max on every
+            eigenvalue): below it the computed low spectrum is not resolved, and when elastic eigenvalues
+            lie there too the rigid mode can come out as any of them with a small residual of its own
+            (random spring networks with stiffness ranges 1e14: lam_1 = 1.7 eps lam_max > bound (1)).
+            No factor n: that is what refused the fine meshes.
+        Cost: products with K, |K| and M, and Phi^T r: O(n^2) dense, O(nnz + n^2) sparse.
+        """
+        lam, Phi = self.eigensolution
+        eps = np.finfo(float).eps
+        phi = Phi[:, index]
+        K = self.K_linear
+        r = K @ phi - lam[index] * (self.M @ phi)
+        eta = float(np.linalg.norm(Phi.T @ r))
+        a = np.abs(phi)
+        s = float(a @ _abs_apply(K, a))
+        return max(2.0 * (eta + eps * s), 10.0 * eps * lam[-1])
 
     def __repr__(self):
         return f"Model(n={self.n}, springs={len(self.springs)}{', name=' + repr(self.name) if self.name else ''})"
@@ -220,3 +256,13 @@ class Model:
 def _apply(A, x):
     """A x for every row x of (..., n), A dense or sparse."""
     return (A @ x.T).T if sp.issparse(A) else x @ A.T
+
+
+def _abs_apply(A, x):
+    """|A| x (x (n,)), A dense or sparse; a dense A is taken in row blocks (no n x n temporary)."""
+    if sp.issparse(A):
+        return abs(A) @ x
+    out = np.empty(A.shape[0])
+    for i in range(0, A.shape[0], 512):
+        out[i:i + 512] = np.abs(A[i:i + 512]) @ x
+    return out
