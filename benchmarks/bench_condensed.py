@@ -55,6 +55,9 @@ def main(argv=None):
     f20 = model.linear_modes()[0][19]
     E = args.energy_max
     hb = dict(method="hb", harmonics=9, condensed=True, floquet=False)
+    for kw in (hb, dict(steps_per_period=200, floquet=False), dict(integrator="gauss6", steps_per_period=100,
+                                                                  floquet=False)):
+        nnm.continue_nnm(model, 20, 0.05, **kw)          # warm: compiled kernels and caches, not in the timings
     full, t_full = timed(lambda: nnm.continue_nnm(model, 20, E, modal_basis="full", **hb), reps)
     ritz._cache.clear()
     rz, t_ritz = timed(lambda: (ritz._cache.clear(), nnm.continue_nnm(model, 20, E, modal_basis="ritz", **hb))[1], reps)

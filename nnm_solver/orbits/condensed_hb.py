@@ -78,12 +78,12 @@ class LinearPart:
 
     def flexibility(self, W, Omega2):
         """G_j = Bq diag(W[j]) Bq^T + R0 + Omega2_j R1: (N_b, n_s, n_s) m/N."""
-        G = np.einsum("sk,jk,tk->jst", self.Bq, W, self.Bq, optimize=True)
+        G = (self.Bq[None] * W[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
         return G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
 
     def flexibility_slope(self, W, Omega2):
         """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
-        return np.einsum("sk,jk,tk->jst", self.Bq, W * W, self.Bq, optimize=True) + self.R1[None]
+        return (self.Bq[None] * (W * W)[:, None, :]) @ self.Bq.T + self.R1[None]
 
 
 class CondensedHBProblem:
