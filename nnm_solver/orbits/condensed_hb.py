@@ -198,21 +198,11 @@ class CondensedHBProblem:
     def accept(self, u, J):
         pass
 
-    def scale(self, u):
-        """Weights of the balanced step norm: 1 / |(D, a beta)| on those, w_r / omega on the frequency."""
-        s = np.full(len(u), 1.0 / max(np.linalg.norm(u[:-1]), 1e-300))
-        s[-1] = 1.0 / u[-1]
-        return s
-
-    def max_step(self, u, p):
-        from .shooting import balanced_max_step
-        return balanced_max_step(self.scale(u) * p, self.max_rel_step, self.max_rel_period_step)
-
-    def check_step(self, u_old, u_new):
-        change = abs(u_old[-1] / u_new[-1] - 1)
-        if change > self.max_rel_period_step:
-            return f"the period changed by {100 * change:.2f} % in one step"
-        return ""
+    # the balanced step norm (1 / |(D, a beta)| on those, w_r / omega on the frequency) and the step limits
+    # are harmonic balance's: the unknowns have the same layout, [coefficients; omega / w_r]
+    scale = HBProblem.scale
+    max_step = HBProblem.max_step
+    check_step = HBProblem.check_step
 
     # --------------------------------------------------------------- the eliminated amplitudes
     def amplitudes(self, u):
