@@ -37,7 +37,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..jit import jit as _jit
+from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
 from .gauss_monodromy import monodromy as _monodromy
 from .newmark import solve_stages
@@ -146,7 +146,7 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
             Dlin[l * ns:(l + 1) * ns] = Bq @ Qlin[l]
             tl = c[l] * h
             Dguess[l * ns:(l + 1) * ns] = Bq @ (q + tl * v + 0.5 * tl * tl * a)
-        D, J, g, Dg, ok = solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess)
+        D, J, g, Dg, ok = solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess, 0)
         for l in range(s):
             P[l] = -(Bq.T @ g[l * ns:(l + 1) * ns])
     fQ = np.empty((s, n))
@@ -245,7 +245,7 @@ def _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, C1, Cc, 
             rhs = np.empty(s * ns)
             for l in range(s):
                 rhs[l * ns:(l + 1) * ns] = Bq @ Qp[l]
-            dd = np.linalg.solve(J, rhs)
+            dd = lapack_solve(J, rhs)
             w = Dg * dd
             for l in range(s):
                 Pp[l] = -(Bq.T @ w[l * ns:(l + 1) * ns])

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..jit import jit as _jit
+from ..jit import jit as _jit, lapack_solve_many
 
 __all__ = ["monodromy"]
 
@@ -32,7 +32,7 @@ def _volterra(Hom, H, G, Dseq, ncols):
         for j in range(k):
             acc -= H[k - 1 - j] @ W[j]
         Jk = eye + G * Dseq[k][None, :]
-        dd = np.linalg.solve(Jk, acc)
+        dd = lapack_solve_many(Jk, acc)
         W[k] = dd * Dseq[k][:, None]
     return W
 

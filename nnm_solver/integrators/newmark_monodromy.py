@@ -18,27 +18,40 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import blas
 
-from ..jit import jit as _jit
+from ..jit import jit as _jit, lapack_inv
+
+
+def one_element(Bq):
+    """The kernels' marker argument ``many``: None for a model with one nonlinear element, whose kernels are
+    compiled with the scalar solves only (numba drops the branches of ``many is None`` when compiling: no
+    LAPACK call, issue 32), else 0 (the general kernels, which also handle one element)."""
+    return None if Bq.shape[0] == 1 else 0
 
 
 @_jit
 def _linear_map(omega2, h):
     """Per-mode linear Newmark transition z_{k+1} = A z_k + e (b^T s_k), z = (dq, dv).
 
-    Returns the four entries of A (n,) each and the two entries of e (n,) each.
+    Returns the four entries of A (n,) each and the two entries of e (n,) each.  (Loops, not numpy
+    expressions: numba compiles them in a fraction of the time, issue 32.)
     """
+    n = omega2.shape[0]
     c1 = 4.0 / h ** 2
     c2 = 4.0 / h
-    S = c1 + omega2
-    alpha = (c1 - omega2) / S
-    beta = c2 / S
-    gam = 1.0 / S
-    a11 = alpha
-    a12 = beta
-    a21 = -(0.5 * h) * omega2 * (1.0 + alpha)
-    a22 = 1.0 - (0.5 * h) * omega2 * beta
-    e1 = -gam
-    e2 = 0.5 * h * (omega2 * gam - 1.0)
+    a11, a12, a21, a22 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    e1, e2 = np.empty(n), np.empty(n)
+    for i in range(n):
+        w2 = omega2[i]
+        S = c1 + w2
+        alpha = (c1 - w2) / S
+        beta = c2 / S
+        gam = 1.0 / S
+        a11[i] = alpha
+        a12[i] = beta
+        a21[i] = -(0.5 * h) * w2 * (1.0 + alpha)
+        a22[i] = 1.0 - (0.5 * h) * w2 * beta
+        e1[i] = -gam
+        e2[i] = 0.5 * h * (w2 * gam - 1.0)
     return a11, a12, a21, a22, e1, e2
 
 
@@ -50,18 +63,24 @@ def _powers(omega2, h, N):
     a11, a12, a21, a22, e1, e2 = _linear_map(omega2, h)
     P11 = np.empty((N + 1, n))
     P12 = np.empty((N + 1, n))
-    p11, p12, p21, p22 = np.ones(n), np.zeros(n), np.zeros(n), np.ones(n)
+    p21 = np.empty(n)
+    p22 = np.empty(n)
     ge1 = np.empty((N, n))
     ge2 = np.empty((N, n))
-    for m in range(N + 1):
-        P11[m] = p11
-        P12[m] = p12
-        if m == N:
-            break
-        ge1[m] = p11 * e1 + p12 * e2
-        ge2[m] = p21 * e1 + p22 * e2
-        p11, p12, p21, p22 = (a11 * p11 + a12 * p21, a11 * p12 + a12 * p22,
-                              a21 * p11 + a22 * p21, a21 * p12 + a22 * p22)
+    for i in range(n):
+        p11_, p12_, p21_, p22_ = 1.0, 0.0, 0.0, 1.0
+        A11, A12, A21, A22, E1, E2 = a11[i], a12[i], a21[i], a22[i], e1[i], e2[i]
+        for m in range(N + 1):
+            P11[m, i] = p11_
+            P12[m, i] = p12_
+            if m == N:
+                break
+            ge1[m, i] = p11_ * E1 + p12_ * E2
+            ge2[m, i] = p21_ * E1 + p22_ * E2
+            p11_, p12_, p21_, p22_ = (A11 * p11_ + A12 * p21_, A11 * p12_ + A12 * p22_,
+                                      A21 * p11_ + A22 * p21_, A21 * p12_ + A22 * p22_)
+        p21[i] = p21_
+        p22[i] = p22_
     return P11, P12, p21, p22, ge1, ge2
 
 
@@ -71,7 +90,7 @@ VOLTERRA_BLOCK = 128
 
 
 @_jit
-def _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1):
+def _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1, many):
     """The pieces of the Volterra recursion (module docstring) for the deformations' perturbations dd_k, k = 1..N:
 
         (I - H0 D_k) dd_k - sum_{0<j<k} Kc(k-j) D_j dd_j = F_k,   F_k = free_k + H(k-1) w_0,
@@ -92,27 +111,39 @@ def _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1):
                 H[m, b, a] = acc
     Kc = np.zeros((N, ns, ns))
     for m in range(1, N):
-        Kc[m] = H[m] + H[m - 1]
+        for a in range(ns):
+            for b in range(ns):
+                Kc[m, a, b] = H[m, a, b] + H[m - 1, a, b]
     M = np.zeros((N + 1, ns, ns))
     F = np.empty((N * ns, ncols))
-    W0 = Bq * Dseq[0][:, None]                  # w_0 = D_0 Bq dq0 (the dv0 columns have w_0 = 0)
-    eye = np.eye(ns)
+    W0 = np.empty((ns, n))                      # w_0 = D_0 Bq dq0 (the dv0 columns have w_0 = 0)
+    for a in range(ns):
+        for c in range(n):
+            W0[a, c] = Bq[a, c] * Dseq[0, a]
+    A = np.empty((ns, ns))
     for k in range(1, N + 1):
-        p11, p12 = P11[k], P12[k]
-        if ns == 1:
+        if many is None:                # one element (one_element): no LAPACK call compiled
+            M[k, 0, 0] = 1.0 / (1.0 - H[0, 0, 0] * Dseq[k, 0])
+        elif ns == 1:
             M[k, 0, 0] = 1.0 / (1.0 - H[0, 0, 0] * Dseq[k, 0])
         else:
-            M[k] = np.linalg.inv(eye - H[0] * Dseq[k][None, :])
+            for a in range(ns):
+                for b in range(ns):
+                    A[a, b] = (1.0 if a == b else 0.0) - H[0, a, b] * Dseq[k, b]
+            Minv = lapack_inv(A)
+            for a in range(ns):
+                for b in range(ns):
+                    M[k, a, b] = Minv[a, b]
         r0 = (k - 1) * ns
         for a in range(ns):
             for c in range(n):
-                acc = Bq[a, c] * p11[c]
+                acc = Bq[a, c] * P11[k, c]
                 for b in range(ns):
                     acc += H[k - 1, a, b] * W0[b, c]
                 F[r0 + a, c] = acc
             if ncols > n:
                 for c in range(n):
-                    F[r0 + a, n + c] = Bq[a, c] * p12[c]
+                    F[r0 + a, n + c] = Bq[a, c] * P12[k, c]
     return Kc, M, F
 
 
@@ -165,7 +196,7 @@ def _volterra(Bq, N, Dseq, ncols, P11, P12, ge1):
     steps at a time: each earlier block enters by a matrix product, the block itself by a triangular solve (BLAS-3)."""
     n = Bq.shape[1]
     ns = Bq.shape[0]
-    Kc, M, F = _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1)
+    Kc, M, F = _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1, one_element(Bq))
     W = np.zeros(((N + 1) * ns, ncols))
     W[:ns, :n] = Bq * Dseq[0][:, None]
     for k0 in range(1, N + 1, VOLTERRA_BLOCK):

@@ -48,6 +48,9 @@ from .hill import hill_multipliers
 class HBProblem:
     """Harmonic-balance equations of one NNM branch, for ``continuation.pseudo_arclength``."""
 
+    #: the route of Hill's method for the multipliers (hill.HILL_METHODS: "auto", "dense", "structured")
+    hill_method = "auto"
+
     def __init__(self, system, mode_index, basis, max_rel_step=0.4, max_rel_period_step=np.inf):
         self.sys = system
         self.n = system.n
@@ -86,9 +89,9 @@ class HBProblem:
         return q0, v0, 2 * np.pi / self.unpack(u)[1]
 
     def multipliers(self, u, tangent=None):
-        """Floquet multipliers of the orbit u by Hill's method (hill.py), the two nearest to +1 (the
-        trivial pair) set to exactly 1."""
-        return without_nearest_to_one(hill_multipliers(self, u))
+        """Floquet multipliers of the orbit u by Hill's method (hill.py; route: ``hill_method``), the two nearest
+        to +1 (the trivial pair) set to exactly 1."""
+        return without_nearest_to_one(hill_multipliers(self, u, method=self.hill_method))
 
     def coefficients(self, u):
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m)."""
