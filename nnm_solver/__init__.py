@@ -18,7 +18,7 @@ from .results import STATUSES, Branch, HarmonicBalanceSettings, MethodSettings, 
 from .fourier import fourier_amplitudes, fourier_coefficients
 from .driver import METHODS, Job, NNMIterator, continue_nnm, continue_tongue, iter_nnm, start_branch, switch_branch
 from .files import (Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit,
-                    load_branches, load_extra, load_model, save_branch, save_model)
+                    load_branches, load_extra, load_model, save_branch, save_model, store_ritz_basis)
 from .files.importers import DofMap, import_model
 from .files.importers.matlab import load_mat_model
 from .files.importers.toml import load_toml_model
@@ -57,6 +57,7 @@ __all__ = [
     "STABILITY_TOL", "cubic_scaling", "fourier_coefficients", "fourier_amplitudes",
     # files and plots
     "load_model", "save_model", "load_branches", "save_branch", "load_extra", "load_mat_model", "plot_fep",
+    "store_ritz_basis",
     # importing FE models, exporting to the test lab (docs/import.md)
     "import_model", "load_toml_model", "load_full_model", "DofMap",
     "export_csv", "export_uff", "export_uff_orbit", "amplitude_backbone", "export_backbone_csv", "Backbone",

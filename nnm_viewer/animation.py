@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from nnm_solver import fourier_coefficients
 
@@ -137,15 +138,24 @@ def orbit_animation(vertices, faces, displacements, t, x, period, n_harm=15, che
 
 class MeshMapper:
     """Vertex displacements from model coordinates, with the map kept as float32 (n, 3V):
-    one fast product per call (DisplayMesh.displacements converts the map at every call)."""
+    one fast product per call (DisplayMesh.displacements converts the map at every call).
+    A sparse map (a large FE model's, scipy.sparse) stays sparse: float32 CSR (3V, n), one sparse product."""
 
     def __init__(self, mesh):
         self.nv = len(mesh.vertices)
-        self.Dt = np.ascontiguousarray(np.asarray(mesh.displacement_map, dtype=np.float32).T)
+        D = mesh.displacement_map
+        self.sparse = sp.issparse(D)
+        if self.sparse:
+            self.D = sp.csr_matrix(D, dtype=np.float32)
+        else:
+            self.Dt = np.ascontiguousarray(np.asarray(D, dtype=np.float32).T)
 
     def __call__(self, x):
         x = np.asarray(x, dtype=np.float32)
-        u = (x @ self.Dt).astype(float)
+        if self.sparse:
+            u = np.asarray(self.D @ x.T, dtype=float).T
+        else:
+            u = (x @ self.Dt).astype(float)
         return u.reshape(x.shape[:-1] + (self.nv, 3))
 
 

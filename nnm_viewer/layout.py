@@ -78,9 +78,11 @@ def modes_markdown(model, linear_freqs):
     """Markdown table of the linear modes (at most MAX_MODES_TABLE rows)."""
     labels = model.mode_labels or []
     rows = ["| mode | f (Hz) | label |", "|---|---|---|"]
-    for k in range(min(model.n, MAX_MODES_TABLE)):
+    for k in range(min(len(linear_freqs), MAX_MODES_TABLE)):
         rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {labels[k] if k < len(labels) else ''} |")
     more = (f"\n\n({model.n - MAX_MODES_TABLE} more modes not listed)" if model.n > MAX_MODES_TABLE else "")
+    if len(linear_freqs) < min(model.n, MAX_MODES_TABLE):            # a large model: only its lowest modes computed
+        more = f"\n\n(the lowest {len(linear_freqs)} of the model's {model.n} modes)"
     return "**Linear modes**\n\n" + "\n".join(rows) + more
 
 
@@ -165,7 +167,8 @@ class Layout:
             self.h_gif = gui.add_button("Download animation (GIF)", icon=viser.Icon.DOWNLOAD,
                                         hint="the deformed structure over one period, seen as in the 3D view, "
                                              "with its colour bar (a few seconds to draw)")
-        options = tuple(mode_label(model, linear_freqs, k) for k in range(1, model.n + 1))    # every mode
+        # every mode (a large model's: the lowest ones computed, nnm_viewer.state.view_linear_modes)
+        options = tuple(mode_label(model, linear_freqs, k) for k in range(1, len(linear_freqs) + 1))
         self.mode_options = options
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
             self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])

@@ -94,6 +94,20 @@ class BranchEntry:
                          status=str(getattr(b, "status", "") or ""))
 
 
+#: linear modes shown for a model too large for the dense eigensolution (nnm_solver.model.MAX_DENSE_DOF)
+LARGE_MODEL_MODES = 48
+
+
+def view_linear_modes(model):
+    """(freqs Hz, shapes (n, k)): every linear mode of the model (``Model.linear_modes``), or for a model above
+    nnm_solver.model.MAX_DENSE_DOF DOFs (a full FE model) its lowest LARGE_MODEL_MODES by sparse Lanczos
+    (``nnm_solver.model.sparse_modes``): the Modes tab and the Compute tab's mode list then stop there."""
+    from nnm_solver.model import MAX_DENSE_DOF, sparse_modes
+    if model.n > MAX_DENSE_DOF:
+        return sparse_modes(model, LARGE_MODEL_MODES)
+    return model.linear_modes()
+
+
 def scaling_law_holds(model):
     """True when the exact k3 scaling law (nnm_solver.cubic_scaling) applies to ``model``: every
     nonlinear element is a pure cubic spring (or there is none).  Otherwise a stiffness factor must
@@ -204,7 +218,7 @@ class SharedState:
         from .scene import fallback_mesh
         self.mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
         self.mapper = MeshMapper(self.mesh)
-        freqs, shapes = model.linear_modes()
+        freqs, shapes = view_linear_modes(model)
         self.linear_freqs = np.asarray(freqs)
         self.linear_shapes = shapes
         for b in branches:

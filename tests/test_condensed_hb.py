@@ -178,6 +178,71 @@ def lattice(N=100, k=1e4, m=0.5, k3=1e9):
     return nnm.Model(m * sp.identity(N * N, format="csr"), K, [nnm.CubicSpring(dof=(N // 2) * N + N // 2, k3=k3)])
 
 
+def test_block_lanczos_finds_every_mode_below_the_cutoff_with_the_exact_eigenvalues():
+    """model/ritz.py's block Lanczos (modes_below) on a 40 x 40 lattice (1,600 DOFs, double eigenvalues from its
+    symmetry), two cutoffs: every mode below the cutoff and past it, none missed (the count is the closed form's),
+    eigenvalues equal to the closed form to 1e-10, M-orthonormal shapes with small residuals (CHOLMOD or SuperLU,
+    whichever SparseSolver uses)."""
+    import scipy.sparse as sp
+    from nnm_solver.model.ritz import modes_below
+    from nnm_solver.model.sparse import SparseSolver
+    N, k, m = 40, 1e4, 0.5
+    model = lattice(N, k, m)
+    p, q = np.meshgrid(np.arange(1, N + 1), np.arange(1, N + 1))
+    s2 = lambda j: np.sin(j * np.pi / (2 * (N + 1))) ** 2                                          # noqa: E731
+    exact = np.sort((k / m * 4 * (s2(p) + s2(q))).ravel())
+    K, M = sp.csc_matrix(model.K), sp.csc_matrix(model.M)
+    for f_cut in (20.0, 30.0):
+        w2 = (2 * np.pi * f_cut) ** 2
+        lam, Phi = modes_below(K, M, SparseSolver(K), 10, lambda found: w2)
+        below = int(np.sum(exact <= w2))
+        assert below > 90 and len(lam) > below and lam[below] > w2 and np.all(lam[:below] <= w2)
+        assert np.allclose(lam, exact[:len(lam)], rtol=1e-10)
+        assert np.allclose(Phi.T @ (M @ Phi), np.eye(len(lam)), atol=1e-9)
+        r = K @ Phi - (M @ Phi) * lam
+        assert np.max(np.linalg.norm(r, axis=0) / (lam * np.linalg.norm(M @ Phi, axis=0))) < 1e-8
+
+
+def test_ritz_basis_falls_back_to_arpack_where_the_block_lanczos_cannot_converge(monkeypatch):
+    """The 300-element cantilever (eigenvalues spanning 1e12) through the sparse path: the block Lanczos stalls at
+    the round-off of K^-1 (LanczosStall) and ritz_basis takes ARPACK's modes instead, equal to the dense ones."""
+    import scipy.sparse as sp
+    from nnm_solver.model import ritz
+    from nnm_solver.model.sparse import SparseSolver
+    model = sparse_cantilever(300)
+    K, M = sp.csc_matrix(model.K_linear), sp.csc_matrix(model.M)
+    with pytest.raises(ritz.LanczosStall):
+        ritz.modes_below(K, M, SparseSolver(K), 10, lambda found: (2 * np.pi * 3000.0) ** 2)
+    monkeypatch.setattr(ritz, "MAX_DENSE_DOF", 100)            # the sparse path for this 600-DOF model
+    lam, Phi, m, cut = ritz.ritz_basis(model, mode=1, harmonics=5)
+    dense = model.eigensolution[0]
+    # to the round-off of this pencil (eigenvalues spanning 1e12, an error ~ eps lam_max / lam): 7e-6 on the first
+    assert m >= 24 and np.allclose(lam[:m], dense[:m], rtol=5e-5)
+
+
+def test_sparse_solver_backends_agree_and_superlu_is_the_fallback():
+    """SparseSolver: CHOLMOD (when scikit-sparse is installed) and SuperLU (with and without the nested-dissection
+    ordering) give the same solutions for 1-D and 2-D right-hand sides; a matrix that is not positive definite goes
+    to SuperLU, and SuperLU's "exactly singular" stays the error of a singular one."""
+    import scipy.sparse as sp
+    from nnm_solver.model.sparse import SparseSolver, cholmod_available
+    model = sparse_cantilever(60)
+    K = sp.csc_matrix(model.K)
+    b = np.random.default_rng(1).standard_normal((K.shape[0], 3))
+    ref = np.linalg.solve(K.toarray(), b)
+    backends = ["superlu"] + (["cholmod"] if cholmod_available() else [])
+    for be in backends:
+        s = SparseSolver(K, backend=be)
+        assert s.backend == be
+        assert np.allclose(s.solve(b), ref, rtol=1e-8, atol=1e-12 * np.abs(ref).max())
+        assert np.allclose(s.solve(b[:, 0]), ref[:, 0], rtol=1e-8, atol=1e-12 * np.abs(ref).max())
+    assert SparseSolver(K).backend == backends[-1]
+    shifted = (K - 2.0 * model.eigensolution[0][3] * sp.csc_matrix(model.M)).tocsc()      # indefinite
+    assert SparseSolver(shifted).backend == "superlu"
+    with pytest.raises(RuntimeError, match="singular"):
+        SparseSolver(sp.csc_matrix(np.array([[1.0, -1.0], [-1.0, 1.0]])))
+
+
 @pytest.mark.slow
 def test_a_ten_thousand_dof_lattice_runs_with_its_first_point_at_the_exact_linear_frequency():
     N, k, m = 100, 1e4, 0.5

@@ -47,6 +47,75 @@ def test_sparse_matrices_round_trip(tmp_path):
     assert sp.issparse(r.K) and np.allclose(r.K.toarray(), K.toarray())
 
 
+def test_sparse_display_map_round_trip_stays_sparse(tmp_path):
+    """A large FE model's display map is sparse (examples/build_paris_full.py: 3V x 64,446): it is written as CSR
+    (/mesh/displacement_map a group, attribute sparse="csr"), read back sparse, and moves the mesh as the dense one."""
+    dense = _mesh()
+    mesh = nnm.DisplayMesh(dense.vertices, dense.faces, sp.csr_matrix(dense.displacement_map, dtype=np.float32),
+                           part_ids=[0], part_names=["plate"])
+    assert sp.issparse(mesh.displacement_map)
+    x = np.array([[1.0, 2.0], [-0.5, 3.0]])
+    assert np.array_equal(mesh.displacements(x), dense.displacements(x))
+    assert np.array_equal(mesh.displacements(x[0]), dense.displacements(x[0]))
+    assert np.array_equal(mesh.map_rows([2, 5]), dense.map_rows([2, 5]))
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]), mesh=mesh)
+    p = tmp_path / "sparse_mesh.h5"
+    nnm.save_model(p, m)
+    with h5py.File(p, "r") as f:
+        g = f["mesh/displacement_map"]
+        assert isinstance(g, h5py.Group) and g.attrs["sparse"] == "csr" and g["data"].dtype == np.float32
+    r = nnm.load_model(p)
+    assert sp.issparse(r.mesh.displacement_map) and r.mesh.displacement_map.shape == (9, 2)
+    assert np.array_equal(r.mesh.displacements(x), dense.displacements(x))
+    # the viewer's mapper keeps it sparse and gives the same displacements
+    from nnm_viewer.animation import MeshMapper
+    assert np.allclose(MeshMapper(r.mesh)(x), MeshMapper(dense)(x))
+    assert MeshMapper(r.mesh).sparse and not MeshMapper(dense).sparse
+    # a dense map is still a dataset
+    nnm.save_model(p, nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]), mesh=dense))
+    with h5py.File(p, "r") as f:
+        assert isinstance(f["mesh/displacement_map"], h5py.Dataset)
+    assert isinstance(nnm.load_model(p).mesh.displacement_map, np.ndarray)
+
+
+def test_stored_ritz_basis_is_used_and_belongs_to_its_model(tmp_path, monkeypatch):
+    """store_ritz_basis writes /ritz_basis; a model read from the file (or a k3-scaled one) takes it instead of
+    computing one; another model's basis is refused, and a file whose basis is not its model's does not use it."""
+    import weakref
+
+    from nnm_solver.model import ritz
+    N = 300
+    T = (1e4 * sp.diags([-np.ones(N - 1), 2 * np.ones(N), -np.ones(N - 1)], [-1, 0, 1])).tocsr()
+    model = nnm.Model(0.5 * sp.identity(N, format="csr"), T, [nnm.CubicSpring(dof=10, other=11, k3=1e9)])
+    p = tmp_path / "chain.h5"
+    nnm.save_model(p, model)
+    hb = dict(method="hb", harmonics=5, condensed=True, floquet=False, modal_basis="ritz")
+    computed = nnm.continue_nnm(model, 2, 1e-3, **hb)
+    info = nnm.store_ritz_basis(p, model, 2, 5)
+    assert info["exact_modes"] >= 2 and info["columns"] == info["exact_modes"] + 2
+    monkeypatch.setattr(ritz, "_stored", {})
+    monkeypatch.setattr(ritz, "_cache", weakref.WeakKeyDictionary())
+    read = nnm.load_model(p)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the basis was computed, not read")
+    monkeypatch.setattr(ritz, "ritz_basis", refuse)
+    branch = nnm.continue_nnm(read, 2, 1e-3, **hb)
+    assert np.array_equal(branch.frequency_hz, computed.frequency_hz)
+    assert ritz.ritz_system(read, 2, 5).stored == str(p.resolve())
+    nnm.continue_nnm(read.scaled(2.0), 2, 1e-3, **hb)            # the same linear part: the same basis
+    other = nnm.Model(0.6 * sp.identity(N, format="csr"), T, [nnm.CubicSpring(dof=10, other=11, k3=1e9)])
+    with pytest.raises(NNMInputError, match="another model"):
+        nnm.store_ritz_basis(p, other, 2, 5)
+    # a file whose model was replaced under a stored basis: the basis is not used
+    with h5py.File(p, "r+") as f:
+        f["ritz_basis"].attrs["fingerprint"] = "0" * 64
+    monkeypatch.setattr(ritz, "_stored", {})
+    with pytest.warns(UserWarning, match="another model"):
+        nnm.load_model(p)
+    assert ritz._stored == {}
+
+
 def test_branch_round_trip_and_append_keeps_everything(tmp_path, two_dof_nnm1):
     p = tmp_path / "b.h5"
     nnm.save_model(p, two_dof_nnm1.model)

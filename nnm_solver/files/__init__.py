@@ -6,7 +6,7 @@ Layer: imports ``nnm_solver.results`` and the layers below it.
 """
 from .exports import (Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff,
                       export_uff_orbit)
-from .io import load_branches, load_extra, load_model, save_branch, save_model
+from .io import load_branches, load_extra, load_model, save_branch, save_model, store_ritz_basis
 
 __all__ = ["load_model", "save_model", "load_branches", "save_branch", "load_extra", "export_csv", "export_uff",
-           "export_uff_orbit", "amplitude_backbone", "export_backbone_csv", "Backbone"]
+           "export_uff_orbit", "amplitude_backbone", "export_backbone_csv", "Backbone", "store_ritz_basis"]

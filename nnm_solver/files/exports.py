@@ -116,7 +116,7 @@ def _coordinate(model, dof=None, vertex=None, direction="uz"):
         c = {"ux": 0, "uy": 1, "uz": 2}.get(direction_name(direction))
         if c is None:
             raise NNMInputError(f"a mesh vertex moves in ux, uy or uz, not {direction!r}")
-        return np.asarray(model.mesh.displacement_map[3 * int(vertex) + c], dtype=float), \
+        return model.mesh.map_rows([3 * int(vertex) + c])[0], \
             f"mesh vertex {vertex} {'xyz'[c]}"
     w = np.zeros(n)
     if isinstance(dof, (int, np.integer)) and not isinstance(dof, bool):

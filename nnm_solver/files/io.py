@@ -8,6 +8,7 @@ import json
 import math
 from pathlib import Path
 
+import h5py
 import numpy as np
 import scipy.sparse as sp
 
@@ -20,6 +21,9 @@ from .h5file import (STR, atomic_h5, open_nnm, read_attrs, read_group_tree, read
 from ..model.mesh import DisplayMesh
 from .sweep_groups import parse_branch_name, recorded_variants, with_variant_models
 from ..model.model import Model
+from ..model.ritz import linear_fingerprint, ritz_system
+from .ritz_store import GROUP as RITZ_GROUP
+from .ritz_store import register_basis_of_file, store_basis_in_file
 
 BRANCH_COLUMNS = ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable")
 
@@ -100,13 +104,43 @@ def write_model_group(f, model, extra=None):
         mg = f.create_group("mesh")
         mg.create_dataset("vertices", data=m.vertices.astype(np.float32), compression="gzip")
         mg.create_dataset("faces", data=m.faces.astype(np.int32), compression="gzip")
-        mg.create_dataset("displacement_map", data=m.displacement_map.astype(np.float32),
-                          compression="gzip", compression_opts=9, shuffle=True)
+        if sp.issparse(m.displacement_map):
+            write_sparse_map(mg, m.displacement_map)
+        else:
+            mg.create_dataset("displacement_map", data=m.displacement_map.astype(np.float32),
+                              compression="gzip", compression_opts=9, shuffle=True)
         if m.part_ids is not None:
             mg.create_dataset("part_ids", data=m.part_ids.astype(np.int16), compression="gzip")
         mg.create_dataset("part_names", data=np.array(list(m.part_names), dtype=STR))
     if extra:
         write_group_tree(f.require_group("extra"), extra)
+
+
+def write_sparse_map(mg, D):
+    """A sparse display map as the group /mesh/displacement_map: attrs sparse="csr" and shape, datasets
+    data (float32), indices and indptr (int32 where they fit)."""
+    D = sp.csr_matrix(D)
+    g = mg.create_group("displacement_map")
+    g.attrs["sparse"] = "csr"
+    g.attrs["shape"] = np.asarray(D.shape, dtype=np.int64)
+    index = np.int32 if max(D.shape[1], D.nnz) < 2 ** 31 else np.int64
+    g.create_dataset("data", data=D.data.astype(np.float32), compression="gzip", shuffle=True)
+    g.create_dataset("indices", data=D.indices.astype(index), compression="gzip", shuffle=True)
+    g.create_dataset("indptr", data=D.indptr.astype(index), compression="gzip", shuffle=True)
+
+
+def read_displacement_map(mg, path):
+    """/mesh/displacement_map: a dense float32 dataset, or a CSR group (write_sparse_map), kept sparse."""
+    obj = mg["displacement_map"]
+    if not isinstance(obj, h5py.Group):
+        return obj[()]
+    if obj.attrs.get("sparse") != "csr":
+        raise NNMFileError(f"{path}: /mesh/displacement_map is a group without the attribute sparse='csr'")
+    try:
+        shape = tuple(int(s) for s in obj.attrs["shape"])
+        return sp.csr_matrix((obj["data"][()], obj["indices"][()], obj["indptr"][()]), shape=shape)
+    except (KeyError, OSError, ValueError) as exc:
+        raise NNMFileError(f"{path}: /mesh/displacement_map is unreadable ({exc}); the file is damaged") from None
 
 
 def save_model(path, model, extra=None):
@@ -139,7 +173,29 @@ def read_springs(g, path):
     return [spring_from_json(int(d), None if o < 0 else int(o), law, path) for d, o, law in zip(dof, other, laws)]
 
 
-def read_model_group(f, path):
+def store_ritz_basis(path, model, mode, harmonics, f_cut_hz=None):
+    """Store the Ritz basis (model/ritz.py) of a condensed-HB branch of the 1-based ``mode`` with ``harmonics`` (or
+    of the cutoff ``f_cut_hz``) as /ritz_basis in the nnm file ``path`` (files/ritz_store.py), whose model must be
+    ``model`` up to its force laws' coefficients (NNMInputError otherwise, the file untouched).  The basis is
+    computed here unless this process has it; one stored before is replaced; the write is atomic.  A branch of a
+    model read from the file then starts from it (no Lanczos).  Returns dict(exact_modes, cutoff_hz, columns)."""
+    path = Path(path)
+    if not isinstance(model, Model):
+        raise NNMInputError(f"store_ritz_basis needs an nnm_solver.Model, got {type(model).__name__}")
+    if is_import_path(path) or not path.exists():
+        raise NNMInputError(f"{path}: no nnm model file there; write the model first (nnm_solver.save_model)")
+    fingerprint = linear_fingerprint(model)
+    with open_nnm(path) as f:
+        file_model = read_model_group(f, path, register_basis=False)
+    if linear_fingerprint(file_model) != fingerprint:
+        raise NNMInputError(f"{path} holds another model than this one (M, K or the elements' places differ); the "
+                            f"basis was not stored: store it in the model's own file")
+    system = ritz_system(model, mode, harmonics, f_cut_hz)
+    store_basis_in_file(path, system, fingerprint, mode, harmonics)
+    return dict(exact_modes=int(system.exact_modes), cutoff_hz=float(system.cutoff_hz), columns=len(system.omega2))
+
+
+def read_model_group(f, path, register_basis=True):
     if "model" not in f:
         raise NNMFileError(f"{path}: no /model group; not an nnm model file")
     g = f["model"]
@@ -155,16 +211,19 @@ def read_model_group(f, path):
         try:
             mesh = DisplayMesh(
                 vertices=mg["vertices"][()].astype(float), faces=mg["faces"][()],
-                displacement_map=mg["displacement_map"][()],
+                displacement_map=read_displacement_map(mg, path),
                 part_ids=mg["part_ids"][()] if "part_ids" in mg else None,
                 part_names=strings(mg["part_names"]) if "part_names" in mg else [])
         except KeyError as exc:
             raise NNMFileError(f"{path}: /mesh is incomplete ({exc})") from None
     try:
-        return Model(M, K, springs, dof_labels=dof_labels, mode_labels=mode_labels, mesh=mesh,
-                     name=str(g.attrs.get("name", "")), info=info)
+        model = Model(M, K, springs, dof_labels=dof_labels, mode_labels=mode_labels, mesh=mesh,
+                      name=str(g.attrs.get("name", "")), info=info)
     except NNMInputError as exc:
         raise NNMFileError(f"{path}: {exc}") from None
+    if register_basis and RITZ_GROUP in f:         # a stored Ritz basis: its shapes are read when a branch needs them
+        register_basis_of_file(path, linear_fingerprint(model), f)
+    return model
 
 
 def load_model(path):

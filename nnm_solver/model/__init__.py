@@ -13,9 +13,10 @@ from .mesh import DisplayMesh
 from .model import MAX_DENSE_DOF, Model
 from .modal import ModalSystem, modal_system
 from .reduction import craig_bampton, mac, mass_mac
+from .ritz import sparse_modes
 from .scaling import cubic_scaling
 from .variants import Variant, variant_grid
 
 __all__ = ["Model", "MAX_DENSE_DOF", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet",
            "check_element", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac", "mass_mac",
-           "cubic_scaling", "Variant", "variant_grid"]
+           "cubic_scaling", "Variant", "variant_grid", "sparse_modes"]

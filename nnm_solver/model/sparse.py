@@ -1,6 +1,17 @@
-"""Sparse symmetric factorisation and solve with a fill-reducing ordering (geometric nested dissection).
+"""Sparse symmetric factorisation and solve with a fill-reducing ordering.
 
-Used by Craig-Bampton (reduction.py) and by the FE kit (nnm_fem) for shift-invert eigensolves.
+Used by Craig-Bampton (reduction.py), the Ritz basis (ritz.py) and the FE kit (nnm_fem) for shift-invert
+eigensolves.  Two back ends:
+
+- CHOLMOD (scikit-sparse, the optional extra ``nnm[sparse]``): supernodal Cholesky with its own fill-reducing
+  ordering (AMD, METIS tried), for symmetric positive definite matrices.  Used whenever it is installed and the
+  matrix is positive definite: on the full aircraft's K (64,446 DOFs, benchmarks/bench_sparse.py) it factorises
+  in 0.9 s against SuperLU's 8.9 s with the nested dissection below (12.9 s with COLAMD), holds 166 MB against
+  1,058 MB, solves 8 right-hand sides 4x faster, at the same backward error (1e-13).
+- SuperLU (scipy, always there): LU with scipy's COLAMD ordering, or, given the node coordinates ``xyz``, with
+  the nodes' geometric nested dissection in symmetric mode.  The fallback when CHOLMOD is not installed, and for
+  matrices that are not positive definite (a shift inside the spectrum, a singular K: SuperLU's RuntimeError
+  "Factor is exactly singular" is what callers catch).
 """
 from __future__ import annotations
 
@@ -45,22 +56,64 @@ def dof_ordering(A, xyz, ndof=6):
     return (ndof * p[:, None] + np.arange(ndof)).ravel()
 
 
-class SparseSolver:
-    """LU factorisation of a symmetric FE matrix with nested-dissection ordering; solve(b)."""
+#: the back ends of SparseSolver: "auto" (CHOLMOD if installed and the matrix is positive definite, else SuperLU)
+BACKENDS = ("auto", "cholmod", "superlu")
 
-    def __init__(self, A, xyz=None, ndof=6):
+
+def _cholmod():
+    """scikit-sparse's CHOLMOD module, or None when it is not installed."""
+    try:
+        from sksparse import cholmod
+    except ImportError:
+        return None
+    return cholmod
+
+
+def cholmod_available():
+    return _cholmod() is not None
+
+
+class SparseSolver:
+    """Factorisation of a symmetric FE matrix A; ``solve(b)`` for b (n,) or (n, k).
+
+    backend "auto" (default): CHOLMOD's Cholesky when scikit-sparse is installed and A is positive definite, else
+    SuperLU (LU, nested-dissection ordering of the nodes when their coordinates ``xyz`` (n / ndof, 3) are given,
+    scipy's COLAMD otherwise); "cholmod" or "superlu" to choose (CHOLMOD refuses a matrix that is not positive
+    definite with its CholmodNotPositiveDefiniteError).  ``backend`` tells which one factorised A.
+    """
+
+    def __init__(self, A, xyz=None, ndof=6, backend="auto"):
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
         A = sp.csc_matrix(A)
+        self.shape = A.shape
+        self.p = None
+        self.factor = None
+        cholmod = _cholmod() if backend != "superlu" else None
+        if backend == "cholmod" and cholmod is None:
+            raise ImportError("the CHOLMOD back end needs scikit-sparse (pip install scikit-sparse)")
+        if cholmod is not None:
+            try:
+                # supernodal: always L L^T, so that a matrix that is not positive definite is refused (the simplicial
+                # mode CHOLMOD picks for small matrices is L D L^T without pivoting, which takes indefinite ones)
+                self.factor = cholmod.cholesky(A.astype(float), mode="supernodal")
+                self.backend = "cholmod"
+                return
+            except cholmod.CholmodNotPositiveDefiniteError:
+                if backend == "cholmod":
+                    raise
+        self.backend = "superlu"
         if xyz is None:
-            self.p = None
             self.lu = spla.splu(A)
         else:
             self.p = dof_ordering(A, xyz, ndof)
             Ap = A[self.p][:, self.p].tocsc()
             self.lu = spla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0,
                                 options=dict(SymmetricMode=True))
-        self.shape = A.shape
 
     def solve(self, b):
+        if self.factor is not None:
+            return self.factor.solve_A(np.asarray(b, dtype=float))
         if self.p is None:
             return self.lu.solve(b)
         b = np.asarray(b)
