@@ -19,7 +19,8 @@ from ..results.branch import Point
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
 from .iterator import NNMIterator
-from .skeleton import skeleton
+from .labels import FamilyLabels
+from .skeleton import SKELETON_HARMONICS, skeleton
 from .tongue_skip import leaves_backbone
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
@@ -249,6 +250,7 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     build = _shooting_problem if method == "shooting" else _hb_problem
     problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
                                       tol, energy_max, floquet)
+    f_method = 1.0 / problem.state(u0)[2]      # the linear mode's frequency as the method computes it (labels.py)
     if _start is not None:                     # start at a given orbit, towards another (continue_tongue)
         (xa, va, Ta), (xb, vb, Tb) = _start
         u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
@@ -259,29 +261,36 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
     if freq_tol is not None:
         settings = settings.replace(freq_tol=float(freq_tol))
-    guide = _skeleton_guide(model, mode, energy_max) if tongues == "skip" and model.springs else None
+    # the skeleton (driver/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
+    # balance it has the branch's harmonics (at most SKELETON_HARMONICS): the same truncation
+    sk_h = SKELETON_HARMONICS if method == "shooting" else min(int(opts["harmonics"]), SKELETON_HARMONICS)
+    guide = _skeleton_guide(model, mode, energy_max, sk_h) if model.springs else None
+    labels = FamilyLabels(guide, math.sqrt(system.omega2[k]) / (2 * math.pi), f_method,
+                          getattr(getattr(problem, "integrator", None), "order", 0))
     it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
                      locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol,
-                     skeleton=guide)
+                     skeleton=guide, labels=labels)
     it._start_is_low = _start is None
     return it
 
 
-def _skeleton_branch(model, mode, energy):
-    """The skeleton's branch (driver/skeleton.py): condensed single-harmonic HB, no stability, no events."""
-    return continue_nnm(model, mode, energy, method="hb", harmonics=1, condensed=True, floquet=False,
-                        locate_events=False, max_points=400)
+def _skeleton_system(model, mode):
+    """The modal system of the skeleton (driver/skeleton.py): every mode, or a Ritz basis for a large model."""
+    if model.n > RITZ_MIN_DOF:
+        return ritz_system(model, mode, SKELETON_HARMONICS)
+    return modal_system(model)
 
 
-def _skeleton_guide(model, mode, energy_max):
-    """A callable giving the Skeleton of the branch (computed at its first call, when a tongue is met), or
-    None when it cannot be computed (the jumps then rescale the backbone's orbits only)."""
+def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS):
+    """A callable giving the Skeleton of the branch (computed at its first call, when a point leaves the linear
+    regime), or None when it cannot be computed (labels then come from the harmonic share, and the jumps
+    rescale the backbone's orbits only)."""
     found = []
 
     def guide():
         if not found:
             try:
-                found.append(skeleton(model, mode, energy_max, _skeleton_branch))
+                found.append(skeleton(model, mode, energy_max, _skeleton_system, harmonics))
             except (NNMInputError, np.linalg.LinAlgError, ValueError, RuntimeError):
                 found.append(None)
         return found[0]
@@ -374,6 +383,9 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     branch's own steps_per_period, symmetric and tol are the defaults).
     """
     tongue = branch.pick("tongues", tongue)
+    if tongue.get("family_end"):
+        raise NNMInputError(f"this record marks where the backbone family ends ({tongue.get('note', '')}): there is "
+                            f"no tongue branch to start from it")
     if "entry_x0" not in tongue:
         raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
     s = branch.settings

@@ -23,10 +23,14 @@ from ..stability.locator import event_rtol
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
-from .tongue_skip import TongueSkipper, harmonic_label, leaves_backbone, same_tongue, tongue_record
+from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_label, leaves_backbone, partner_harmonic,
+                          same_tongue, tongue_record)
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
+
+#: skip mode: a tongue entered above this fraction of the skeleton's energy maximum (or end) is "at" it
+PEAK_NEAR = 0.8
 
 __all__ = ["NNMIterator"]
 
@@ -42,7 +46,8 @@ class NNMIterator(StepRefinement):
     """
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None, skeleton=None):
+                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None, skeleton=None,
+                 labels=None):
         self.model = model
         self.freq_tol = None if not freq_tol else float(freq_tol)
         self._refine_pause = 0
@@ -66,7 +71,8 @@ class NNMIterator(StepRefinement):
         self.events = []
         self._landed = False
         self.tongue_mode = tongues
-        self._skeleton = skeleton      # a callable giving the branch's Skeleton (skeleton.py), for skip mode
+        self._skeleton = skeleton      # a callable giving the branch's Skeleton (skeleton.py), or None
+        self._labels = labels          # FamilyLabels (labels.py): point labels against the skeleton, or None
         self.tongues = []
         self._tongue = None            # the tongue being traversed (skip mode)
         self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
@@ -124,7 +130,7 @@ class NNMIterator(StepRefinement):
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
-            self._finish("done", f"reached energy_max = {self.energy_max:g} J")
+            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._off_family_note())
         elif N + 1 >= self.max_points:
             self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
                                        f"raise max_points to go on")
@@ -132,6 +138,17 @@ class NNMIterator(StepRefinement):
             self._finish("done", "the branch returned to low energy")
         self._last = (q0, v0)
         return point
+
+    def _off_family_note(self):
+        """Follow mode: a branch that ends in a tongue (its last points off the backbone family) says so."""
+        if not self.points or self.points[-1].label == "backbone":
+            return ""
+        i = len(self.points) - 1
+        while i > 0 and self.points[i - 1].label != "backbone":
+            i -= 1
+        p = self.points[i]
+        return (f", inside a {self.points[-1].label.split()[-1]} tongue: the points from E = {p.energy:.4g} J "
+                f"(f = {p.frequency_hz:.5g} Hz) on are off the backbone family (tongues='skip' follows the backbone)")
 
     def _settle(self, point):
         """Wait for the multipliers of a point recorded with later=True and set its floquet, stable, _collision."""
@@ -166,6 +183,8 @@ class NNMIterator(StepRefinement):
         trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
         if self._skip(cp, point):
             return True
+        if self.status != "running":           # no backbone above this tongue (an escape the skeleton knows)
+            raise StopIteration
         t = self.tongues[-1]
         # the backbone resumes beyond the tongue with its frequency moving the same way as before it
         t.update(last_energy=point.energy, hidden_points=1, backbone=bpoint, trend=float(trend))
@@ -177,13 +196,14 @@ class NNMIterator(StepRefinement):
         restarts beyond it."""
         bcp, bpoint = self._last_backbone
         Q = self._problem.modal_orbit(cp.u)
-        k = harmonic_label(Q)[1] if Q is not None else 1
+        k = int(point.label.split()[-1].split(":")[0]) if point.label.startswith("tongue") else (
+            harmonic_label(Q)[1] if Q is not None else 1)
         tongue = tongue_record(self._system, Q, k, bpoint, point, len(self.points) - 1)
         self._last_backbone = None
         E_base = max(bpoint.energy, point.energy)
         partner = tongue.get("partner_mode", 0)
         partner_hz = math.sqrt(self._system.omega2[partner - 1]) / (2 * math.pi) if partner >= 1 else None
-        skipper = TongueSkipper(self._problem, self._cs, self._tol, self._system, self._skeleton)
+        skipper = TongueSkipper(self._problem, self._cs, self._tol, self._system, self._skeleton, self._labels)
         jumped = skipper.jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k, partner_hz)
         previous = self.tongues[-1] if self.tongues else None
         if previous is not None and same_tongue(previous, tongue):
@@ -194,8 +214,16 @@ class NNMIterator(StepRefinement):
             tongue = previous
         else:
             self.tongues.append(tongue)
+        tongue["attempts"] = tongue.get("attempts", 0) + skipper.attempts     # orbits corrected to jump it
         if jumped is None:
             tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
+            sk = self._skeleton() if self._skeleton is not None else None
+            if sk is not None and sk.energy_peak is not None and tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:
+                self._finish("escape", f"the backbone entered the {tongue['label']} internal resonance with mode "
+                                       f"{partner} at E = {bpoint.energy:.4g} J, f = {bpoint.frequency_hz:.5g} Hz, "
+                                       f"just below the family's energy maximum {sk.energy_peak:.4g} J (its skeleton: a "
+                                       f"softening family approaching a saddle): no backbone exists above it, the "
+                                       f"structure escapes; the points on the backbone below are kept")
             return False
         u, J, how = jumped
         tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)), jump=how)
@@ -210,8 +238,12 @@ class NNMIterator(StepRefinement):
         where = (f"the backbone entered the {t['label']} internal resonance with mode {t.get('partner_mode', 0)} "
                  f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
         why = "energy_max inside it" if point.energy >= self.energy_max else f"{t['hidden_points']} points inside it"
-        self._finish("tongue", f"{where} and could not be jumped over ({why}); the points on the backbone below it "
-                               f"are kept (continue_tongue(branch, {len(self.tongues) - 1}) follows the tongue)")
+        sk = self._skeleton() if self._skeleton is not None else None
+        family = ""
+        if sk is not None and sk.end != "reach" and t["entry_energy"] >= PEAK_NEAR * sk.energy[-1]:
+            family = f"; the backbone family itself ends there ({sk.message})"
+        self._finish("tongue", f"{where} and could not be jumped over ({why}){family}; the points on the backbone "
+                               f"below it are kept (continue_tongue(branch, {len(self.tongues) - 1}) follows the tongue)")
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
@@ -226,10 +258,41 @@ class NNMIterator(StepRefinement):
             self._finish("escape", escape_message(self.points[-1], ratio) +
                          f" (the continuation could not go further: {reason})")
             return
+        if N and self._family_ends(reason):
+            return
         where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
                  f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
         self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
                                f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
+
+    def _family_ends(self, reason):
+        """The continuation failed where the backbone family itself ends (its skeleton ended 'peak', 'locked'
+        or 'stuck' within 1 - PEAK_NEAR of the last point's energy): not a numerical failure but the end of the
+        family.  Status 'escape' at a softening family's energy maximum, else 'tongue' (the k:1 resonance that
+        ends it, recorded in branch.tongues).  True when the branch was finished here."""
+        sk = self._skeleton() if self._skeleton is not None else None
+        last = self.points[-1]
+        if sk is None or sk.end == "reach" or not len(sk.energy):
+            return False
+        E_end = sk.energy_peak if sk.energy_peak is not None else float(sk.energy[-1])
+        if not last.energy >= PEAK_NEAR * E_end:
+            return False
+        at = f"E = {last.energy:.4g} J, f = {last.frequency_hz:.5g} Hz"
+        if sk.end == "peak":
+            self._finish("escape", f"the continuation could not go beyond {at} ({reason}), just below the family's "
+                                   f"energy maximum {E_end:.4g} J (its skeleton: a softening family approaching a "
+                                   f"saddle): no backbone exists above it, the structure escapes; the points are kept")
+            return True
+        k, partner = sk.partner
+        record = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=partner, partner_mac=float("nan"),
+                      entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz),
+                      entry_index=len(self.points) - 1, hidden_points=0, skipped=False, attempts=0, family_end=True,
+                      note=f"the backbone family ends here: {sk.message}")
+        self.tongues.append(record)
+        self._finish("tongue", f"the backbone ends at {at}, where its family meets the {k}:1 internal resonance with "
+                               f"mode {partner}: the continuation cannot go further ({reason}) and the family's skeleton "
+                               f"ends there too ({sk.message}): no backbone beyond it; the points are kept")
+        return True
 
     def _locate(self, cp, point, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at
@@ -306,8 +369,13 @@ class NNMIterator(StepRefinement):
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
         Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-        label, k, frac, _ = harmonic_label(Q)
-        point = Point(energy=float(self.model.energy(x0, v0)), frequency_hz=float(1.0 / T), period=float(T), x0=x0,
+        label, k, frac, amps = harmonic_label(Q)
+        energy = float(self.model.energy(x0, v0))
+        dev = None
+        if self._labels is not None:
+            kp = partner_harmonic(Q, self.mode - 1)[0] if Q is not None else k
+            label, dev = self._labels.label(energy, 1.0 / T, label, kp if kp > 1 else k, frac, amps)
+        point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=label)
         point.steps = int(getattr(prob, "spp", 0))
@@ -315,6 +383,8 @@ class NNMIterator(StepRefinement):
         point._spectrum = job
         point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
         point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
+        point._dev = dev                   # distance from the skeleton's frequency (labels.py), None: not measured
+        point.fundamental_share = fundamental_share(amps)
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)
 

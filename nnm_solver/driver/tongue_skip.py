@@ -28,7 +28,8 @@ from ..analysis.harmonics import RESONANCE_FRACTION
 from ..continuation.engine import CorrectorFailure, correct
 from ..fourier import fourier_coefficients
 
-__all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION", "leaves_backbone", "same_tongue", "tongue_record"]
+__all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION", "leaves_backbone", "same_tongue", "tongue_record",
+           "fundamental_share", "partner_harmonic"]
 
 #: highest harmonic looked at for labels
 LABEL_HARMONICS = 25
@@ -57,6 +58,29 @@ def harmonic_label(Q, n=LABEL_HARMONICS):
     if k > 1 and fr[k] >= RESONANCE_FRACTION:
         return f"tongue {k}:1", k, float(fr[k]), amps
     return "backbone", k, float(fr[k]), amps
+
+
+def partner_harmonic(Q, r, n=LABEL_HARMONICS):
+    """The harmonic k >= 2 (and its fraction of the orbit's amplitude) that the modes other than the followed
+    one (0-based r) carry most: the order of the resonance a partner is in.  (1, 0) when there is none."""
+    if Q is None or Q.shape[1] < 2:
+        return 1, 0.0
+    c = fourier_coefficients(Q, n)
+    tot = float(np.sum(np.linalg.norm(c, axis=1)[1:]))
+    c[:, r] = 0.0
+    amps = np.linalg.norm(c, axis=1)
+    if not tot > 0 or len(amps) < 3:
+        return 1, 0.0
+    k = int(np.argmax(amps[2:]) + 2)
+    return k, float(amps[k] / tot)
+
+
+def fundamental_share(amps):
+    """Fraction of a modal orbit's amplitude (harmonic_label's ``amps``) in its fundamental; 1 when unknown."""
+    if amps is None or len(amps) < 2:
+        return 1.0
+    tot = float(np.sum(amps[1:]))
+    return float(amps[1] / tot) if tot > 0 else 1.0
 
 
 def partner_mode(system, Q, k):
@@ -89,10 +113,12 @@ def harmonic_content(point):
 
 def leaves_backbone(point, bpoint):
     """Skip mode: does ``point`` leave the backbone (last backbone point ``bpoint``)?  Its energy turned back (a
-    backbone continued in energy has no fold), or a harmonic k >= 2 carries SKIP_FRACTION of its amplitude and
-    grew by half since the last backbone point."""
+    backbone continued in energy has no fold); where the skeleton measured it (labels.py), its label says; else
+    a harmonic k >= 2 carries SKIP_FRACTION of its amplitude and grew by half since the last backbone point."""
     if point.energy < bpoint.energy:
         return True
+    if getattr(point, "_dev", None) is not None:
+        return point.label != "backbone"
     k, frac = harmonic_content(point)
     kb, frac_b = harmonic_content(bpoint)
     return k > 1 and frac >= SKIP_FRACTION and frac >= 1.5 * (frac_b if kb == k else 0.0)
@@ -126,12 +152,13 @@ class TongueSkipper:
     or None (then only the rescaled backbone orbits are tried).
     """
 
-    def __init__(self, problem, settings, tol, system=None, skeleton=None):
+    def __init__(self, problem, settings, tol, system=None, skeleton=None, labels=None):
         self.problem = problem
         self.settings = settings
         self.tol = tol
         self.system = system
         self.skeleton = skeleton
+        self.labels = labels               # FamilyLabels (labels.py): is a landing orbit on the family?
 
     def jump(self, u_b, p_b, E_b, E_base=None, k=None, partner_hz=None):
         """A backbone orbit u beyond the tongue, from the backbone point u_b (tangent p_b, energy E_b):
@@ -143,18 +170,20 @@ class TongueSkipper:
         E_base = E_b if E_base is None else E_base
         prob = self.problem
         w = prob.scale(u_b) if hasattr(prob, "scale") else np.ones(len(u_b))
+        self.attempts = 0
         for guess, how, side in self._skeleton_guesses(E_b, k, partner_hz):
+            self.attempts += 1
             u, J = self._level_set(guess, w)
             # beyond the band the k-th harmonic may still exceed SKIP_FRACTION (the partner is near): the orbit
-            # must be labelled backbone, on the skeleton's side of the band and near the skeleton's frequency
-            if (u is not None and self._lands(u, k, E_b, RESONANCE_FRACTION)
-                    and self._on_side(u, k, partner_hz, side) and self._near_skeleton(u)):
+            # must be on the family (labels.py), on the skeleton's side of the band (if any)
+            if u is not None and self._on_family(u, k, E_b) and (side is None or self._on_side(u, k, partner_hz, side)):
                 return u, J, how
         slope = (prob.energy(u_b + 1e-6 * p_b) - prob.energy(u_b - 1e-6 * p_b)) / 2e-6
         for delta in JUMPS:
             guess = self._guess(u_b, p_b, slope, E_b, E_base * (1 + delta))
             if guess is None:
                 continue
+            self.attempts += 1
             u, J = self._level_set(guess, w)
             if u is not None and self._lands(u, k, E_base):
                 return u, J, f"a jump of {100 * delta:g} % in energy"
@@ -169,26 +198,43 @@ class TongueSkipper:
         sk = self.skeleton()
         if sk is None:
             return
-        for E_t in sk.targets(E_base, k, partner_hz):
-            side = np.sign(k * sk.frequency_at(E_t) / partner_hz - 1.0)
+        band = sk.targets(E_base, k, partner_hz)
+        # then the family just above the entry (a tongue the skeleton does not place, or one re-entered)
+        near = [E_base * (1 + d) for d in JUMPS if sk.covers(E_base * (1 + d))
+                and not any(abs(E_base * (1 + d) / E_t - 1) < 0.01 for E_t in band)]
+        for E_t in band + near:
+            side = np.sign(k * sk.frequency_at(E_t) / partner_hz - 1.0) if E_t in band else None
             refined = sk.family_orbit(self.system, E_t, self.settings, self.tol)
             if refined is None:
                 continue
             fam, u = refined
-            if hasattr(prob, "from_family"):           # harmonic balance: the family's harmonics as they are
-                guess = prob.from_family(fam, u)
+            if hasattr(prob, "from_family") and getattr(prob, "sys", None) is fam.sys:
+                guess = prob.from_family(fam, u)       # harmonic balance: the family's harmonics as they are
             else:
                 q0, v0, T = fam.state(u)
+                if fam.sys is not self.system:         # the skeleton's basis is not the branch's (a Ritz basis)
+                    q0, v0 = (self.system.to_modal(fam.sys.to_physical(x)) for x in (q0, v0))
                 guess = prob.from_state(q0, v0, T)
             yield guess, f"the skeleton's orbit at {E_t:.4g} J", side
 
     def _level_set(self, guess, w):
         return level_set(self.problem, guess, self.settings, self.tol, w)
 
-    def _near_skeleton(self, u):
-        """Is the orbit u's frequency within FAMILY_TOL of the skeleton's at its energy?"""
-        f_sk = self.skeleton().frequency_at(self.problem.energy(u))
-        return bool(abs(1.0 / self.problem.state(u)[2] / f_sk - 1.0) <= FAMILY_TOL)
+    def _on_family(self, u, k, E_base):
+        """Is the orbit u above E_base and on the backbone family: labelled backbone against the skeleton
+        (labels.py), or, without one, by its harmonic content and within FAMILY_TOL of the skeleton?"""
+        prob = self.problem
+        E = prob.energy(u)
+        if not E > E_base:
+            return False
+        f = 1.0 / prob.state(u)[2]
+        label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
+        if self.labels is not None:
+            label, dev = self.labels.label(E, f, label, kk, frac, amps)
+            if dev is not None:
+                return label == "backbone"
+        f_sk = self.skeleton().frequency_at(E)
+        return self._lands(u, k, E_base, RESONANCE_FRACTION) and bool(abs(f / f_sk - 1.0) <= FAMILY_TOL)
 
     def _lands(self, u, k, E_base, limit=SKIP_FRACTION):
         """Is u a backbone orbit (label, less than ``limit`` in harmonic k) above E_base?"""

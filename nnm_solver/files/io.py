@@ -289,6 +289,8 @@ def save_branch(path, branch, name=None):
         g.create_dataset("freq_error", data=branch.freq_error)
         if np.any(branch.steps):
             g.create_dataset("steps", data=branch.steps)
+        if not np.all(np.isnan(branch.fundamental_share)):
+            g.create_dataset("fundamental_share", data=branch.fundamental_share)
         columns = BRANCH_COLUMNS + (("coefficients",) if branch.coefficients is not None else ())
         for key in columns:
             data = getattr(branch, key)
@@ -457,7 +459,7 @@ def load_branches(path, model=None):
                 k3 = g["k3"][()] if "k3" in g else model.k3
                 if "labels" in g:
                     cols["labels"] = strings(g["labels"])
-                for key in ("freq_error", "steps"):
+                for key in ("freq_error", "steps", "fundamental_share"):
                     if key in g:
                         cols[key] = g[key][()]
                 settings = json.loads(g.attrs.get("settings_json", "{}"))

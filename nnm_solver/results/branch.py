@@ -29,7 +29,9 @@ class Point:
     for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py);
     freq_error: estimated relative error of frequency_hz from the discretisation (NaN: not estimated;
     see ShootingProblem.frequency_error); steps: time steps per period this point was computed with
-    (0: the branch settings' steps_per_period).  ``point["energy"]`` works too (first-release rows).
+    (0: the branch settings' steps_per_period); fundamental_share: the fraction of the orbit's modal
+    amplitude in its fundamental harmonic (1: a single harmonic; NaN: not measured).  ``point["energy"]``
+    works too (first-release rows).
     """
 
     energy: float
@@ -44,6 +46,7 @@ class Point:
     label: str = "backbone"
     freq_error: float = float("nan")
     steps: int = 0
+    fundamental_share: float = float("nan")
 
     def __getitem__(self, key):
         try:
@@ -63,14 +66,16 @@ class Branch:
     tongues passed by a ``tongues="skip"`` continuation (dicts: ratio, order, partner_mode, entry_energy,
     entry_frequency_hz, ...).  freq_error (N,) estimated relative frequency error of each point (NaN where
     not estimated, e.g. files written before it existed); steps (N,) int, the time steps per period of each
-    shooting point (0: settings.steps_per_period; a branch refined with freq_tol has several).
+    shooting point (0: settings.steps_per_period; a branch refined with freq_tol has several);
+    fundamental_share (N,) the fraction of each orbit's modal amplitude in its fundamental harmonic (NaN where
+    not measured): a tongue's partner shows as it falls.
     status: one of STATUSES; message: why it stopped.
     settings: the method's typed settings (settings.py; a plain dict is converted).
     """
 
     def __init__(self, model, mode, energy, frequency_hz, period, x0, v0, floquet=None, stable=None,
                  events=None, status="done", message="", settings=None, name="", coefficients=None, labels=None,
-                 tongues=None, freq_error=None, steps=None):
+                 tongues=None, freq_error=None, steps=None, fundamental_share=None):
         self.model = model
         self.mode = int(mode)
         self.settings = settings_from_dict(settings)
@@ -78,13 +83,13 @@ class Branch:
         self.message = str(message)
         self.name = str(name)
         self._set_columns(energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels, freq_error,
-                          steps)
+                          steps, fundamental_share)
         self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
                            if events is None else events)
         self.tongues = list(tongues or [])
 
     def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None,
-                     freq_error=None, steps=None):
+                     freq_error=None, steps=None, fundamental_share=None):
         n = self.model.n
         self.energy = np.asarray(energy, dtype=float).reshape(-1)
         N = len(self.energy)
@@ -101,6 +106,8 @@ class Branch:
         self.freq_error = (np.full(N, np.nan) if freq_error is None
                            else np.asarray(freq_error, dtype=float).reshape(N))
         self.steps = np.zeros(N, dtype=int) if steps is None else np.asarray(steps, dtype=int).reshape(N)
+        self.fundamental_share = (np.full(N, np.nan) if fundamental_share is None
+                                  else np.asarray(fundamental_share, dtype=float).reshape(N))
 
     # ------------------------------------------------------------------ building from points
     @classmethod
@@ -135,7 +142,8 @@ class Branch:
                           np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
                           np.r_[self.stable, col("stable", dtype=bool)], coeffs,
                           np.r_[self.labels, col("label", dtype=object)], np.r_[self.freq_error, col("freq_error")],
-                          np.r_[self.steps, col("steps", dtype=int)])
+                          np.r_[self.steps, col("steps", dtype=int)],
+                          np.r_[self.fundamental_share, col("fundamental_share")])
         self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         return self
 
@@ -145,7 +153,8 @@ class Branch:
         return Point(float(self.energy[i]), float(self.frequency_hz[i]), float(self.period[i]), self.x0[i].copy(),
                      self.v0[i].copy(), self.floquet[i].copy(), bool(self.stable[i]),
                      coefficients=None if self.coefficients is None else self.coefficients[i].copy(),
-                     label=str(self.labels[i]), freq_error=float(self.freq_error[i]), steps=int(self.steps[i]))
+                     label=str(self.labels[i]), freq_error=float(self.freq_error[i]), steps=int(self.steps[i]),
+                     fundamental_share=float(self.fundamental_share[i]))
 
     @property
     def hb_coefficients(self):
@@ -185,7 +194,7 @@ class Branch:
                       self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
                       self.message, self.settings, self.name,
                       None if self.coefficients is None else self.coefficients[index], self.labels[index],
-                      self.tongues, self.freq_error[index], self.steps[index])
+                      self.tongues, self.freq_error[index], self.steps[index], self.fundamental_share[index])
 
     def interpolate(self, s):
         """One-point Branch at fractional index s in [0, N-1] (linear between neighbouring points)."""
@@ -208,7 +217,8 @@ class Branch:
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
                       [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
                       self.name, None if self.coefficients is None else lerp(self.coefficients)[None],
-                      [self.labels[near]], None, [lerp(self.freq_error)], [self.steps[near]])
+                      [self.labels[near]], None, [lerp(self.freq_error)], [self.steps[near]],
+                      [lerp(self.fundamental_share)])
 
     def at_energy(self, energy):
         """One-point Branch at energy (J): the first crossing of that energy along the branch."""
@@ -296,7 +306,7 @@ class Branch:
                       self.status, self.message, settings, self.name,
                       None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
                       [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues], self.freq_error,
-                      self.steps)
+                      self.steps, self.fundamental_share)
 
 
 def _match_energy(model, x, v, energy):

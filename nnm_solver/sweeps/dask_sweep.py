@@ -87,7 +87,7 @@ def _compute(model, variant, mode, energy_max, options, topic):
         b = continue_nnm(model, mode, energy_max, on_point=on_point, **options)
         payload = {k: getattr(b, k) for k in ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable",
                                               "coefficients", "events", "status", "message", "settings",
-                                              "freq_error", "steps")}
+                                              "freq_error", "steps", "labels", "tongues", "fundamental_share")}
     except Exception as exc:  # reported per branch, never raised on the worker
         payload = {"status": "failed", "message": f"the solver raised {type(exc).__name__}: {exc}"}
     payload.update(info, seconds=time.perf_counter() - t0, cpu_seconds=time.thread_time() - c0)
@@ -101,7 +101,8 @@ def _empty(model, mode, name, status, message):
 
 def _branch_from(model, mode, name, payload):
     cols = {k: payload[k] for k in ("energy", "frequency_hz", "period", "x0", "v0", "floquet", "stable",
-                                    "coefficients", "events", "settings", "freq_error", "steps") if k in payload}
+                                    "coefficients", "events", "settings", "freq_error", "steps", "labels", "tongues",
+                                    "fundamental_share") if k in payload}
     if "energy" not in cols:
         return _empty(model, mode, name, payload["status"], payload["message"])
     return Branch(model, mode, status=payload["status"], message=payload["message"], name=name, **cols)
