@@ -240,7 +240,7 @@ class NNMIterator(StepRefinement):
         why = "energy_max inside it" if point.energy >= self.energy_max else f"{t['hidden_points']} points inside it"
         sk = self._skeleton() if self._skeleton is not None else None
         family = ""
-        if sk is not None and sk.end != "reach" and t["entry_energy"] >= PEAK_NEAR * sk.energy[-1]:
+        if sk is not None and sk.end != "reach" and PEAK_NEAR * sk.energy[-1] <= t["entry_energy"] <= sk.energy[-1] / PEAK_NEAR:
             family = f"; the backbone family itself ends there ({sk.message})"
         self._finish("tongue", f"{where} and could not be jumped over ({why}){family}; the points on the backbone "
                                f"below it are kept (continue_tongue(branch, {len(self.tongues) - 1}) follows the tongue)")

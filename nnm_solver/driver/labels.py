@@ -21,7 +21,9 @@ kinetic energy, (k a_k)^2 normalised), and labelled
   family while a partner takes a share the family does not have: a tongue's entrance; the thresholds
   widened by twice the skeleton's estimated truncation error at that energy, skeleton.py);
 * ``"backbone"`` otherwise (on the family, whatever the share);
-* ``"tongue k:1"`` above the family's energy maximum (a softening family's saddle: no backbone there).
+* ``"tongue k:1"`` above the family's energy maximum (a softening family's saddle: no backbone there), and
+  above the energy where the family ends in a k:1 resonance (the skeleton ended ``locked`` or ``stuck``:
+  the branch's orbits there are that resonance's, e.g. the frequency locked while the energy grows).
 
 Where no skeleton covers the energy (no nonlinear elements, beyond its end) the harmonic share alone
 decides (tongue_skip.harmonic_label).
@@ -95,6 +97,10 @@ class FamilyLabels:
         sk = self._skeleton() if self._skeleton is not None else None
         if sk is not None and sk.energy_peak is not None and energy > sk.energy_peak:
             return f"tongue {max(k, 2)}:1", math.inf      # above the family's energy maximum: no backbone there
+        if sk is not None and sk.end in ("stuck", "locked") and len(sk.energy) and energy > sk.energy[-1]:
+            # beyond where the family passes into (or stops at) a k:1 resonance: what the branch finds there is
+            # that resonance's tongue, not the backbone family (its skeleton does not go on)
+            return f"tongue {max(sk.partner[0], 2)}:1", math.inf
         dev = self.deviation(energy, frequency_hz, amps)
         if dev is None or not math.isfinite(dev):
             return content_label, None
