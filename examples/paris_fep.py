@@ -742,6 +742,9 @@ def main(argv=None):
             if do_tongues:
                 done = []
                 for i in range(len(b.tongues)):
+                    if b.tongues[i].get("family_end"):     # where the backbone family itself ends: no tongue to follow
+                        tbs.append(None)
+                        continue
                     j = same_tongue(b.tongues[i], done)
                     if j is not None:
                         print(f"  tongue {i + 1} ({b.tongues[i]['label']} at {b.tongues[i]['entry_energy']:.4g} J) "

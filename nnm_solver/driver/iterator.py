@@ -20,6 +20,7 @@ from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 from ..stability.locator import event_rtol
+from .ends import escape_below_peak, family_end, inside_tongue, off_family_note
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
@@ -28,9 +29,6 @@ from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_label, leav
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
-
-#: skip mode: a tongue entered above this fraction of the skeleton's energy maximum (or end) is "at" it
-PEAK_NEAR = 0.8
 
 __all__ = ["NNMIterator"]
 
@@ -130,7 +128,7 @@ class NNMIterator(StepRefinement):
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
-            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._off_family_note())
+            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + off_family_note(self.points))
         elif N + 1 >= self.max_points:
             self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
                                        f"raise max_points to go on")
@@ -138,17 +136,6 @@ class NNMIterator(StepRefinement):
             self._finish("done", "the branch returned to low energy")
         self._last = (q0, v0)
         return point
-
-    def _off_family_note(self):
-        """Follow mode: a branch that ends in a tongue (its last points off the backbone family) says so."""
-        if not self.points or self.points[-1].label == "backbone":
-            return ""
-        i = len(self.points) - 1
-        while i > 0 and self.points[i - 1].label != "backbone":
-            i -= 1
-        p = self.points[i]
-        return (f", inside a {self.points[-1].label.split()[-1]} tongue: the points from E = {p.energy:.4g} J "
-                f"(f = {p.frequency_hz:.5g} Hz) on are off the backbone family (tongues='skip' follows the backbone)")
 
     def _settle(self, point):
         """Wait for the multipliers of a point recorded with later=True and set its floquet, stable, _collision."""
@@ -217,13 +204,9 @@ class NNMIterator(StepRefinement):
         tongue["attempts"] = tongue.get("attempts", 0) + skipper.attempts     # orbits corrected to jump it
         if jumped is None:
             tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
-            sk = self._skeleton() if self._skeleton is not None else None
-            if sk is not None and sk.energy_peak is not None and tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:
-                self._finish("escape", f"the backbone entered the {tongue['label']} internal resonance with mode "
-                                       f"{partner} at E = {bpoint.energy:.4g} J, f = {bpoint.frequency_hz:.5g} Hz, "
-                                       f"just below the family's energy maximum {sk.energy_peak:.4g} J (its skeleton: a "
-                                       f"softening family approaching a saddle): no backbone exists above it, the "
-                                       f"structure escapes; the points on the backbone below are kept")
+            escape = escape_below_peak(self._skeleton() if self._skeleton is not None else None, tongue, partner, bpoint)
+            if escape is not None:
+                self._finish("escape", escape)
             return False
         u, J, how = jumped
         tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)), jump=how)
@@ -234,16 +217,9 @@ class NNMIterator(StepRefinement):
 
     def _inside_tongue(self, t, point):
         """Skip mode: the continuation is inside tongue t and cannot come back onto the backbone (it reached
-        energy_max or max_points inside it): status 'tongue'."""
-        where = (f"the backbone entered the {t['label']} internal resonance with mode {t.get('partner_mode', 0)} "
-                 f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
-        why = "energy_max inside it" if point.energy >= self.energy_max else f"{t['hidden_points']} points inside it"
-        sk = self._skeleton() if self._skeleton is not None else None
-        family = ""
-        if sk is not None and sk.end != "reach" and PEAK_NEAR * sk.energy[-1] <= t["entry_energy"] <= sk.energy[-1] / PEAK_NEAR:
-            family = f"; the backbone family itself ends there ({sk.message})"
-        self._finish("tongue", f"{where} and could not be jumped over ({why}){family}; the points on the backbone "
-                               f"below it are kept (continue_tongue(branch, {len(self.tongues) - 1}) follows the tongue)")
+        energy_max or max_points inside it): status 'tongue' (ends.py)."""
+        self._finish("tongue", inside_tongue(self._skeleton() if self._skeleton is not None else None, t,
+                                             point.energy >= self.energy_max, len(self.tongues) - 1))
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
@@ -266,32 +242,16 @@ class NNMIterator(StepRefinement):
                                f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
 
     def _family_ends(self, reason):
-        """The continuation failed where the backbone family itself ends (its skeleton ended 'peak', 'locked'
-        or 'stuck' within 1 - PEAK_NEAR of the last point's energy): not a numerical failure but the end of the
-        family.  Status 'escape' at a softening family's energy maximum, else 'tongue' (the k:1 resonance that
-        ends it, recorded in branch.tongues).  True when the branch was finished here."""
-        sk = self._skeleton() if self._skeleton is not None else None
-        last = self.points[-1]
-        if sk is None or sk.end == "reach" or not len(sk.energy):
+        """The continuation failed where the backbone family itself ends (ends.family_end): finish there.
+        True when the branch was finished."""
+        end = family_end(self._skeleton() if self._skeleton is not None else None, self.points[-1], reason,
+                         len(self.points) - 1)
+        if end is None:
             return False
-        E_end = sk.energy_peak if sk.energy_peak is not None else float(sk.energy[-1])
-        if not last.energy >= PEAK_NEAR * E_end:
-            return False
-        at = f"E = {last.energy:.4g} J, f = {last.frequency_hz:.5g} Hz"
-        if sk.end == "peak":
-            self._finish("escape", f"the continuation could not go beyond {at} ({reason}), just below the family's "
-                                   f"energy maximum {E_end:.4g} J (its skeleton: a softening family approaching a "
-                                   f"saddle): no backbone exists above it, the structure escapes; the points are kept")
-            return True
-        k, partner = sk.partner
-        record = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=partner, partner_mac=float("nan"),
-                      entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz),
-                      entry_index=len(self.points) - 1, hidden_points=0, skipped=False, attempts=0, family_end=True,
-                      note=f"the backbone family ends here: {sk.message}")
-        self.tongues.append(record)
-        self._finish("tongue", f"the backbone ends at {at}, where its family meets the {k}:1 internal resonance with "
-                               f"mode {partner}: the continuation cannot go further ({reason}) and the family's skeleton "
-                               f"ends there too ({sk.message}): no backbone beyond it; the points are kept")
+        status, message, record = end
+        if record is not None:
+            self.tongues.append(record)
+        self._finish(status, message)
         return True
 
     def _locate(self, cp, point, state):

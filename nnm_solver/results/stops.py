@@ -12,7 +12,9 @@ where there is one, the remedy:
                   solution set); one lap is kept
 * ``tongue``      (``tongues="skip"``) the backbone entered an internal-resonance tongue it could not jump
                   over and reached energy_max or max_points inside it: the backbone's points below it are
-                  kept, the message names the k:1 resonance, the partner mode and the entry energy
+                  kept, the message names the k:1 resonance, the partner mode and the entry energy; also a
+                  backbone whose continuation cannot go on where its family itself ends in a k:1 resonance
+                  (its skeleton ends there too, driver/ends.py): no backbone beyond it
 * ``failed``      the corrector could not converge at the smallest step (a singular point, or too
                   coarse a time discretisation: try a larger steps_per_period or tol)
 * ``cancelled``   cancelled through ``stop`` / ``Job.cancel``;  ``stopped``: the caller left the

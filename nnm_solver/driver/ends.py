@@ -1,0 +1,84 @@
+r"""Honest ends of a backbone: where and why a branch that did not reach energy_max on its family ends.
+
+The branch's skeleton (skeleton.py) knows how the backbone family itself ends: at its energy maximum
+(``peak``: a softening family approaching a saddle, no backbone above it) or in a k:1 internal resonance
+(``locked``: a partner mode takes the orbit over; ``stuck``: no solution at a larger amplitude).  A branch
+whose continuation stops near there (above PEAK_NEAR of that energy) ends where its family ends, and says
+so, instead of ``failed`` or ``done``:
+
+* ``escape``: a tongue that cannot be jumped, or a continuation that cannot go on, just below the family's
+  energy maximum;
+* ``tongue``: the continuation cannot go on where the family meets its final k:1 resonance (a record with
+  ``family_end`` is added to ``branch.tongues``), or it cannot leave a tongue it entered (energy_max or
+  max_points inside it), with the skeleton's word when the family itself ends there;
+* ``done`` in follow mode with its last points in a tongue: the message says that they are off the family.
+
+These functions only build the statuses, messages and records; the iterator (iterator.py) finishes with them.
+"""
+from __future__ import annotations
+
+__all__ = ["PEAK_NEAR", "off_family_note", "escape_below_peak", "inside_tongue", "family_end"]
+
+#: a tongue entered, or a continuation stopped, above this fraction of the skeleton's energy maximum (or end)
+#: is "at" the end of the family
+PEAK_NEAR = 0.8
+
+
+def off_family_note(points):
+    """Follow mode: the note for a branch whose last points (Point, labelled) are off the backbone family."""
+    if not points or points[-1].label == "backbone":
+        return ""
+    i = len(points) - 1
+    while i > 0 and points[i - 1].label != "backbone":
+        i -= 1
+    p = points[i]
+    return (f", inside a {points[-1].label.split()[-1]} tongue: the points from E = {p.energy:.4g} J "
+            f"(f = {p.frequency_hz:.5g} Hz) on are off the backbone family (tongues='skip' follows the backbone)")
+
+
+def escape_below_peak(sk, tongue, partner, bpoint):
+    """Skip mode, a tongue that could not be jumped: the 'escape' message when it was entered just below
+    the family's energy maximum (the skeleton's energy_peak), else None."""
+    if sk is None or sk.energy_peak is None or not tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:
+        return None
+    return (f"the backbone entered the {tongue['label']} internal resonance with mode {partner} at "
+            f"E = {bpoint.energy:.4g} J, f = {bpoint.frequency_hz:.5g} Hz, just below the family's energy maximum "
+            f"{sk.energy_peak:.4g} J (its skeleton: a softening family approaching a saddle): no backbone exists "
+            f"above it, the structure escapes; the points on the backbone below are kept")
+
+
+def inside_tongue(sk, t, reached_energy_max, index):
+    """Skip mode: the 'tongue' message for a continuation inside tongue t (record ``index`` of
+    branch.tongues) that cannot come back onto the backbone."""
+    where = (f"the backbone entered the {t['label']} internal resonance with mode {t.get('partner_mode', 0)} "
+             f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
+    why = "energy_max inside it" if reached_energy_max else f"{t['hidden_points']} points inside it"
+    family = ""
+    if sk is not None and sk.end != "reach" and len(sk.energy) and (
+            PEAK_NEAR * sk.energy[-1] <= t["entry_energy"] <= sk.energy[-1] / PEAK_NEAR):
+        family = f"; the backbone family itself ends there ({sk.message})"
+    return (f"{where} and could not be jumped over ({why}){family}; the points on the backbone below it are kept "
+            f"(continue_tongue(branch, {index}) follows the tongue)")
+
+
+def family_end(sk, last, reason, index):
+    """The continuation failed after the point ``last`` (index ``index``) for ``reason``: where the backbone
+    family itself ends there, (status, message, tongue record or None); else None (a numerical failure)."""
+    if sk is None or sk.end == "reach" or not len(sk.energy):
+        return None
+    E_end = sk.energy_peak if sk.energy_peak is not None else float(sk.energy[-1])
+    if not last.energy >= PEAK_NEAR * E_end:
+        return None
+    at = f"E = {last.energy:.4g} J, f = {last.frequency_hz:.5g} Hz"
+    if sk.end == "peak":
+        return "escape", (f"the continuation could not go beyond {at} ({reason}), just below the family's energy "
+                          f"maximum {E_end:.4g} J (its skeleton: a softening family approaching a saddle): no "
+                          f"backbone exists above it, the structure escapes; the points are kept"), None
+    k, partner = sk.partner
+    record = dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=partner, partner_mac=float("nan"),
+                  entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz), entry_index=index,
+                  hidden_points=0, skipped=False, attempts=0, family_end=True,
+                  note=f"the backbone family ends here: {sk.message}")
+    return "tongue", (f"the backbone ends at {at}, where its family meets the {k}:1 internal resonance with mode "
+                      f"{partner}: the continuation cannot go further ({reason}) and the family's skeleton ends "
+                      f"there too ({sk.message}): no backbone beyond it; the points are kept"), record
