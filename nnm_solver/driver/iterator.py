@@ -25,7 +25,7 @@ from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
 from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_label, leaves_backbone, partner_harmonic,
-                          same_tongue, tongue_record)
+                          same_tongue, tongue_record, upward_tangent)
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
@@ -210,7 +210,8 @@ class NNMIterator(StepRefinement):
             return False
         u, J, how = jumped
         tongue.update(skipped=True, exit_energy=float(self._problem.energy(u)), jump=how)
-        self._engine.restart(pseudo_arclength(self._problem, u, bcp.tangent, self._cs, self._tol))
+        self._engine.restart(pseudo_arclength(self._problem, u, upward_tangent(self._problem, u, J, bcp.tangent),
+                                              self._cs, self._tol))
         self._prev = None          # no events are located across the jump
         self._refusals = 0
         return True

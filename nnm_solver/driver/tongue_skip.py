@@ -25,11 +25,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis.harmonics import RESONANCE_FRACTION
-from ..continuation.engine import CorrectorFailure, correct
+from ..continuation.engine import CorrectorFailure, _energy_slope, correct, tangent
 from ..fourier import fourier_coefficients
 
 __all__ = ["harmonic_label", "TongueSkipper", "RESONANCE_FRACTION", "leaves_backbone", "same_tongue", "tongue_record",
-           "fundamental_share", "partner_harmonic"]
+           "fundamental_share", "partner_harmonic", "upward_tangent"]
 
 #: highest harmonic looked at for labels
 LABEL_HARMONICS = 25
@@ -131,6 +131,16 @@ def same_tongue(a, b):
     return (a["order"] == b["order"] and a["partner_mode"] == b["partner_mode"]
             and abs(b["entry_frequency_hz"] / a["entry_frequency_hz"] - 1) < 1e-3
             and b["entry_energy"] <= 1.1 * E_out)
+
+
+def upward_tangent(prob, u, J, previous):
+    """The branch's tangent at the orbit u (Jacobian J), oriented so that the energy increases.  After a jump
+    the old backbone tangent ``previous`` (only used to pick the null direction of J) may point either way
+    at the landing orbit, and a restart that goes down in energy re-enters the tongue just jumped: the
+    backbone continued in energy has no fold, so beyond a tongue it goes on upwards."""
+    w = prob.scale(u) if hasattr(prob, "scale") else np.ones(len(u))
+    p = tangent(J, previous, w)
+    return -p if _energy_slope(prob.energy, u, p) < 0 else p
 
 
 def level_set(prob, guess, settings, tol, w=None):
