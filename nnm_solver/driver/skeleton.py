@@ -1,5 +1,5 @@
 r"""The backbone's skeleton: the NNM family by harmonic balance condensed onto the elements, stepped in
-the followed mode's modal amplitude.
+the followed mode's modal amplitude (the stepping: amplitude_family.py).
 
 The skeleton is the family of orbits whose fundamental component in the followed mode r is a cos(w t)
 (a in sqrt(kg) m, mass-normalised modal coordinates), for a rising geometrically: at each a the
@@ -39,6 +39,8 @@ import weakref
 
 import numpy as np
 
+from .amplitude_family import PEAK_SHARE, solve_at_amplitude, family_share, amplitude_family
+
 __all__ = ["Skeleton", "skeleton", "amplitude_family"]
 
 #: the skeleton is computed up to this multiple of the branch's energy_max
@@ -50,178 +52,8 @@ ENTRY_BAND = 0.01
 #: harmonics of the skeleton (odd ones for odd elements)
 SKELETON_HARMONICS = 9
 
-#: modal amplitude steps: largest and smallest ratio a_{i+1} / a_i, and the largest move of ln f in a step
-STEP_MAX, STEP_MIN = 1.05, 1.0005
-DLNF_MAX = 0.002
-
-#: energy falling over this many steps in a row with at least PEAK_SHARE kept (_share): the family's energy
-#: maximum (with less, a resonance)
-PEAK_RUN, PEAK_SHARE = 3, 0.98
-
-#: relative amplitude jumps tried where the family meets a resonance it does not pass smoothly
-JUMPS = (0.01, 0.02, 0.05, 0.1, 0.2)
-#: relative frequency shifts of the jumps' guesses (besides the trend's), the largest move accepted beyond the
-#: trend's, and the fraction of the fundamental share a landing orbit keeps
-JUMP_SHIFTS = (0.0, -0.005, 0.005, -0.01, -0.02)
-JUMP_LIMIT, SHARE_KEPT = 0.02, 0.85
-
-#: the family ends where other modes' higher harmonics take more than 1 - SHARE_MIN of the orbit (_share)
-SHARE_MIN = 0.5
-
-#: a step moving ln f by more than JUMP_FACTOR x the previous step's + JUMP_FLOOR is halved
-JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
-
 _cache = weakref.WeakKeyDictionary()
 _lock = threading.Lock()
-
-
-def _newton(prob, u, tol=1e-10, iterations=30):
-    """Solve the condensed HB equations at the fixed modal amplitude held in u (Newton on all the other
-    unknowns); the solution or None."""
-    nD = prob.nb * prob.ns
-    free = np.r_[0:nD, nD + 1]
-    u = u.copy()
-    for _ in range(iterations):
-        r, J = prob.jacobian(u)
-        if prob.error(u, r) < tol:
-            return u
-        try:
-            du = np.linalg.solve(J[:, free], -r)
-        except np.linalg.LinAlgError:
-            return None
-        u[free] += du
-        if not np.all(np.isfinite(u)) or u[-1] <= 0:
-            return None
-    return None
-
-
-def _partner(prob, u):
-    """(k, 1-based mode) of the strongest higher-harmonic (k >= 2) amplitude of another mode in the orbit u
-    (velocity-weighted)."""
-    A = np.abs(prob.amplitudes(u)[0]) * prob.basis.h[:, None]
-    A[prob.basis.h == 1] = 0.0
-    A[:, prob.r] = 0.0
-    j, m = np.unravel_index(int(np.argmax(A)), A.shape)
-    return int(prob.basis.h[j]), int(m) + 1
-
-
-def _share(prob, u):
-    """1 - the share of the other modes' higher harmonics (k >= 2) in the orbit u, velocity-weighted
-    (sum (h_j A_jk)^2 over those / over all): what a partner mode takes from the followed one.  A change of
-    shape at the fundamental, or the followed mode's own harmonics (an anharmonic orbit near a saddle), are
-    the family's own."""
-    A = prob.amplitudes(u)[0]
-    h = prob.basis.h
-    W = (h[:, None] * A) ** 2
-    partner = W[h >= 2].sum() - W[h >= 2, prob.r].sum()
-    return float(1.0 - partner / max(W.sum(), 1e-300))
-
-
-def _jump(prob, pts, slope):
-    """Past a resonance the family does not pass smoothly: from the last point, the amplitudes a (1 + delta),
-    delta in JUMPS, the orbit scaled and its frequency moved along the trend ``slope`` = d ln f / d ln a
-    (or by JUMP_SHIFTS); accepted when Newton converges onto an orbit whose frequency keeps the trend (within
-    3 times the move expected + JUMP_LIMIT) and whose fundamental share is at least SHARE_KEPT of the last
-    point's.  (a, E, f, u) or None."""
-    a0, _, f0, u0 = pts[-1]
-    nD = prob.nb * prob.ns
-    share0 = _share(prob, u0)
-    for delta in JUMPS:
-        expected = slope * math.log(1 + delta)
-        for shift in (expected,) + JUMP_SHIFTS:
-            guess = u0.copy()
-            guess[:nD] *= 1 + delta
-            guess[-1] *= math.exp(shift)
-            guess[nD] = a0 * (1 + delta) * prob.beta
-            v = _newton(prob, guess, iterations=60)
-            if v is None:
-                continue
-            f = v[-1] * prob.w_r / (2 * math.pi)
-            if (abs(math.log(f / f0) - expected) <= 3 * abs(expected) + JUMP_LIMIT
-                    and _share(prob, v) >= SHARE_KEPT * share0):
-                return a0 * (1 + delta), prob.energy(v), f, v
-    return None
-
-
-def amplitude_family(prob, E_reach, a_start, max_jumps=20):
-    """Step the condensed problem ``prob`` in its modal amplitude from a_start (sqrt(kg) m, linear regime)
-    until the energy exceeds E_reach (J) or the family ends (module docstring).  Returns (a, E, f (Hz), u,
-    end, message, gaps, partner) with the raw points (blips inside tongues included) as lists; gaps: the
-    (E_before J, E_after J, a_after) of the resonances jumped; partner: (k, 1-based mode) of the k:1
-    resonance that ended the family ((1, 0) when none did)."""
-    u = _newton(prob, prob.start(a_start)[0])
-    if u is None:
-        return [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0)
-    pts = [(a_start, prob.energy(u), u[-1] * prob.w_r / (2 * math.pi), u)]
-    ratio, dlnf_prev, falls = STEP_MAX, 0.0, 0
-    end, message, gaps = "reach", "", []
-    partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
-    nD = prob.nb * prob.ns
-    def resonance(v, what):
-        """The family met a resonance at the last point: jump it (True) or end the family (False)."""
-        nonlocal end, message, ratio, falls, partner
-        a0, E0, f0, u0 = pts[-1]
-        base = [p for p in pts if math.log(a0 / p[0]) <= 0.3]     # the trend over the last 30 % in amplitude
-        slope = math.log(f0 / base[0][2]) / math.log(a0 / base[0][0]) if base[0] is not pts[-1] else 0.0
-        jumped = _jump(prob, pts, slope) if len(gaps) < max_jumps else None
-        if jumped is not None:
-            gaps.append((E0, jumped[1], jumped[0]))
-            pts.append(jumped)
-            ratio, falls = STEP_MAX, 0
-            return True
-        k, p = partner = _partner(prob, u0 if v is None else v)
-        end = "stuck" if v is None else "locked"
-        message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: {what} (a {k}:1 internal resonance with "
-                   f"mode {p}) and no jump of up to {100 * JUMPS[-1]:g} % in amplitude passes it")
-        return False
-
-    while len(pts) < 3000:
-        a0, _, f0, u0 = pts[-1]
-        a = a0 * ratio
-        guess = u0.copy()
-        if len(pts) > 1:               # secant predictor in ln a
-            a1, u1 = pts[-2][0], pts[-2][3]
-            guess = u0 + (u0 - u1) * (math.log(ratio) / math.log(a0 / a1))
-        guess[nD] = a * prob.beta
-        v = _newton(prob, guess)
-        dlnf = math.log(v[-1] * prob.w_r / (2 * math.pi) / f0) if v is not None else math.inf
-        if v is None or abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR:
-            if ratio > STEP_MIN:
-                ratio = 1 + (ratio - 1) / 2
-                continue
-            what = "no solution at a larger amplitude" if v is None else f"its frequency jumps by {100 * dlnf:.2g} %"
-            if resonance(v, what):
-                continue
-            break
-        E = prob.energy(v)
-        pts.append((a, E, f0 * math.exp(dlnf), v))
-        dlnf_prev = dlnf
-        # the next step: grown by half, at most STEP_MAX, and moving the frequency by about DLNF_MAX at most
-        # (the interpolation in energy between points stays at 1e-5 where f(E) is steep, e.g. near a saddle)
-        ratio = min(STEP_MAX, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
-        ratio = max(ratio, STEP_MIN)
-        share = _share(prob, v)
-        # the energy falling while no partner grows (the points inside a narrow tongue are not the family's: their
-        # energy rises above it and falls back, with the partner's share)
-        falls = falls + 1 if E < pts[-2][1] and share >= PEAK_SHARE and _share(prob, pts[-2][3]) >= PEAK_SHARE else 0
-        if falls >= PEAK_RUN:
-            end, message = "peak", "the family's energy turns back: its maximum"
-            break
-        if E > E_reach and falls == 0:
-            break
-        if share < SHARE_MIN:
-            pts.pop()                  # a partner takes the orbit over: jump from the last point before
-            landed = gaps[-1][2] if gaps else 0.0
-            if pts[-1][0] > landed and resonance(v, "a partner mode takes the orbit over"):
-                continue
-            if not message:
-                k, p = partner = _partner(prob, v)
-                end, message = "locked", (f"the family passes into a {k}:1 internal resonance with mode {p} at E = "
-                                          f"{pts[-1][1]:.4g} J, f = {pts[-1][2]:.5g} Hz: that mode takes over "
-                                          f"more than {1 - SHARE_MIN:.0%} of the orbit")
-            break
-    a, E, f, us = (list(c) for c in zip(*pts))
-    return a, E, f, us, end, message, gaps, partner
 
 
 class Skeleton:
@@ -239,7 +71,7 @@ class Skeleton:
         E = np.asarray(E, dtype=float)
         n = len(E)
         if end == "peak" and n:               # a turned-back family: up to its peak (among the points on the family)
-            shares = np.array([_share(prob, u) for u in us])
+            shares = np.array([family_share(prob, u) for u in us])
             n = int(np.argmax(np.where(shares >= PEAK_SHARE, E, -np.inf))) + 1
         keep, lowest = [], math.inf
         for i in range(n - 1, -1, -1):           # a point inside a tongue lies above the family's later points
@@ -269,7 +101,7 @@ class Skeleton:
         lower = CondensedHBProblem(prob.sys, prob.r, HBBasis(prob.basis.harmonics - step, prob.basis.kind), prob.lin)
         out = []
         for u in self.orbits:
-            v = _newton(lower, lower.from_family(prob, u))
+            v = solve_at_amplitude(lower, lower.from_family(prob, u))
             out.append(abs(v[-1] / u[-1] - 1.0) if v is not None else np.nan)
         return np.asarray(out)
 
@@ -370,7 +202,7 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
     # the frequency is the linear one to 1e-8
     a0 = math.sqrt(2e-6 * E_reach) / prob.w_r
     for _ in range(20):
-        u = _newton(prob, prob.start(a0)[0])
+        u = solve_at_amplitude(prob, prob.start(a0)[0])
         if u is None or abs(u[-1] - 1.0) < 1e-8:
             break
         a0 /= 4
