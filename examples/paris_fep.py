@@ -544,7 +544,7 @@ def results_table(results, times, spp, tol, integrator="newmark"):
              f"Computed by `examples/paris_fep.py` ({how}, tolerance {tol:g}, "
              f"Floquet "
              f"multipliers at every point). Frequency change and MAC at the backbone's highest point labelled "
-             f"`backbone` (no harmonic k >= 2 above 15 %); MAC "
+             f"`backbone` (on the family: its frequency on the skeleton's, docs/continuation.md); MAC "
              f"mass-weighted (`nnm.mass_mac`) between the orbit shapes (configuration of largest mass-weighted "
              f"amplitude) at the lowest and highest energy. Largest estimated frequency error: the largest "
              f"`branch.freq_error` (relative, step doubling) of the backbone and of each tongue branch.", "",

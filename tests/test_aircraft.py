@@ -166,8 +166,8 @@ def test_shipped_branches_each_tongue_once(shipped):
     """assets/paris.h5 carries the skip backbones of paper modes 10, 13, 19, 20 (model modes of the same
     numbers, builder 1.2) and each tongue they passed once, as its own branch named after its backbone
     (examples/paris_fep.py), computed with gauss6 at 200 steps per period: estimated frequency errors below
-    5e-4 on every backbone and below 5e-3 on the tongue branches (largest: mode 10's 3:1 tongue branch,
-    7.2e-4; the Newmark-200 branches shipped before had 0.56-5.1 %)."""
+    5e-4 on every backbone and below 5e-3 on the tongue branches (largest: mode 13's 3:1 tongue branch,
+    4.3e-5; the Newmark-200 branches shipped before had 0.56-5.1 %)."""
     branches = nnm_solver.load_branches(ASSET, shipped)
     for b in branches:
         assert (b.settings.integrator, b.settings.steps_per_period) == ("gauss6", 200), b.name
@@ -188,13 +188,19 @@ def test_shipped_branches_each_tongue_once(shipped):
             assert b.energy.max() < lo or b.energy.min() > hi
         seen.setdefault(key, []).append((b.energy.min(), b.energy.max()))
     drop = {name: 1 - b.frequency_hz[np.argmax(b.energy)] / b.frequency_hz[0] for name, b in backbones.items()}
-    assert drop["mode20"] > 0.005 and drop["mode19"] > 0.005 and abs(drop["mode13"]) < 0.005
+    # the backbones past their tongues (issue 29): none failed; each ends where its family ends (status
+    # 'tongue') or at energy_max; mode 20 follows its family to >= 2.5 % on points labelled backbone
+    for name, b in backbones.items():
+        assert b.status in ("done", "tongue", "escape"), (name, b.status, b.message)
+        assert set(b.labels) == {"backbone"}, name
+    assert drop["mode20"] > 0.025 and drop["mode19"] > 0.01 and drop["mode10"] > 0.005 and abs(drop["mode13"]) < 0.01
     # builder 1.2: the symmetric wing torsion (mode 19) meets a 3:1 tongue with the symmetric tail torsion
-    # (mode 39, 94.9 Hz; the seed paper's Fig. 12) and 15:1 tongues with mode 417 (473 Hz, tank); mode 20 a
-    # 3:1 tongue with the tank mode 43 (101.8 Hz); mode 10 a 3:1 tongue with mode 14 (23.3 Hz)
-    assert ("mode19", "3:1", 39) in seen and ("mode19", "15:1", 417) in seen
-    assert ("mode20", "3:1", 43) in seen
-    assert ("mode10", "3:1", 14) in seen
+    # (mode 39, 94.9 Hz; the seed paper's Fig. 12); mode 20 a 5:1 with mode 72 and 3:1 tongues with the tank
+    # mode 42 and mode 41 (99.4 Hz), the last of which its family locks into; mode 13 a 3:1 with mode 29
+    assert ("mode19", "3:1", 39) in seen
+    assert ("mode20", "5:1", 72) in seen and ("mode20", "3:1", 42) in seen and ("mode20", "3:1", 41) in seen
+    assert ("mode13", "3:1", 29) in seen
+    assert backbones["mode20"].tongues[-1]["partner_mode"] == 41
     # along the 3:1 tongue of mode 19 the motion turns into the tail torsion: its third harmonic dominates
     tb = next(b for b in branches if b.name.startswith("mode19: tongue") and "(3:1)" in b.name)
     assert tb.energy.max() > 100.0
