@@ -83,7 +83,8 @@ def test_two_dof_skip_backbone_traverses_its_three_to_one_tongue():
     """NNM 1 of the 2-DOF benchmark to 3e5 J with tongues="skip" (its partner hardens with the amplitude: the
     linear partner frequency does not locate the band, the skeleton gives no target).  gauss6: done, every
     point labelled backbone, the 3:1 tongue recorded and the 5:1 passed by rescaled orbits.  Harmonic balance
-    (H = 9) cannot jump the 5:1 that way: the branch says so (status 'tongue', not 'done' or 'failed')."""
+    (H = 9): done too, or, where a tongue cannot be jumped that way, the branch says so (status 'tongue', not
+    'done' or 'failed')."""
     b = nnm.continue_nnm(two_dof(), 1, 3e5, tongues="skip", floquet=False, integrator="gauss6", steps_per_period=100)
     assert b.status == "done", b.message
     assert set(b.labels) == {"backbone"}
