@@ -94,6 +94,8 @@ SECULAR_TOL = 1e-13
 SECULAR_RESIDUAL = 1e-9
 SECULAR_LATTICE_GAP = 0.05
 SECULAR_DISTINCT = 1e-6
+#: at most this many classes go to the structured route from the secular one (more: the whole structured route)
+SECULAR_MAX_HARD = 4
 
 _warned = False
 DEBUG = False
@@ -568,10 +570,11 @@ def _secular(problem, A, w, bp, C):
                 dWb[:, l * ns:(l + 1) * ns, l * ns:(l + 1) * ns] = dW[:, l]
             return sk, inv, Wb, dWb
 
+        bad = np.zeros(S, dtype=bool)             # classes the secular route cannot vouch for: the structured route's
         with np.errstate(all="ignore"):
             recentred = np.zeros(S, dtype=int)
             for _ in range(4):                      # Newton, then move to the central copies and refine
-                conv = np.zeros(S, dtype=bool)
+                conv = bad.copy()
                 for it in range(SECULAR_ITER):
                     act = np.flatnonzero(~conv)
                     if not len(act):
@@ -581,13 +584,14 @@ def _secular(problem, A, w, bp, C):
                     G = np.linalg.solve(Mm, Ct[None] @ dWb)
                     L = np.trace(G, axis1=1, axis2=2) + (2.0 * sk[:, :, None] * inv).sum(axis=(1, 2))
                     step = -1.0 / L
-                    if not np.all(np.isfinite(step)):
-                        return None
+                    broken = ~np.isfinite(step)
+                    bad[act[broken]] = conv[act[broken]] = True
+                    step[broken] = 0.0
                     nu[act] += step
-                    conv[act] = np.abs(step) <= SECULAR_TOL * np.maximum(1.0, np.abs(nu[act]))
-                if not np.all(conv):
-                    return None
+                    conv[act] |= np.abs(step) <= SECULAR_TOL * np.maximum(1.0, np.abs(nu[act]))
+                bad |= ~conv
                 # the eigenvectors: z = null vector of I + W C~, c_kj = -(1 / q0_kj) sum_s Bq_sj (C~ z)_ks
+                nu[bad] = np.where(np.isfinite(nu[bad]), nu[bad], 1j)
                 sk, inv, Wb, dWb = parts(nu)
                 Mz = eye[None] + Wb @ Ct[None]
                 z = np.linalg.solve(Mz, np.ones((S, r, 1)) / np.sqrt(r))[..., 0]         # inverse iteration
@@ -599,33 +603,52 @@ def _secular(problem, A, w, bp, C):
                 c[:, :, tm] = -inv * np.einsum("sj,Sks->Skj", B, f)
                 p = (np.abs(c) ** 2).sum(axis=2)
                 cent = (kk[None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
-                move = np.abs(cent) > 0.5
+                move = (np.abs(cent) > 0.5) & ~bad
                 if not np.any(move):
                     break
-                if np.any(recentred[move] >= 3):
-                    return None
+                bad |= move & (recentred >= 3)
+                move &= ~bad
                 recentred[move] += 1
                 nu[move] += 1j * np.round(cent[move])
-            else:
-                return None
             op = _HillOperator(omega2, Bq, Cexp, H, w)
+            c = np.where(np.isfinite(c), c, 0.0)
             X = op.lift(c[..., None], nu)                                                  # (S, 2m, 1)
             R = op.apply(X) - X * nu[:, None, None]
             res = np.linalg.norm(R[:, :, 0], axis=1) / (np.linalg.norm(X[:, :, 0], axis=1) * np.maximum(1.0, np.abs(nu)))
-            if not np.all(res < SECULAR_RESIDUAL):
-                return None
-            if np.any(_velocity_overlap(c, vel) > 0.5):
-                return None
-            mu = np.exp(2 * np.pi * nu)
+            bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
+            bad |= _velocity_overlap(c, vel) > 0.5
             lat = np.round(nu.imag)
-            if np.any((np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)):
-                return None
-            pairs_close = (np.abs(mu[:, None] - mu[None, :]) < SECULAR_DISTINCT) | \
+            bad |= (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
+            mu = np.exp(2 * np.pi * nu)
+            close = (np.abs(mu[:, None] - mu[None, :]) < SECULAR_DISTINCT) | \
                 (np.abs(mu[:, None] - 1.0 / mu[None, :]) < SECULAR_DISTINCT)
-            if np.any(np.triu(pairs_close, 1)):
+            close = np.triu(close, 1) & ~bad[:, None] & ~bad[None, :]
+            bad |= close.any(axis=0) | close.any(axis=1)
+        good = ~bad
+        if np.any(bad):
+            # the classes near the trivial pair's copies (internal resonances), or unconverged: the structured route
+            # on those classes alone (its blocks at the lattice i k hold the hybrids the dense route may keep)
+            if bad.sum() > SECULAR_MAX_HARD:
                 return None
+            op = _HillOperator(omega2, Bq, Cexp, H, w)
+            found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel, warm=True)
+            if found is None:
+                found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
+                                 warm=False)
+            if found is None:
+                return None
+            mf = np.exp(2 * np.pi * np.asarray(found))
+            mg = mu[good]
+            if len(mg) and np.min(np.abs(mf[:, None] - mg[None, :])) < SECULAR_DISTINCT:
+                return None                       # the structured blocks found a secular class's exponent again
+            nu_kept += list(nu[good]) + list(-nu[good]) + list(found)
+            if getattr(problem, "_hill_secular", None) is not None and problem._hill_secular[0] == key:
+                nu[bad] = problem._hill_secular[1][bad] / w          # the hard classes: their last secular exponents
+            else:
+                nu[bad] = 1j * np.sqrt(np.maximum(beta2[classes], 0.0))[bad]
+        else:
+            nu_kept += list(nu) + list(-nu)
         problem._hill_secular = (key, nu * w)
-        nu_kept += list(nu) + list(-nu)
     if len(nu_kept) != 2 * n - 2:
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
