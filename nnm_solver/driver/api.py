@@ -45,8 +45,10 @@ METHODS = ("shooting", "hb")
 #: harmonic-balance orbit with H harmonics has tongues up to order H only; the engine's unseen-turn guard and the
 #: locator's mid-step check find their entrances (the 2-DOF 3:1 tongue's four folds, the beam's 5:1 tongue of
 #: NLvib's example 09), and the tight cap cost ~3x NLvib's points on the same paths (issue 30: the steps NLvib took
-#: changed the period by up to 1.4 % on example 04 and 7.8 % on example 09)
-MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.05}
+#: changed the period by up to 1.4 % on example 04 and 7.8 % on example 09).  HB's cap is not looser than 2 %: at
+#: 5 % a step of the 3-DOF combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable
+#: interval between two Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
+MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.02}
 
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
@@ -348,7 +350,7 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     max_correction : largest corrector displacement, relative to the step length.
     max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
     max_period_step : largest relative change of the period between two points (default: MAX_PERIOD_STEP of
-        the method, 0.005 for shooting, 0.05 for harmonic balance; keeps the
+        the method, 0.005 for shooting, 0.02 for harmonic balance; keeps the
         continuation from stepping over the entrance of internal-resonance tongues).
     tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
         each computable with ``continue_tongue``).
