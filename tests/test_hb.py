@@ -154,13 +154,14 @@ def test_hill_stability_matches_shooting_floquet(nnm1_hb, nnm1_shooting):
     # largest multiplier on the unstable part of the backbone (before the first fold)
     first_fold_hb = next(e["index"] for e in hb.events if e["kind"] == "fold")
     first_fold_sh = next(e["index"] for e in sh.events if e["kind"] == "fold")
-    E_hb, mu_hb = hb.energy[:first_fold_hb], np.abs(hb.floquet[:first_fold_hb, 0])
-    sel = (sh.energy[:first_fold_sh] > 80) & (sh.energy[:first_fold_sh] < 2000)
+    # (interpolated along shooting's branch, the denser one: HB's period cap is 10x shooting's, MAX_PERIOD_STEP)
+    E_sh, mu_sh = sh.energy[:first_fold_sh], np.abs(sh.floquet[:first_fold_sh, 0])
+    sel = (hb.energy[:first_fold_hb] > 80) & (hb.energy[:first_fold_hb] < 2000)
     assert sel.sum() >= 5
-    mu_interp = CubicSpline(np.log(E_hb), np.log(mu_hb))(np.log(sh.energy[:first_fold_sh][sel]))
-    mu_sh = np.abs(sh.floquet[:first_fold_sh, 0][sel])
-    assert np.all(mu_sh > 1.5)
-    assert np.max(np.abs(np.exp(mu_interp) / mu_sh - 1)) < 1e-2
+    mu_interp = CubicSpline(np.log(E_sh), np.log(mu_sh))(np.log(hb.energy[:first_fold_hb][sel]))
+    mu_hb = np.abs(hb.floquet[:first_fold_hb, 0][sel])
+    assert np.all(mu_hb > 1.5)
+    assert np.max(np.abs(np.exp(mu_interp) / mu_hb - 1)) < 1e-2
 
 
 def test_coefficients_recomputed_for_a_loaded_branch(nnm1_hb):

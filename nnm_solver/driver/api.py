@@ -40,6 +40,16 @@ START_NONLINEARITY = 1e-5
 #: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
 METHODS = ("shooting", "hb")
 
+#: default largest relative change of the period in one step (max_period_step=None), by method.  Shooting keeps a
+#: tight cap: its orbits meet internal-resonance tongues of every order, whose entrances are narrow in period.  A
+#: harmonic-balance orbit with H harmonics has tongues up to order H only; the engine's unseen-turn guard and the
+#: locator's mid-step check find their entrances (the 2-DOF 3:1 tongue's four folds, the beam's 5:1 tongue of
+#: NLvib's example 09), and the tight cap cost ~3x NLvib's points on the same paths (issue 30: the steps NLvib took
+#: changed the period by up to 1.4 % on example 04 and 7.8 % on example 09).  HB's cap is not looser than 2 %: at
+#: 5 % a step of the 3-DOF combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable
+#: interval between two Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
+MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.02}
+
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
 
@@ -203,7 +213,7 @@ def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
-             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005,
+             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=None,
              locate_events=True, tongues="follow", error_estimate=True, freq_tol=None, _start=None, **method_options):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
@@ -227,6 +237,8 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     if tongues not in ("follow", "skip"):
         raise NNMInputError(f"tongues must be 'follow' or 'skip', got {tongues!r}")
     method, opts = _method_options(method, method_options)
+    if max_period_step is None:
+        max_period_step = MAX_PERIOD_STEP[method]
     if tol is None:
         tol = 1e-6 if method == "shooting" else 1e-8
     ritz = method == "hb" and _modal_basis(model, opts) == "ritz"
@@ -299,7 +311,7 @@ def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS):
 
 def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
                  stop=None, energy_min=None, symmetric=None, floquet=None, step=None, max_angle=0.35,
-                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=0.005, *,
+                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=None, *,
                  method="shooting", tongues="follow", locate_events=True, integrator="newmark", error_estimate=True,
                  freq_tol=None, **hb_options):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
@@ -337,7 +349,8 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     max_angle : largest turn (rad) of the branch tangent between two points.
     max_correction : largest corrector displacement, relative to the step length.
     max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
-    max_period_step : largest relative change of the period between two points (keeps the
+    max_period_step : largest relative change of the period between two points (default: MAX_PERIOD_STEP of
+        the method, 0.005 for shooting, 0.02 for harmonic balance; keeps the
         continuation from stepping over the entrance of internal-resonance tongues).
     tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
         each computable with ``continue_tongue``).
