@@ -18,16 +18,25 @@ import numpy as np
 log = logging.getLogger("nnm_viewer")
 
 
-def warm_kernels():
+def warm_kernels(elements=1):
     """Call every compiled kernel the viewer uses (shooting with Floquet multipliers, event
-    location, orbit integration) on a 2-DOF model, and import the plotting backend."""
+    location, orbit integration) on a 2-DOF model with ``elements`` cubic springs (1, or 2 for
+    the kernels of a model with several nonlinear elements: numba compiles the one-element
+    kernels apart, newmark_monodromy.one_element), and import the plotting backend."""
     import nnm_solver as nnm
 
-    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)],
-                      name="warm-up")
+    springs = [nnm.CubicSpring(dof=0, k3=0.5)] + ([nnm.CubicSpring(dof=1, k3=0.25)] if elements > 1 else [])
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs, name="warm-up")
     branch = nnm.continue_nnm(model, mode=1, energy_max=1.0, max_points=2)
     branch.motion(0, samples=16)
     import matplotlib.backends.backend_agg  # noqa: F401 (the FEP images)
+
+
+def warm_for(model):
+    """The warm-up of the kernels ``model`` needs: those of a model with one nonlinear element or
+    with several (the file's model and the jobs started on it use those)."""
+    n = len(getattr(model, "elements", ()) or ())
+    return lambda: warm_kernels(2 if n > 1 else 1)
 
 
 class SolverWarmUp:
