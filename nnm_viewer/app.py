@@ -116,7 +116,7 @@ class ViewerApp:
         # the solver's kernels are compiled in the background (about 30 s on the first start after
         # installing): the pages are served and drawn meanwhile, and show "preparing the solver"
         self.warm_up = SolverWarmUp(on_done=lambda seconds, error: self.shared.set_solver_ready(),
-                                    warm=warm or warm_for(model)).start()
+                                    warm=warm or warm_for(model, branches, self.shared.set_orbits_ready)).start()
 
     @property
     def url(self):
