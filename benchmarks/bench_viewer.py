@@ -4,14 +4,16 @@
 
 FILE defaults to assets/paris.h5 (the 2-DOF demo, computed on the fly, if it is missing).
     python benchmarks/bench_viewer.py FILE --cold     # every start with an empty numba cache
+    python benchmarks/bench_viewer.py FILE --cold --solve-starts 3   # and the first nnm-solve of the 2-DOF
 
 Measured (medians):
   * in-process: pick -> GLB ready (orbit integrated by the solver, Fourier fit, morph-target
     GLB built and handed to viser), with its parts, and the GLB size;
   * in Debian's Chromium (headless, software WebGL, Playwright), with `nnm-view` as a
     subprocess, from the start of the command: server ready (URL printed), page populated,
-    first frame showing the model (screenshots polled), solver ready ("preparing the solver"
-    gone); Start in the Compute tab -> first streamed point; mouse click on an in-scene FEP
+    first frame showing the model (screenshots polled), model animated (the orbit's text shown and
+    two screenshots of the model differing), solver ready ("preparing the solver" gone); Start in the
+    Compute tab -> first streamed point (the job's "N of at most M points"); mouse click on an in-scene FEP
     point -> page updated with the new orbit (the GLB is sent before the text, on the same
     ordered websocket).
 """
@@ -84,8 +86,9 @@ def in_browser(path, model, branches, mesh, starts, picks, cold=False):
     geom = view_geometry(mesh.vertices)
     series = [BranchEntry(b, "").series(1.0) for b in branches]
     ranges, _ = board_view(series, 0)          # the board as a new tab shows it (zoomed on branch 1 if narrow)
-    rows = {k: [] for k in ("server ready", "page populated", "model drawn", "solver ready",
+    rows = {k: [] for k in ("server ready", "page populated", "model drawn", "model animated", "solver ready",
                             "Start -> first streamed point", "pick")}
+    loads = []
     with sync_playwright() as pw:
         browser = launch_chromium(pw)
         try:
@@ -111,19 +114,62 @@ def in_browser(path, model, branches, mesh, starts, picks, cold=False):
                             if time.perf_counter() - t0 > 120:
                                 raise RuntimeError("the model never appeared")
                         rows["model drawn"].append(time.perf_counter() - t0)
+                        page.wait_for_function("document.body.innerText.includes('real period')", timeout=300000,
+                                               polling=100)
+                        box = (x0, y0, x1 + 1, y1 + 1)
+                        shot = model_pixels(page.screenshot(), box)
+                        while True:                    # the animation runs: the model's pixels change
+                            new = model_pixels(page.screenshot(), box)
+                            if not np.array_equal(new, shot):
+                                break
+                            shot = new
+                        rows["model animated"].append(time.perf_counter() - t0)
                         page.wait_for_function("window.__nnmSolverReady !== null", timeout=300000)
                         ready_js = page.evaluate("window.__nnmSolverReady")
                         rows["solver ready"].append(now - t0 + (ready_js - now_js) / 1000.0)
                         if run == 0:
                             rows["pick"] += pick_points(page, series[0], geom, ranges, picks, PWTimeout)
                         rows["Start -> first streamed point"].append(first_point(page))
+                        loads.append(os.getloadavg()[0])
+                        print(f"  start {run + 1}: " + ", ".join(f"{k} {v[-1]:.2f} s" for k, v in rows.items()
+                                                                 if v and k != "pick")
+                              + f" (load {loads[-1]:.2f})", flush=True)
                 finally:
                     page.close()
                     if cache:
                         shutil.rmtree(cache, ignore_errors=True)
         finally:
             browser.close()
-    return rows
+    return rows, loads
+
+
+def model_pixels(png_bytes, region):
+    import io
+    import matplotlib.image as mpimg
+    x0, y0, x1, y1 = region
+    return mpimg.imread(io.BytesIO(png_bytes), format="png")[y0:y1, x0:x1, :3]
+
+
+def cold_solve(starts):
+    """Seconds (wall) of ``nnm-solve two_dof.h5 --mode 1 --energy-max 10`` (on a copy of the shipped file) with an
+    empty numba cache, and the 1-minute load average at its end, per start."""
+    import subprocess
+    times, loads = [], []
+    for run in range(starts):
+        tmp = tempfile.mkdtemp(prefix="nnm-solve-cold-")
+        try:
+            shutil.copy(ROOT / "assets" / "two_dof.h5", Path(tmp) / "two_dof.h5")
+            env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba"),
+                   "PYTHONPATH": os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "nnm_solver.cli", "two_dof.h5", "--mode", "1", "--energy-max", "10"],
+                           cwd=tmp, env=env, check=True, stdout=subprocess.DEVNULL)
+            times.append(time.perf_counter() - t0)
+            loads.append(os.getloadavg()[0])
+            print(f"  cold nnm-solve {run + 1}: {times[-1]:.2f} s (load {loads[-1]:.2f})", flush=True)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return times, loads
 
 
 #: JavaScript: note in window.__nnmSolverReady the time (performance.now(), ms) at which the page
@@ -143,7 +189,7 @@ def first_point(page):
     page.get_by_role("tab", name="Compute").click()
     page.get_by_role("button", name="Start").click()
     t1 = time.perf_counter()
-    page.wait_for_function("/\\b[1-9]\\d* (of at most \\d+ points|points in)/.test(document.body.innerText)",
+    page.wait_for_function("/\\b[1-9]\\d* (of at most \\d+ points|points in \\d)/.test(document.body.innerText)",
                            timeout=300000, polling=50)
     dt = time.perf_counter() - t1
     stop = page.get_by_role("button", name="Stop (keep points)")
@@ -183,6 +229,10 @@ def main():
     ap.add_argument("--starts", type=int, default=3)
     ap.add_argument("--picks", type=int, default=5)
     ap.add_argument("--cold", action="store_true", help="every start with an empty numba cache (fresh install)")
+    ap.add_argument("--solve-starts", type=int, default=0,
+                    help="also time the first `nnm-solve two_dof.h5 --mode 1 --energy-max 10` with an empty numba "
+                         "cache this many times")
+    ap.add_argument("--no-in-process", action="store_true", help="skip the in-process pick timings")
     args = ap.parse_args()
     path = Path(args.file)
     tmp = None
@@ -199,21 +249,33 @@ def main():
     mesh = model.mesh if model.mesh is not None else fallback_mesh(model.n)
     print(f"model {model.name or path.name}: {model.n} DOFs, mesh {len(mesh.vertices)} vertices / "
           f"{len(mesh.faces)} faces, branch 1: {len(branches[0])} points")
-    parts, size = in_process(model, branches[0], mesh, args.picks)
-    rows = [(f"pick -> GLB ready, in-process: {k}", v, args.picks) for k, v in parts.items()]
-    if os.path.exists(CHROMIUM):
-        med = (lambda v: statistics.median(v) if v else float("nan"))
+    med = (lambda v: statistics.median(v) if v else float("nan"))
+    rows, size, loads = [], 0, []
+    if args.solve_starts:
+        times, solve_loads = cold_solve(args.solve_starts)
+        rows.append(("first nnm-solve two_dof.h5 --mode 1 --energy-max 10 (cold numba cache)", med(times),
+                     len(times)))
+        loads += solve_loads
+    if not args.no_in_process:
+        parts, size = in_process(model, branches[0], mesh, args.picks)
+        rows += [(f"pick -> GLB ready, in-process: {k}", v, args.picks) for k, v in parts.items()]
+    if os.path.exists(CHROMIUM) and args.starts:
         cache = "cold numba cache" if args.cold else "warm cache"
-        for name, v in in_browser(path, model, branches, mesh, args.starts, args.picks, cold=args.cold).items():
+        browser_rows, browser_loads = in_browser(path, model, branches, mesh, args.starts, args.picks, cold=args.cold)
+        loads += browser_loads
+        for name, v in browser_rows.items():
             what = "pick (click) -> page updated" if name == "pick" else \
                 name if name.startswith("Start") else f"start -> {name}"
             rows.append((f"{what} (Chromium, {cache})", med(v), len(v)))
     else:
         print("no /usr/bin/chromium: browser timings skipped")
-    print(f"\nGLB size: {size / 1e6:.2f} MB")
+    if size:
+        print(f"\nGLB size: {size / 1e6:.2f} MB")
     print(f"{'measure':68s} {'median (s)':>10s} {'n':>3s}")
     for name, v, n in rows:
         print(f"{name:68s} {v:10.3f} {n:3d}")
+    if loads:
+        print(f"1-minute load average during the runs: median {med(loads):.2f}, {min(loads):.2f}..{max(loads):.2f}")
     print(f"load average at the end: {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     if tmp:
         shutil.rmtree(tmp, ignore_errors=True)

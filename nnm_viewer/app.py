@@ -20,7 +20,7 @@ import time
 import nnm_solver
 
 from .state import SharedState
-from .warmup import SolverWarmUp
+from .warmup import SolverWarmUp, warm_for
 from .worker import one_line
 
 log = logging.getLogger("nnm_viewer")
@@ -100,6 +100,12 @@ class ViewerApp:
         mesh = model.mesh if model.mesh is not None else sc.fallback_mesh(model.n)
         geom = sc.view_geometry(mesh.vertices)
         self.server.scene.set_up_direction("+z")
+        # no image-based lighting: the client's environment map is prefiltered (PMREM) on the first frame,
+        # which stalls software WebGL (headless Chromium, no GPU) for 10-14 s before anything is drawn
+        # (issue 32); a hemisphere light gives the PBR materials about the same look
+        self.server.scene.configure_environment_map(hdri=None)
+        self.server.scene.add_light_hemisphere("/lights/hemisphere", sky_color=(255, 255, 255),
+                                               ground_color=(120, 120, 120), intensity=1.0)
         cam = self.server.initial_camera
         cam.position = tuple(geom.camera_position)
         cam.look_at = tuple(geom.camera_look_at)
@@ -110,7 +116,7 @@ class ViewerApp:
         # the solver's kernels are compiled in the background (about 30 s on the first start after
         # installing): the pages are served and drawn meanwhile, and show "preparing the solver"
         self.warm_up = SolverWarmUp(on_done=lambda seconds, error: self.shared.set_solver_ready(),
-                                    warm=warm).start()
+                                    warm=warm or warm_for(model, branches, self.shared.set_orbits_ready)).start()
 
     @property
     def url(self):

@@ -55,7 +55,7 @@ class PointView:
         if s.linear_mode is not None:             # a linear mode (Modes tab): no solver needed
             return self.compute_linear(s.linear_mode)
         e = s.selected_entry()
-        if not s.shared.solver_ready.is_set():     # no orbit before the kernels are compiled (warmup.py);
+        if not s.shared.orbits_ready.is_set():     # no orbit before the kernels are compiled (warmup.py);
             with s.lock:                           # the session asks again when they are
                 drawn = s.current_point is None and self.last_glb is not None
                 s.current_point = s.current_anim = None

@@ -206,8 +206,11 @@ class SharedState:
         #: set once the solver's compiled kernels are ready (app.py warms them in the background);
         #: until then the sessions draw everything but the orbits
         self.solver_ready = threading.Event()
+        #: the kernels that integrate the file's orbits are compiled (warm-up's first step): orbits can be shown
+        self.orbits_ready = threading.Event()
         if solver_ready:
             self.solver_ready.set()
+            self.orbits_ready.set()
         self.entries: list[BranchEntry] = []
         self.listeners: list = []
         self.job = None                 # worker.JobRunner or None
@@ -288,8 +291,15 @@ class SharedState:
             self.error = message
         self.notify("error")
 
+    def set_orbits_ready(self):
+        """The kernels integrating the stored branches' orbits are compiled: the sessions show their orbits now
+        (the continuation's kernels may still be compiling)."""
+        self.orbits_ready.set()
+        self.notify("solver")
+
     def set_solver_ready(self):
         """The solver's kernels are compiled: the sessions compute their orbits now."""
+        self.orbits_ready.set()
         self.solver_ready.set()
         self.notify("solver")
 

@@ -18,16 +18,52 @@ import numpy as np
 log = logging.getLogger("nnm_viewer")
 
 
-def warm_kernels():
+def warm_kernels(elements=1):
     """Call every compiled kernel the viewer uses (shooting with Floquet multipliers, event
-    location, orbit integration) on a 2-DOF model, and import the plotting backend."""
+    location, orbit integration) on a 2-DOF model with ``elements`` cubic springs (1, or 2 for
+    the kernels of a model with several nonlinear elements: numba compiles the one-element
+    kernels apart, newmark_monodromy.one_element), and import the plotting backend."""
     import nnm_solver as nnm
 
-    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)],
-                      name="warm-up")
+    springs = [nnm.CubicSpring(dof=0, k3=0.5)] + ([nnm.CubicSpring(dof=1, k3=0.25)] if elements > 1 else [])
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs, name="warm-up")
     branch = nnm.continue_nnm(model, mode=1, energy_max=1.0, max_points=2)
     branch.motion(0, samples=16)
     import matplotlib.backends.backend_agg  # noqa: F401 (the FEP images)
+
+
+def warm_orbits(elements=1, integrators=("newmark",)):
+    """Compile the orbit integration (``record_orbit``) of each of ``integrators`` for a model with ``elements``
+    nonlinear elements (1 or several): what showing the stored branches' orbits needs."""
+    import nnm_solver as nnm
+    from nnm_solver.integrators.registry import record_orbit
+    from nnm_solver.model.modal import modal_system
+
+    springs = [nnm.CubicSpring(dof=0, k3=0.5)] + ([nnm.CubicSpring(dof=1, k3=0.25)] if elements > 1 else [])
+    system = modal_system(nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs, name="warm-up"))
+    for name in integrators:
+        record_orbit(system, np.array([0.1, 0.0]), np.zeros(2), 6.0, 8, name)
+
+
+def warm_for(model, branches=(), on_orbits=None):
+    """The warm-up of the kernels ``model`` needs (those of a model with one nonlinear element or with
+    several): first the orbit integration of the integrators of the stored ``branches`` (then
+    ``on_orbits()``: their orbits can be shown), then the continuation's kernels (warm_kernels)."""
+    n = len(getattr(model, "elements", ()) or ())
+    elements = 2 if n > 1 else 1
+    used = []
+    for b in branches:
+        name = getattr(getattr(b, "settings", None), "integrator", None)
+        if name and name not in used:
+            used.append(name)
+
+    def warm():
+        if used:
+            warm_orbits(elements, used)
+        if on_orbits is not None:
+            on_orbits()
+        warm_kernels(elements)
+    return warm
 
 
 class SolverWarmUp:
