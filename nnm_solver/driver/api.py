@@ -40,15 +40,15 @@ START_NONLINEARITY = 1e-5
 #: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
 METHODS = ("shooting", "hb")
 
-#: default largest relative change of the period in one step (max_period_step=None), by method.  Shooting keeps a
-#: tight cap: its orbits meet internal-resonance tongues of every order, whose entrances are narrow in period.  A
-#: harmonic-balance orbit with H harmonics has tongues up to order H only; the engine's unseen-turn guard and the
-#: locator's mid-step check find their entrances (the 2-DOF 3:1 tongue's four folds, the beam's 5:1 tongue of
-#: NLvib's example 09), and the tight cap cost ~3x NLvib's points on the same paths (issue 30: the steps NLvib took
-#: changed the period by up to 1.4 % on example 04 and 7.8 % on example 09).  HB's cap is not looser than 2 %: at
-#: 5 % a step of the 3-DOF combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable
-#: interval between two Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
-MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.02}
+#: default largest relative change of the period in one step (max_period_step=None), by method: 0.005.  Shooting's
+#: orbits meet internal-resonance tongues of every order, whose entrances are narrow in period.  For harmonic
+#: balance a 2 % cap takes about NLvib's points (issue 30: 23 instead of 70 on NLvib's example 04, 87 instead of
+#: 190 on 09, the same folds) but straight lines between its points then miss the curve by up to 2.4e-3 across a
+#: piecewise-linear kink and the energy-balance peak prediction by 1.3e-3 (tests/test_elements.py,
+#: tests/test_forced.py), so it is the user's choice (``max_period_step=0.02``); at 5 % a step of the 3-DOF
+#: combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable interval between two
+#: Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
+MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.005}
 
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
