@@ -134,3 +134,20 @@ def test_a_tongue_branch_is_named_once():
     assert backbone.tongues and backbone.tongues[0]["label"] == "tongue 3:1"
     tongue = nnm.continue_tongue(backbone, 0, max_points=5)
     assert tongue.name.startswith("NNM 1: 3:1 tongue at 0.22"), tongue.name
+
+
+def test_files_the_docs_write_in_the_repository_root_are_ignored():
+    """Following README.md and docs/tutorial.md from the repository root writes these files; git ignores
+    them (and still tracks the shipped assets/ and docs/img/)."""
+    import shutil
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        import pytest
+        pytest.skip("not a git checkout")
+    written = ["paris_branches.h5", "branches.h5", "fep.png", "paris_fep.h5", "paris_fep_figures/paris_fep_overview.png",
+               "two_dof.h5", "hb.h5", "atlas.h5", "atlas.png", "nnm1.uff", "bb.csv", "chain.h5", "two_dof_branches.h5"]
+    r = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *written], capture_output=True, text=True)
+    assert sorted(r.stdout.split()) == sorted(written), r.stdout
+    r = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", "assets/paris.h5", "docs/img/viewer.png"],
+                       capture_output=True, text=True)
+    assert r.stdout == ""
