@@ -530,7 +530,9 @@ def fmt_tongue(t):
             f"ends {t['status']}")
 
 
-def results_table(results, times, spp, tol, integrator="newmark"):
+def results_table(results, times, spp, tol, integrator="newmark", floquet=True):
+    """The results table of docs/paris_results.md (Markdown lines); floquet: whether the branches have
+    their Floquet multipliers (not with --fast), said in the table's introduction."""
     how = {}
     for m, r in results.items():   # each mode's integrator and steps per period (runs put together may differ)
         how.setdefault((r.get("integrator", integrator), r.get("steps_per_period", spp)), []).append(m)
@@ -542,8 +544,9 @@ def results_table(results, times, spp, tol, integrator="newmark"):
         how = f"integrator {i}, {s} steps per period"
     lines = [MARK_START, "",
              f"Computed by `examples/paris_fep.py` ({how}, tolerance {tol:g}, "
-             f"Floquet "
-             f"multipliers at every point). Frequency change and MAC at the backbone's highest point labelled "
+             + ("Floquet multipliers at every point" if floquet else
+                "no Floquet multipliers: stability not computed (--fast)") +
+             f"). Frequency change and MAC at the backbone's highest point labelled "
              f"`backbone` (on the family: its frequency on the skeleton's, docs/continuation.md); MAC "
              f"mass-weighted (`nnm.mass_mac`) between the orbit shapes (configuration of largest mass-weighted "
              f"amplitude) at the lowest and highest energy. Largest estimated frequency error: the largest "
@@ -808,7 +811,7 @@ def main(argv=None):
         spp = getattr(first.settings, "steps_per_period", spp)
         tol = getattr(first.settings, "tol", tol)
         integrator = getattr(first.settings, "integrator", integrator)
-    table = results_table(results, times, spp, tol, integrator)
+    table = results_table(results, times, spp, tol, integrator, floquet)
     doc = args.doc or (str(ROOT / "docs" / "paris_results.md") if args.update_shipped and not args.fast else None)
     if doc and not args.from_file:
         update_doc(doc, [table, table2_markdown(model)])

@@ -7,10 +7,11 @@ run also by harmonic balance, as a check), draws the frequency-energy plots and 
 the 3:1 tongue (time series, configuration space, Fourier coefficients), and saves everything, with a
 small 3D scene (two masses, springs, walls), to an nnm file that ``nnm-view`` animates.
 
-    python examples/two_dof_tongues.py                 # full run, ~1 min: docs/img/*.png, assets/two_dof.h5
+    python examples/two_dof_tongues.py                 # full run, ~1 min: ./two_dof_figures/*.png, ./two_dof.h5
     python examples/two_dof_tongues.py --fast          # a few seconds: coarser steps, no HB check
     python examples/two_dof_tongues.py --fast --out-dir /tmp/x --assets /tmp/x/two_dof.h5
-    nnm-view assets/two_dof.h5
+    python examples/two_dof_tongues.py --update-shipped   # maintainers: docs/img/two_dof_*.png, assets/two_dof.h5
+    nnm-view two_dof.h5
 """
 from __future__ import annotations
 
@@ -286,13 +287,30 @@ def fig_shares(branch, fractions, tongues, path):
 
 
 # ---------------------------------------------------------------------- main
+#: the shipped file and figures, written only with --update-shipped
+SHIPPED, SHIPPED_FIGURES = ROOT / "assets" / "two_dof.h5", ROOT / "docs" / "img"
+
+
+def default_outputs(args):
+    """(figure folder, nnm file) of a run: --out-dir / --assets if given, else ./two_dof_figures and
+    ./two_dof.h5 in the current folder; the shipped docs/img and assets/two_dof.h5 only with --update-shipped."""
+    out_dir = args.out_dir or str(SHIPPED_FIGURES if args.update_shipped else Path("two_dof_figures"))
+    assets = args.assets or str(SHIPPED if args.update_shipped else Path("two_dof.h5"))
+    return out_dir, assets
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fast", action="store_true", help="coarser steps, fewer points (a few seconds)")
-    p.add_argument("--out-dir", default=str(ROOT / "docs" / "img"), help="folder of the PNG figures")
-    p.add_argument("--assets", default=str(ROOT / "assets" / "two_dof.h5"), help="nnm file written (replaced)")
+    p.add_argument("--out-dir", default=None, help="folder of the PNG figures (default ./two_dof_figures; "
+                   "docs/img with --update-shipped)")
+    p.add_argument("--assets", default=None, help="nnm file written (replaced; default ./two_dof.h5; the shipped "
+                   "assets/two_dof.h5 with --update-shipped)")
+    p.add_argument("--update-shipped", action="store_true", help="maintainers: write the shipped assets/two_dof.h5 "
+                   "and docs/img/two_dof_*.png (without it they are never written)")
     p.add_argument("--summary", default=None, help="optional JSON file with the numbers shown")
     args = p.parse_args(argv)
+    args.out_dir, args.assets = default_outputs(args)
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t_all = time.perf_counter()

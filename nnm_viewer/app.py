@@ -120,7 +120,12 @@ class ViewerApp:
 
     @property
     def url(self):
-        host = "localhost" if self.host in ("0.0.0.0", "127.0.0.1", "::") else self.host
+        """The address to open: the one the server listens on (http://127.0.0.1:8080 by default; a server
+        on every interface, 0.0.0.0 or ::, is reached there too).  Not 'localhost', which a browser may
+        resolve to ::1 first, where a server on 127.0.0.1 does not listen."""
+        host = {"0.0.0.0": "127.0.0.1", "::": "[::1]"}.get(self.host, self.host)
+        if ":" in host and not host.startswith("["):
+            host = f"[{host}]"
         return f"http://{host}:{self.port}"
 
     def _connect(self, client):

@@ -131,7 +131,8 @@ def mode_name(model, mode):
 def name_remainder(name, mode):
     """What a branch's stored ``name`` adds to 'NNM <mode>': '' for 'NNM1', 'mode 14', a sweep's
     'variant <variant>' for a sweep's '<variant>:mode<N>'; 'paper mode 13' for
-    'mode14 (paper mode 13)'; 'harmonic balance H15' for 'NNM1 harmonic balance H15'."""
+    'mode14 (paper mode 13)'; 'harmonic balance H15' for 'NNM1 harmonic balance H15'; 'run 2' for
+    'mode1_2' (save_branch's name of a second branch of mode 1 in the same file)."""
     from nnm_solver.sweeps import parse_branch_name
 
     name = str(name or "").strip()
@@ -142,6 +143,9 @@ def name_remainder(name, mode):
         return ""
     m = re.match(rf"^\s*(?:nnm|mode)\s*{re.escape(str(mode))}(?![0-9])\s*(.*)$", name, flags=re.IGNORECASE)
     rest = m.group(1) if m else name
+    run = re.match(r"^_(\d+)\b\s*(.*)$", rest) if m else None
+    if run:                                       # 'mode1_2': the second branch of mode 1 saved to the file
+        rest = f"run {run.group(1)}" + (f" {run.group(2)}" if run.group(2) else "")
     rest = rest.strip().strip(":,-;").strip()
     if rest.startswith("("):                      # '(paper mode 13): tongue 1 (5:1)' -> 'paper mode 13: ...'
         depth = 0

@@ -27,6 +27,35 @@ def test_list_modes(tmp_path):
     assert "reference" in lines[0]
     assert lines[1].split()[:3] == ["1", "0.1592", "0.1600"] and "in phase" in lines[1]
     assert lines[2].split()[1] == "0.2757"
+    # a legend names every column of the header
+    assert lines[3].startswith("columns: ") and len(lines) == 4
+    for column in ("mode:", "freq:", "reference:", "diff:", "label:"):
+        assert column in lines[3], column
+    assert "(1-based)" in lines[3] and "(Hz" in lines[3]
+    nnm.save_model(p, nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]])))      # no reference, no labels
+    r = run(p, "--list-modes")
+    assert r.returncode == 0, r.stderr
+    legend = r.stdout.splitlines()[-1]
+    assert legend.startswith("columns: mode:") and "reference" not in legend and "label" not in legend
+
+
+def test_mode_out_of_range_on_a_shipped_example_is_one_line(tmp_path):
+    """`nnm-solve assets/paris.h5 --mode 999 ...`: the error alone (no notice about where the branch would
+    have been saved), exit code 2, nothing written."""
+    from pathlib import Path
+    shipped = Path(__file__).resolve().parents[1] / "assets" / "paris.h5"
+    for extra in ((), ("--energy-max", "1")):
+        r = subprocess.run([sys.executable, "-m", "nnm_solver.cli", str(shipped), "--mode", "999", *extra],
+                           capture_output=True, text=True, timeout=120, cwd=tmp_path)
+        assert r.returncode == 2, (r.stdout, r.stderr)
+        lines = (r.stdout + r.stderr).strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("nnm-solve: error: "), lines
+    assert lines == ["nnm-solve: error: mode 999 is out of range: this model has modes 1..548"]
+    r = subprocess.run([sys.executable, "-m", "nnm_solver.cli", str(shipped), "--mode", "2", "--energy-max", "-1"],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == "", (r.stdout, r.stderr)
+    assert r.stderr.strip() == "nnm-solve: error: energy_max must be a positive number, got -1.0"
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_solve_saves_branch_and_plot(tmp_path):
@@ -87,3 +116,4 @@ def test_errors_are_one_line(tmp_path):
         assert r.returncode == 2, (args, r.stdout, r.stderr)
         assert fragment in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
+        assert r.stdout == "", (args, r.stdout)

@@ -98,3 +98,56 @@ def test_solve_refuses_a_branch_of_another_model_in_the_same_file(tmp_path):
     assert r.returncode == 0, r.stderr
     assert [b.mode for b in nnm.load_branches(h5)] == [1, 2]
     assert nnm.load_model(tmp_path / "chain_2.h5").k3[0] == 1.5
+
+
+def test_status_texts_name_the_tongue_once_and_count_what_they_say():
+    """Issue 32: a status read 'the tongue 3:1 tongue ... (121 points inside it)' with max_points = 120.
+    The messages of ends.py name the resonance once ('the 3:1 internal-resonance tongue') and say what
+    the number is: the orbits computed inside the tongue, not kept, max_points of them."""
+    import re
+
+    from nnm_solver.driver import ends
+
+    t = dict(label="tongue 3:1", partner_mode=2, entry_energy=4708.0, entry_frequency_hz=0.22344, hidden_points=120)
+    by_points = ends.inside_tongue(None, t, False, 0, max_points=120)
+    assert by_points.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2 at E = 4708 J")
+    assert "(max_points = 120 orbits computed inside it without coming back onto the backbone, not kept)" in by_points
+    t["hidden_points"] = 7
+    by_energy = ends.inside_tongue(None, t, True, 0, max_points=120)
+    assert "(energy_max reached inside it; 7 orbits computed inside it, not kept)" in by_energy
+    bpoint = nnm.Point(4708.0, 0.22344, 1 / 0.22344, np.zeros(2), np.zeros(2), np.ones(4), True)
+
+    class Skeleton:
+        energy_peak = 5000.0
+
+    escape = ends.escape_below_peak(Skeleton(), t, 2, bpoint)
+    assert escape.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2")
+    for text in (by_points, by_energy, escape):
+        assert not re.search(r"\b(\w+) \1\b", text), text          # no doubled word
+        assert "tongue 3:1" not in text and text.count("3:1 internal-resonance tongue") == 1, text
+
+
+def test_a_tongue_branch_is_named_once():
+    """continue_tongue's branch: 'NNM 1: 3:1 tongue at ... Hz', not 'tongue 3:1 tongue'."""
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+    backbone = nnm.continue_nnm(model, mode=1, energy_max=1e4, tongues="skip")
+    assert backbone.tongues and backbone.tongues[0]["label"] == "tongue 3:1"
+    tongue = nnm.continue_tongue(backbone, 0, max_points=5)
+    assert tongue.name.startswith("NNM 1: 3:1 tongue at 0.22"), tongue.name
+
+
+def test_files_the_docs_write_in_the_repository_root_are_ignored():
+    """Following README.md and docs/tutorial.md from the repository root writes these files; git ignores
+    them (and still tracks the shipped assets/ and docs/img/)."""
+    import shutil
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        import pytest
+        pytest.skip("not a git checkout")
+    written = ["paris_branches.h5", "branches.h5", "fep.png", "paris_fep.h5", "paris_fep_figures/paris_fep_overview.png",
+               "two_dof.h5", "hb.h5", "atlas.h5", "atlas.png", "nnm1.uff", "bb.csv", "chain.h5", "two_dof_branches.h5"]
+    r = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *written], capture_output=True, text=True)
+    assert sorted(r.stdout.split()) == sorted(written), r.stdout
+    r = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", "assets/paris.h5", "docs/img/viewer.png"],
+                       capture_output=True, text=True)
+    assert r.stdout == ""

@@ -144,7 +144,7 @@ def test_serves_page_and_prints_url(demo_file):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline()
-        assert f"http://localhost:{port}" in line and "1 branch" in line
+        assert f"Open http://127.0.0.1:{port} " in line and "1 branch" in line     # the address it listens on
         for _ in range(50):
             try:
                 with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=2) as r:

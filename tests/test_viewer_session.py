@@ -676,7 +676,11 @@ def test_every_mode_is_offered_and_branch_names_are_consistent(server, tmp_path)
              "NNM1 harmonic balance H15": "NNM 1 (in phase) \u00b7 harmonic balance H15",
              "mode1: tongue 1 (3:1)": "NNM 1 (in phase) \u00b7 tongue 1 (3:1)",
              "mode1 (paper mode 13): tongue 1 (5:1)": "NNM 1 (in phase) \u00b7 paper mode 13: tongue 1 (5:1)",
-             "stiff:mode1": "NNM 1 (in phase) \u00b7 variant stiff", "": "NNM 1 (in phase)"}
+             "stiff:mode1": "NNM 1 (in phase) \u00b7 variant stiff",
+             # a second branch of mode 1 saved to the same file (e.g. by nnm-solve from a .mat run)
+             "mode1_2": "NNM 1 (in phase) \u00b7 run 2", "NNM1_3": "NNM 1 (in phase) \u00b7 run 3",
+             "mode1_2 (paper mode 13)": "NNM 1 (in phase) \u00b7 run 2 (paper mode 13)",
+             "mode12": "NNM 1 (in phase) \u00b7 mode12", "": "NNM 1 (in phase)"}
     for name, want in cases.items():
         b1.name = name
         assert branch_label(b1) == want, name

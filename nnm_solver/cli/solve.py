@@ -68,6 +68,20 @@ def list_modes(model, reference=None, count=30, out=sys.stdout):
                 line += " " * 21
         label = labels[k] if k < len(labels) else ""
         print(line + ("  " + label if label else ""), file=out)
+    source = str(reference.get("source", "")) if table is not None else ""
+    print(list_modes_legend(table is not None, bool(labels), source), file=out)
+
+
+def list_modes_legend(reference, labels, source=""):
+    """The line under --list-modes' table saying what its columns are (reference, labels: whether the
+    table has the reference and label columns; source: where the reference frequencies come from)."""
+    words = ["mode: the number --mode takes (1-based)", "freq: linear natural frequency (Hz)"]
+    if reference:
+        words += [f"reference: the file's reference frequency of that mode (Hz; /extra/reference/table2_hz"
+                  f"{', from the ' + source if source else ''})", "diff: freq / reference - 1"]
+    if labels:
+        words.append("label: the mode's description stored in the file")
+    return "columns: " + "; ".join(words)
 
 
 def _progress(job, stream, interval=0.2):
@@ -218,6 +232,16 @@ def _method_arguments(args):
     return dict(method="hb", harmonics=args.harmonics, condensed=args.condensed)
 
 
+def _check_arguments(model, args):
+    """NNMInputError for a mode out of range, a non-positive --energy-max, --tol, --max-points or
+    --energy-min (the checks continue_nnm makes, done before anything is printed or written)."""
+    from ..driver.api import check_branch_arguments
+    from ..model import MAX_DENSE_DOF
+
+    check_branch_arguments(model, args.mode, args.energy_max, 1e-6 if args.tol is None else args.tol,
+                           args.max_points, args.energy_min, modes_known=model.n <= MAX_DENSE_DOF)
+
+
 def _run_forced(args):
     """nnm-solve FILE --forced --force-dof D --force F --f-range A B [--damping Z] [--harmonics H]."""
     from ..driver.forced import forced_response
@@ -258,6 +282,7 @@ def _run(args):
         return 0
     if args.mode is None or args.energy_max is None:
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
+    _check_arguments(model, args)            # bad input: its one line, before any notice about the output file
     out = _output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
     check_branch_file(out, model)              # a file of another model: refused before anything is computed
     if args.plot and not Path(args.plot).resolve().parent.is_dir():

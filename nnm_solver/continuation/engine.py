@@ -43,6 +43,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import warnings
+
 import numpy as np
 import scipy.linalg as sla
 from scipy.linalg import lapack
@@ -101,7 +103,14 @@ class LeastSquares:
         self.n = A.shape[1]
         self._lu = None
         if A.shape[0] == self.n and self.n >= self.EXPLICIT_Q:
-            self._lu = sla.lu_factor(A, overwrite_a=True, check_finite=False)
+            # An exactly singular A (e.g. a tongue jump's level-set guess on the aircraft) makes scipy warn
+            # "LinAlgWarning: Diagonal number k is exactly zero. Singular matrix." and nothing else: the zero
+            # pivot shows in rcond (0) and gives a non-finite Newton step, which the corrector reports as its
+            # own failure (CorrectorFailure), and the caller tries another guess or a shorter step.  The
+            # warning is harmless and told the user nothing, so it is not shown.
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sla.LinAlgWarning)
+                self._lu = sla.lu_factor(A, overwrite_a=True, check_finite=False)
             d = np.abs(np.diag(self._lu[0]))
             self.rcond = d.min() / max(d.max(), 1e-300)
             return

@@ -426,5 +426,6 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     out = it.branch()
     if out.status == "cancelled":
         out.status = "done"
-    out.name = f"{branch.name or f'NNM {branch.mode}'}: {tongue['label']} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
+    ratio = tongue["label"].split()[-1]          # 'tongue 3:1' -> '3:1'
+    out.name = f"{branch.name or f'NNM {branch.mode}'}: {ratio} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
     return out

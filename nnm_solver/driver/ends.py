@@ -17,7 +17,7 @@ These functions only build the statuses, messages and records; the iterator (ite
 """
 from __future__ import annotations
 
-__all__ = ["PEAK_NEAR", "off_family_note", "escape_below_peak", "inside_tongue", "family_end"]
+__all__ = ["PEAK_NEAR", "resonance", "off_family_note", "escape_below_peak", "inside_tongue", "family_end"]
 
 #: a tongue entered, or a continuation stopped, above this fraction of the skeleton's energy maximum (or end)
 #: is "at" the end of the family
@@ -36,23 +36,35 @@ def off_family_note(points):
             f"(f = {p.frequency_hz:.5g} Hz) on are off the backbone family (tongues='skip' follows the backbone)")
 
 
+def resonance(label):
+    """'tongue 3:1' (a tongue record's label) -> 'the 3:1 internal-resonance tongue'."""
+    ratio = label.split()[-1] if label.startswith("tongue") else label
+    return f"the {ratio} internal-resonance tongue"
+
+
 def escape_below_peak(sk, tongue, partner, bpoint):
     """Skip mode, a tongue that could not be jumped: the 'escape' message when it was entered just below
     the family's energy maximum (the skeleton's energy_peak), else None."""
     if sk is None or sk.energy_peak is None or not tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:
         return None
-    return (f"the backbone entered the {tongue['label']} internal resonance with mode {partner} at "
+    return (f"the backbone entered {resonance(tongue['label'])} with mode {partner} at "
             f"E = {bpoint.energy:.4g} J, f = {bpoint.frequency_hz:.5g} Hz, just below the family's energy maximum "
             f"{sk.energy_peak:.4g} J (its skeleton: a softening family approaching a saddle): no backbone exists "
             f"above it, the structure escapes; the points on the backbone below are kept")
 
 
-def inside_tongue(sk, t, reached_energy_max, index):
+def inside_tongue(sk, t, reached_energy_max, index, max_points=None):
     """Skip mode: the 'tongue' message for a continuation inside tongue t (record ``index`` of
-    branch.tongues) that cannot come back onto the backbone."""
-    where = (f"the backbone entered the {t['label']} internal resonance with mode {t.get('partner_mode', 0)} "
+    branch.tongues) that cannot come back onto the backbone.  ``t['hidden_points']``: the orbits the
+    continuation computed inside the tongue since it entered it (not kept on the backbone branch); it
+    stopped because it reached energy_max among them, or because they reached ``max_points``."""
+    where = (f"the backbone entered {resonance(t['label'])} with mode {t.get('partner_mode', 0)} "
              f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
-    why = "energy_max inside it" if reached_energy_max else f"{t['hidden_points']} points inside it"
+    n = t["hidden_points"]
+    orbits = f"{n} orbit{'s' if n != 1 else ''} computed inside it, not kept"
+    why = (f"energy_max reached inside it; {orbits}" if reached_energy_max else
+           f"max_points = {max_points} orbits computed inside it without coming back onto the backbone, not kept"
+           if max_points is not None else orbits)
     family = ""
     if sk is not None and sk.end != "reach" and len(sk.energy) and (
             PEAK_NEAR * sk.energy[-1] <= t["entry_energy"] <= sk.energy[-1] / PEAK_NEAR):

@@ -160,7 +160,7 @@ class NNMIterator(StepRefinement):
                 self._prev = None              # no event is located across the tongue
                 return False
             t["hidden_points"] += 1
-            if point.energy >= self.energy_max or t["hidden_points"] > self.max_points:
+            if point.energy >= self.energy_max or t["hidden_points"] >= self.max_points:
                 self._inside_tongue(t, point)
                 raise StopIteration
             return True
@@ -220,7 +220,8 @@ class NNMIterator(StepRefinement):
         """Skip mode: the continuation is inside tongue t and cannot come back onto the backbone (it reached
         energy_max or max_points inside it): status 'tongue' (ends.py)."""
         self._finish("tongue", inside_tongue(self._skeleton() if self._skeleton is not None else None, t,
-                                             point.energy >= self.energy_max, len(self.tongues) - 1))
+                                             point.energy >= self.energy_max, len(self.tongues) - 1,
+                                             self.max_points))
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
