@@ -61,7 +61,9 @@ def run_blocks(page, namespace=None, only=None):
     for block in (blocks if only is None else [blocks[k] for k in only]):
         lines = block.splitlines()
         for stmt in ast.parse(block).body:
-            src = "\n".join(lines[stmt.lineno - 1:stmt.end_lineno])
+            # the statement itself, not its whole line: `a(); b()` on one line is two statements, and
+            # running the line once per statement ran a(); b() twice (a queue.get() then waited forever)
+            src = ast.get_source_segment(block, stmt)
             buf = io.StringIO()
             t0 = time.perf_counter()
             with contextlib.redirect_stdout(buf):

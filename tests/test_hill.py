@@ -106,7 +106,7 @@ def test_secular_route_is_fast_on_a_beam(beam_tongue):
 def test_secular_flags_and_events_equal_dense(monkeypatch, case):
     """The 2-DOF benchmark's pitchfork (NNM 1, H = 7: a real pair through +1 at 40.98 J) and the 3-DOF chain's
     combination resonance (H = 15: two Krein collisions, 1.71 and 2.37 J): the same points, flags, events (to 1e-8
-    in energy) and multipliers (1e-8) by the secular route as by the dense one."""
+    in energy) and multipliers (1e-8; 1e-7 through the collisions) by the secular route as by the dense one."""
     if case == "pitchfork":
         m, E, H, kinds = two_dof_model(), 57.0, 7, ["branch_point"]
     else:
@@ -116,7 +116,9 @@ def test_secular_flags_and_events_equal_dense(monkeypatch, case):
     assert [e["kind"] for e in ref.events] == [e["kind"] for e in sec.events] == kinds
     assert np.allclose([e["energy"] for e in sec.events], [e["energy"] for e in ref.events], rtol=1e-8, atol=0)
     assert len(sec.energy) == len(ref.energy) and np.array_equal(sec.stable, ref.stable)
-    assert max(_matched(a, b) for a, b in zip(sec.floquet, ref.floquet)) < 1e-8
+    # next to a Krein collision the multipliers are a double eigenvalue: the dense route's own error there is about
+    # sqrt(eps) (measured: 1.7e-8 at the default period cap), elsewhere the routes agree to ~1e-10
+    assert max(_matched(a, b) for a, b in zip(sec.floquet, ref.floquet)) < (1e-8 if case == "pitchfork" else 1e-7)
     if case == "pitchfork":
         assert sec.events[0]["energy"] == pytest.approx(40.975, rel=3e-4)
 

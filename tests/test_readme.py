@@ -10,8 +10,7 @@ import pytest
 from doc_blocks import ROOT, python_blocks, run_blocks
 
 
-@pytest.mark.skip(reason="unfinished (issue 32): under pytest this run did not finish within 240 s, while the "
-                         "same statements run in ~40 s in a plain interpreter; the cause was not found in time")
+@pytest.mark.slow
 def test_readme_solver_block_runs_and_its_comments_are_true(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)                         # it writes fep.png and two_dof.h5
     blocks = python_blocks("README.md")
@@ -44,10 +43,8 @@ def test_readme_solver_block_runs_and_its_comments_are_true(tmp_path, monkeypatc
     refined = ns["refined"]
     assert np.nanmedian(refined.freq_error) < np.nanmedian(branch.freq_error)
     assert max(refined.steps) > 200
-    seconds = dict(times)
-    key = next(k for k in seconds if k.startswith("refined ="))
-    base = next(k for k in seconds if k.startswith("branch = nnm.continue_nnm"))
-    assert seconds[key] > seconds[base]                  # "its cost grows as freq_tol tightens"
+    # "its cost grows as freq_tol tightens": measured in work, not seconds (the first run also compiles the kernels)
+    assert np.sum(refined.steps) > 1.5 * np.sum(branch.steps) * len(refined) / len(branch)
     assert ns["hb_branch"].coefficients is not None and ns["hb_branch"].status == "done"
 
 
