@@ -124,7 +124,7 @@ def readout_markdown(s, e):
     f_lin = e.linear_frequency(s.shared.linear_freqs)
     rel = f" ({100 * (f / f_lin - 1):+.3g} % from its linear {f_lin:.5g} Hz)" if f_lin else ""
     idx = s.shared.index_of(e.uid)
-    return (f"**Picked:** branch {(idx or 0) + 1}, {e.label}, point {along:.2f} of {n - 1}  \n"
+    return (f"**Picked:** branch {(idx or 0) + 1}, {e.label}, point {along + 1:.2f} of {n}  \n"
             f"E = {energy:.4g} J, f = {f:.6g} Hz{rel}  \n" + " · ".join(point_facts(e, along)))
 
 
@@ -303,7 +303,7 @@ class FepView:
         option = dict(branch_options(s.shared.snapshot())).get(idx)
         if option is not None and option in ui.h_branch.options:
             ui.set(ui.h_branch, value=option)
-        ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, point {along:.2f} of {n - 1}  \n"
+        ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, point {along + 1:.2f} of {n}  \n"
                                  f"E = {10 ** cur_le:.4g} J, f = {f:.5g} Hz, {st}")
         ui.set(ui.h_recompute, disabled=abs(s.factor / e.k3_factor - 1.0) < 1e-9)
         ui.set(ui.h_save, disabled=e.saved or e.source == "running")

@@ -33,8 +33,9 @@ VIEW_PRESETS = ("Iso", "Top", "Side", "Front")
 
 
 #: shown while the solver's kernels are being compiled (nnm_viewer/warmup.py)
-SOLVER_PREPARING = ("**Preparing the solver** (compiling its kernels: about 30 s after installing, then "
-                    "cached) … The FEP can be browsed meanwhile; the orbits are animated as soon as it is ready.")
+SOLVER_PREPARING = ("**Preparing the solver** (compiling its kernels once after installing, then cached: the "
+                    "stored orbits animate after ~15-25 s, the continuation ~10 s later) … The FEP can be browsed "
+                    "meanwhile.")
 
 
 #: JavaScript run once per page: arrow keys pressed on a focused slider (or another widget that uses

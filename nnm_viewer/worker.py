@@ -80,6 +80,7 @@ class JobProgress:
     def text(self):
         """One line: progress and the measure it is by, elapsed time, rate and time left."""
         parts = [f"{self.points} of at most {self.max_points} points",
+                 f"{100 * self.fraction:.0f} % (by energy)" if self.by == "energy" else
                  f"{100 * self.fraction:.0f} % (by {self.by}; by energy {100 * self.energy_fraction:.0f} %)",
                  f"elapsed {duration_text(self.elapsed)}"]
         if self.rate_per_min is not None:

@@ -120,7 +120,7 @@ def test_viewer_in_chromium(tmp_path):
                 _phase(t_start, "model drawn")
                 # 2) the energy slider moves the selection
                 before = selected_text(page)
-                assert "point 0.00" in before, before
+                assert "point 1.00" in before, before
                 slider = page.get_by_role("slider").first
                 slider.focus()
                 page.keyboard.press("End")
@@ -129,7 +129,7 @@ def test_viewer_in_chromium(tmp_path):
                                        arg=before, timeout=20000)
                 after = selected_text(page)
                 top = int(np.argmax(branches[0].energy))     # the slider's end: the highest energy
-                assert f"point {top:.2f}" in after, after
+                assert f"point {top + 1:.2f}" in after, after        # 1-based for users
 
                 _phase(t_start, "energy slider moved the selection")
                 # 3) pick a point of the in-scene FEP with the mouse
@@ -145,7 +145,7 @@ def test_viewer_in_chromium(tmp_path):
                     try:
                         page.wait_for_function(
                             "(want) => [...document.querySelectorAll('p')].some(e => e.innerText.includes(want))",
-                            arg=f"branch {bi + 1}, point {target:.2f}", timeout=8000)
+                            arg=f"branch {bi + 1}, point {target + 1:.2f}", timeout=8000)
                         picked = True
                         break
                     except sync_api.TimeoutError:
@@ -246,14 +246,14 @@ def test_five_clients_at_once(tmp_path):
                 page.wait_for_function("document.body.innerText.includes('Selected:')", timeout=120000)
             _phase(t_start, "5 tabs populated")
             texts = [selected_text(p) for p in pages]
-            assert all("branch 1, point 0.00" in t for t in texts), texts
+            assert all("branch 1, point 1.00" in t for t in texts), texts
             # tab 0 moves its selection: the other tabs keep theirs
             pages[0].get_by_role("slider").first.focus()
             pages[0].keyboard.press("End")
             wait_selection_change(pages[0], texts[0], timeout_ms=30000)
-            assert "point 0.00" not in selected_text(pages[0])
+            assert "point 1.00" not in selected_text(pages[0])
             time.sleep(1.0)
-            assert all("branch 1, point 0.00" in selected_text(p) for p in pages[1:])
+            assert all("branch 1, point 1.00" in selected_text(p) for p in pages[1:])
             _phase(t_start, "tab 0 moved its selection alone")
             # tab 1 computes a branch: it selects it; every tab sees the job in its Compute tab
             pages[1].get_by_role("tab", name="Compute").click()

@@ -91,7 +91,7 @@ def test_initial_state_selection_and_animation(server, demo_file):
     assert len(shared.entries) == 2
     assert s.sel_uid == shared.entries[0].uid and s.s == 0.0
     assert s.h_branch.value.startswith("1: NNM 1")
-    assert "branch 1, point 0.00" in s.h_sel.content
+    assert "branch 1, point 1.00" in s.h_sel.content
     js = read_glb_json(s.last_glb)
     assert "animations" in js and js["meshes"][0]["primitives"][0]["targets"]
     assert "peak displacement" in s.h_peak.content
@@ -105,7 +105,7 @@ def test_pick_energy_and_along_sliders(server, demo_file):
     b2 = shared.entries[1]
     s.pick(b2.uid, 5)                                      # click on point 5 of branch 2 in the scene
     assert s.sel_uid == b2.uid and s.s == 5.0
-    assert s.h_branch.value.startswith("2: NNM 2") and "branch 2, point 5.00" in s.h_sel.content
+    assert s.h_branch.value.startswith("2: NNM 2") and "branch 2, point 6.00" in s.h_sel.content
     E = b2.branch.energy
     assert s.h_energy.value == pytest.approx(np.log10(E[5]), abs=0.006)
     # energy slider: selection moves along the branch, the along slider follows
@@ -390,7 +390,7 @@ def test_page_is_drawn_while_the_solver_is_prepared(server, demo_file, monkeypat
     assert "preparing the solver" in s.h_job.content and "preparing the solver" in s.h_info.content
     b2 = shared.entries[1]
     s.pick(b2.uid, 5)                                     # picking works meanwhile
-    assert s.sel_uid == b2.uid and "branch 2, point 5.00" in s.h_sel.content and not calls
+    assert s.sel_uid == b2.uid and "branch 2, point 6.00" in s.h_sel.content and not calls
     shared.set_solver_ready()
     assert not s.h_solver.visible and calls
     assert s.current_point.energy == pytest.approx(b2.branch.energy[5])
@@ -625,6 +625,8 @@ def test_job_progress_is_the_further_of_points_and_energy():
     text = q.text()
     assert "60 of at most 80 points" in text and "75 % (by points" in text and "30 points/min" in text
     assert "about 40 s left" in text
+    # by energy: said once (it read "17 % (by energy; by energy 17 %)")
+    assert "96 % (by energy)" in p.text() and p.text().count("by energy") == 1
     assert [duration_text(x) for x in (42, 185, 3720)] == ["42 s", "3 min 05 s", "1 h 02 min"]
 
 
@@ -838,7 +840,7 @@ def test_fep_zooms_on_a_narrow_branch_by_default_and_relative_axis(server):
                                                       ranges)[0])
     # the readout of the picked point
     text = s.h_readout.content
-    assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 3.00 of" in text
+    assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 4.00 of" in text
     assert f"f = {f1[3]:.6g} Hz" in text and "% from its linear" in text and "stable" in text and "backbone" in text
     s.close()
 
@@ -1107,7 +1109,7 @@ def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, 
     assert f"**linear mode 2 ({label}), f = {f2:.6g} Hz**" in s.h_info.content
     assert "Branch 2" not in s.h_info.content and "linear mode 2" in s.h_peak.content
     assert "animations" in read_glb_json(s.last_glb) and s.last_glb != glb_point
-    assert s.sel_uid == e2.uid and s.s == 5.0 and "branch 2, point 5.00" in s.h_sel.content
+    assert s.sel_uid == e2.uid and s.s == 5.0 and "branch 2, point 6.00" in s.h_sel.content
     s.request("branches")                                  # e.g. a job's points arriving: the mode stays
     assert s.current_point.frequency == pytest.approx(f2, rel=1e-12)
     name, data = s.orbit_csv()
