@@ -1,0 +1,174 @@
+r"""Hill's multipliers by the secular route (hill.py explains the routes): the Floquet exponents as the zeros of the
+small determinant det(I + C~ W(nu)) of the springs' coordinates, by batched Newton warm-started at the previous
+orbit's, each checked; the classes it cannot vouch for go to the structured route (hill_structured.py)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .hill_structured import _classes, _exp_transform, _HillOperator, _iterate, _setup
+
+#: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
+#: accepted eigenpair, and the checks that send a point to the structured route: an exponent this close (units of
+#: omega) to a point i k, |k| <= 2H + 1, where the trivial pair's copies lie (internal resonances: a class's
+#: eigenvectors mix with those copies, the dense route may keep such a hybrid; branch points), two pairs of
+#: multipliers this close (a duplicate, or a collision)
+SECULAR_ITER = 30
+SECULAR_TOL = 1e-13
+SECULAR_RESIDUAL = 1e-9
+SECULAR_LATTICE_GAP = 0.05
+SECULAR_DISTINCT = 1e-6
+#: at most this many classes go to the structured route from the secular one (more: the whole structured route)
+SECULAR_MAX_HARD = 4
+
+
+def _secular(problem, A, w, bp, C):
+    """Multipliers (2n,) by the secular route, or None when it cannot vouch for them (then: structured, dense).
+
+    Eliminating the modal blocks exactly (module docstring), lambda = nu omega is a Hill eigenvalue where the
+    r x r matrix  M(nu) = I + C~ W(nu),  W(nu) = blockdiag_k Bq diag(1 / ((nu + i k)^2 + omega_j^2)) Bq^T  (units of
+    omega) is singular (r = N_b n_s: 11 for one spring at H = 5, whatever n).  One exponent per class (the touched
+    modes but the continued one's) by Newton on the characteristic polynomial p(nu) = det M(nu) prod q0(nu):
+    p'/p = tr(M^-1 C~ W') + sum 2 (nu + i k) / q0, batched over the classes, warm-started at the previous call's
+    exponents; each converged exponent is moved to its central copy (the dense route's choice: the eigenvector's
+    mean harmonic below 1/2) and refined there.  Each class gives its pair nu, -nu (the matrix is Hamiltonian).
+    Checked before use: the Hill residual of the eigenvector rebuilt from the null vector of M, the mean harmonic,
+    no eigenvector on the orbit's velocity (or its copies), distinct pairs (a duplicate, or a collision in
+    progress), no exponent near the trivial pair's copies i k (internal resonances, branch points).
+    Anything else: None, and the structured route (then the dense one) decides."""
+    n, H = problem.n, bp.harmonics
+    nb = 2 * H + 1
+    Tinv, omega2, touched, Ah, vel = _setup(problem, A, w, bp)
+    Cexp = np.einsum("ab,sbc,cd->sad", Tinv, C, _exp_transform(H)) / w ** 2
+    Bq = problem.sys.Bq
+    tm, beta2, Vbar, classes, nu_kept = _classes(omega2, Bq, Cexp, touched, Ah, H)
+    S = len(classes)
+    if S:
+        ns = Bq.shape[0]
+        r = nb * ns
+        kk = np.arange(-H, H + 1, dtype=float)
+        B = Bq[:, tm]                                                        # (n_s, n_t)
+        w2 = omega2[tm]
+        Ct = np.zeros((r, r), dtype=complex)                                 # C~: rows (k, s), columns (l, s)
+        for j in range(ns):
+            Ct[j::ns, j::ns] = Cexp[j]
+        key = (n, nb, S)
+        warm = getattr(problem, "_hill_secular", None)
+        if warm is not None and warm[0] == key:
+            nu = warm[1] / w
+        else:
+            nu = 1j * np.sqrt(np.maximum(beta2[classes], 0.0))
+        nu = np.asarray(nu, dtype=complex) + 0j
+        eye = np.eye(r)
+
+        def parts(nu):
+            sk = nu[:, None] + 1j * kk[None, :]                              # (S, N_b)
+            q0 = sk[:, :, None] ** 2 + w2[None, None, :]                     # (S, N_b, n_t)
+            inv = 1.0 / q0
+            W = np.einsum("sj,Slj,tj->Slst", B, inv, B)                      # (S, N_b, n_s, n_s)
+            dW = np.einsum("sj,Slj,tj->Slst", B, -2.0 * sk[:, :, None] * inv ** 2, B)
+            Wb = np.zeros((len(nu), r, r), dtype=complex)
+            dWb = np.zeros_like(Wb)
+            for l in range(nb):
+                Wb[:, l * ns:(l + 1) * ns, l * ns:(l + 1) * ns] = W[:, l]
+                dWb[:, l * ns:(l + 1) * ns, l * ns:(l + 1) * ns] = dW[:, l]
+            return sk, inv, Wb, dWb
+
+        bad = np.zeros(S, dtype=bool)             # classes the secular route cannot vouch for: the structured route's
+        with np.errstate(all="ignore"):
+            recentred = np.zeros(S, dtype=int)
+            for _ in range(4):                      # Newton, then move to the central copies and refine
+                conv = bad.copy()
+                for it in range(SECULAR_ITER):
+                    act = np.flatnonzero(~conv)
+                    if not len(act):
+                        break
+                    sk, inv, Wb, dWb = parts(nu[act])
+                    Mm = eye[None] + Ct[None] @ Wb
+                    G = np.linalg.solve(Mm, Ct[None] @ dWb)
+                    L = np.trace(G, axis1=1, axis2=2) + (2.0 * sk[:, :, None] * inv).sum(axis=(1, 2))
+                    step = -1.0 / L
+                    broken = ~np.isfinite(step)
+                    bad[act[broken]] = conv[act[broken]] = True
+                    step[broken] = 0.0
+                    nu[act] += step
+                    conv[act] |= np.abs(step) <= SECULAR_TOL * np.maximum(1.0, np.abs(nu[act]))
+                bad |= ~conv
+                # the eigenvectors: z = null vector of I + W C~, c_kj = -(1 / q0_kj) sum_s Bq_sj (C~ z)_ks
+                nu[bad] = np.where(np.isfinite(nu[bad]), nu[bad], 1j)
+                sk, inv, Wb, dWb = parts(nu)
+                Mz = eye[None] + Wb @ Ct[None]
+                z = np.linalg.solve(Mz, np.ones((S, r, 1)) / np.sqrt(r))[..., 0]         # inverse iteration
+                if not np.all(np.isfinite(z)):
+                    z = np.linalg.svd(Mz)[2][:, -1, :].conj()                            # (S, r)
+                z /= np.linalg.norm(z, axis=1, keepdims=True)
+                f = (z @ Ct.T).reshape(S, nb, ns)                                          # (C~ z)_(k, s)
+                c = np.zeros((S, nb, n), dtype=complex)
+                c[:, :, tm] = -inv * np.einsum("sj,Sks->Skj", B, f)
+                p = (np.abs(c) ** 2).sum(axis=2)
+                cent = (kk[None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
+                move = (np.abs(cent) > 0.5) & ~bad
+                if not np.any(move):
+                    break
+                bad |= move & (recentred >= 3)
+                move &= ~bad
+                recentred[move] += 1
+                nu[move] += 1j * np.round(cent[move])
+            op = _HillOperator(omega2, Bq, Cexp, H, w)
+            c = np.where(np.isfinite(c), c, 0.0)
+            X = op.lift(c[..., None], nu)                                                  # (S, 2m, 1)
+            R = op.apply(X) - X * nu[:, None, None]
+            res = np.linalg.norm(R[:, :, 0], axis=1) / (np.linalg.norm(X[:, :, 0], axis=1) * np.maximum(1.0, np.abs(nu)))
+            bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
+            bad |= _velocity_overlap(c, vel) > 0.5
+            lat = np.round(nu.imag)
+            bad |= (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
+            mu = np.exp(2 * np.pi * nu)
+            close = (np.abs(mu[:, None] - mu[None, :]) < SECULAR_DISTINCT) | \
+                (np.abs(mu[:, None] - 1.0 / mu[None, :]) < SECULAR_DISTINCT)
+            close = np.triu(close, 1) & ~bad[:, None] & ~bad[None, :]
+            bad |= close.any(axis=0) | close.any(axis=1)
+        good = ~bad
+        if np.any(bad):
+            # the classes near the trivial pair's copies (internal resonances), or unconverged: the structured route
+            # on those classes alone (its blocks at the lattice i k hold the hybrids the dense route may keep)
+            if bad.sum() > SECULAR_MAX_HARD:
+                return None
+            op = _HillOperator(omega2, Bq, Cexp, H, w)
+            found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel, warm=True)
+            if found is None:
+                found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
+                                 warm=False)
+            if found is None:
+                return None
+            mf = np.exp(2 * np.pi * np.asarray(found))
+            mg = mu[good]
+            if len(mg) and np.min(np.abs(mf[:, None] - mg[None, :])) < SECULAR_DISTINCT:
+                return None                       # the structured blocks found a secular class's exponent again
+            nu_kept += list(nu[good]) + list(-nu[good]) + list(found)
+            if getattr(problem, "_hill_secular", None) is not None and problem._hill_secular[0] == key:
+                nu[bad] = problem._hill_secular[1][bad] / w          # the hard classes: their last secular exponents
+            else:
+                nu[bad] = 1j * np.sqrt(np.maximum(beta2[classes], 0.0))[bad]
+        else:
+            nu_kept += list(nu) + list(-nu)
+        problem._hill_secular = (key, nu * w)
+    if len(nu_kept) != 2 * n - 2:
+        return None
+    mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+
+def _velocity_overlap(c, vel):
+    """Largest |cos| (S,) between each vector c (S, N_b, n) and the orbit's velocity vel (N_b, n) moved by p
+    harmonics, p = -2H..2H (the trivial pair's eigenvector and its copies)."""
+    nb = vel.shape[0]
+    G = np.einsum("lj,Skj->Skl", np.conj(vel), c)                            # <vel_l, c_k>
+    nrm_c = np.linalg.norm(c.reshape(len(c), -1), axis=1)
+    vk = (np.abs(vel) ** 2).sum(axis=1)
+    best = np.zeros(len(c))
+    for p in range(-(nb - 1), nb):                                           # c_k against vel_{k - p}
+        nv = np.sqrt(vk[max(0, -p):nb - max(0, p)].sum())
+        if nv > 0:
+            ip = np.abs(np.trace(G, offset=-p, axis1=1, axis2=2))
+            best = np.maximum(best, ip / np.maximum(nv * nrm_c, 1e-300))
+    return best

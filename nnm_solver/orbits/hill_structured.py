@@ -1,0 +1,358 @@
+r"""Hill's multipliers by the structured route (hill.py explains the routes): shift-invert subspace iteration on
+the Hill matrix, one small block per Floquet exponent, the springs' low-rank part by Woodbury; the shared pieces of
+the secular route (the operator, the classes of exponents, the central-copy ordering)."""
+from __future__ import annotations
+
+import numpy as np
+
+#: vectors per exponent in the structured route (a collision of two exponents needs 2, the trivial pair beside a
+#: real pair near +1 needs 4)
+BLOCK = 4
+
+#: relative residual ||L x - theta x|| / max(1, |theta|) (theta in units of omega) of an accepted eigenpair
+RESIDUAL_TOL = 1e-11
+
+#: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
+CENTROID_MAX = 0.6
+
+#: iterations of the structured route before it gives up (and the dense route is taken)
+MAX_SWEEPS = 40
+
+#: shifts are kept this far (in units of omega) from i k omega, where the trivial pair's copies make Q singular
+LATTICE_GAP = 0.02
+
+#: the shift of the block around the trivial pair (units of omega), and its largest number of sweeps
+ZERO_SHIFT = 0.03 + 0.03j
+ZERO_SWEEPS = 12
+
+#: eigenvectors of the shifted blocks within this |cos| of the orbit's velocity are the trivial pair's, not kept
+#: (the trivial block's two nearest the velocity are; the trivial pair is reported as exactly 1, 1)
+TRIVIAL_COS = 0.999
+
+
+def _exp_transform(H):
+    """T (N_b, N_b) complex: real-basis coefficients a = T c of the exp(i k theta) coefficients c, k = -H..H
+    (column k + H); the real basis is 1, cos 1, sin 1, ..., cos H, sin H."""
+    nb = 2 * H + 1
+    T = np.zeros((nb, nb), dtype=complex)
+    T[0, H] = 1.0
+    for h in range(1, H + 1):
+        T[2 * h - 1, H + h] = T[2 * h - 1, H - h] = 1.0       # a_cos = c_h + c_-h
+        T[2 * h, H + h], T[2 * h, H - h] = 1j, -1j           # a_sin = i (c_h - c_-h)
+    return T
+
+
+class _HillOperator:
+    """The Hill matrix of one orbit in exp(i k theta) and modal coordinates, time in units of 1 / omega
+    (exponents nu = lambda / omega, multipliers exp(2 pi nu)): products with L and shifted solves
+    (L - sigma)^-1, for many shifts and blocks at once.  Vectors are stored (S, 2m, b): S shifts, b vectors,
+    m = N_b n, the first half c[k, j] (k = -H..H, mode j), the second nu c."""
+
+    def __init__(self, omega2, Bq, Cexp, H, w=1.0):
+        self.w = w                                            # the orbit's omega (rad/s): the unit of time
+        self.H = H
+        self.nb = 2 * H + 1
+        self.n = len(omega2)
+        self.m = self.nb * self.n
+        self.k = np.arange(-H, H + 1, dtype=float)
+        self.omega2 = omega2                                  # (n,) in units of omega^2
+        self.Bq = Bq                                          # (n_s, n)
+        self.Cexp = Cexp                                      # (n_s, N_b, N_b) in units of omega^2
+        self.ns = Bq.shape[0]
+        self.Kdiag = (-(self.k ** 2))[:, None] + omega2[None, :]       # (N_b, n): D^2 + Omega^2
+
+    def _halves(self, X):
+        S, _, b = X.shape
+        return (X[:, :self.m].reshape(S, self.nb, self.n, b), X[:, self.m:].reshape(S, self.nb, self.n, b))
+
+    def _springs(self, x1):
+        """U C U^T x1 for x1 (S, N_b, n, b)."""
+        d = np.einsum("sj,Skjb->Sksb", self.Bq, x1)
+        f = np.einsum("skl,Slsb->Sksb", self.Cexp, d)
+        return np.einsum("sj,Sksb->Skjb", self.Bq, f)
+
+    def apply(self, X):
+        """L X."""
+        x1, x2 = self._halves(X)
+        S, b = X.shape[0], X.shape[2]
+        Kx = self.Kdiag[None, :, :, None] * x1 + self._springs(x1)
+        y2 = -Kx - 2j * self.k[None, :, None, None] * x2
+        return np.concatenate([x2.reshape(S, self.m, b), y2.reshape(S, self.m, b)], axis=1)
+
+    def factor(self, sigma):
+        """What the solves with shifts sigma (S,) need: 1 / Q0 (S, N_b, n) and the r x r Woodbury matrices."""
+        q0 = (sigma[:, None, None] + 1j * self.k[None, :, None]) ** 2 + self.omega2[None, None, :]
+        q0inv = 1.0 / q0
+        W = np.einsum("sj,Slj,tj->Slst", self.Bq, q0inv, self.Bq)                 # (S, N_b, n_s, n_s)
+        CW = np.einsum("skl,Slst->Skslt", self.Cexp, W)                         # (S, N_b, n_s, N_b, n_s)
+        r = self.nb * self.ns
+        Mw = CW.reshape(len(sigma), r, r) + np.eye(r)[None]
+        return sigma, q0inv, Mw
+
+    def solve(self, fac, Y):
+        """(L - sigma)^-1 Y for each shift (Y (S, 2m, b))."""
+        sigma, q0inv, Mw = fac
+        y1, y2 = self._halves(Y)
+        S, b = Y.shape[0], Y.shape[2]
+        rhs = -(y2 + (2j * self.k[None, :, None, None] + sigma[:, None, None, None]) * y1)
+        g = q0inv[..., None] * rhs
+        d = np.einsum("sj,Skjb->Sksb", self.Bq, g)
+        f = np.einsum("skl,Slsb->Sksb", self.Cexp, d).reshape(S, self.nb * self.ns, b)
+        z = np.linalg.solve(Mw, f).reshape(S, self.nb, self.ns, b)
+        x1 = g - q0inv[..., None] * np.einsum("sj,Sksb->Skjb", self.Bq, z)
+        x2 = y1 + sigma[:, None, None, None] * x1
+        return np.concatenate([x1.reshape(S, self.m, b), x2.reshape(S, self.m, b)], axis=1)
+
+    def centroids(self, X):
+        """Mean harmonic sum_k k |c_k|^2 / sum_k |c_k|^2 of each vector's first half (S, b)."""
+        x1 = self._halves(X)[0]
+        p = (np.abs(x1) ** 2).sum(axis=2)                                       # (S, N_b, b)
+        return (self.k[None, :, None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
+
+    def lift(self, c, nu):
+        """Vectors [c; nu c] (S, 2m, b) from first halves c (S, N_b, n, b) and exponents nu (S,)."""
+        S, b = c.shape[0], c.shape[3]
+        return np.concatenate([c.reshape(S, self.m, b), (nu[:, None, None, None] * c).reshape(S, self.m, b)], axis=1)
+
+
+def _keep_off_lattice(sigma):
+    """Shifts moved to at least LATTICE_GAP from the points i k (the trivial pair's copies, where Q is singular)."""
+    k = np.round(sigma.imag)
+    near = np.abs(sigma - 1j * k) < LATTICE_GAP
+    if np.any(near):
+        side = np.where(sigma.real[near] < 0, -1.0, 1.0)
+        sigma = sigma.copy()
+        sigma[near] = 1j * k[near] + side * LATTICE_GAP
+    return sigma
+
+
+def _rayleigh_ritz(op, V):
+    """Orthonormalise each block and return (V, theta (S, b), X (S, 2m, b) Ritz vectors, residuals (S, b))."""
+    V = np.linalg.qr(V)[0]
+    LV = op.apply(V)
+    Hm = np.conj(np.swapaxes(V, 1, 2)) @ LV
+    theta, Y = np.linalg.eig(Hm)
+    X = V @ Y
+    R = LV @ Y - X * theta[:, None, :]
+    res = np.linalg.norm(R, axis=1) / np.maximum(np.linalg.norm(X, axis=1), 1e-300)
+    return V, theta, X, res
+
+
+def _setup(problem, A, w, bp):
+    """What the structured and secular routes share: (T^-1, omega2 / w^2, touched modes tm, the averaged stiffness's
+    (beta2, Vbar), the classes to find (every touched class but the continued one), the untouched modes' exact
+    exponents, the orbit's velocity in exp(i k theta) (N_b, n))."""
+    s, n = problem.sys, problem.n
+    H = bp.harmonics
+    nb = 2 * H + 1
+    Tinv = np.linalg.inv(_exp_transform(H))
+    omega2 = s.omega2 / w ** 2
+    Bq = s.Bq
+    touched = np.linalg.norm(Bq, axis=0) > 0
+    # the orbit's velocity in exp(i k theta): the trivial pair's eigenvector (dq/dtheta = sum i k c_k e^{ik theta})
+    Ah = np.zeros((nb, n))
+    orbit = problem.basis
+    for j in np.flatnonzero(orbit.h <= H):
+        hj = orbit.h[j]
+        row = 0 if hj == 0 else (2 * hj if orbit.sine[j] else 2 * hj - 1)
+        Ah[row] += A[j]
+    vel = (1j * np.arange(-H, H + 1))[:, None] * (Tinv @ Ah)                  # (N_b, n)
+    return Tinv, omega2, touched, Ah, vel
+
+
+def _classes(omega2, Bq, Cexp, touched, Ah, H):
+    """(tm, beta2, Vbar, classes, nu_exact): the touched modes, the averaged stiffness Omega^2 + Bq^T <g'> Bq on
+    them (eigenvalues, vectors), the classes to find (all but the continued one's: the trivial pair), and the
+    untouched modes' exponents +- i omega_j (exact)."""
+    Gbar = Cexp[:, H, H].real                                                 # <g'> (n_s,) / omega^2
+    tm = np.flatnonzero(touched)
+    Kbar = np.diag(omega2[tm]) + (Bq[:, tm].T * Gbar) @ Bq[:, tm]
+    beta2, Vbar = np.linalg.eigh(Kbar)
+    shape = np.abs(Ah[1, tm]) + np.abs(Ah[2, tm])                             # the fundamental's shape
+    own = int(np.argmax(np.abs(Vbar.T @ shape))) if len(tm) else -1
+    classes = [j for j in range(len(tm)) if j != own]
+    nu_exact = []
+    for j in np.flatnonzero(~touched):                                        # +- i omega_j, exact
+        nu_exact += [1j * np.sqrt(omega2[j]), -1j * np.sqrt(omega2[j])]
+    return tm, beta2, Vbar, classes, nu_exact
+
+
+def _structured(problem, A, w, bp, C):
+    """Multipliers (2n,) by the structured route, or None when it cannot vouch for them (then: dense)."""
+    n, H = problem.n, bp.harmonics
+    Tinv, omega2, touched, Ah, vel = _setup(problem, A, w, bp)
+    Cexp = np.einsum("ab,sbc,cd->sad", Tinv, C, _exp_transform(H)) / w ** 2
+    Bq = problem.sys.Bq
+    tm, beta2, Vbar, classes, nu_kept = _classes(omega2, Bq, Cexp, touched, Ah, H)
+    if classes:
+        op = _HillOperator(omega2, Bq, Cexp, H, w)
+        found = _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True)
+        if found is None and getattr(problem, "_hill_warm", None) is not None:
+            found = _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=False)      # a cold start
+        if found is None:
+            return None
+        nu_kept += list(found)
+    if len(nu_kept) != 2 * n - 2:
+        return None
+    mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+
+def _trivial_overlap(op, X, vel):
+    """(largest |cos| (S, b) between each vector's first half and the orbit's velocity moved by p harmonics,
+    p = -2H..2H: the trivial pair's eigenvector and its copies; the same for p = 0 alone: the trivial pair)."""
+    S, _, b = X.shape
+    nb = op.nb
+    x1 = X[:, :op.m].reshape(S, nb, op.n, b)
+    G = np.einsum("lj,Skjb->Sbkl", np.conj(vel), x1)                         # <vel_l, x1_k>
+    nrm_x = np.linalg.norm(x1.reshape(S, -1, b), axis=1)                     # (S, b)
+    vk = (np.abs(vel) ** 2).sum(axis=1)                                      # (N_b,)
+    best = np.zeros((S, b))
+    own = np.zeros((S, b))
+    for p in range(-(nb - 1), nb):                                           # x1_k against vel_{k - p}
+        ks = np.arange(max(0, p), min(nb, nb + p))
+        if not len(ks):
+            continue
+        ip = np.abs(G[:, :, ks, ks - p].sum(axis=2))
+        nv = np.sqrt(vk[ks - p].sum())
+        if nv > 0:
+            best = np.maximum(best, ip / np.maximum(nv * nrm_x, 1e-300))
+            if p == 0:
+                own = ip / np.maximum(nv * nrm_x, 1e-300)
+    return best, own
+
+
+def _trivial_pair(cos):
+    """The trivial pair among the trivial block's Ritz vectors: the two nearest the velocity (|cos| (b,) with it),
+    if they are near it at all."""
+    out = np.zeros(len(cos), dtype=bool)
+    two = np.argsort(-cos, kind="stable")[:2]
+    out[two] = cos[two] > 0.5
+    return out
+
+
+def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
+    """The 2 len(classes) kept exponents nu (units of omega) of the touched modes, or None.
+
+    One block per class (its shift at the class's exponent), and one around each i k, k = 0..H, where the
+    trivial pair and its copies lie: at internal resonances other eigenvalues with eigenvectors centred on the
+    fundamental gather there (the hybrids of those copies and another mode's), which the dense route keeps when
+    they are more central than a class's exponent; so they join the pool too."""
+    nc = len(classes)
+    b, nb, n, H = BLOCK, op.nb, op.n, op.H
+    S = nc + H + 1
+    lattice = 1j * np.arange(H + 1) + ZERO_SHIFT                             # the last H + 1 blocks' shifts
+    is_lat = np.arange(S) >= nc
+    warm = getattr(problem, "_hill_warm", None) if warm else None
+    if warm is not None and warm[0] == (nb, n, S):
+        sigma = warm[1] / op.w                 # the exponents in rad/s, in units of this orbit's omega
+        V = op.lift(warm[2][:, :op.m].reshape(S, nb, n, b), sigma)
+    else:
+        sigma = np.concatenate([1j * np.sqrt(np.maximum(beta2[classes], 0.0)) + 1e-9, lattice])
+        c = np.zeros((S, nb, n, b), dtype=complex)
+        rng = np.random.default_rng(12345)
+        bell = np.exp(-0.5 * np.arange(-H, H + 1) ** 2)[:, None]
+        for i, j in enumerate(classes):
+            v = np.zeros(n)
+            v[tm] = Vbar[:, j]
+            c[i, H, :, 0] = v
+            if H >= 1:
+                c[i, H + 1, :, 1] = v
+                c[i, H - 1, :, 2] = v
+            c[i, :, :, 3] = rng.standard_normal((nb, n)) * bell
+        for k in range(H + 1):                 # the trivial pair's copy at i k: the velocity moved by k harmonics
+            i = nc + k
+            c[i, :nb - k, :, 0] = vel[k:]
+            c[i, :, :, 1] = np.roll(np.abs(c[i, :, :, 0]), 1, axis=0)
+            for col in range(2, b):
+                c[i, :, :, col] = rng.standard_normal((nb, n)) * np.roll(bell, -k, axis=0)
+        V = op.lift(c, sigma)
+    sigma[is_lat] = lattice
+    sigma = _keep_off_lattice(sigma)
+    done = np.zeros(S, dtype=bool)
+    frozen = np.zeros(S, dtype=bool)
+    recentred = np.zeros(S, dtype=int)
+    theta = np.zeros((S, b), dtype=complex)
+    X = np.zeros_like(V)
+    res = np.full((S, b), np.inf)
+    cent = np.zeros((S, b))
+    triv = np.zeros((S, b))
+    triv0 = np.zeros((S, b))
+    with np.errstate(all="ignore"):
+        for sweep in range(MAX_SWEEPS):
+            act = np.flatnonzero(~done)
+            if not len(act):
+                break
+            fac = op.factor(sigma[act])
+            Va = op.solve(fac, V[act])
+            if not np.all(np.isfinite(Va)):
+                return None
+            Va, th, Xa, ra = _rayleigh_ritz(op, Va)
+            ca, (tr, tr0) = op.centroids(Xa), _trivial_overlap(op, Xa, vel)
+            V[act], theta[act], X[act], res[act], cent[act], triv[act], triv0[act] = Va, th, Xa, ra, ca, tr, tr0
+            rel_all = ra / np.maximum(1.0, np.abs(th))
+            for ii, i in enumerate(act):
+                if is_lat[i]:                  # fixed shift; done when its central eigenpairs converged
+                    want = np.abs(ca[ii]) <= CENTROID_MAX
+                    if i == nc:
+                        want &= ~_trivial_pair(tr0[ii])
+                    if np.all(rel_all[ii][want] < RESIDUAL_TOL) or sweep >= ZERO_SWEEPS:
+                        done[i] = True
+                    continue
+                cand = np.flatnonzero(tr[ii] <= 0.5)
+                if not len(cand):              # only the trivial pair's copies or hybrids of them: the lattice
+                    if np.all(rel_all[ii] < RESIDUAL_TOL) or sweep >= ZERO_SWEEPS:   # blocks hold those
+                        done[i] = True
+                    continue
+                t = cand[int(np.argmin(np.abs(th[ii, cand] - sigma[i])))]   # the block's eigenvalue nearest its shift
+                rel = rel_all[ii, t]
+                ct = ca[ii, t]
+                if rel < 1e-6 and abs(ct) > 0.5 and recentred[i] < 4:
+                    # centred on another harmonic: a copy; move the shift and the block by round(ct) harmonics
+                    p = int(np.round(ct))
+                    recentred[i] += 1
+                    x1 = np.roll(op._halves(V[i:i + 1])[0][0], -p, axis=0)
+                    if p > 0:
+                        x1[nb - p:] = 0.0
+                    elif p < 0:
+                        x1[:-p] = 0.0
+                    sigma[i] = th[ii, t] + 1j * p
+                    frozen[i] = False
+                    V[i] = op.lift(x1[None], np.array([sigma[i]]))[0]
+                    continue
+                if rel < RESIDUAL_TOL:
+                    done[i] = True
+                elif rel < 1e-8:
+                    frozen[i] = True
+                elif not frozen[i] and sweep >= 1:
+                    sigma[i] = th[ii, t]
+            sigma[is_lat] = lattice
+            sigma = _keep_off_lattice(sigma)
+        else:
+            if not np.all(done):
+                return None
+    # the pool: converged eigenpairs but the trivial pair, their conjugates and Hamiltonian partners -conj (exact
+    # eigenvalues too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic| as the dense route
+    rel = res / np.maximum(1.0, np.abs(theta))
+    ok = (rel < 1e3 * RESIDUAL_TOL) & (triv0 <= TRIVIAL_COS)
+    ok[nc] = (rel[nc] < 1e3 * RESIDUAL_TOL) & ~_trivial_pair(triv0[nc])
+    nu, cc = theta[ok], np.abs(cent[ok])
+    nu = np.concatenate([nu, np.conj(nu), -np.conj(nu), -nu])
+    cc = np.tile(cc, 4)
+    order = np.argsort(cc, kind="stable")
+    nu, cc = nu[order], cc[order]
+    same = np.abs(nu[:, None] - nu[None, :]) <= 1e-8 * np.maximum(1.0, np.abs(nu))[None, :]
+    first = ~np.any(np.tril(same, -1), axis=1)                      # not a repeat of an earlier (more central) one
+    pool, pool_c = nu[first], cc[first]
+    need = 2 * nc
+    if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
+        return None
+    # warm start for the next orbit of this problem: the shifts at the kept exponents of each block
+    t = np.argmin(np.abs(theta - sigma[:, None]) + 1e9 * (triv > 0.5), axis=1)
+    nu_t = theta[np.arange(S), t]
+    nu_t[is_lat] = lattice
+    problem._hill_warm = ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy())
+    return np.array(pool[:need])
+
+
+# --------------------------------------------------------------------------- the secular route
