@@ -94,6 +94,7 @@ class Session(ComputeActions, DownloadActions):
         first = next((e for e in shared.snapshot() if len(e)), None)
         if first is not None:
             self.sel_uid = first.uid
+            self._modes_tab_on(first)
         shared.subscribe(self._on_shared)
         self.drawing.start()
         self.request(*ALL_KINDS)
@@ -254,7 +255,18 @@ class Session(ComputeActions, DownloadActions):
             changed = uid != self.sel_uid
             self.sel_uid, self.s = uid, float(s)
             self.linear_mode = None          # a pick (or a branch chosen) shows its point again
+        if changed:
+            idx = self.shared.index_of(uid)
+            if idx is not None:
+                self._modes_tab_on(self.shared.snapshot()[idx])
         self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
+
+    def _modes_tab_on(self, e):
+        """The Modes tab's list on the linear mode of the selected branch ``e`` (its NNM's mode)."""
+        k = int(getattr(e.branch, "mode", 0) or 0)
+        options = self.layout.mode_options
+        if 1 <= k <= len(options):
+            self.layout.set(self.layout.h_lin_mode, value=options[k - 1])
 
     def pick(self, uid, instance_index):
         """A click on FEP point ``instance_index`` of the branch with ``uid``."""

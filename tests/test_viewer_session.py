@@ -1087,7 +1087,10 @@ def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, 
     M = np.asarray(model.M)
     assert s.h_lin_mode.options == s.h_mode.options                      # same labels as the Compute tab
     e2 = shared.entries[1]
+    # the Modes tab opens on the selected branch's mode, and follows the selection to another branch
+    assert s.h_lin_mode.value == s.h_lin_mode.options[shared.entries[0].branch.mode - 1]
     s.pick(e2.uid, 5)
+    assert e2.branch.mode == 2 and s.h_lin_mode.value == s.h_lin_mode.options[1]
     glb_point = s.last_glb
     s.h_lin_mode.value = s.h_lin_mode.options[1]
     s._cb(s._on_show_linear)(None)
