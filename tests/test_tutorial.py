@@ -4,7 +4,6 @@ run (assets/two_dof.h5, the branches drawn in the page's figures) or from sectio
 looked up in the page.  A number that changes in the file or in the solver fails the test, and so does a
 sentence of the page that is reworded without updating the claim checked here."""
 import numpy as np
-
 from doc_blocks import ROOT, python_blocks, run_blocks
 
 import nnm_solver as nnm
