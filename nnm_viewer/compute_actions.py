@@ -8,7 +8,7 @@ import threading
 import numpy as np
 
 from .layout import SEE_COMPUTE_TAB
-from .fep import energy_to_s, interp_at
+from .fep import energy_at, energy_to_s
 from .fep_view import sweep_key
 from .state import branch_label
 from .worker import JobRunner, one_line
@@ -122,7 +122,7 @@ class ComputeActions:
         s = 0.0
         if cur is not None and len(cur) and cur.uid != e.uid:
             ser = cur.series(self.view_factor(cur))
-            energy = 10 ** interp_at(np.log10(ser.energy), float(np.clip(self.s, 0, len(ser) - 1)))
+            energy = energy_at(ser.energy, float(np.clip(self.s, 0, len(ser) - 1)))
             s = energy_to_s(e.series(e.k3_factor).energy, energy, 0.0)
         elif cur is not None and cur.uid == e.uid:
             return

@@ -167,14 +167,14 @@ def energy_to_s(energy, target, s_current=0.0):
 
     Energies need not be monotonic (folds, tongues): among all crossings of the level
     the one nearest to ``s_current`` wins, so a slider never jumps to a far part of the
-    branch.  Interpolation is linear in log10 energy.  Outside the range: nearest end.
+    branch.  Interpolation is linear in energy, as ``Branch.interpolate`` makes it (the
+    interpolated orbit's energy is the linear interpolation of its neighbours'), so the orbit
+    shown at the returned index has energy ``target``.  Outside the range: nearest end.
     """
-    e = np.log10(np.maximum(np.asarray(energy, dtype=float), 1e-300))
-    if len(e) == 0:
+    e = np.asarray(energy, dtype=float)
+    if len(e) <= 1:
         return 0.0
-    if len(e) == 1:
-        return 0.0
-    y = np.log10(max(float(target), 1e-300))
+    y = float(target)
     lo, hi = e[:-1], e[1:]
     inside = (np.minimum(lo, hi) <= y) & (y <= np.maximum(lo, hi))
     cands = []
@@ -182,8 +182,8 @@ def energy_to_s(energy, target, s_current=0.0):
         d = hi[i] - lo[i]
         cands.append(i + (0.0 if d == 0 else (y - lo[i]) / d))
     if not cands:
-        # out of range: the nearest point in energy (ties broken by distance in s)
-        dist = np.abs(e - y)
+        # out of range: the nearest point in log energy (ties broken by distance in s)
+        dist = np.abs(np.log10(np.maximum(e, 1e-300)) - np.log10(max(y, 1e-300)))
         best = np.flatnonzero(dist <= dist.min() + 1e-12)
         return float(best[np.argmin(np.abs(best - s_current))])
     cands = np.array(cands)
@@ -198,6 +198,15 @@ def interp_at(values, s):
     i = int(np.clip(np.floor(s), 0, len(values) - 2))
     a = float(s) - i
     return float((1 - a) * values[i] + a * values[i + 1])
+
+
+def energy_at(energy, s):
+    """Energy (J) of the orbit shown at fractional index s of a branch whose points have energies
+    ``energy`` (J): linear in energy between neighbouring points, the energy ``Branch.interpolate``
+    gives the interpolated orbit (it rescales the interpolated initial state to it).  Every place
+    of the viewer that prints or plots the selection's energy uses this, so that the readout, the
+    selection text, the FEP marker and the Point tab agree."""
+    return interp_at(energy, s)
 
 
 def axis_ranges(series):

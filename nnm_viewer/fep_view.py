@@ -7,7 +7,7 @@ import numpy as np
 from nnm_solver.sweeps import parse_branch_name
 
 from . import scene as sc
-from .fep import FepRenderer, branch_color, interp_at
+from .fep import FepRenderer, branch_color, energy_at, interp_at
 
 #: size (px) of the FEP image of the panel (the plot, and its legend below)
 PANEL_FEP_SIZE = (480, 470)
@@ -119,7 +119,7 @@ def readout_markdown(s, e):
     ser = e.series(s.view_factor(e))
     n = len(ser)
     along = float(np.clip(s.s, 0, n - 1))
-    energy = 10 ** interp_at(np.log10(ser.energy), along)
+    energy = energy_at(ser.energy, along)
     f = interp_at(ser.frequency, along)
     f_lin = e.linear_frequency(s.shared.linear_freqs)
     rel = f" ({100 * (f / f_lin - 1):+.3g} % from its linear {f_lin:.5g} Hz)" if f_lin else ""
@@ -250,13 +250,13 @@ class FepView:
 
     def selected_point(self):
         """(energy J, frequency on the FEP's axis: Hz or %) of the selection at the current k3 factor,
-        or None (interpolated linearly in log energy, like the energy slider)."""
+        or None (the energy of the orbit shown, fep.energy_at: linear in energy, as Branch.interpolate)."""
         s = self.session
         e = s.selected_entry()
         if e is None or not len(e):
             return None
         ser = s.fep_series(e)
-        return 10 ** interp_at(np.log10(ser.energy), s.s), interp_at(ser.frequency, s.s)
+        return energy_at(ser.energy, s.s), interp_at(ser.frequency, s.s)
 
     def draw_image(self):
         """The panel image with the selection marker, and the marker on the board."""
@@ -290,7 +290,8 @@ class FepView:
         lo, hi = float(np.floor(le.min() * 100) / 100), float(np.ceil(le.max() * 100) / 100)
         if hi - lo < 0.02:
             lo, hi = lo - 0.01, hi + 0.01
-        cur_le = interp_at(le, along)
+        energy = energy_at(ser.energy, along)
+        cur_le = float(np.log10(energy))
         if skip != "energy":
             ui.set(ui.h_energy, min=lo, max=hi, disabled=False)
             ui.set(ui.h_energy, value=float(np.clip(round(cur_le, 2), lo, hi)))
@@ -304,6 +305,6 @@ class FepView:
         if option is not None and option in ui.h_branch.options:
             ui.set(ui.h_branch, value=option)
         ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, point {along + 1:.2f} of {n}  \n"
-                                 f"E = {10 ** cur_le:.4g} J, f = {f:.5g} Hz, {st}")
+                                 f"E = {energy:.4g} J, f = {f:.5g} Hz, {st}")
         ui.set(ui.h_recompute, disabled=abs(s.factor / e.k3_factor - 1.0) < 1e-9)
         ui.set(ui.h_save, disabled=e.saved or e.source == "running")

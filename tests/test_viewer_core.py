@@ -7,7 +7,7 @@ import pytest
 
 from nnm_solver import ShootingSettings, fourier_amplitudes
 from nnm_viewer.animation import format_length, fourier_fit, orbit_animation
-from nnm_viewer.fep import (FepSeries, axis_ranges, energy_to_s, interp_at, render_fep)
+from nnm_viewer.fep import (FepSeries, axis_ranges, energy_at, energy_to_s, interp_at, render_fep)
 from nnm_viewer.glb import build_glb, read_glb_json
 from nnm_viewer.info import parse_dofs
 from nnm_viewer.scene import fallback_mesh, view_geometry
@@ -90,7 +90,9 @@ def test_orbit_animation_peak_colors_and_harmonic_pruning():
 def test_energy_to_s_monotonic_fold_and_out_of_range():
     E = np.array([1e-3, 1e-2, 1e-1, 1.0])
     assert energy_to_s(E, 1e-2) == pytest.approx(1.0)
-    assert energy_to_s(E, 10 ** -1.5) == pytest.approx(1.5)
+    # linear in energy between points, as Branch.interpolate: the orbit at the index has the target energy
+    assert energy_to_s(E, 10 ** -1.5) == pytest.approx(1 + (10 ** -1.5 - 1e-2) / (1e-1 - 1e-2))
+    assert energy_at(E, energy_to_s(E, 0.37)) == pytest.approx(0.37)
     assert energy_to_s(E, 1e3) == 3.0 and energy_to_s(E, 1e-9) == 0.0
     # a fold (tongue): energy up, down, up -- the crossing nearest to the current point wins
     F = np.array([1.0, 10.0, 100.0, 10.0, 1.0, 10.0, 100.0, 1000.0])

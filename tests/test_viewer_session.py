@@ -100,6 +100,38 @@ def test_initial_state_selection_and_animation(server, demo_file):
     s.close()
 
 
+def test_one_energy_for_the_point_shown_in_every_place(server, demo_file):
+    """Issue 32, finding (a): between two computed points the readout under the panel FEP, the selection
+    text, the FEP marker and the Point tab all give the energy of the orbit shown, Branch.interpolate's
+    (linear in energy between the neighbours); the readout used to interpolate in log energy (0.912 J
+    there against 0.9573 J in the Point tab).  The energy slider picks the orbit of the energy it shows,
+    also at a scaled k3 (energies / factor)."""
+    s, shared = make_session(server, demo_file)
+    e = shared.entries[1]
+    E = e.branch.energy
+    j = int(np.argmax(E[1:] / E[:-1]))               # the widest energy step: log and linear differ most
+    along = j + 0.5
+    s.pick(e.uid, j)
+    s.h_along.value = along
+    orbit = e.branch.interpolate(along).energy[0]
+    assert abs(orbit / np.sqrt(E[j] * E[j + 1]) - 1) > 0.01   # the old readout's value is another number
+    shown = f"{orbit:.4g} J"
+    assert s.current_point.energy == pytest.approx(orbit, rel=1e-12)
+    assert f"E = {shown}" in s.h_readout.content and f"E = {shown}" in s.h_sel.content
+    assert f"energy **{shown}**" in s.h_info.content
+    assert s.drawing.fep.selected_point()[0] == pytest.approx(orbit, rel=1e-12)
+    for k3 in (0.0, 1.0):                             # k3 x 1, then x 10 (scaling law: energies / 10)
+        s.h_k3.value = k3
+        target = round(float(np.log10(E[j] * E[j + 1])) / 2 - k3, 2)
+        s.h_energy.value = target
+        assert j <= s.s <= j + 1
+        assert s.current_point.energy == pytest.approx(10 ** target, rel=1e-6)
+        shown = f"{s.current_point.energy:.4g} J"
+        assert f"E = {shown}" in s.h_readout.content and f"E = {shown}" in s.h_sel.content
+        assert f"energy **{shown}**" in s.h_info.content
+    s.close()
+
+
 def test_pick_energy_and_along_sliders(server, demo_file):
     s, shared = make_session(server, demo_file)
     b2 = shared.entries[1]
