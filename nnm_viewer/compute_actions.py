@@ -48,13 +48,15 @@ class ComputeActions:
     # ---- the stiffness slider
     def _on_k3(self, _):
         """The stiffness slider: pure cubic springs, the FEP and the orbit follow by the exact scaling
-        law; otherwise nothing is scaled and the chosen factor is computed (``_slider_recompute``)."""
+        law; otherwise nothing is scaled and the chosen factor is computed (``_slider_recompute``).
+        A linear mode shown (Modes tab) gives way to the selected point, the one the factor changes."""
         with self.lock:
             self.factor_log = float(self.layout.h_k3.value)
+            linear, self.linear_mode = self.linear_mode, None
         if self.scaling_law:
             self.request("branches", "point", "controls")
             return
-        self.request("controls", "progress", "sliders")
+        self.request("controls", "progress", "sliders", *(("point", "fep") if linear is not None else ()))
         self._slider_recompute()
 
     def _entry_at(self, mode, factor, prefer=None):
@@ -191,7 +193,7 @@ class ComputeActions:
             raise ValueError(f"linear mode {k} is a rigid-body mode (0 Hz): nothing to animate")
         with self.lock:
             self.linear_mode = k
-        self.request("point")
+        self.request("point", "readout")
 
     def _on_show_linear(self, _):
         self.show_linear_mode(self._linear_mode_choice())

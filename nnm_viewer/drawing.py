@@ -47,7 +47,7 @@ class Drawing:
 
     def request(self, *kinds):
         """Ask for redraws: 'branches', 'controls', 'fep', 'sliders' (or 'sliders:energy' /
-        'sliders:along'), 'point', 'glb', 'info', 'progress', 'error'."""
+        'sliders:along'), 'point', 'glb', 'info', 'readout', 'progress', 'error'."""
         with self.session.lock:
             self._dirty.update(kinds)
         if self.sync:
@@ -113,7 +113,9 @@ class Drawing:
         if "fep_series" in kinds:
             step(self.fep.draw_series)
         if "fep" in kinds:
-            step(self.fep.draw_image)
+            step(self.fep.draw_image)            # with the readout
+        elif "readout" in kinds or "point" in kinds:
+            step(self.fep.draw_readout)
         slider_kinds = {k for k in kinds if k.startswith("sliders")}
         if slider_kinds:
             skip = {frozenset({"sliders:along"}): "energy", frozenset({"sliders:energy"}): "along"}

@@ -8,6 +8,7 @@ from nnm_solver.sweeps import parse_branch_name
 
 from . import scene as sc
 from .fep import FepRenderer, branch_color, energy_at, interp_at
+from .info import linear_mode_title
 
 #: size (px) of the FEP image of the panel (the plot, and its legend below)
 PANEL_FEP_SIZE = (480, 470)
@@ -263,14 +264,25 @@ class FepView:
         s, ui = self.session, self.ui
         sel = self.selected_point()
         ui.h_fep.image = self.renderer.image(sel)
-        e = s.selected_entry()
-        ui.set(ui.h_readout, content=readout_markdown(s, e) if e is not None and len(e) else "no point picked")
+        self.draw_readout()
         board = s.geom.board
         if s.show_board and self.ranges is not None and sel is not None:
             pos = board.to_world([sel[0]], [sel[1]], self.ranges)[0]
             sc.draw_marker(s.scene, pos + 0.5 * board.point_radius() * board.normal, 1.6 * board.point_radius())
         elif sel is None:
             s.scene.remove_by_name("/fep/marker")
+
+    def draw_readout(self):
+        """The picked point's readout under the panel image; while a linear mode is animated instead
+        (Modes tab) it says so first, so that it never names as shown a point that is not."""
+        s, ui = self.session, self.ui
+        e = s.selected_entry()
+        text = readout_markdown(s, e) if e is not None and len(e) else "no point picked"
+        k = s.linear_mode
+        if k is not None:
+            text = (f"**Shown:** {linear_mode_title(s.model, s.shared.linear_freqs, k)} (Modes tab); pick a "
+                    "point or move a slider to animate the picked point again  \n" + text)
+        ui.set(ui.h_readout, content=text)
 
     def draw_sliders(self, skip=None):
         """Energy and along-branch sliders (``skip``: the one being dragged), selection text."""

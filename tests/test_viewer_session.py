@@ -1167,6 +1167,29 @@ def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, 
     s.close()
 
 
+def test_stiffness_slider_after_a_linear_mode_animates_the_picked_point(server, demo_file):
+    """Issue 32, finding (c): while a linear mode is shown the readout says so (it used to name only the
+    picked point); the stiffness slider, which changes that point and not the linear mode, animates the
+    picked point again at the new factor (scaling law: same frequency, energy / 10), and every text agrees."""
+    s, shared = make_session(server, demo_file)
+    e2 = shared.entries[1]
+    s.pick(e2.uid, 5)
+    assert "Shown:" not in s.h_readout.content
+    s.h_lin_mode.value = s.h_lin_mode.options[0]
+    s._cb(s._on_show_linear)(None)
+    f1 = shared.model.linear_modes()[0][0]
+    assert s.current_point.frequency == pytest.approx(f1, rel=1e-12)
+    assert s.h_readout.content.startswith("**Shown:** linear mode 1") and "point 6.00" in s.h_readout.content
+    s.h_k3.value = 1.0                                     # every k3 x 10
+    assert s.linear_mode is None and s.current_uid == e2.uid
+    assert s.current_point.frequency == pytest.approx(e2.branch.frequency_hz[5], rel=1e-12)
+    assert s.current_point.energy == pytest.approx(e2.branch.energy[5] / 10, rel=1e-12)
+    shown = f"E = {e2.branch.energy[5] / 10:.4g} J"
+    assert "Shown:" not in s.h_readout.content and shown in s.h_readout.content and shown in s.h_sel.content
+    assert s.h_info.content.startswith("**Branch 2") and "linear mode" not in s.h_peak.content
+    s.close()
+
+
 def test_modes_tab_compute_its_branch_starts_the_job_as_start_does(server, demo_file):
     """'Compute its branch' selects the mode in the Compute tab and starts the job with the same
     arguments as Start; the new branch is selected (the linear mode shown is replaced)."""
