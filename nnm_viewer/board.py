@@ -6,7 +6,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BoardLayout", "board_layout"]
+__all__ = ["BOARD_MARGINS", "BoardLayout", "board_layout"]
+
+#: margins of the board picture around its plotting area (left, right, bottom, top), in fractions of the
+#: plotting area's width (left, right) and height (bottom, top): the bottom one holds the tick labels, the
+#: axis label and the legend (two columns, up to scene.BOARD_LEGEND_MAX entries), below the curves
+BOARD_MARGINS = (0.17, 0.04, 0.6, 0.12)
 
 
 @dataclass
@@ -50,8 +55,8 @@ def board_layout(bounds_min, bounds_max, view_dir, place="above"):
     width, height = 1.0 * size, 0.7 * size
     if place == "above":
         half_up = 0.5 * float(np.abs(hi - lo) @ np.abs(up))
-        # the picture's bottom margin (tick labels) is about 0.2 of the plot height
-        origin = center + up * (half_up + 0.05 * size + 0.22 * height) - right * 0.5 * width
+        # the picture's bottom margin (tick labels, axis label, legend) above the model
+        origin = center + up * (half_up + 0.05 * size + (BOARD_MARGINS[2] + 0.02) * height) - right * 0.5 * width
     else:
         half_extent = 0.5 * float(np.abs(hi - lo) @ np.abs(right))
         origin = center + right * (half_extent + 0.15 * size) - up * 0.5 * height

@@ -236,6 +236,14 @@ def _hex(rgb):
 LEGEND_MAX = 16
 
 
+def wrap_title(title, width=44):
+    """The panel FEP's title on lines of at most ``width`` characters, broken after a comma or at a
+    space ('Frequency-energy plot (k3 x 3.16), zoomed on the selected branch' takes two lines)."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(title, width=width, break_long_words=False)) or title
+
+
 class FepRenderer:
     """Draws the FEP panel image with matplotlib (Agg).
 
@@ -249,9 +257,12 @@ class FepRenderer:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         dpi = 100
-        self.fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
+        # constrained layout: the title, the axis labels and the legend below the axes are fitted inside
+        # the image whatever their length (a fixed axes box cut a long title and a long legend off)
+        self.fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi, layout="constrained")
+        self.fig.get_layout_engine().set(w_pad=0.06, h_pad=0.06)
         self.canvas = FigureCanvasAgg(self.fig)
-        self.ax = self.fig.add_axes([0.13, 1.0 - 0.09 - 0.78 * 350 / size[1], 0.84, 0.78 * 350 / size[1]])
+        self.ax = self.fig.add_subplot()
         self._background = None
         (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
                                      zorder=5, animated=True)
@@ -263,8 +274,7 @@ class FepRenderer:
         for artist in list(ax.lines) + list(ax.texts):
             if artist is not self._star:
                 artist.remove()
-        leg = ax.get_legend()
-        if leg is not None:
+        for leg in list(self.fig.legends):
             leg.remove()
         handles, labels = [], []
         if any(len(g) for g in ghosts):
@@ -278,14 +288,19 @@ class FepRenderer:
         if h:
             # below the axes, so that it never hides a branch; as many rows as needed (LEGEND_MAX entries)
             handles, labels = (handles + h)[:LEGEND_MAX], (labels + lab)[:LEGEND_MAX]
-            ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
-                      frameon=False, handlelength=1.6, columnspacing=1.0)
+            self.fig.legend(handles, labels, fontsize=7, loc="outside lower center", ncol=2, frameon=False,
+                            handlelength=1.6, columnspacing=1.0)
         else:
             ax.text(0.5, 0.5, "no branch yet:\ncompute one in the Compute tab", ha="center", va="center",
                     transform=ax.transAxes, color="grey")
-        ax.set_title(title or "Frequency-energy plot", fontsize=10)
+        ax.set_title(wrap_title(title or "Frequency-energy plot"), fontsize=10)
         self.canvas.draw()
         self._background = self.canvas.copy_from_bbox(self.fig.bbox)
+
+    @property
+    def legend(self):
+        """The image's legend (below the axes), or None before any branch is drawn."""
+        return self.fig.legends[0] if self.fig.legends else None
 
     def image(self, selected=None):
         """RGB image (H, W, 3) uint8 with the picked orbit (energy J, frequency Hz) marked."""

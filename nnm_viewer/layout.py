@@ -31,6 +31,10 @@ SEE_COMPUTE_TAB = "the job's progress is in the **Compute** tab"
 #: view presets of the camera (scene.preset_camera)
 VIEW_PRESETS = ("Iso", "Top", "Side", "Front")
 
+#: the caption under the panel FEP image, which cannot be clicked (viser 1.1 sends no clicks on panel images)
+PANEL_FEP_CAPTION = ("*This picture is not clickable: pick points on the FEP board of the 3D view (click a "
+                     "sphere) or with the Energy and Along branch sliders (left panel).*")
+
 
 #: shown while the solver's kernels are being compiled (nnm_viewer/warmup.py)
 SOLVER_PREPARING = ("**Preparing the solver** (compiling its kernels once after installing, then cached: the "
@@ -150,6 +154,8 @@ class Layout:
         self.panel = panel
         with panel.add_tab("FEP", viser.Icon.CHART_DOTS):
             self.h_fep = gui.add_image(np.full((470, 480, 3), 255, np.uint8), label=None, format="png")
+            # viser 1.1 sends the server no clicks on panel images: say so where the user clicks in vain
+            self.h_fep_caption = gui.add_markdown(PANEL_FEP_CAPTION)
             self.h_readout = gui.add_markdown("no point picked")
             gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view (each branch in its "
                              "colour, pale spheres: unstable orbits; the yellow sphere is the picked orbit; the "

@@ -9,7 +9,7 @@ import numpy as np
 import nnm_solver
 
 from .glb import build_glb
-from .board import BoardLayout, board_layout
+from .board import BOARD_MARGINS, BoardLayout, board_layout
 from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, pale, rgb
 
 #: vertical field of view of the initial camera, degrees
@@ -146,13 +146,20 @@ def sphere_mesh():
 
 #: legend entries of the board picture at most
 BOARD_LEGEND_MAX = 14
-#: margins of the board picture around the plotting area, in fractions of its width/height
-_ML, _MR, _MB, _MT = 0.17, 0.04, 0.2, 0.12
+#: margins of the board picture around the plotting area (board.BOARD_MARGINS)
+_ML, _MR, _MB, _MT = BOARD_MARGINS
 
 
 def render_board(board, ranges, series=(), width_px=900, ylabel=None):
     """The board picture (RGB uint8): axes, ticks, labels and thin branch lines; the plotting
     area maps exactly onto the rectangle of ``board`` so that the spheres sit on the curves."""
+    fig = board_figure(board, ranges, series, width_px, ylabel)
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
+def board_figure(board, ranges, series=(), width_px=900, ylabel=None):
+    """The drawn matplotlib Figure of ``render_board`` (its axes fill the board's rectangle; the
+    legend is in the bottom margin, below the tick labels)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -168,11 +175,13 @@ def render_board(board, ranges, series=(), width_px=900, ylabel=None):
     handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0)
     set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3, ylabel=ylabel or Y_LABELS[False])
     if handles:
-        ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="best", framealpha=0.85,
-                  markerscale=0.6, handlelength=1.5)
+        # below the plotting area, never over the curves (nor over the spheres drawn in front of them)
+        ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="upper center",
+                  bbox_to_anchor=(0.5, -0.15), ncol=2, frameon=False, markerscale=0.6, handlelength=1.5,
+                  columnspacing=1.2)
     ax.set_title("FEP: click a point to animate it", fontsize=22)
     fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    return fig
 
 
 def board_rotation(board):

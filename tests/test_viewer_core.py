@@ -7,10 +7,12 @@ import pytest
 
 from nnm_solver import ShootingSettings, fourier_amplitudes
 from nnm_viewer.animation import format_length, fourier_fit, orbit_animation
-from nnm_viewer.fep import (FepSeries, axis_ranges, energy_at, energy_to_s, interp_at, render_fep)
+from nnm_viewer.fep import (LEGEND_MAX, FepRenderer, FepSeries, axis_ranges, energy_at, energy_to_s, interp_at,
+                             render_fep)
+from nnm_viewer.fep_view import PANEL_FEP_SIZE
 from nnm_viewer.glb import build_glb, read_glb_json
 from nnm_viewer.info import parse_dofs
-from nnm_viewer.scene import fallback_mesh, view_geometry
+from nnm_viewer.scene import BOARD_LEGEND_MAX, board_figure, fallback_mesh, view_geometry
 
 
 def _tetra():
@@ -112,6 +114,47 @@ def test_fep_image_and_ranges():
     assert img.shape == (200, 300, 3) and img.dtype == np.uint8
     assert img.std() > 10
     assert render_fep([], size=(300, 200)).shape == (200, 300, 3)    # no branch: a hint, no crash
+
+
+def _inside(inner, outer, tol=0.5):
+    return (inner.x0 >= outer.x0 - tol and inner.y0 >= outer.y0 - tol and inner.x1 <= outer.x1 + tol
+            and inner.y1 <= outer.y1 + tol)
+
+
+def _many_series(n=11):
+    return [FepSeries(np.logspace(-2, 1, 12), 31.7 - 0.01 * k - np.linspace(0, 0.3, 12), np.ones(12, bool),
+                      f"NNM {10 + k} · tongue {k} (3:1)", events=[("fold", 5.0, 31.6)]) for k in range(n)]
+
+
+def test_panel_fep_title_and_legend_fit_in_the_image():
+    """Issue 32, finding (f): the panel image's title (the long zoomed, scaled one) and its legend (as many
+    entries as it holds) are inside the image, and the legend is below the axes, not on the curves."""
+    r = FepRenderer(size=PANEL_FEP_SIZE)
+    r.set_series(_many_series(16), 0, title="Frequency-energy plot (k3 x 3.16), zoomed on the selected branch")
+    fig = r.fig
+    renderer = r.canvas.get_renderer()
+    box = fig.bbox
+    title = r.ax.title.get_window_extent(renderer)
+    legend = fig.legends[0].get_window_extent(renderer)
+    axes = r.ax.get_tightbbox(renderer)
+    assert "\n" in r.ax.get_title()                        # wrapped
+    assert _inside(title, box) and _inside(legend, box) and _inside(axes, box)
+    assert legend.y1 <= r.ax.get_window_extent(renderer).y0  # below the plotting area
+    assert len(fig.legends[0].get_texts()) == LEGEND_MAX
+
+
+def test_board_legend_is_outside_the_plotting_area():
+    """Issue 32, finding (g): the in-scene board's legend is in its bottom margin, inside the picture and
+    never over the plotting area (where the curves and the clickable spheres are), even full and zoomed."""
+    geom = view_geometry(np.array([[0, 0, 0], [10, 4, 2]], float))
+    fig = board_figure(geom.board, ((-2.2, 1.2), (31.3, 31.75)), _many_series(14))
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    legend = ax.get_legend().get_window_extent(renderer)
+    area = ax.get_window_extent(renderer)
+    ticks = ax.xaxis.get_tightbbox(renderer)
+    assert _inside(legend, fig.bbox) and legend.y1 <= ticks.y0 < area.y0
+    assert len(ax.get_legend().get_texts()) == BOARD_LEGEND_MAX
 
 
 def test_board_layout_maps_corners_and_faces_camera():

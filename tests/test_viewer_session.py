@@ -132,6 +132,17 @@ def test_one_energy_for_the_point_shown_in_every_place(server, demo_file):
     s.close()
 
 
+def test_panel_fep_says_it_is_not_clickable(server, demo_file):
+    """Issue 32, finding (i): clicks on the panel FEP image never reach the server (viser 1.1); the caption
+    right under it says so and where to pick points instead."""
+    s, _ = make_session(server, demo_file)
+    text = s.h_fep_caption.content
+    assert "not clickable" in text and "board" in text and "Energy" in text and "Along branch" in text
+    assert s.h_energy.label.startswith("Energy") and s.h_along.label.startswith("Along branch")
+    assert s.h_fep.order < s.h_fep_caption.order < s.h_readout.order
+    s.close()
+
+
 def test_pick_energy_and_along_sliders(server, demo_file):
     s, shared = make_session(server, demo_file)
     b2 = shared.entries[1]
@@ -501,7 +512,7 @@ def test_branch_status_and_events_are_shown(server, demo_file, monkeypatch):
     assert "1 branch point (near point 9)" in info
     # the panel: a marker per event, by kind, and the failed end, with legend entries
     ax = s.drawing.fep.renderer.ax
-    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    legend = [t.get_text() for t in s.drawing.fep.renderer.legend.get_texts()]
     for text in ("fold (energy turns back)", "period doubling (multiplier -1)", "branch point (multiplier +1)",
                  "end: solver failed"):
         assert text in legend
@@ -530,8 +541,7 @@ def test_branch_colours_are_distinct_with_legends(server, demo_file):
     firsts = [tuple(s._board_handles[e.uid].batched_colors[0]) for e in shared.entries]
     assert len(set(firsts)) == 11
     assert firsts[9] == tuple(int(branch_color(9)[i:i + 2], 16) for i in (1, 3, 5))
-    ax = s.drawing.fep.renderer.ax
-    leg = ax.get_legend()
+    leg = s.drawing.fep.renderer.legend
     names = [t.get_text() for t in leg.get_texts()]
     assert names[:11] == [legend_label(e.label) for e in shared.entries]
     assert names[0] == "NNM 1" and shared.entries[0].label == "NNM 1 (in phase)"   # the mode label: in the lists
