@@ -53,23 +53,35 @@ def orbit_samples(branch):
     return int(np.clip(analysis.orbit_samples(branch), 64, 400))
 
 
-def point_data(branch, s, samples=None):
+#: the Point tab's note on an orbit integrated by scipy while the solver's integrator is being compiled
+REFERENCE_NOTE = ("orbit integrated by scipy's DOP853 from the stored state (Branch.reference_motion) while the "
+                  "solver's integrator is being compiled; the solver's own orbit replaces it when it is ready")
+
+
+def point_data(branch, s, samples=None, reference=False):
     """PointData at fractional index s of ``branch`` (the solver interpolates between points).
-    samples : per period (default: the branch's own time step, see orbit_samples)."""
+    samples : per period (default: the branch's own time step, see orbit_samples).
+    reference : the orbit by ``Branch.reference_motion`` (scipy, no compiled kernel: what the viewer shows
+    before numba has compiled the branch's integrator), without the harmonic description (it would
+    integrate the orbit again with the integrator); the note says so."""
     if samples is None:
         samples = orbit_samples(branch)
     i = int(np.clip(round(s), 0, len(branch) - 1))
-    note = ""
+    note = REFERENCE_NOTE if reference else ""
+
+    def motion(b, j):
+        return b.reference_motion(j, samples=samples) if reference else b.motion(j, samples=samples)
+
     if abs(s - i) < 1e-9 or len(branch) == 1:
         b, j = branch, i
-        t, x = b.motion(j, samples=samples)
+        t, x = motion(b, j)
     else:
         b, j = branch.interpolate(float(s)), 0
         try:
-            t, x = b.motion(j, samples=samples)
+            t, x = motion(b, j)
         except RuntimeError:       # the interpolated state is not on an orbit: show the nearest point
             b, j = branch, i
-            t, x = b.motion(j, samples=samples)
+            t, x = motion(b, j)
             note = f"the orbit between points could not be integrated; showing computed point {i}"
     harm = fourier_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
     try:
@@ -77,10 +89,12 @@ def point_data(branch, s, samples=None):
     except Exception:
         mac = np.zeros(0)
     floquet = np.asarray(b.floquet[j]) if getattr(b, "floquet", None) is not None and len(b.floquet) else np.zeros(0)
-    try:
-        description = nnm_solver.describe_orbit(b, j)
-    except Exception:  # a description is a bonus: never lose the point for it
-        description = ""
+    description = ""
+    if not reference:
+        try:
+            description = nnm_solver.describe_orbit(b, j)
+        except Exception:  # a description is a bonus: never lose the point for it
+            description = ""
     return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
                      stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
                      x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description)

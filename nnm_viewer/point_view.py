@@ -55,21 +55,19 @@ class PointView:
         if s.linear_mode is not None:             # a linear mode (Modes tab): no solver needed
             return self.compute_linear(s.linear_mode)
         e = s.selected_entry()
-        if not s.shared.orbits_ready.is_set():     # no orbit before the kernels are compiled (warmup.py);
-            with s.lock:                           # the session asks again when they are
-                drawn = s.current_point is None and self.last_glb is not None
-                s.current_point = s.current_anim = None
-            return not drawn
         if e is None or not len(e):
             with s.lock:
                 s.current_point = s.current_anim = None
                 s.current_uid = None if e is None else e.uid
             return True
+        # until the branch's integrator is compiled (warmup.py, then the session asks again) the orbit is
+        # scipy's (Branch.reference_motion: no compiled kernel), replaced by the solver's own once ready
+        reference = not s.shared.orbits_ready.is_set()
         along = float(np.clip(s.s, 0, len(e) - 1))
-        key = (e.uid, len(e), round(along, 4))
+        key = (e.uid, len(e), round(along, 4), reference)
         pd = self._point_cache.get(key)
         if pd is None:
-            pd = point_data(e.branch, along)
+            pd = point_data(e.branch, along, reference=reference)
             if len(self._point_cache) > POINT_CACHE:
                 self._point_cache.clear()
             self._point_cache[key] = pd

@@ -416,27 +416,39 @@ def test_point_tab_mac_is_mass_weighted(server, tmp_path):
 
 
 def test_page_is_drawn_while_the_solver_is_prepared(server, demo_file, monkeypatch):
-    """Issue 14, item 3: until the solver's kernels are compiled (warmup.py) a new tab draws the
-    branch list, the FEP and the sliders, says "preparing the solver" and computes no orbit (which
-    would wait for the compiler); once ready, the selected orbit is animated."""
+    """Issue 14, item 3 and issue 32, item 4: until the solver's kernels are compiled (warmup.py) a new tab
+    draws the branch list, the FEP and the sliders, says "preparing the solver", and animates the selected
+    orbit integrated by scipy (Branch.reference_motion: no compiled kernel, no wait for the compiler), which
+    the Point tab says; once the kernels are ready, the solver's own orbit replaces it."""
     import nnm_viewer.point_view as pv
+    from nnm_solver.results.branch import Branch
 
-    calls = []
+    calls, exact = [], []
     real = pv.point_data
-    monkeypatch.setattr(pv, "point_data", lambda *a, **k: calls.append(a) or real(*a, **k))
+    monkeypatch.setattr(pv, "point_data", lambda *a, **k: calls.append(k.get("reference")) or real(*a, **k))
+    real_motion = Branch.motion
+    monkeypatch.setattr(Branch, "motion", lambda self, *a, **k: exact.append(1) or real_motion(self, *a, **k))
     model = nnm.load_model(demo_file)
     shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file), solver_ready=False)
     s = Session(server, shared, sync=True)
     assert s.h_solver.visible and "Preparing the solver" in s.h_solver.content
     assert "Selected:" in s.h_sel.content and len(s.h_branch.options) == 2 and len(s._board_handles) == 2
-    assert s.current_point is None and not calls and "animations" not in read_glb_json(s.last_glb)
-    assert "preparing the solver" in s.h_job.content and "preparing the solver" in s.h_info.content
+    assert calls == [True] and not exact                   # the reference orbit, not the integrator's
+    assert "animations" in read_glb_json(s.last_glb) and "DOP853" in s.h_info.content
+    assert "preparing the solver" in s.h_job.content
+    b1 = shared.entries[0].branch
+    np.testing.assert_allclose(s.current_point.x, b1.reference_motion(0, samples=len(s.current_point.t))[1])
     b2 = shared.entries[1]
     s.pick(b2.uid, 5)                                     # picking works meanwhile
-    assert s.sel_uid == b2.uid and "branch 2, point 6.00" in s.h_sel.content and not calls
+    assert s.sel_uid == b2.uid and "branch 2, point 6.00" in s.h_sel.content and calls == [True, True]
+    ref = s.current_point
     shared.set_solver_ready()
-    assert not s.h_solver.visible and calls
-    assert s.current_point.energy == pytest.approx(b2.branch.energy[5])
+    assert not s.h_solver.visible and calls == [True, True, False] and exact
+    assert s.current_point.energy == pytest.approx(b2.branch.energy[5]) and "DOP853" not in s.h_info.content
+    t, x = real_motion(b2.branch, 5, samples=len(ref.t))
+    np.testing.assert_allclose(s.current_point.x, x)
+    # the reference orbit was that orbit, to the integrator's discretisation error (Newmark, 2nd order here)
+    assert np.abs(ref.x - x).max() < 1e-2 * np.abs(x).max()
     assert "animations" in read_glb_json(s.last_glb) and "preparing" not in s.h_job.content
     s.close()
 

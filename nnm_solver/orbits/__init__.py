@@ -13,6 +13,7 @@ and, for the driver (``driver/api.py``), what a converged point is::
 Implementations: ``shooting.ShootingProblem`` (Newmark shooting with the exact monodromy, the seed
 paper's method) and ``harmonic_balance.HBProblem`` (Fourier series, AFT, on the basis of
 ``hb_basis.py``; multipliers by Hill's method, ``hill.py``).  Both work on a ``model.ModalSystem``.
+``reference.py``: a converged orbit integrated by scipy's DOP853 (no compiled kernel; ``Branch.reference_motion``).
 
 Layer: imports ``nnm_solver.stability``, ``continuation``, ``integrators``, ``model`` and the base modules.
 """
