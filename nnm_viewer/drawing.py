@@ -101,7 +101,10 @@ class Drawing:
             step(self.draw_solver)
         if "controls" in kinds:
             step(self.draw_controls)
-        if "point" in kinds and step(self.point.compute):
+        # before the branch's integrator is compiled the orbit is scipy's (point_view.py), which takes a
+        # while: the rest of the page is drawn first
+        deferred = "point" in kinds and not self.session.shared.orbits_ready.is_set()
+        if "point" in kinds and not deferred and step(self.point.compute):
             kinds |= {"glb", "info"}
         if "glb" in kinds:            # first: the animation is what the user waits for
             step(self.point.draw_glb)
@@ -120,6 +123,9 @@ class Drawing:
         if slider_kinds:
             skip = {frozenset({"sliders:along"}): "energy", frozenset({"sliders:energy"}): "along"}
             step(self.fep.draw_sliders, skip.get(frozenset(slider_kinds)))
+        if deferred and step(self.point.compute):
+            step(self.point.draw_glb)
+            kinds.add("info")
         if "info" in kinds:
             step(self.point.draw_info)
         if "progress" in kinds:

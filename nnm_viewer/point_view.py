@@ -67,8 +67,6 @@ class PointView:
         key = (e.uid, len(e), round(along, 4), reference)
         pd = self._point_cache.get(key)
         if pd is None:
-            if reference and self.last_glb is None:   # the model at rest first: the integration takes a while
-                self.draw_glb()
             pd = point_data(e.branch, along, reference=reference)
             if len(self._point_cache) > POINT_CACHE:
                 self._point_cache.clear()

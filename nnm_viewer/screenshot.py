@@ -1,6 +1,7 @@
 """Screenshot of the viewer (for the documentation), taken with Debian's Chromium headless.
 
     python -m nnm_viewer.screenshot assets/paris.h5 docs/img/viewer.png [--point 0.6] [--tab FEP]
+    python -m nnm_viewer.screenshot --all [DIR]    # every viewer screenshot of the docs (doc_screenshots.py)
 
 Starts ``nnm-view`` on FILE, opens it in Chromium (Playwright, software WebGL), picks the point
 at fraction ``--point`` of the first branch by clicking its sphere in the 3D FEP, pauses the
@@ -67,12 +68,23 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Screenshot of nnm-view (docs)")
-    ap.add_argument("file")
-    ap.add_argument("out")
+    ap.add_argument("file", nargs="?", help="nnm file to show (not with --all)")
+    ap.add_argument("out", nargs="?", help="PNG written (not with --all)")
     ap.add_argument("--point", type=float, default=0.6, help="fraction along the first branch (0..1)")
     ap.add_argument("--branch", type=int, default=1, help="branch number (1-based, in file order)")
     ap.add_argument("--tab", default="FEP", help="right panel tab: FEP, Point, Compute or Modes")
+    ap.add_argument("--all", nargs="?", const="", default=None, metavar="DIR",
+                    help="every viewer screenshot of the documentation (doc_screenshots.SCREENSHOTS) into DIR "
+                         "(default: docs/img)")
     args = ap.parse_args(argv)
+    if args.all is not None:
+        if args.file or args.out:
+            ap.error("--all takes no FILE or OUT (its folder is --all DIR)")
+        from .doc_screenshots import regenerate
+        regenerate(args.all or None)
+        return 0
+    if not (args.file and args.out):
+        ap.error("FILE and OUT are needed (or --all)")
     text = take(args.file, args.out, point=float(np.clip(args.point, 0, 1)), tab=args.tab, branch=args.branch - 1)
     print(f"wrote {args.out}: {text}")
     return 0
