@@ -20,6 +20,10 @@ from .browser import (CLOSE_NOTIFICATIONS_JS, ZOOM_CHECKBOX_LABEL, free_port, la
                       selected_text, viewer_process, wait_selection_change)
 
 
+#: scroll every scrolled element of the page back to its top (the panels show their first controls)
+SCROLL_TO_TOP_JS = "document.querySelectorAll('*').forEach(e => { if (e.scrollTop) e.scrollTop = 0; })"
+
+
 def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
     """Save a PNG of the viewer on ``path`` with point ``point`` (fraction 0..1) of branch
     ``branch`` (0-based position in the file) picked; returns the selection text shown."""
@@ -58,6 +62,7 @@ def take(path, out, point=0.6, tab="FEP", size=(1600, 900), branch=0):
                 page.get_by_role("tab", name=tab).click()
             time.sleep(5.0)
             page.evaluate(CLOSE_NOTIFICATIONS_JS)
+            page.evaluate(SCROLL_TO_TOP_JS)       # ticking the zoom box scrolled the control panel down
             time.sleep(1.0)
             page.screenshot(path=str(out))
             text = selected_text(page)
