@@ -59,11 +59,10 @@ def build_byom(folder):
     return h5
 
 
-def regenerate(out_dir=None, take=None, log=print):
-    """Write every screenshot of SCREENSHOTS into ``out_dir`` (default: docs/img of the source tree);
-    ``take``: screenshot.take (a parameter for tests).  Returns the files written."""
-    if take is None:
-        from .screenshot import take
+def regenerate(take, out_dir=None, log=print):
+    """Write every screenshot of SCREENSHOTS into ``out_dir`` (default: docs/img of the source tree) with
+    ``take(file, out, point=, branch=)`` (screenshot.take, which passes itself; tests pass a recorder).
+    Returns the files written."""
     out_dir = Path(out_dir) if out_dir is not None else ROOT / "docs" / "img"
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []

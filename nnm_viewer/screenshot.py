@@ -86,7 +86,7 @@ def main(argv=None):
         if args.file or args.out:
             ap.error("--all takes no FILE or OUT (its folder is --all DIR)")
         from .doc_screenshots import regenerate
-        regenerate(args.all or None)
+        regenerate(take, args.all or None)
         return 0
     if not (args.file and args.out):
         ap.error("FILE and OUT are needed (or --all)")

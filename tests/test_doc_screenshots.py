@@ -36,7 +36,7 @@ def test_regenerate_builds_each_file_and_takes_each_shot(tmp_path):
         calls.append((path, out, point, branch, len(branches[branch])))
         return "selected"
 
-    written = doc_screenshots.regenerate(tmp_path, take=take, log=lambda *_: None)
+    written = doc_screenshots.regenerate(take, tmp_path, log=lambda *_: None)
     assert [p.name for p in written] == [s.name for s in SCREENSHOTS]
     by_name = {c[1].rsplit("/", 1)[-1]: c for c in calls}
     path, _, point, branch, n = by_name["viewer.png"]
