@@ -58,19 +58,27 @@ REFERENCE_NOTE = ("orbit integrated by scipy's DOP853 from the stored state (Bra
                   "solver's integrator is being compiled; the solver's own orbit replaces it when it is ready")
 
 
+#: the scipy orbit is not tried when it would take more steps (about 3 s; a model with very high modal
+#: frequencies: the viewer then waits for the compiled integrator)
+REFERENCE_MAX_STEPS = 20000
+
+
 def point_data(branch, s, samples=None, reference=False):
     """PointData at fractional index s of ``branch`` (the solver interpolates between points).
     samples : per period (default: the branch's own time step, see orbit_samples).
     reference : the orbit by ``Branch.reference_motion`` (scipy, no compiled kernel: what the viewer shows
     before numba has compiled the branch's integrator), without the harmonic description (it would
-    integrate the orbit again with the integrator); the note says so."""
+    integrate the orbit again with the integrator); the note says so.  RuntimeError if that orbit would
+    take more than REFERENCE_MAX_STEPS steps or cannot be integrated."""
     if samples is None:
         samples = orbit_samples(branch)
     i = int(np.clip(round(s), 0, len(branch) - 1))
     note = REFERENCE_NOTE if reference else ""
 
     def motion(b, j):
-        return b.reference_motion(j, samples=samples) if reference else b.motion(j, samples=samples)
+        if reference:
+            return b.reference_motion(j, samples=samples, max_steps=REFERENCE_MAX_STEPS)
+        return b.motion(j, samples=samples)
 
     if abs(s - i) < 1e-9 or len(branch) == 1:
         b, j = branch, i

@@ -67,7 +67,16 @@ class PointView:
         key = (e.uid, len(e), round(along, 4), reference)
         pd = self._point_cache.get(key)
         if pd is None:
-            pd = point_data(e.branch, along, reference=reference)
+            try:
+                pd = point_data(e.branch, along, reference=reference)
+            except RuntimeError:
+                if not reference:
+                    raise
+                with s.lock:                      # too slow or failed: the model at rest until the solver's orbit
+                    drawn = s.current_point is None and self.last_glb is not None
+                    s.current_point = s.current_anim = None
+                    s.current_uid = e.uid
+                return not drawn
             if len(self._point_cache) > POINT_CACHE:
                 self._point_cache.clear()
             self._point_cache[key] = pd

@@ -9,7 +9,7 @@ import pytest
 import nnm_solver as nnm
 from nnm_solver.errors import NNMInputError
 from nnm_solver.model.modal import modal_system
-from nnm_solver.orbits.reference import reference_orbit
+from nnm_solver.orbits.reference import reference_orbit, reference_steps
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -65,3 +65,17 @@ def test_reference_orbit_rejects_bad_input():
         reference_orbit(system, [0.1, 0.1], [0.0, 0.0], 6.0, 1)
     with pytest.raises(NNMInputError, match="period"):
         reference_orbit(system, [0.1, 0.1], [0.0, 0.0], -1.0, 16)
+
+
+def test_reference_orbit_refuses_to_take_more_steps_than_allowed():
+    """An explicit method needs steps below ~3 / omega_max: the estimate, and max_steps refusing before it
+    integrates (the viewer then waits for the compiled integrator instead)."""
+    b = nnm.load_branches(ROOT / "assets" / "two_dof.h5")[0]
+    system = modal_system(b.model)
+    T = b.period[0]
+    assert reference_steps(system, T) == int(np.ceil(T * np.sqrt(system.omega2.max()) / 3)) + 1
+    half = reference_steps(system, T * 127 / 256)             # symmetric: half a period (the last sample's time)
+    with pytest.raises(RuntimeError, match="max_steps"):
+        b.reference_motion(0, samples=256, max_steps=half - 1)
+    _, x = b.reference_motion(0, samples=256, max_steps=half)
+    assert np.all(np.isfinite(x))

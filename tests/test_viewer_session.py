@@ -453,6 +453,22 @@ def test_page_is_drawn_while_the_solver_is_prepared(server, demo_file, monkeypat
     s.close()
 
 
+def test_no_reference_orbit_when_it_would_be_too_slow(server, demo_file, monkeypatch):
+    """Issue 32, item 4: when scipy's orbit would take more than info.REFERENCE_MAX_STEPS steps (very high modal
+    frequencies) the model stays at rest until the solver's orbit is ready, with no error in the page."""
+    import nnm_viewer.info as info
+
+    monkeypatch.setattr(info, "REFERENCE_MAX_STEPS", 1)
+    model = nnm.load_model(demo_file)
+    shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file), solver_ready=False)
+    s = Session(server, shared, sync=True)
+    assert s.current_point is None and "animations" not in read_glb_json(s.last_glb)
+    assert not s.h_error.visible and "preparing the solver" in s.h_info.content
+    shared.set_solver_ready()
+    assert s.current_point is not None and "animations" in read_glb_json(s.last_glb)
+    s.close()
+
+
 def test_server_warms_the_solver_in_the_background(demo_file):
     """Issue 14, item 3: ViewerApp serves at once and marks the solver ready when the warm-up ends."""
     import threading

@@ -27,15 +27,28 @@ import numpy as np
 
 from ..errors import NNMInputError
 
-__all__ = ["reference_orbit"]
+__all__ = ["reference_orbit", "reference_steps"]
 
 
-def reference_orbit(system, x0, v0, period, samples=256, symmetric=False, rtol=1e-9):
+#: steps of DOP853 per unit of omega_max * t (its stability limit along the imaginary axis: h omega_max ~ 3.4)
+STEP_OMEGA = 3.0
+
+
+def reference_steps(system, duration):
+    """Estimated DOP853 steps to integrate ``system`` over ``duration`` (s): duration * omega_max / 3, the
+    stability limit of an explicit method (accuracy may ask for more on orbits with strong high harmonics)."""
+    omega_max = float(np.sqrt(max(float(np.max(system.omega2, initial=0.0)), 0.0)))
+    return int(np.ceil(float(duration) * omega_max / STEP_OMEGA)) + 1
+
+
+def reference_orbit(system, x0, v0, period, samples=256, symmetric=False, rtol=1e-9, max_steps=None):
     """(x, v) (samples, n): the orbit of ``system`` (a ModalSystem) from the physical state x0 (m), v0 (m/s)
     at t = k T / samples, k = 0 .. samples - 1, T = ``period`` (s), integrated by scipy's DOP853 to the
     relative tolerance ``rtol`` (absolute tolerance rtol * 1e-3 of the state's size, in each of q and
     v).  ``symmetric``: integrate over T/2 and use x(t + T/2) = -x(t) (needs an even ``samples``; with an
-    odd one the whole period is integrated).  RuntimeError if the integration fails."""
+    odd one the whole period is integrated).  ``max_steps``: RuntimeError before integrating if
+    ``reference_steps`` estimates more steps (a model with very high modal frequencies makes an explicit
+    method slow).  RuntimeError if the integration fails."""
     from scipy.integrate import solve_ivp
 
     samples = int(samples)
@@ -59,6 +72,10 @@ def reference_orbit(system, x0, v0, period, samples=256, symmetric=False, rtol=1
     half = bool(symmetric) and samples % 2 == 0
     count = samples // 2 if half else samples
     t_eval = np.arange(count) * period / samples
+    if max_steps is not None and reference_steps(system, t_eval[-1]) > max_steps:
+        raise RuntimeError(f"the reference integration would take about {reference_steps(system, t_eval[-1])} "
+                           f"steps (highest modal frequency {np.sqrt(np.max(omega2)) / (2 * np.pi):.4g} Hz over "
+                           f"{t_eval[-1]:.4g} s), more than max_steps = {max_steps}")
     sol = solve_ivp(rhs, (0.0, t_eval[-1]), np.concatenate([q0, p0]), method="DOP853", t_eval=t_eval,
                     rtol=rtol, atol=atol)
     if sol.status != 0 or sol.y.shape[1] != count or not np.all(np.isfinite(sol.y)):

@@ -239,17 +239,18 @@ class Branch:
         t, x, _ = self.orbit(i, samples)
         return t, x
 
-    def reference_motion(self, i, samples=256, rtol=1e-9):
+    def reference_motion(self, i, samples=256, rtol=1e-9, max_steps=None):
         """The orbit of point i integrated by scipy's DOP853 from its stored state over its stored period,
         with no compiled kernel (orbits/reference.py): (t (samples,) s, x (samples, n) m).  It agrees with
         ``motion(i)`` to the branch's discretisation error (a shooting branch's motion is the discrete
         orbit of its own integrator); half-period shooting branches are integrated over T/2 and continued
-        by their symmetry, like ``motion``."""
+        by their symmetry, like ``motion``.  ``max_steps``: RuntimeError, before integrating, if that would
+        take more steps (an explicit method on a model with very high modal frequencies)."""
         from ..model.modal import modal_system
         from ..orbits.reference import reference_orbit
         i = self.check_index(i)
         x, _ = reference_orbit(modal_system(self.model), self.x0[i], self.v0[i], self.period[i], samples,
-                               bool(getattr(self.settings, "symmetric", False)), rtol)
+                               bool(getattr(self.settings, "symmetric", False)), rtol, max_steps)
         return np.arange(int(samples)) * self.period[i] / int(samples), x
 
     def velocity(self, i, samples=256):
