@@ -682,6 +682,14 @@ def build_parser():
     return p
 
 
+def _same_model(a, b):
+    """Are the models a and b the same (DOF count, M, K bit for bit, the springs' places and k3)?"""
+    def dense(A):
+        return A.toarray() if hasattr(A, "toarray") else np.asarray(A)
+    return (a.n == b.n and [(s.dof, s.other, s.k3) for s in a.springs] == [(s.dof, s.other, s.k3) for s in b.springs]
+            and np.array_equal(dense(a.M), dense(b.M)) and np.array_equal(dense(a.K), dense(b.K)))
+
+
 def main(argv=None):
     args = build_parser().parse_args(argv)
     t_all = time.perf_counter()
@@ -715,6 +723,9 @@ def main(argv=None):
         for b in nnm.load_branches(model_path, model):
             saved[b.name] = b
     for path in args.branches_from or []:
+        if not _same_model(nnm.load_model(path), model):
+            sys.exit(f"{path} holds another model than {model_path} (M, K or the springs differ: e.g. a rebuild whose "
+                     f"reduced coordinates differ); its branches were not used: compute them on {model_path}")
         for b in nnm.load_branches(path, model):
             saved[b.name] = b
     for path in args.times_from or []:

@@ -211,3 +211,34 @@ def test_shipped_branches_each_tongue_once(shipped):
     share = analysis.harmonic_fractions(tb, 4)[:, 3]
     assert share[0] < 0.1 and np.nanmax(share) > 0.4
     assert shipped.mode_labels[38] == "horizontal tail torsion 1 (symmetric)"
+
+
+def test_attachment_shares_and_partner_band_penalty(coarse):
+    """Builder 1.3's tuning quantities (paris_aircraft.tuning_nonlinear).  attachment_shares, att_kz sum d^2 / w^2,
+    is att_kz times the first-order sensitivity of ln w^2 to a linear spring added on each attachment's relative
+    vertical displacement d (what the cubic springs see): checked against the eigenvalues of the model with such
+    springs of 1e3 N/m.  The band penalty counts only coupled anti-symmetric modes just under n f."""
+    import scipy.sparse as sp
+    from paris_aircraft.tuning_nonlinear import attachment_deformations, attachment_shares, partner_band_penalty
+    ac, f, V = coarse
+    share = attachment_shares(ac, f, V)
+    d = attachment_deformations(ac, V)
+    assert d.shape == (4, V.shape[1])
+    r, n, dk = ac.retained_dofs, ac.K.shape[0], 1e3
+    rows = []
+    for a in range(4):
+        e = np.zeros(n)
+        e[r[6 * (2 * a) + 2]], e[r[6 * (2 * a + 1) + 2]] = 1.0, -1.0
+        rows.append(e)
+    B = sp.csr_matrix(np.array(rows))
+    f2, V2 = modes(ac.K + dk * (B.T @ B), ac.M, len(f), sigma=-1.0, xyz=ac.fe.nodes)
+    el = np.flatnonzero(f > 4.0)                            # the structural modes (not the suspension ones)
+    w2, w2b = (2 * np.pi * f[el]) ** 2, (2 * np.pi * f2[el]) ** 2
+    fd = ac.params.att_kz * (w2b - w2) / (dk * w2)
+    big = share[el] > 1e-3
+    assert big.sum() >= 2 and np.allclose(fd[big], share[el][big], rtol=2e-2)
+    labels = ["x (anti-symmetric)", "y (symmetric)", "z (anti-symmetric)"]
+    assert partner_band_penalty([98.0, 98.0, 120.0], labels, [1e-2, 1e-2, 1e-2], 34.0) == pytest.approx(
+        np.log(98.0 / (3 * 34.0 * 0.945)))                # only the first: anti-symmetric, coupled, in the band
+    assert partner_band_penalty([98.0], labels[:1], [1e-3], 34.0) == 0.0      # not coupled
+    assert partner_band_penalty([103.0], labels[:1], [1e-2], 34.0) == 0.0     # above 3 f: never met by a softening backbone

@@ -2,7 +2,7 @@
 
 ``build_fingerprint(params, n_cb, k3)`` hashes (SHA-256) the builder version, every parameter of
 ``ParisParams``, the reduction size and the springs' k3, and the source text of the builder
-(examples/paris_aircraft/*.py and examples/build_paris.py).  build_paris.py stores it in the file
+(examples/paris_aircraft/*.py but the tuning scripts tuning*.py, and examples/build_paris.py).  build_paris.py stores it in the file
 (model info ``builder_fingerprint``); tests/test_aircraft.py recomputes it from the code and fails
 when the shipped file was built by other code or parameters (rebuild with build_paris.py then).
 The FE kit (nnm_fem) and the solver are not hashed: their own tests cover them.
@@ -17,8 +17,9 @@ from pathlib import Path
 from .params import BUILDER_VERSION, ParisParams
 
 PACKAGE = Path(__file__).resolve().parent
-#: source files whose text enters the fingerprint
-SOURCES = sorted(PACKAGE.glob("*.py")) + [PACKAGE.parent / "build_paris.py"]
+#: source files whose text enters the fingerprint: the builder, not the tuning scripts (tuning*.py choose the
+#: parameters, whose values are hashed; their text does not change a build)
+SOURCES = sorted(p for p in PACKAGE.glob("*.py") if not p.name.startswith("tuning")) + [PACKAGE.parent / "build_paris.py"]
 
 
 def build_inputs(params: ParisParams, n_cb: int, k3: float) -> dict:

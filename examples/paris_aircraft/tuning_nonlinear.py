@@ -4,8 +4,10 @@ The four softening cubic springs act on the relative vertical displacement acros
 attachments.  How far a backbone softens and which internal resonance stops it are set by linear
 quantities of the FE model (docs/aircraft.md, "Builder 1.3"):
 
-* the share of a mode's strain energy in the attachments' vertical stiffness ``att_kz``
-  (``attachment_shares``): the softening a backbone can reach grows with it;
+* how much a mode deforms the springs, measured by ``attachment_shares``: att_kz sum d^2 / w^2, the energy a
+  spring of the attachments' vertical stiffness would store at the relative vertical displacements d the
+  cubic springs see, per unit modal energy (not the attachment beams' own strain energy: d also holds the short
+  stubs' rigid rotation); the softening a backbone can reach grows with it;
 * the modes whose frequency sits just under n x f (n = 3, 5, ...) and that deform the attachments
   (``attachment_deformations``): a backbone softening by d meets such a partner at
   f_k = n f (1 - d), and a strongly coupled one takes the orbit over there (the tongue ends the
@@ -41,8 +43,11 @@ def attachment_deformations(ac, V):
 
 
 def attachment_shares(ac, f_hz, V):
-    """Share of each mode's strain energy stored in the attachments' vertical stiffness att_kz:
-    att_kz sum_a d_a^2 / w^2 for mass-normalised modes (strain energy w^2 / 2 per unit amplitude)."""
+    """How much each mode loads the cubic springs: att_kz sum_a d_a^2 / w^2 for mass-normalised modes (modal
+    strain energy w^2 / 2 per unit amplitude), d_a the relative vertical displacement across attachment a (what
+    the spring of attachment a sees).  The energy a spring of stiffness att_kz would store at d, as a fraction of
+    the mode's energy; an upper bound of nothing physical in the linear model (d includes the stubs' rigid
+    rotation, which strains no beam), but the measure the nonlinear terms scale with."""
     d = attachment_deformations(ac, V)
     w2 = (2 * np.pi * np.asarray(f_hz)) ** 2
     return ac.params.att_kz * (d ** 2).sum(axis=0) / np.maximum(w2, 1e-12)

@@ -67,10 +67,14 @@ def craig_bampton(M, K, retained_dofs, n_modes, tol=0.0, xyz=None):
     if n_modes > 0:
         op = spla.LinearOperator(Kii.shape, matvec=lu.solve, dtype=float)
         ncv = min(len(internal) - 1, n_modes + max(100, (2 * n_modes) // 5))  # ~20 % faster than 2k+1
-        lam, Phi = spla.eigsh(Kii, k=n_modes, M=Mii, sigma=0.0, OPinv=op, which="LM", tol=tol, ncv=ncv)
+        v0 = np.ones(len(internal)) / np.sqrt(len(internal))        # a fixed start: the same basis at every run
+        lam, Phi = spla.eigsh(Kii, k=n_modes, M=Mii, sigma=0.0, OPinv=op, which="LM", tol=tol, ncv=ncv, v0=v0)
         order = np.argsort(lam)
         lam, Phi = lam[order], Phi[:, order]
         Phi /= np.sqrt(np.einsum("ik,ik->k", Phi, Mii @ Phi))
+        # a fixed sign: each mode's largest entry positive, so that the reduced coordinates (and branches saved in
+        # them) are the same at every build of the same model
+        Phi *= np.sign(Phi[np.argmax(np.abs(Phi), axis=0), np.arange(Phi.shape[1])])
     else:
         lam, Phi = np.zeros(0), np.zeros((len(internal), 0))
     nb = len(b)
