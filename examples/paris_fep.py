@@ -52,6 +52,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import nnm_solver as nnm  # noqa: E402
 from nnm_solver import analysis  # noqa: E402
 from nnm_solver.files.h5file import atomic_file  # noqa: E402
+from nnm_solver.files.io import check_branch_file  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the shipped model file (nnm_viewer/data links to assets/: ``nnm-view paris.h5`` shows it); written only
@@ -682,14 +683,6 @@ def build_parser():
     return p
 
 
-def _same_model(a, b):
-    """Are the models a and b the same (DOF count, M, K bit for bit, the springs' places and k3)?"""
-    def dense(A):
-        return A.toarray() if hasattr(A, "toarray") else np.asarray(A)
-    return (a.n == b.n and [(s.dof, s.other, s.k3) for s in a.springs] == [(s.dof, s.other, s.k3) for s in b.springs]
-            and np.array_equal(dense(a.M), dense(b.M)) and np.array_equal(dense(a.K), dense(b.K)))
-
-
 def main(argv=None):
     args = build_parser().parse_args(argv)
     t_all = time.perf_counter()
@@ -723,9 +716,12 @@ def main(argv=None):
         for b in nnm.load_branches(model_path, model):
             saved[b.name] = b
     for path in args.branches_from or []:
-        if not _same_model(nnm.load_model(path), model):
-            sys.exit(f"{path} holds another model than {model_path} (M, K or the springs differ: e.g. a rebuild whose "
-                     f"reduced coordinates differ); its branches were not used: compute them on {model_path}")
+        try:
+            check_branch_file(path, model)          # the file's model must be this one (M, K, the springs)
+        except nnm.NNMInputError as exc:
+            sys.exit(f"{path} holds another model than {model_path} ({str(exc).split('(', 1)[-1].split(')')[0]}: "
+                     f"e.g. a rebuild whose reduced coordinates differ); its branches were not used: compute them "
+                     f"on {model_path}")
         for b in nnm.load_branches(path, model):
             saved[b.name] = b
     for path in args.times_from or []:

@@ -1,5 +1,5 @@
 """Computing NNM branches: the public entry points (``api``: argument checks, the first orbit,
-``iter_nnm``, ``continue_nnm``, ``continue_tongue``), the ``NNMIterator`` of one branch (events
+``iter_nnm``, ``continue_nnm``), a tongue as its own branch (``tongue_branch``: ``continue_tongue``), the ``NNMIterator`` of one branch (events
 located, stop reasons), finer time steps where the error asks (``refinement``), tongue skipping
 (``tongue_skip``), branch switching (``switching``) and background jobs (``jobs``).
 
@@ -7,7 +7,8 @@ Layer: imports ``nnm_solver.analysis``, ``results``, ``orbits``, ``stability``, 
 ``integrators``, ``model`` and the base modules.
 """
 from .api import (HILL_AUTO_SIZE, METHODS, START_NONLINEARITY, NNMIterator, check_branch_arguments, check_positive,
-                  continue_nnm, continue_tongue, iter_nnm, start_amplitude)
+                  continue_nnm, iter_nnm, start_amplitude)
+from .tongue_branch import continue_tongue
 from .jobs import Job, start_branch
 from .switching import switch_branch
 

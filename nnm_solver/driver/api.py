@@ -15,20 +15,18 @@ import math
 
 import numpy as np
 
-from ..results.branch import Point
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
 from .iterator import NNMIterator
 from .labels import FamilyLabels
 from .skeleton import SKELETON_HARMONICS, skeleton
-from .tongue_skip import leaves_backbone
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
 from ..orbits.condensed_hb import CondensedHBProblem
 from ..orbits.harmonic_balance import HBProblem
 from ..orbits.hb_basis import BASES, HBBasis
-from ..integrators.registry import INTEGRATORS, get_integrator
+from ..integrators.registry import get_integrator
 from ..orbits.shooting import ShootingProblem
 from ..results.settings import HarmonicBalanceSettings, ShootingSettings
 
@@ -383,77 +381,3 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
             return it.branch()
         if on_point is not None:
             on_point(point)
-
-
-#: continue_tongue stops after this many consecutive points back on the backbone below the tongue's entry
-BACK_ON_BACKBONE = 3
-#: relative frequency distance within which a point lies on the backbone's own curve (energy-frequency)
-ON_BACKBONE_RTOL = 1e-4
-
-
-def _on_backbone(branch, p):
-    """Does point ``p`` lie on the backbone ``branch``'s frequency-energy curve (within ON_BACKBONE_RTOL), inside
-    the backbone's energy range?"""
-    E, f = np.asarray(branch.energy, float), np.asarray(branch.frequency_hz, float)
-    order = np.argsort(E)
-    E, f = E[order], f[order]
-    if not (E[0] <= p.energy <= E[-1]) or np.any(np.diff(E) <= 0):
-        return False
-    f_b = np.interp(np.log(p.energy), np.log(E), f)
-    return abs(p.frequency_hz - f_b) <= ON_BACKBONE_RTOL * f_b
-
-
-def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
-    """The internal-resonance tongue ``tongue`` (one of ``branch.tongues``, or its index) as its own branch.
-
-    branch : a backbone computed with ``continue_nnm(..., tongues="skip")`` (shooting).  The
-    continuation restarts at the tongue's entry orbit, heads into the tongue and follows it through
-    its turning points until it is back on the backbone above the entry energy (message: where), back on
-    it below the entry (BACK_ON_BACKBONE points descending: the tongue is a loop off the backbone), closes
-    a loop, or reaches energy_max (default: 100 x the entry energy).  Points are labelled by their
-    harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
-    branch's own steps_per_period, symmetric and tol are the defaults).
-    """
-    tongue = branch.pick("tongues", tongue)
-    if tongue.get("family_end"):
-        raise NNMInputError(f"this record marks where the backbone family ends ({tongue.get('note', '')}): there is "
-                            f"no tongue branch to start from it")
-    if "entry_x0" not in tongue:
-        raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
-    s = branch.settings
-    if s.method != "shooting":
-        raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
-    for key in ("steps_per_period", "symmetric", "tol", "integrator"):
-        options.setdefault(key, getattr(s, key))
-    E_in = float(tongue["entry_energy"])
-    energy_max = 100 * E_in if energy_max is None else energy_max
-    start = ((np.asarray(tongue["entry_x0"]), np.asarray(tongue["entry_v0"]), tongue["entry_period"]),
-             (np.asarray(tongue["inside_x0"]), np.asarray(tongue["inside_v0"]), tongue["inside_period"]))
-    tol = options.pop("tol")
-    it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
-                  _start=start, **options)
-    entry = Point(E_in, tongue["entry_frequency_hz"], tongue["entry_period"], start[0][0], start[0][1],
-                  np.full(2 * branch.model.n, np.nan, dtype=complex), True)
-    last, inside, in_tongue, below = E_in, False, False, 0
-    for p in it:
-        inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
-        in_tongue = in_tongue or p.label != "backbone"
-        if inside and p.energy > E_in and p.energy > last and not leaves_backbone(p, entry):
-            it.cancel(f"back on the backbone at E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz, above the "
-                      f"tongue's entry at {E_in:.6g} J")
-            break
-        # a tongue that closes back onto the backbone below its entry: the continuation would retrace the backbone
-        # down to the linear mode; stop after BACK_ON_BACKBONE such points
-        below = below + 1 if (in_tongue and p.label == "backbone" and p.energy < E_in and p.energy < last
-                              and _on_backbone(branch, p)) else 0
-        if below >= BACK_ON_BACKBONE:
-            it.cancel(f"the tongue closes back onto the backbone below its entry (at E = {p.energy:.6g} J, "
-                      f"f = {p.frequency_hz:.6g} Hz; entry {E_in:.6g} J): a loop off the backbone")
-            break
-        last = p.energy
-    out = it.branch()
-    if out.status == "cancelled":
-        out.status = "done"
-    ratio = tongue["label"].split()[-1]          # 'tongue 3:1' -> '3:1'
-    out.name = f"{branch.name or f'NNM {branch.mode}'}: {ratio} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
-    return out

@@ -217,7 +217,8 @@ def peak_of_samples(x):
     S = len(x)
     k = np.argmax(x, axis=0)
     idx = np.indices(k.shape)
-    y0, y1, y2 = x[(k - 1) % S, *idx], x[k, *idx], x[(k + 1) % S, *idx]
+    idx = tuple(idx)                                  # x[(k, *idx)]: Python 3.10 has no starred index
+    y0, y1, y2 = x[((k - 1) % S,) + idx], x[(k,) + idx], x[((k + 1) % S,) + idx]
     den = y0 - 2 * y1 + y2
     with np.errstate(divide="ignore", invalid="ignore"):
         d = np.where(den < 0, 0.5 * (y0 - y2) / den, 0.0)
