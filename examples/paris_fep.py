@@ -52,7 +52,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import nnm_solver as nnm  # noqa: E402
 from nnm_solver import analysis  # noqa: E402
 from nnm_solver.files.h5file import atomic_file  # noqa: E402
-from nnm_solver.files.io import check_branch_file  # noqa: E402
+from nnm_solver.files.branch_io import check_branch_file  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the shipped model file (nnm_viewer/data links to assets/: ``nnm-view paris.h5`` shows it); written only

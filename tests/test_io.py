@@ -149,7 +149,7 @@ def test_interrupted_write_leaves_file_intact(tmp_path, two_dof_nnm1, monkeypatc
 
     def fail(*args, **kwargs):
         raise KeyboardInterrupt
-    monkeypatch.setattr(nnm.io, "_jsonable", fail)   # dies in the middle of writing the new group
+    monkeypatch.setattr(nnm.files.branch_io, "_jsonable", fail)   # dies in the middle of writing the new group
     with pytest.raises(KeyboardInterrupt):
         nnm.save_branch(p, two_dof_nnm1)
     assert p.read_bytes() == before

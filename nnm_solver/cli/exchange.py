@@ -119,7 +119,8 @@ def main_import(argv):
 
 
 def main_export(argv):
-    from ..files.io import load_branches, load_model
+    from ..files.branch_io import load_branches
+    from ..files.io import load_model
 
     p = argparse.ArgumentParser(prog="nnm-solve export", description="Export a stored branch (CSV, UFF 55 shapes, "
                                 "amplitude-frequency backbone).")

@@ -273,7 +273,7 @@ def _run_forced(args):
 
 def _run(args):
     from . import exchange as cli_exchange
-    from ..files.io import check_branch_file, save_branch
+    from ..files.branch_io import check_branch_file, save_branch
     from ..driver.jobs import start_branch
 
     model, ref = _load(args.file)

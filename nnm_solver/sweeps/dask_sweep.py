@@ -228,7 +228,7 @@ def sweep(model, modes, energy_max, variants=None, client=None, out=None, **cont
 
 
 def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, results, state, report, stop):
-    from ..files.io import save_branch
+    from ..files.branch_io import save_branch
 
     dd = _import_distributed()
     client, owned = _connect(client_arg, len(todo))

@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import NNMInputError
 from ..files.h5file import atomic_h5, open_nnm
-from ..files.io import load_branches, load_model, write_model_group
+from ..files.branch_io import load_branches
+from ..files.io import load_model, write_model_group
 from ..files.sweep_groups import parse_branch_name, recorded_variants
 
 __all__ = ["prepare_file", "load_sweep"]
