@@ -195,6 +195,10 @@ def test_shipped_branches_each_tongue_once(shipped):
         assert b.status in ("done", "tongue", "escape"), (name, b.status, b.message)
         assert set(b.labels) == {"backbone"}, name
     assert drop["mode20"] > 0.04 and drop["mode19"] > 0.01 and drop["mode10"] > 0.005 and abs(drop["mode13"]) < 0.01
+    # shapes (mass-weighted MAC of the orbit shapes at the lowest and highest energy, as paris_fep.py reports them):
+    # mode 10 weakly changed (>= 0.98, paper 0.99), mode 13 practically unchanged, mode 20 0.96 (paper 0.97)
+    mac = {name: analysis.mac_orbits(b, 0, b, int(np.argmax(b.energy))) for name, b in backbones.items()}
+    assert mac["mode10"] >= 0.98 and mac["mode13"] >= 0.98 and mac["mode20"] > 0.9 and mac["mode19"] > 0.9
     # builder 1.3: mode 19 meets the 3:1 with the symmetric tail torsion (mode 39; the seed paper's Fig. 12), a 5:1
     # (mode 67) and the 9:1 (mode 238) its family ends in; mode 20 jumps the 3:1 with mode 42 (the second
     # anti-symmetric wing torsion) and its family ends in it; mode 13 a 3:1 with mode 30; mode 10 a 9:1 with mode 32
