@@ -246,3 +246,19 @@ def test_attachment_shares_and_partner_band_penalty(coarse):
         np.log(98.0 / (3 * 34.0 * 0.945)))                # only the first: anti-symmetric, coupled, in the band
     assert partner_band_penalty([98.0], labels[:1], [1e-3], 34.0) == 0.0      # not coupled
     assert partner_band_penalty([103.0], labels[:1], [1e-2], 34.0) == 0.0     # above 3 f: never met by a softening backbone
+
+
+def test_tutorial_aircraft_numbers_are_the_shipped_ones(shipped):
+    """docs/tutorial.md section 8 quotes the shipped backbones (drops, mode 13's last energy, the 3:1 entry of
+    mode 19 and the tail torsion's frequency): each number, recomputed from assets/paris.h5, is in the text."""
+    text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "tutorial.md").read_text().split())
+    branches = {b.name: b for b in nnm_solver.load_branches(ASSET, shipped)}
+    drop = {m: 100 * (1 - branches[f"mode{m}"].frequency_hz[-1] / branches[f"mode{m}"].frequency_hz[0])
+            for m in (10, 13, 19, 20)}
+    assert f"-{drop[13]:.2f} % at {branches['mode13'].energy.max():.1f} J" in text
+    assert f"softens by {drop[10]:.2f} %" in text and f"by {drop[19]:.2f} %" in text and f"({drop[20]:.2f} %)" in text
+    entry = next(t for t in branches["mode19"].tongues if t["label"] == "tongue 3:1")
+    f19 = shipped.linear_modes()[0][18]
+    assert (f"meets at {entry['entry_energy']:.2f} J ({100 * (entry['entry_frequency_hz'] / f19 - 1):.2f} %)"
+            in text)
+    assert f"model mode 39, {shipped.linear_modes()[0][38]:.1f} Hz" in text
