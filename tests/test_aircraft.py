@@ -262,3 +262,14 @@ def test_tutorial_aircraft_numbers_are_the_shipped_ones(shipped):
     assert (f"meets at {entry['entry_energy']:.2f} J ({100 * (entry['entry_frequency_hz'] / f19 - 1):.2f} %)"
             in text)
     assert f"model mode 39, {shipped.linear_modes()[0][38]:.1f} Hz" in text
+
+
+@pytest.mark.slow
+def test_backbone_check_follows_a_softening_backbone_of_the_full_fe_model():
+    """tuning_nonlinear.backbone_check (the tuning tool of builder 1.3): the condensed HB backbone of the full
+    (here coarse, 17,514-DOF) FE model with the four springs; mode 20 softens (k3 < 0), from its linear frequency,
+    and at H = 1 (no higher harmonic: no internal resonance) its family ends at the springs' saddle ('escape')."""
+    from paris_aircraft.tuning_nonlinear import backbone_check
+    (out,) = backbone_check(ParisParams(mesh=0.4), modes=(20,), harmonics=1, energy_max=5.0)
+    assert out["mode"] == 20 and out["points"] > 10
+    assert out["status"] == "escape" and 0.02 < out["drop"] < 0.5 and out["energy_at_drop"] > 0
