@@ -257,3 +257,18 @@ def test_a_ten_thousand_dof_lattice_runs_with_its_first_point_at_the_exact_linea
     assert b.frequency_hz[-1] > 1.003 * b.frequency_hz[0]                   # the spring hardens it (0.5 %)
     assert b.x0.shape == (len(b), N * N)
     assert np.isclose(model.energy(b.x0[-1], b.v0[-1]), 2e-2, rtol=1e-6)
+
+
+def test_skip_backbone_does_not_crawl_at_a_tongue_it_keeps_re_entering():
+    """The shipped aircraft's mode 20 by condensed HB (H = 3) with tongues="skip": past about 6.6 J every jump over
+    the 3:1 with mode 41 landed on the orbit it started from and the branch re-entered the tongue 469 times, 500
+    points at one energy (max_points).  After MAX_STALLS re-entries from the same energy it ends there (status
+    'tongue', said so), with the backbone below it."""
+    from pathlib import Path
+    from nnm_solver.driver.iterator import MAX_STALLS
+    model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
+    b = nnm.continue_nnm(model, 20, 40.0, method="hb", harmonics=3, condensed=True, floquet=False, tongues="skip")
+    assert b.status == "tongue" and "from the same orbit" in b.message, b.message
+    assert len(b) < 60 and b.tongues[-1]["stalls"] == MAX_STALLS and not b.tongues[-1]["skipped"]
+    assert np.sum(np.isclose(b.energy, b.energy.max(), rtol=1e-9)) <= MAX_STALLS + 1
+    assert b.frequency_hz.min() / b.frequency_hz[0] - 1 < -0.04

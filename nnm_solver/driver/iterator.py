@@ -29,6 +29,9 @@ from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_label, leav
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
+#: skip mode: a tongue re-entered MAX_STALLS times from the same backbone energy (to STALL_RTOL) ends the branch
+MAX_STALLS = 3
+STALL_RTOL = 1e-9
 
 __all__ = ["NNMIterator"]
 
@@ -196,9 +199,22 @@ class NNMIterator(StepRefinement):
         if previous is not None and same_tongue(previous, tongue):
             # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
             previous["reentries"] = previous.get("reentries", 0) + 1
+            last = previous.get("last_entry_energy", previous["entry_energy"])
+            previous["stalls"] = previous.get("stalls", 0) + 1 if bpoint.energy <= last * (1 + STALL_RTOL) else 0
+            previous["last_entry_energy"] = bpoint.energy
             previous.pop("exit_energy", None)
             previous.pop("exit_frequency_hz", None)
             tongue = previous
+            if tongue["stalls"] >= MAX_STALLS:
+                # the jumps land on the orbit they started from: no progress, the family ends at this tongue
+                tongue.update(skipped=False, note=f"re-entered {tongue['stalls']} times from the same orbit")
+                self._finish("tongue", f"the backbone re-entered the {k}:1 internal-resonance tongue with mode "
+                             f"{tongue.get('partner_mode', 0)} at E = {bpoint.energy:.4g} J, f = "
+                             f"{bpoint.frequency_hz:.5g} Hz {tongue['stalls']} times from the same orbit (the jumps "
+                             f"over it land where they started): no backbone above it was found, the branch ends "
+                             f"there; the points on the backbone below are kept")
+                self._last_backbone = None
+                return False
         else:
             self.tongues.append(tongue)
         tongue["attempts"] = tongue.get("attempts", 0) + skipper.attempts     # orbits corrected to jump it
