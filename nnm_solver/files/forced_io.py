@@ -14,7 +14,6 @@ and the file is left unchanged.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -24,13 +23,12 @@ from ..errors import NNMFileError, NNMInputError
 from ..results.forced import ForcedResponse
 from .h5file import atomic_h5, open_nnm, read_matrix
 from .importers import is_import_path
+from .branch_io import MODEL_RTOL, _close, _jsonable      # the same model comparison and JSON as for branches
 from .io import read_model_group, spring_law_json, write_model_group
 
 __all__ = ["save_forced_response", "load_forced_responses", "FORCED_GROUP"]
 
 FORCED_GROUP = "forced"
-#: relative tolerance of the comparison with the file's model
-MODEL_RTOL = 1e-10
 
 
 def save_forced_response(path, result, name=None):
@@ -153,25 +151,3 @@ def _matrix_difference(A, B):
     scale = max(float(np.max(np.abs(A))) if A.size else 0.0, float(np.max(np.abs(B))) if B.size else 0.0, 1e-300)
     d = float(np.max(np.abs(A - B))) / scale if A.size else 0.0
     return 0.0 if d <= MODEL_RTOL else d
-
-
-def _close(a, b):
-    if isinstance(a, dict) and isinstance(b, dict):
-        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
-    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
-        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
-    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        return math.isclose(a, b, rel_tol=MODEL_RTOL, abs_tol=0.0)
-    return a == b
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj
