@@ -167,3 +167,40 @@ def test_two_dof_hb_skip_jumps_the_three_to_one_onto_the_backbone_the_default_br
                  ((default, above), (skip, np.flatnonzero(skip.energy > 1.1 * skip.tongues[-1]["exit_energy"])))
                  for i in idx]
     assert len(above) >= 3 and len(on_family) >= 6 and max(on_family) < 1e-6
+
+
+def test_is_fold_tells_a_missing_harmonic_from_a_partner_harmonic():
+    """tongue_skip.is_fold: an orbit with no third harmonic (a single-harmonic balance) has no 3:1 partner to
+    name; a third harmonic of 1e-3 of the fundamental is one."""
+    from nnm_solver.driver.tongue_skip import is_fold
+    t = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+    Q = np.column_stack([np.cos(t), 0.1 * np.cos(t)])
+    assert is_fold(Q, 3)
+    Q[:, 1] += 1e-3 * np.cos(3 * t)
+    assert not is_fold(Q, 3) and not is_fold(Q, 1)
+
+
+def test_single_harmonic_backbones_end_at_their_fold_not_in_a_tongue_with_their_own_mode():
+    """Condensed HB at H = 1 (no harmonic k >= 2: no k:1 internal resonance can exist) on the shipped aircraft,
+    tongues='skip'.  Modes 20 and 10 soften up to the springs' saddle, where the single-harmonic family folds (its
+    skeleton at H = 1 ends at its energy maximum, end 'peak', the amplitude stepping failing with no partner in
+    the orbit): status 'escape', no tongue recorded, every point backbone.  It used to record a '3:1 tongue with
+    mode 20' there (the argmax of round-off harmonics) and, on a slower solver path, jump onto another family
+    above the saddle and report 'done'.  Mode 19's family folds below its end: those departures are recorded as
+    'fold' (order 1, no partner), never as a k:1 tongue with its own mode."""
+    from pathlib import Path
+    model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
+    f_lin = model.linear_modes()[0]
+    for mode in (20, 10):
+        b = nnm.continue_nnm(model, mode, 20.0, method="hb", harmonics=1, condensed=True, floquet=False,
+                             tongues="skip")
+        sk = skeleton(model, mode, 20.0, _skeleton_system, 1)
+        assert sk.end == "peak" and sk.energy_peak is not None, sk.message
+        assert b.status == "escape" and "energy maximum" in b.message, b.message
+        assert b.tongues == [] and set(b.labels) == {"backbone"}
+        assert 0.8 * sk.energy_peak <= b.energy.max() <= sk.energy_peak * 1.01
+        assert b.frequency_hz[-1] < 0.99 * f_lin[mode - 1] and abs(b.frequency_hz[0] / f_lin[mode - 1] - 1) < 1e-4
+    b = nnm.continue_nnm(model, 19, 20.0, method="hb", harmonics=1, condensed=True, floquet=False, tongues="skip")
+    assert b.tongues and all(t["label"] == "fold" and t["order"] == 1 and t["partner_mode"] == 0
+                             for t in b.tongues), [(t["label"], t["partner_mode"]) for t in b.tongues]
+    assert "no internal resonance" in b.message and "tongue with mode 19" not in b.message

@@ -7,7 +7,8 @@ step halved where ln f moves more than the trend allows) the condensed harmonic-
 Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (JUMPS, with frequency shifts
 JUMP_SHIFTS) are tried and kept when they land on the family's frequency trend with SHARE_KEPT of its
 fundamental share (``family_share``); the family ends at the reach, at its energy maximum (PEAK_RUN steps of falling
-energy with PEAK_SHARE kept), where a partner takes the orbit over (SHARE_MIN) or where no jump lands.
+energy with PEAK_SHARE kept, or a fold in amplitude with no partner where the energy folds too: _folds_at_peak),
+where a partner takes the orbit over (SHARE_MIN) or where no jump lands.
 ``amplitude_family`` returns the raw points and how the family ended; skeleton.Skeleton reads them.
 """
 from __future__ import annotations
@@ -35,6 +36,10 @@ JUMP_LIMIT, SHARE_KEPT = 0.02, 0.85
 
 #: the family ends where other modes' higher harmonics take more than 1 - SHARE_MIN of the orbit (family_share)
 SHARE_MIN = 0.5
+
+#: at a fold of the family (no solution at a larger amplitude, no partner), d ln E / d ln a below this (2 in the
+#: linear regime) means the energy turns back with the amplitude: the family's energy maximum (_folds_at_peak)
+FOLD_SLOPE = 4.0
 
 #: a step moving ln f by more than JUMP_FACTOR x the previous step's + JUMP_FLOOR is halved
 JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
@@ -66,8 +71,24 @@ def _partner(prob, u):
     A = np.abs(prob.amplitudes(u)[0]) * prob.basis.h[:, None]
     A[prob.basis.h == 1] = 0.0
     A[:, prob.r] = 0.0
+    if not np.max(A, initial=0.0) > 0:
+        return 1, 0                                  # no other mode carries a higher harmonic: no partner
     j, m = np.unravel_index(int(np.argmax(A)), A.shape)
     return int(prob.basis.h[j]), int(m) + 1
+
+
+def _folds_at_peak(prob, pts):
+    """Is the end of the stepping (no solution at a larger amplitude, no jump past it) a fold of the family
+    itself, with its energy maximum there?  True when the followed mode keeps PEAK_SHARE of the orbit (no
+    partner mode takes it over) and d ln E / d ln a stays between 0 and FOLD_SLOPE over the last step: the
+    amplitude a reaches its maximum along the family while E grows at a finite rate with a, so E reaches its
+    maximum at the same fold (dE/ds = dE/da da/ds = 0).  An energy growing ever faster as a stalls is
+    another mode taking the energy (a resonance), not a fold of the family."""
+    if len(pts) < 3 or family_share(prob, pts[-1][3]) < PEAK_SHARE:
+        return False
+    (a1, E1, _, _), (a0, E0, _, _) = pts[-2], pts[-1]
+    slope = math.log(E0 / E1) / math.log(a0 / a1) if a0 > a1 and E0 > 0 and E1 > 0 else math.inf
+    return 0.0 < slope < FOLD_SLOPE
 
 
 def family_share(prob, u):
@@ -134,6 +155,12 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             pts.append(jumped)
             ratio, falls = STEP_MAX, 0
             return True
+        if v is None and _folds_at_peak(prob, pts):
+            end = "peak"
+            message = (f"the family folds back at E = {E0:.4g} J, f = {f0:.5g} Hz: no solution at a larger amplitude, "
+                       f"with no partner mode in the orbit and its energy still growing with the amplitude there, so "
+                       f"the energy turns back with it: the family's energy maximum")
+            return False
         k, p = partner = _partner(prob, u0 if v is None else v)
         end = "stuck" if v is None else "locked"
         message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: {what} (a {k}:1 internal resonance with "

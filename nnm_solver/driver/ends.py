@@ -6,8 +6,8 @@ The branch's skeleton (skeleton.py) knows how the backbone family itself ends: a
 whose continuation stops near there (above PEAK_NEAR of that energy) ends where its family ends, and says
 so, instead of ``failed`` or ``done``:
 
-* ``escape``: a tongue that cannot be jumped, or a continuation that cannot go on, just below the family's
-  energy maximum;
+* ``escape``: a tongue that cannot be jumped, a continuation that cannot go on, or one whose energy turns
+  back with no tongue's harmonic (the fold of the family itself), just below the family's energy maximum;
 * ``tongue``: the continuation cannot go on where the family meets its final k:1 resonance (a record with
   ``family_end`` is added to ``branch.tongues``), or it cannot leave a tongue it entered (energy_max or
   max_points inside it), with the skeleton's word when the family itself ends there;
@@ -17,11 +17,16 @@ These functions only build the statuses, messages and records; the iterator (ite
 """
 from __future__ import annotations
 
-__all__ = ["PEAK_NEAR", "resonance", "off_family_note", "escape_below_peak", "inside_tongue", "family_end"]
+__all__ = ["PEAK_NEAR", "resonance", "off_family_note", "escape_below_peak", "escape_at_peak", "inside_tongue",
+           "family_end"]
 
 #: a tongue entered, or a continuation stopped, above this fraction of the skeleton's energy maximum (or end)
 #: is "at" the end of the family
 PEAK_NEAR = 0.8
+
+#: a departure from the backbone near the family's energy maximum with less than this fraction of the orbit in any
+#: harmonic k >= 2 has no partner harmonic: the fold of the family itself (escape_at_peak), not a tongue
+PEAK_CONTENT = 1e-3
 
 
 def off_family_note(points):
@@ -36,10 +41,14 @@ def off_family_note(points):
             f"(f = {p.frequency_hz:.5g} Hz) on are off the backbone family (tongues='skip' follows the backbone)")
 
 
-def resonance(label):
-    """'tongue 3:1' (a tongue record's label) -> 'the 3:1 internal-resonance tongue'."""
+def resonance(label, record=None):
+    """'tongue 3:1' (a tongue record's label) -> 'the 3:1 internal-resonance tongue' (and 'with mode p' when the
+    record names its partner); 'fold' -> a fold of the family, which is not an internal resonance."""
+    if label == "fold":
+        return "a fold of its family (its energy turns back with no harmonic k >= 2: no internal resonance)"
     ratio = label.split()[-1] if label.startswith("tongue") else label
-    return f"the {ratio} internal-resonance tongue"
+    partner = record.get("partner_mode", 0) if record is not None else 0
+    return f"the {ratio} internal-resonance tongue" + (f" with mode {partner}" if partner else "")
 
 
 def escape_below_peak(sk, tongue, partner, bpoint):
@@ -47,10 +56,25 @@ def escape_below_peak(sk, tongue, partner, bpoint):
     the family's energy maximum (the skeleton's energy_peak), else None."""
     if sk is None or sk.energy_peak is None or not tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:
         return None
-    return (f"the backbone entered {resonance(tongue['label'])} with mode {partner} at "
+    return (f"the backbone entered {resonance(tongue['label'], tongue)} at "
             f"E = {bpoint.energy:.4g} J, f = {bpoint.frequency_hz:.5g} Hz, just below the family's energy maximum "
             f"{sk.energy_peak:.4g} J (its skeleton: a softening family approaching a saddle): no backbone exists "
             f"above it, the structure escapes; the points on the backbone below are kept")
+
+
+def escape_at_peak(sk, bpoint, point, fraction):
+    """Skip mode: the 'escape' message when the continuation left the backbone (last backbone point ``bpoint``)
+    at the family's own energy maximum: the skeleton ended at its peak, ``point`` is below ``bpoint`` in
+    energy (the energy turned back) or above the peak, ``bpoint`` lies above PEAK_NEAR of it, and no harmonic
+    k >= 2 carries more than PEAK_CONTENT of the orbit (``fraction``, tongue_skip.harmonic_content): no partner
+    harmonic, not a tongue but the fold of the family itself.  None otherwise."""
+    if (sk is None or sk.energy_peak is None or not (point.energy < bpoint.energy or point.energy > sk.energy_peak)
+            or not bpoint.energy >= PEAK_NEAR * sk.energy_peak or not fraction < PEAK_CONTENT):
+        return None
+    return (f"the backbone reached its family's energy maximum at E = {bpoint.energy:.4g} J, "
+            f"f = {bpoint.frequency_hz:.5g} Hz (its skeleton: {sk.energy_peak:.4g} J, a softening family approaching "
+            f"a saddle; no internal resonance there, the higher harmonics carry {100 * fraction:.2g} % of the orbit): "
+            f"no backbone exists above it, the structure escapes; the points are kept")
 
 
 def inside_tongue(sk, t, reached_energy_max, index, max_points=None):
@@ -58,7 +82,7 @@ def inside_tongue(sk, t, reached_energy_max, index, max_points=None):
     branch.tongues) that cannot come back onto the backbone.  ``t['hidden_points']``: the orbits the
     continuation computed inside the tongue since it entered it (not kept on the backbone branch); it
     stopped because it reached energy_max among them, or because they reached ``max_points``."""
-    where = (f"the backbone entered {resonance(t['label'])} with mode {t.get('partner_mode', 0)} "
+    where = (f"the backbone entered {resonance(t['label'], t)} "
              f"at E = {t['entry_energy']:.4g} J, f = {t['entry_frequency_hz']:.5g} Hz")
     n = t["hidden_points"]
     orbits = f"{n} orbit{'s' if n != 1 else ''} computed inside it, not kept"

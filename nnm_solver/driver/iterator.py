@@ -20,12 +20,12 @@ from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 from ..stability.locator import event_rtol
-from .ends import escape_below_peak, family_end, inside_tongue, off_family_note
+from .ends import escape_at_peak, escape_below_peak, family_end, inside_tongue, off_family_note, resonance
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
-from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_label, leaves_backbone, partner_harmonic,
-                          same_tongue, tongue_record, upward_tangent)
+from .tongue_skip import (TongueSkipper, fundamental_share, harmonic_content, harmonic_label, leaves_backbone,
+                          partner_harmonic, same_tongue, tongue_record, upward_tangent)
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
@@ -170,6 +170,11 @@ class NNMIterator(StepRefinement):
         if self._last_backbone is None or not leaves_backbone(point, self._last_backbone[1]):
             return False
         bpoint = self._last_backbone[1]
+        at_peak = escape_at_peak(self._skeleton() if self._skeleton is not None else None, bpoint, point,
+                                 harmonic_content(point)[1])
+        if at_peak is not None:                # the family's own fold at its energy maximum: no tongue to jump
+            self._finish("escape", at_peak)
+            raise StopIteration
         trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
         if self._skip(cp, point):
             return True
@@ -194,7 +199,8 @@ class NNMIterator(StepRefinement):
         partner = tongue.get("partner_mode", 0)
         partner_hz = math.sqrt(self._system.omega2[partner - 1]) / (2 * math.pi) if partner >= 1 else None
         skipper = TongueSkipper(self._problem, self._cs, self._tol, self._system, self._skeleton, self._labels)
-        jumped = skipper.jump(bcp.u, bcp.tangent, bpoint.energy, E_base, k, partner_hz)
+        jumped = skipper.jump(bcp.u, bcp.tangent, bpoint.energy, E_base, None if tongue["order"] == 1 else k,
+                              partner_hz)
         previous = self.tongues[-1] if self.tongues else None
         if previous is not None and same_tongue(previous, tongue):
             # the backbone seemed to resume but re-entered the tongue it was passing: one record, first entry
@@ -208,8 +214,8 @@ class NNMIterator(StepRefinement):
             if tongue["stalls"] >= MAX_STALLS:
                 # the jumps land on the orbit they started from: no progress, the family ends at this tongue
                 tongue.update(skipped=False, note=f"re-entered {tongue['stalls']} times from the same orbit")
-                self._finish("tongue", f"the backbone re-entered the {k}:1 internal-resonance tongue with mode "
-                             f"{tongue.get('partner_mode', 0)} at E = {bpoint.energy:.4g} J, f = "
+                self._finish("tongue", f"the backbone re-entered {resonance(tongue['label'], tongue)} at "
+                             f"E = {bpoint.energy:.4g} J, f = "
                              f"{bpoint.frequency_hz:.5g} Hz {tongue['stalls']} times from the same orbit (the jumps "
                              f"over it land where they started): no backbone above it was found, the branch ends "
                              f"there; the points on the backbone below are kept")

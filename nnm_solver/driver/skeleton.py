@@ -11,9 +11,10 @@ points that land inside (their energy raised by the partner's share) are recogni
 lies above the family's later points and are left out.  Stepping in a ends where
 
 * the energy reaches the reach asked for (``end = "reach"``);
-* the energy turns back for PEAK_RUN steps while a grows and no partner grows: the family's energy
-  maximum (a softening family approaching a saddle), ``energy_peak``: no backbone at higher energy
-  (``end = "peak"``);
+* the energy turns back for PEAK_RUN steps while a grows and no partner grows, or the family folds back
+  in a with no partner in the orbit and its energy growing at a finite rate with a up to the fold (so the
+  energy folds there too): the family's energy maximum (a softening family approaching a saddle),
+  ``energy_peak``: no backbone at higher energy (``end = "peak"``);
 * the frequency jumps (a step of the smallest size still moves it much more than the trend) or Newton
   fails at the smallest step: the family met an internal resonance it does not pass smoothly; jumps of
   1-20 % in amplitude are tried (``JUMPS``: accepted on the family's frequency trend with its fundamental

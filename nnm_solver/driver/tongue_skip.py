@@ -22,6 +22,8 @@ on the backbone above the entry energy (or closes a loop, or reaches energy_max)
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..analysis.harmonics import RESONANCE_FRACTION
@@ -36,6 +38,9 @@ LABEL_HARMONICS = 25
 
 #: relative energy jumps tried over a tongue
 JUMPS = (0.02, 0.05, 0.1, 0.2, 0.5)
+
+#: a harmonic below this fraction of the fundamental is absent (is_fold: a fold of the family, not a tongue)
+FOLD_CONTENT = 1e-6
 
 #: skip mode: a harmonic k >= 2 growing to this fraction of the amplitude marks a tongue's entrance
 SKIP_FRACTION = 0.05
@@ -95,11 +100,27 @@ def partner_mode(system, Q, k):
     return r + 1, float(m[r])
 
 
+def is_fold(Q, k):
+    """Does the modal orbit Q hold no harmonic k (below FOLD_CONTENT of its fundamental)?  Then a departure from
+    the backbone into Q is not a k:1 internal resonance but a fold of the family at the fundamental (e.g. the
+    springs' saddle at one harmonic): there is no partner harmonic to name."""
+    if Q is None or k is None or k < 2:
+        return False
+    c = np.linalg.norm(fourier_coefficients(Q, k), axis=1)
+    return bool(c[k] < FOLD_CONTENT * max(c[1], 1e-300))
+
+
 def tongue_record(system, Q, k, bpoint, point, entry_index):
     """The record of a k:1 tongue entered from the backbone point ``bpoint`` (index entry_index) into ``point``
-    (Q: its modal orbit): ratio, partner mode (partner_mode) and the entry and inside orbits."""
-    mode, mac = partner_mode(system, Q, k) if Q is not None else (0, float("nan"))
-    return dict(ratio=[k, 1], order=k, label=f"tongue {k}:1", partner_mode=mode, partner_mac=mac,
+    (Q: its modal orbit): ratio, partner mode (partner_mode) and the entry and inside orbits.  Where Q holds
+    no harmonic k (is_fold) the record is a fold of the family: label "fold", order 1, partner_mode 0."""
+    fold = is_fold(Q, k)
+    mode, mac = partner_mode(system, Q, k) if Q is not None and not fold else (0, float("nan"))
+    extra = dict(note="the energy turned back with no harmonic k >= 2 in the orbit: a fold of the family, "
+                      "not an internal resonance") if fold else {}
+    k = 1 if fold else k
+    return dict(ratio=[k, 1], order=k, label="fold" if fold else f"tongue {k}:1", partner_mode=mode,
+                partner_mac=mac, **extra,
                 entry_index=entry_index, entry_energy=bpoint.energy, entry_frequency_hz=bpoint.frequency_hz,
                 entry_period=bpoint.period, entry_x0=np.asarray(bpoint.x0).tolist(),
                 entry_v0=np.asarray(bpoint.v0).tolist(), inside_x0=np.asarray(point.x0).tolist(),
@@ -195,20 +216,22 @@ class TongueSkipper:
                 continue
             self.attempts += 1
             u, J = self._level_set(guess, w)
-            if u is not None and self._lands(u, k, E_base):
+            if u is not None and self._lands(u, k, E_base) and not self._beyond_family(u):
                 return u, J, f"a jump of {100 * delta:g} % in energy"
         return None
 
     def _skeleton_guesses(self, E_base, k, partner_hz):
         """(u guess, description, side of the band) for the skeleton's orbits beyond the k:1 band."""
         prob = self.problem
-        if self.skeleton is None or not partner_hz or k is None or k < 2 or not (
-                hasattr(prob, "from_state") or hasattr(prob, "from_family")):
+        if self.skeleton is None or not (hasattr(prob, "from_state") or hasattr(prob, "from_family")):
+            return
+        fold = k is None                   # a fold of the family (is_fold): no band, the family just above it
+        if not fold and (not partner_hz or k < 2):
             return
         sk = self.skeleton()
         if sk is None:
             return
-        band = sk.targets(E_base, k, partner_hz)
+        band = [] if fold else sk.targets(E_base, k, partner_hz)
         # then the family just above the entry (a tongue the skeleton does not place, or one re-entered)
         near = [E_base * (1 + d) for d in JUMPS if sk.covers(E_base * (1 + d))
                 and not any(abs(E_base * (1 + d) / E_t - 1) < 0.01 for E_t in band)]
@@ -245,6 +268,17 @@ class TongueSkipper:
                 return label == "backbone"
         f_sk = self.skeleton().frequency_at(E)
         return self._lands(u, k, E_base, RESONANCE_FRACTION) and bool(abs(f / f_sk - 1.0) <= FAMILY_TOL)
+
+    def _beyond_family(self, u):
+        """Is the orbit u where the backbone family does not exist: above the skeleton's energy maximum (a
+        softening family's saddle) or beyond where it ends in a k:1 resonance (labels.py: dev = inf)?  A jump
+        that lands there has left the family (e.g. onto another family above the saddle), not jumped a tongue."""
+        if self.labels is None:
+            return False
+        prob = self.problem
+        label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
+        _, dev = self.labels.label(prob.energy(u), 1.0 / prob.state(u)[2], label, kk, frac, amps)
+        return dev is not None and math.isinf(dev)
 
     def _lands(self, u, k, E_base, limit=SKIP_FRACTION):
         """Is u a backbone orbit (label, less than ``limit`` in harmonic k) above E_base?"""
