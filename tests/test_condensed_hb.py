@@ -265,7 +265,7 @@ def test_skip_backbone_does_not_crawl_at_a_tongue_it_keeps_re_entering():
     points at one energy (max_points).  After MAX_STALLS re-entries from the same energy it ends there (status
     'tongue', said so), with the backbone below it."""
     from pathlib import Path
-    from nnm_solver.driver.iterator import MAX_STALLS
+    from nnm_solver.driver.skip_mode import MAX_STALLS
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     b = nnm.continue_nnm(model, 20, 40.0, method="hb", harmonics=3, condensed=True, floquet=False, tongues="skip")
     assert b.status == "tongue" and "from the same orbit" in b.message, b.message
