@@ -120,7 +120,7 @@ def test_status_texts_name_the_tongue_once_and_count_what_they_say():
     class Skeleton:
         energy_peak = 5000.0
 
-    escape = ends.escape_below_peak(Skeleton(), t, 2, bpoint)
+    escape = ends.escape_below_peak(Skeleton(), t, bpoint)
     assert escape.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2")
     for text in (by_points, by_energy, escape):
         assert not re.search(r"\b(\w+) \1\b", text), text          # no doubled word

@@ -51,7 +51,7 @@ def resonance(label, record=None):
     return f"the {ratio} internal-resonance tongue" + (f" with mode {partner}" if partner else "")
 
 
-def escape_below_peak(sk, tongue, partner, bpoint):
+def escape_below_peak(sk, tongue, bpoint):
     """Skip mode, a tongue that could not be jumped: the 'escape' message when it was entered just below
     the family's energy maximum (the skeleton's energy_peak), else None."""
     if sk is None or sk.energy_peak is None or not tongue["entry_energy"] >= PEAK_NEAR * sk.energy_peak:

@@ -106,7 +106,7 @@ class SkipMode:
         tongue["attempts"] = tongue.get("attempts", 0) + skipper.attempts     # orbits corrected to jump it
         if jumped is None:
             tongue.update(skipped=False, note="no backbone orbit found by a jump: passed by traversing the tongue")
-            escape = escape_below_peak(self._skeleton() if self._skeleton is not None else None, tongue, partner, bpoint)
+            escape = escape_below_peak(self._skeleton() if self._skeleton is not None else None, tongue, bpoint)
             if escape is not None:
                 self._finish("escape", escape)
             return False

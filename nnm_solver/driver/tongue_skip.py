@@ -261,11 +261,9 @@ class TongueSkipper:
         if not E > E_base:
             return False
         f = 1.0 / prob.state(u)[2]
-        label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
-        if self.labels is not None:
-            label, dev = self.labels.label(E, f, label, kk, frac, amps)
-            if dev is not None:
-                return label == "backbone"
+        label, dev = self._family_label(u, E, f)
+        if dev is not None:
+            return label == "backbone"
         f_sk = self.skeleton().frequency_at(E)
         return self._lands(u, k, E_base, RESONANCE_FRACTION) and bool(abs(f / f_sk - 1.0) <= FAMILY_TOL)
 
@@ -273,12 +271,16 @@ class TongueSkipper:
         """Is the orbit u where the backbone family does not exist: above the skeleton's energy maximum (a
         softening family's saddle) or beyond where it ends in a k:1 resonance (labels.py: dev = inf)?  A jump
         that lands there has left the family (e.g. onto another family above the saddle), not jumped a tongue."""
-        if self.labels is None:
-            return False
-        prob = self.problem
-        label, kk, frac, amps = harmonic_label(prob.modal_orbit(u))
-        _, dev = self.labels.label(prob.energy(u), 1.0 / prob.state(u)[2], label, kk, frac, amps)
+        _, dev = self._family_label(u, self.problem.energy(u), 1.0 / self.problem.state(u)[2])
         return dev is not None and math.isinf(dev)
+
+    def _family_label(self, u, E, f):
+        """(label, dev) of the orbit u (energy E J, frequency f Hz) against the skeleton (labels.py); dev is None
+        without labels or where no skeleton covers E (then the label is the harmonic content's)."""
+        label, kk, frac, amps = harmonic_label(self.problem.modal_orbit(u))
+        if self.labels is None:
+            return label, None
+        return self.labels.label(E, f, label, kk, frac, amps)
 
     def _lands(self, u, k, E_base, limit=SKIP_FRACTION):
         """Is u a backbone orbit (label, less than ``limit`` in harmonic k) above E_base?"""
