@@ -312,7 +312,7 @@ def test_similar_mode_loss_of_stability_matches_hills_equation():
 
 def _fold_and_crossing_step(s_fold, s_cross):
     """A synthetic step sigma 0 -> 1: the energy 1 - 1e-3 (sigma - s_fold)^2 (a fold at s_fold) and a real pair
-    through +1 at s_cross.  Returns (locator, point(sigma), slope(sigma))."""
+    through +1 at s_cross (rho = 1 + ds + 0.3 ds^2).  Returns (locator, point(sigma), slope(sigma))."""
     import types
     from nnm_solver.stability.floquet import is_stable, sort_multipliers
     from nnm_solver.stability.locator import Locator
@@ -324,7 +324,8 @@ def _fold_and_crossing_step(s_fold, s_cross):
         return -2e-3 * (s - s_fold)
 
     def mults(s):
-        rho = 1.0 + (s - s_cross)
+        rho = 1.0 + (s - s_cross) + 0.3 * (s - s_cross) ** 2      # not linear: regula falsi does not land on the
+        #                                                           crossing, where the pair is 1, 1 (trivial)
         m = ([np.exp(1j * np.arccos(rho)), np.exp(-1j * np.arccos(rho))] if rho <= 1 else
              [rho + np.sqrt(rho * rho - 1), 1 / (rho + np.sqrt(rho * rho - 1))])
         return sort_multipliers(np.array(m + [np.exp(0.7j), np.exp(-0.7j), 1.0, 1.0]))
