@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_structured import _classes, _exp_transform, _HillOperator, _iterate, _setup
+from .hill_structured import _classes, _exp_transform, _HillOperator, _iterate, _setup, velocity_overlaps
 
 #: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
 #: accepted eigenpair, and the checks that send a point to the structured route: an exponent this close (units of
@@ -64,8 +64,8 @@ def _secular(problem, A, w, bp, C):
             sk = nu[:, None] + 1j * kk[None, :]                              # (S, N_b)
             q0 = sk[:, :, None] ** 2 + w2[None, None, :]                     # (S, N_b, n_t)
             inv = 1.0 / q0
-            W = np.einsum("sj,Slj,tj->Slst", B, inv, B)                      # (S, N_b, n_s, n_s)
-            dW = np.einsum("sj,Slj,tj->Slst", B, -2.0 * sk[:, :, None] * inv ** 2, B)
+            W = (B * inv[:, :, None, :]) @ B.T                                 # (S, N_b, n_s, n_s)
+            dW = (B * (-2.0 * sk[:, :, None] * inv ** 2)[:, :, None, :]) @ B.T
             Wb = np.zeros((len(nu), r, r), dtype=complex)
             dWb = np.zeros_like(Wb)
             for l in range(nb):
@@ -103,7 +103,7 @@ def _secular(problem, A, w, bp, C):
                 z /= np.linalg.norm(z, axis=1, keepdims=True)
                 f = (z @ Ct.T).reshape(S, nb, ns)                                          # (C~ z)_(k, s)
                 c = np.zeros((S, nb, n), dtype=complex)
-                c[:, :, tm] = -inv * np.einsum("sj,Sks->Skj", B, f)
+                c[:, :, tm] = -inv * (f @ B)
                 p = (np.abs(c) ** 2).sum(axis=2)
                 cent = (kk[None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
                 move = (np.abs(cent) > 0.5) & ~bad
@@ -119,7 +119,7 @@ def _secular(problem, A, w, bp, C):
             R = op.apply(X) - X * nu[:, None, None]
             res = np.linalg.norm(R[:, :, 0], axis=1) / (np.linalg.norm(X[:, :, 0], axis=1) * np.maximum(1.0, np.abs(nu)))
             bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
-            bad |= _velocity_overlap(c, vel) > 0.5
+            bad |= velocity_overlaps(c, vel).max(axis=-1) > 0.5
             lat = np.round(nu.imag)
             bad |= (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
             mu = np.exp(2 * np.pi * nu)
@@ -156,19 +156,3 @@ def _secular(problem, A, w, bp, C):
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
     return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-
-def _velocity_overlap(c, vel):
-    """Largest |cos| (S,) between each vector c (S, N_b, n) and the orbit's velocity vel (N_b, n) moved by p
-    harmonics, p = -2H..2H (the trivial pair's eigenvector and its copies)."""
-    nb = vel.shape[0]
-    G = np.einsum("lj,Skj->Skl", np.conj(vel), c)                            # <vel_l, c_k>
-    nrm_c = np.linalg.norm(c.reshape(len(c), -1), axis=1)
-    vk = (np.abs(vel) ** 2).sum(axis=1)
-    best = np.zeros(len(c))
-    for p in range(-(nb - 1), nb):                                           # c_k against vel_{k - p}
-        nv = np.sqrt(vk[max(0, -p):nb - max(0, p)].sum())
-        if nv > 0:
-            ip = np.abs(np.trace(G, offset=-p, axis1=1, axis2=2))
-            best = np.maximum(best, ip / np.maximum(nv * nrm_c, 1e-300))
-    return best
