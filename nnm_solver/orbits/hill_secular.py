@@ -76,8 +76,9 @@ def _secular(problem, A, w, bp, C):
         bad = np.zeros(S, dtype=bool)             # classes the secular route cannot vouch for: the structured route's
         with np.errstate(all="ignore"):
             recentred = np.zeros(S, dtype=int)
+            fresh = np.ones(S, dtype=bool)          # the classes whose exponent is not converged where it is
             for _ in range(4):                      # Newton, then move to the central copies and refine
-                conv = bad.copy()
+                conv = bad | ~fresh
                 for it in range(SECULAR_ITER):
                     act = np.flatnonzero(~conv)
                     if not len(act):
@@ -113,6 +114,7 @@ def _secular(problem, A, w, bp, C):
                 move &= ~bad
                 recentred[move] += 1
                 nu[move] += 1j * np.round(cent[move])
+                fresh = move                        # only the moved ones are refined in the next pass
             op = _HillOperator(omega2, Bq, Cexp, H, w)
             c = np.where(np.isfinite(c), c, 0.0)
             X = op.lift(c[..., None], nu)                                                  # (S, 2m, 1)
