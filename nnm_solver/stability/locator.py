@@ -280,7 +280,7 @@ class Locator:
         lies within LINEAR_BAND x |g(b) - g(a)| of the chord through the ends' true values (g looks linear
         again: Illinois resumes).  A jump is located at bisection's cost; a smooth g keeps Illinois' order.
         Measured on NLvib's beam (example 09, HB H = 5) at its loss of stability next to the 5:1 tongue's fold:
-        60 evaluations without convergence before (the event reported 0.0449549 J, unconverged), 22 after
+        60 evaluations without convergence before (the event reported 0.0449549 J, unconverged), 26 after
         (0.04495513 J, converged); on synthetic jumps to a 1e-9 bracket 36 evaluations instead of 100-200,
         on smooth convex g 12-18 (Illinois alone 12-18; tests/test_locator_root.py)."""
         converged = converged or (lambda a_, b_, fa_, fb_: self._converged(a_, b_))
