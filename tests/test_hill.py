@@ -148,3 +148,56 @@ def test_secular_events_equal_dense_through_a_tongue(monkeypatch, beam_tongue):
                         for e in ref.events])
     assert np.allclose(Ea[~by_fold], Er[~by_fold], rtol=1e-6, atol=0)
     assert np.allclose(Ea[by_fold], Er[by_fold], rtol=1e-3, atol=0)
+
+
+@pytest.mark.parametrize("case", ["pitchfork", "krein"])
+def test_reversible_flags_and_events_equal_dense(monkeypatch, case):
+    """The dense route on the symmetry blocks of a time-symmetric orbit (hill_reversible.py; the default up to
+    DENSE_MAX_ROWS rows) against the whole Hill matrix: the 2-DOF pitchfork (H = 7) and the 3-DOF chain's two Krein
+    collisions (H = 15): the same points, flags, events (to 1e-8 in energy) and multipliers point by point, and the
+    reversible route answered every call itself (no fallback to the whole matrix)."""
+    from nnm_solver.orbits import hill_reversible
+    if case == "pitchfork":
+        m, E, H, kinds = two_dof_model(), 57.0, 7, ["branch_point"]
+    else:
+        m, E, H, kinds = _combination_resonance_model(), 3.0, 15, ["torus", "torus"]
+    ref = _with_route(monkeypatch, "dense", m, 1, E, harmonics=H, max_points=400)
+    calls = {"rev": 0, "none": 0}
+    rev_fn = hill.reversible_multipliers
+
+    def counting(*args, **kw):
+        mu = rev_fn(*args, **kw)
+        calls["rev"] += 1
+        calls["none"] += mu is None
+        return mu
+
+    monkeypatch.setattr(hill, "reversible_multipliers", counting)
+    rev = _with_route(monkeypatch, "reversible", m, 1, E, harmonics=H, max_points=400)
+    assert calls["rev"] >= len(rev.energy) and calls["none"] == 0
+    assert [e["kind"] for e in ref.events] == [e["kind"] for e in rev.events] == kinds
+    assert np.allclose([e["energy"] for e in rev.events], [e["energy"] for e in ref.events], rtol=1e-8, atol=0)
+    assert len(rev.energy) == len(ref.energy) and np.array_equal(rev.stable, ref.stable)
+    assert max(_matched(a, b) for a, b in zip(rev.floquet, ref.floquet)) < (1e-8 if case == "pitchfork" else 1e-7)
+    if case == "pitchfork":
+        assert rev.events[0]["energy"] == pytest.approx(40.975, rel=3e-4)
+
+
+def test_reversible_route_needs_the_symmetry():
+    """An orbit with sines (no time reversal) is not the reversible route's: it says so (None), the whole matrix
+    decides; on a symmetric orbit its multipliers are the whole matrix's."""
+    from nnm_solver.orbits.hill_reversible import reversible_multipliers
+    m = two_dof_model()
+    b = nnm.continue_nnm(m, 1, 30.0, method="hb", harmonics=7, floquet=False, max_points=40)
+    problem, us = _orbits(m, b, 7)
+    u = us[-1]
+    A, w, _, bp, C = hill._galerkin_blocks(problem, u, None)
+    ref = hill._dense(problem, w, bp, C)
+    mu = reversible_multipliers(problem, w, bp, C)
+    assert _matched(without_nearest_to_one(mu), without_nearest_to_one(ref)) < 1e-10
+    full = HBProblem(problem.sys, 0, HBBasis(7, "full"))
+    Af = np.zeros((len(full.basis), problem.n))
+    Af[1] = A[0]                                        # cos 1
+    Af[4] = 0.3 * A[0]                                  # sin 2: q(-t) != q(t)
+    uf = full.pack(Af, w)
+    Af_, wf, _, bpf, Cf = hill._galerkin_blocks(full, uf, None)
+    assert reversible_multipliers(full, wf, bpf, Cf) is None

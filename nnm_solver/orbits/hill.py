@@ -39,8 +39,12 @@ Two routes to the same eigenvalues (``method=``):
   O(classes x N_b x n) a Newton iteration: ~5-15 ms for the 38-DOF beam at H = 5 (0.5-0.7 s dense).  Where an
   exponent comes within SECULAR_LATTICE_GAP of the trivial pair's copies i k (internal resonances: tongues, their
   branch points) the structured route decides (then the dense one).
-* ``"auto"`` (default): dense up to DENSE_MAX_ROWS rows, secular above (structured, then dense, where it cannot
-  vouch for its answer).
+* ``"reversible"``: the dense route on the symmetry blocks of a time-symmetric orbit (hill_reversible.py: time
+  reversal makes the problem linear in lambda^2, half-wave symmetry splits it by the parity of the harmonics): the
+  same eigenpairs from matrices of n (2H + 1) / 2 rows, ~1/30 of the dense route's work; the dense route where the
+  orbit has no such symmetry.
+* ``"auto"`` (default): reversible up to DENSE_MAX_ROWS rows of the whole matrix, secular above (structured, then
+  reversible, then dense, where it cannot vouch for its answer).
 """
 from __future__ import annotations
 
@@ -48,6 +52,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .hb_basis import HBBasis
+from .hill_reversible import reversible_multipliers
 from .hill_secular import _secular
 from .hill_structured import _structured
 
@@ -55,7 +60,7 @@ __all__ = ["hill_multipliers", "derivative_matrix", "HILL_METHODS", "DENSE_MAX_R
 
 
 #: the routes of hill_multipliers(method=...)
-HILL_METHODS = ("auto", "dense", "structured", "secular")
+HILL_METHODS = ("auto", "dense", "structured", "secular", "reversible")
 
 #: method="auto" takes the dense route up to this many rows 2 n (2H + 1) of the Hill matrix
 DENSE_MAX_ROWS = 400
@@ -91,14 +96,14 @@ def _galerkin_blocks(problem, u, harmonics):
 def hill_multipliers(problem, u, harmonics=None, method=None):
     """Floquet multipliers (2n,) of the HB orbit u of ``problem`` (an HBProblem), largest modulus first.
 
-    method : "dense", "structured", "secular" or "auto" (module docstring); default: ``problem.hill_method`` if it has
+    method : "dense", "structured", "secular", "reversible" or "auto" (module docstring); default: ``problem.hill_method`` if it has
     one, else "auto".  The structured route returns the trivial pair as exactly 1, 1."""
     method = method or getattr(problem, "hill_method", None) or "auto"
     if method not in HILL_METHODS:
         raise ValueError(f"method must be one of {HILL_METHODS}, got {method!r}")
     A, w, H, bp, C = _galerkin_blocks(problem, u, harmonics)
     if method == "auto":
-        method = "dense" if 2 * problem.n * len(bp) <= DENSE_MAX_ROWS else "secular"
+        method = "reversible" if 2 * problem.n * len(bp) <= DENSE_MAX_ROWS else "secular"
     if method == "secular":
         mu = _secular(problem, A, w, bp, C)
         if mu is not None:
@@ -106,6 +111,10 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
         method = "structured"
     if method == "structured":
         mu = _structured(problem, A, w, bp, C)
+        if mu is not None:
+            return mu
+    if method != "dense":
+        mu = reversible_multipliers(problem, w, bp, C)
         if mu is not None:
             return mu
     return _dense(problem, w, bp, C)
