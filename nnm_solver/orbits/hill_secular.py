@@ -60,18 +60,26 @@ def _secular(problem, A, w, bp, C):
         nu = np.asarray(nu, dtype=complex) + 0j
         eye = np.eye(r)
 
+        BB = (B[:, None, :] * B[None, :, :]).reshape(ns * ns, -1).T            # (n_t, n_s^2): Bq_sj Bq_s'j
+        # the entries of the block diagonal (l, s), (l, s') of an r x r matrix, in W's order (l, s, s')
+        bl, bs, bt = np.meshgrid(np.arange(nb), np.arange(ns), np.arange(ns), indexing="ij")
+        brow, bcol = (bl * ns + bs).ravel(), (bl * ns + bt).ravel()
+
+        def blockdiag(Wf):
+            out = np.zeros((Wf.shape[0], r, r), dtype=complex)
+            out[:, brow, bcol] = Wf
+            return out
+
         def parts(nu):
             sk = nu[:, None] + 1j * kk[None, :]                              # (S, N_b)
             q0 = sk[:, :, None] ** 2 + w2[None, None, :]                     # (S, N_b, n_t)
             inv = 1.0 / q0
-            W = (B * inv[:, :, None, :]) @ B.T                                 # (S, N_b, n_s, n_s)
-            dW = (B * (-2.0 * sk[:, :, None] * inv ** 2)[:, :, None, :]) @ B.T
-            Wb = np.zeros((len(nu), r, r), dtype=complex)
-            dWb = np.zeros_like(Wb)
-            for l in range(nb):
-                Wb[:, l * ns:(l + 1) * ns, l * ns:(l + 1) * ns] = W[:, l]
-                dWb[:, l * ns:(l + 1) * ns, l * ns:(l + 1) * ns] = dW[:, l]
-            return sk, inv, Wb, dWb
+            dinv = -2.0 * sk[:, :, None] * inv * inv
+            S_ = len(nu)
+            # W[l] = Bq diag(inv_l) Bq^T, as one product with the real BB (real and imaginary parts apart)
+            W = (inv.real @ BB + 1j * (inv.imag @ BB)).reshape(S_, nb * ns * ns)
+            dW = (dinv.real @ BB + 1j * (dinv.imag @ BB)).reshape(S_, nb * ns * ns)
+            return sk, inv, blockdiag(W), blockdiag(dW)
 
         bad = np.zeros(S, dtype=bool)             # classes the secular route cannot vouch for: the structured route's
         with np.errstate(all="ignore"):
