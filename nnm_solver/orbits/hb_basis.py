@@ -37,6 +37,10 @@ class HBBasis:
         self.E = self.functions(theta)
         w = np.where(self.h == 0, 1.0, 2.0) / self.samples
         self.P = self.E.T * w[:, None]
+        #: c_j(0) and d c_j / d theta (0) (N_b,): the state at t = 0 (the orbit's initial state, its energy),
+        #: asked for at every corrector step, so evaluated once
+        self.at_zero = self.functions([0.0])[0]
+        self.slope_at_zero = self.derivatives([0.0])[0]
 
     def __len__(self):
         return len(self.h)
