@@ -125,9 +125,7 @@ def _secular(problem, A, w, bp, C):
                 fresh = move                        # only the moved ones are refined in the next pass
             op = _HillOperator(omega2, Bq, Cexp, H, w)
             c = np.where(np.isfinite(c), c, 0.0)
-            X = op.lift(c[..., None], nu)                                                  # (S, 2m, 1)
-            R = op.apply(X) - X * nu[:, None, None]
-            res = np.linalg.norm(R[:, :, 0], axis=1) / (np.linalg.norm(X[:, :, 0], axis=1) * np.maximum(1.0, np.abs(nu)))
+            res = op.eigen_residual(c, nu) / np.maximum(1.0, np.abs(nu))          # of X = [c; nu c]
             bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
             bad |= velocity_overlaps(c, vel).max(axis=-1) > 0.5
             lat = np.round(nu.imag)

@@ -86,6 +86,15 @@ class _HillOperator:
         y2 = -Kx - 2j * self.k[None, :, None, None] * x2
         return np.concatenate([x2.reshape(S, self.m, b), y2.reshape(S, self.m, b)], axis=1)
 
+    def eigen_residual(self, c, nu):
+        """||L X - nu X|| / ||X|| (S,) for X = lift(c, nu), c (S, N_b, n): the first half of L X - nu X vanishes
+        (it is nu c - nu c), the second is -Q(nu) c, Q(nu) = diag((nu + i k)^2 + omega_j^2) + U C U^T; so only Q(nu) c
+        is formed (half the work of apply)."""
+        q0 = (nu[:, None, None] + 1j * self.k[None, :, None]) ** 2 + self.omega2[None, None, :]
+        Qc = q0 * c + self._springs(c[..., None])[..., 0]
+        nrm = np.sqrt((np.abs(c) ** 2).sum(axis=(1, 2)) * (1.0 + np.abs(nu) ** 2))
+        return np.sqrt((np.abs(Qc) ** 2).sum(axis=(1, 2))) / np.maximum(nrm, 1e-300)
+
     def factor(self, sigma):
         """What the solves with shifts sigma (S,) need: 1 / Q0 (S, N_b, n) and the r x r Woodbury matrices."""
         q0 = (sigma[:, None, None] + 1j * self.k[None, :, None]) ** 2 + self.omega2[None, None, :]
