@@ -211,6 +211,9 @@ def main(argv=None):
     ap.add_argument("--octave", default=os.environ.get("OCTAVE", "octave"))
     ap.add_argument("--nlvib", default=None, help="NLvib checkout (default: $NLVIB_DIR)")
     ap.add_argument("--json", default=None, help="also write the results to this file")
+    ap.add_argument("--hb-period-steps", nargs="+", type=float, default=[HB_PERIOD_STEP],
+                    help="period caps of the HB runs with multipliers (the first one also for the run without and "
+                         "the agreement; each further one adds a row)")
     args = ap.parse_args(argv)
     octave = shutil.which(args.octave)
     nlvib = nlvib_dir(args.nlvib)
@@ -230,11 +233,18 @@ def main(argv=None):
             E, f = d["energy"].ravel(), d["om_HB"].ravel() / (2 * np.pi)
             model = nnm.load_mat_model(nl["mat"], name=f"nlvib_{case}")
             rows = {"NLvib HB (Octave)": nl}
+            cap, more = args.hb_period_steps[0], args.hb_period_steps[1:]
             b_hb, rows["nnm HB, multipliers at every point"] = time_nnm(model, H, E, f, args.repeats, method="hb",
                                                                          harmonics=H, floquet=True,
-                                                                         max_period_step=HB_PERIOD_STEP)
+                                                                         max_period_step=cap)
             _, rows["nnm HB, no multipliers"] = time_nnm(model, H, E, f, args.repeats, method="hb", harmonics=H,
-                                                         floquet=False, max_period_step=HB_PERIOD_STEP)
+                                                         floquet=False, max_period_step=cap)
+            extra_events = {}
+            for c in more:
+                name = f"nnm HB, multipliers at every point, period cap {100 * c:g} %"
+                b_c, rows[name] = time_nnm(model, H, E, f, args.repeats, method="hb", harmonics=H, floquet=True,
+                                           max_period_step=c)
+                extra_events[name] = events(b_c)
             b_sh, rows["nnm shooting (Newmark 200)"] = time_nnm(model, H, E, f, args.repeats, method="shooting")
             agree_hb = hb_agreement(model, b_hb, H, E, f)
             agree_sh = interpolated_agreement(b_sh, E, f)
@@ -249,6 +259,8 @@ def main(argv=None):
                   f"HB {agree_hb:.1e} (nnm's HB at NLvib's energies), shooting {agree_sh:.1e} (interpolated, "
                   f"Newmark's error included)")
             print(f"nnm HB events: {events(b_hb)}; shooting events: {events(b_sh)}")
+            for name, ev in extra_events.items():
+                print(f"{name}: events {ev}")
             results[case] = dict(rows=rows, agreement_hb=agree_hb, agreement_shooting=agree_sh,
                                  events_hb=[(e["kind"], e["energy"]) for e in b_hb.events],
                                  events_shooting=[(e["kind"], e["energy"]) for e in b_sh.events])
