@@ -273,3 +273,30 @@ def test_backbone_check_follows_a_softening_backbone_of_the_full_fe_model():
     (out,) = backbone_check(ParisParams(mesh=0.4), modes=(20,), harmonics=1, energy_max=5.0)
     assert out["mode"] == 20 and out["points"] > 10
     assert out["status"] == "escape" and 0.02 < out["drop"] < 0.5 and out["energy_at_drop"] > 0
+
+
+def test_minimax_step_of_the_table2_round():
+    """tuning_table2.minimax_step on a synthetic linear spectrum whose minimax is known: slot 13 5 % low and one
+    parameter that raises it one for one; the step stops at x_max (t = the rest), and a label-margin constraint that
+    the same parameter erodes binds before it."""
+    from paris_aircraft.tuning_table2 import minimax_step
+    n_f = 46
+    q0 = np.log(np.r_[TABLE2_HZ, np.full(n_f - 24, 200.0)])
+    q0[19] = np.log(35.5)
+    q0[23:27] = np.log(TABLE2_HZ[23] * np.array([1.0, 1.01, 1.02, 1.03]))
+    q0[39:42] = np.log(0.9 * 3 * 35.5)
+    q0[12] -= 0.05
+    q0 = np.r_[q0, 0.05, np.log(0.12), np.log(0.33)]          # label margin, shares of slots 19 and 20
+    J = np.zeros((len(q0), 2))
+    J[12, 0] = 1.0
+    x, t, pred = minimax_step(q0, J, x_max=0.03)
+    assert x[0] == pytest.approx(0.03) and t == pytest.approx(0.02) and abs(x[1]) < 1e-9
+    assert pred[12] == pytest.approx(np.log(TABLE2_HZ[12]) - 0.02)
+    J[n_f, 0] = -1.0                                            # the step erodes slot 13's label margin
+    x, t, _ = minimax_step(q0, J, x_max=0.1, label_margin=0.03)
+    assert x[0] == pytest.approx(0.02) and t == pytest.approx(0.03)
+    x, t, _ = minimax_step(q0, J, x_max=0.1, only_up=(0,), label_margin=0.03)
+    assert x[0] >= 0.0
+    J[12, 0] = -1.0                                             # only_up: a parameter that would have to fall
+    x, t, _ = minimax_step(q0, J, x_max=0.1, only_up=(0,))
+    assert x[0] == pytest.approx(0.0, abs=1e-12) and t == pytest.approx(0.05)
