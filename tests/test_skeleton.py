@@ -132,11 +132,18 @@ def test_aircraft_mode_10_ends_where_its_family_ends_not_failed():
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     b = nnm.continue_nnm(model, 10, 200.0, integrator="gauss6", steps_per_period=200, tongues="skip", floquet=False)
     sk = skeleton(model, 10, 200.0, _skeleton_system)
-    assert sk.end in ("stuck", "locked") and sk.partner[0] >= 3
-    # the skeleton's end is named; the continuation may stop in a narrower resonance just below it (builder 1.3:
-    # a 9:1 with mode 32 near 12 J, jumped or not depending on round-off), never beyond it
-    assert b.status == "tongue" and "family" in b.message and f"mode {sk.partner[1]}" in b.message, b.message
-    assert not b.tongues[-1]["skipped"] and b.energy.max() <= sk.energy[-1] * (1 + 1e-6)
+    # near 12 J the family meets the 3:1 with mode 14 just below its energy maximum: by round-off (numpy/scipy
+    # builds) the skeleton ends there 'stuck'/'locked' with the partner named or at its 'peak' (the fold of the
+    # family), and the branch 'tongue' (the partner named) or 'escape' (the family's energy maximum named)
+    assert sk.end in ("stuck", "locked", "peak"), sk.end
+    if sk.end == "peak":
+        assert b.status in ("escape", "tongue") and "family" in b.message, b.message
+    else:
+        # the skeleton's end is named; the continuation may stop in a narrower resonance just below it (builder
+        # 1.3: a 9:1 with mode 32 near 12 J, jumped or not depending on round-off), never beyond it
+        assert sk.partner[0] >= 3
+        assert b.status == "tongue" and "family" in b.message and f"mode {sk.partner[1]}" in b.message, b.message
+    assert b.status != "failed" and not b.tongues[-1]["skipped"] and b.energy.max() <= sk.energy[-1] * (1 + 1e-6)
     assert b.energy.max() >= 0.8 * sk.energy[-1]
     low = [abs(b.frequency_hz[i] / sk.frequency_at(b.energy[i]) - 1) for i in range(len(b))
            if b.energy[i] < 0.8 * b.energy.max()]
