@@ -265,6 +265,10 @@ def test_tutorial_aircraft_numbers_are_the_shipped_ones(shipped):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="known bug, seen 2026-12-04 in a fresh venv (numpy 2.4.6, scipy 1.17.1; also on "
+                   "902ea5a): at the H = 1 family's fold (4.636 J, 32.885 Hz) the skip continuation jumps to 6.156 J, "
+                   "29.857 Hz (another family above the saddle) and reports 'done' instead of 'escape'; to be fixed at "
+                   "the mechanism (ends.escape_at_peak / the skeleton's peak reading), then this mark removed")
 def test_backbone_check_follows_a_softening_backbone_of_the_full_fe_model():
     """tuning_nonlinear.backbone_check (the tuning tool of builder 1.3): the condensed HB backbone of the full
     (here coarse, 17,514-DOF) FE model with the four springs; mode 20 softens (k3 < 0), from its linear frequency,
