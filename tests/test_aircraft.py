@@ -265,20 +265,44 @@ def test_tutorial_aircraft_numbers_are_the_shipped_ones(shipped):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known bug, seen 2026-12-04 in a fresh venv (numpy 2.4.6, scipy 1.17.1; also on "
-                   "902ea5a): at the H = 1 family's fold (4.636 J, 32.885 Hz) the skip continuation jumps to 6.156 J, "
-                   "29.857 Hz (another family above the saddle) and reports 'done' instead of 'escape'; to be fixed at "
-                   "the mechanism (ends.escape_at_peak / the skeleton's peak reading), then this mark removed")
 def test_backbone_check_follows_a_softening_backbone_of_the_full_fe_model():
     """tuning_nonlinear.backbone_check (the tuning tool of builder 1.3): the condensed HB backbone of the full
-    (here coarse, 17,514-DOF) FE model with the four springs; mode 20 softens (k3 < 0), from its linear frequency,
-    and at H = 1 (no higher harmonic: no internal resonance) its family ends at the springs' saddle ('escape')."""
+    (here coarse, 17,514-DOF) FE model with the four springs; mode 20 softens (k3 < 0) from its linear frequency.
+    At H = 1 (no higher harmonic: no k:1 resonance with k >= 2) its family ends at 4.64 J, 32.8 Hz, where its
+    energy folds and recovers as mode 18's motion at the same frequency grows (a 1:1 resonance, the next test):
+    status 'tongue', one record, 'tongue 1:1' with mode 18, the family's end."""
     from paris_aircraft.tuning_nonlinear import backbone_check
     (out,) = backbone_check(ParisParams(mesh=0.4), modes=(20,), harmonics=1, energy_max=5.0)
     assert out["mode"] == 20 and out["points"] > 10
-    assert out["status"] == "escape" and 0.02 < out["drop"] < 0.5 and out["energy_at_drop"] > 0
+    assert out["status"] == "tongue" and 0.02 < out["drop"] < 0.5 and out["energy_at_drop"] > 0
+    assert [t[:2] for t in out["tongues"]] == [("tongue 1:1", 18)], out["tongues"]
 
 
+@pytest.mark.slow
+def test_single_harmonic_skeleton_of_the_full_fe_model_ends_in_a_one_to_one_resonance_without_jumping():
+    """The coarse FE model's mode 20 at H = 1: stepping in the modal amplitude finds no solution above
+    a ~ 0.01413 sqrt(kg) m (4.64 J).  Followed past that fold by arclength (amplitude_family._past_fold) the family's
+    energy falls 4 % and comes back above it while mode 18's fundamental grows: a 1:1 resonance with mode 18, not
+    the family's energy maximum (an escape).  The skeleton ends 'locked' there with partner (1, 18) and no jump: a 2 %
+    jump in a used to land on another family (31.9 Hz) and carry the skeleton, and the branch after it, above.
+    Checked against the branch's own pseudo-arclength continuation (tongues='follow') through the same fold: its
+    energy reaches the skeleton's end, turns back, then rises above it, and its points past the fold are labelled
+    'tongue 1:1' (no harmonic k >= 2 exists at H = 1: never a 3:1)."""
+    from nnm_solver.driver.api import _skeleton_system
+    from nnm_solver.driver.skeleton import skeleton
+    from paris_aircraft.builder import build_paris
+    ac = build_paris(ParisParams(mesh=0.4))
+    r = ac.retained_dofs
+    springs = [nnm_solver.CubicSpring(dof=int(r[12 * a + 2]), other=int(r[12 * a + 8]), k3=-1e13) for a in range(4)]
+    model = nnm_solver.Model(ac.M.tocsr(), ac.K.tocsr(), springs, name="coarse aircraft")
+    sk = skeleton(model, 20, 5.0, _skeleton_system, 1)
+    assert sk.end == "locked" and sk.partner == (1, 18) and sk.gaps == [] and sk.energy_peak is None, sk.message
+    b = nnm_solver.continue_nnm(model, 20, 5.0, method="hb", harmonics=1, condensed=True, floquet=False,
+                                tongues="follow")
+    E = np.asarray(b.energy)
+    i = int(np.argmax(E > sk.energy[-1] * (1 - 2e-3)))         # the first point at the fold
+    assert i > 10 and E[i:].min() < E[i] * 0.99 and E[-1] > E[i]  # turns back, then rises above it
+    assert set(b.labels[:i]) == {"backbone"} and set(b.labels[i + 1:]) == {"tongue 1:1"}, set(b.labels)
 def test_minimax_step_of_the_table2_round():
     """tuning_table2.minimax_step on a synthetic linear spectrum whose minimax is known: slot 13 5 % low and one
     parameter that raises it one for one; the step stops at x_max (t = the rest), and a label-margin constraint that

@@ -7,7 +7,9 @@ step halved where ln f moves more than the trend allows) the condensed harmonic-
 Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (JUMPS, with frequency shifts
 JUMP_SHIFTS) are tried and kept when they land on the family's frequency trend with SHARE_KEPT of its
 fundamental share (``family_share``); the family ends at the reach, at its energy maximum (PEAK_RUN steps of falling
-energy with PEAK_SHARE kept, or a fold in amplitude with no partner where the energy folds too: _folds_at_peak),
+energy with PEAK_SHARE kept, or a fold in amplitude where the family, followed past it by arclength with no
+partner growing, turns back in energy too: _past_fold; when that cannot tell, the slope test _folds_at_peak after
+the jumps fail),
 where a partner takes the orbit over (SHARE_MIN) or where no jump lands.
 ``amplitude_family`` returns the raw points and how the family ended; skeleton.Skeleton reads them.
 """
@@ -17,7 +19,7 @@ import math
 
 import numpy as np
 
-__all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "PEAK_SHARE"]
+__all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
 
 #: modal amplitude steps: largest and smallest ratio a_{i+1} / a_i, and the largest move of ln f in a step
 STEP_MAX, STEP_MIN = 1.05, 1.0005
@@ -40,6 +42,12 @@ SHARE_MIN = 0.5
 #: at a fold of the family (no solution at a larger amplitude, no partner), d ln E / d ln a below this (2 in the
 #: linear regime) means the energy turns back with the amplitude: the family's energy maximum (_folds_at_peak)
 FOLD_SLOPE = 4.0
+
+#: past the end of the stepping, the family is followed by pseudo-arclength in (orbit, a) for at most
+#: FOLD_PROBE_STEPS steps (_past_fold): its energy maximum when the energy falls FOLD_PROBE_DROP below the
+#: largest on the way with the followed mode keeping FUND_SHARE of the fundamental; a 1:1 resonance when the energy
+#: comes back above it (by FOLD_ENERGY_RTOL) or another mode takes the fundamental first
+FOLD_PROBE_STEPS, FOLD_PROBE_DROP, FUND_SHARE, FOLD_ENERGY_RTOL = 300, 0.1, 0.9, 1e-9
 
 #: a step moving ln f by more than JUMP_FACTOR x the previous step's + JUMP_FLOOR is halved
 JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
@@ -89,6 +97,82 @@ def _folds_at_peak(prob, pts):
     (a1, E1, _, _), (a0, E0, _, _) = pts[-2], pts[-1]
     slope = math.log(E0 / E1) / math.log(a0 / a1) if a0 > a1 and E0 > 0 and E1 > 0 else math.inf
     return 0.0 < slope < FOLD_SLOPE
+
+
+def _null_direction(J, along):
+    """The unit tangent of the solution curve (null vector of the n x (n + 1) Jacobian J), oriented along ``along``."""
+    t = np.linalg.svd(J)[2][-1]
+    return t if t @ along >= 0 else -t
+
+
+def fundamental_shares(prob, u):
+    """The modes' shares of the orbit u's fundamental (h = 1), sum over cos and sin of A^2 normalised: at a
+    1:1 internal resonance another mode takes the followed one's."""
+    A = prob.amplitudes(u)[0][prob.basis.h == 1]
+    W = (A ** 2).sum(axis=0)
+    return W / max(W.sum(), 1e-300)
+
+
+def _past_fold(prob, pts, tol=1e-10):
+    """Where the stepping in a found no solution at a larger amplitude: read what the family does past that
+    fold in a by following it by pseudo-arclength in (orbit, a) from the last point (steps of the last
+    step's size, tangent from the Jacobian's null vector), with no partner harmonic growing (family_share
+    above PEAK_SHARE, else None: a k:1 resonance, the caller's jumps).  The verdict is
+
+    * ``("peak", points)``: the energy falls FOLD_PROBE_DROP below the largest on the way while the followed
+      mode keeps FUND_SHARE of the fundamental: the family's energy maximum (points: from the last one up to it);
+    * ``("locked", (1, mode))``: the energy comes back above that maximum, or another mode takes more than
+      1 - FUND_SHARE of the fundamental first (its energy folds and recovers as that mode's motion grows): a 1:1
+      internal resonance with that mode (1-based), which ends the followed mode's family;
+    * None when the path cannot tell within FOLD_PROBE_STEPS steps or Newton fails."""
+    nD = prob.nb * prob.ns
+    (_, _, _, u1), (a0, E0, f0, u0) = pts[-2], pts[-1]
+    h = h0 = float(np.linalg.norm(u0 - u1))
+    if not h > 0:
+        return None
+    share0 = fundamental_shares(prob, u0)
+    u, t = u0, _null_direction(prob.jacobian(u0)[1], u0 - u1)
+    path, E_top, fell = [], E0, False
+    for _ in range(FOLD_PROBE_STEPS):
+        v = u + h * t
+        for _ in range(20):                      # Newton on the equations + the arclength plane t . (v - pred) = 0
+            r, J = prob.jacobian(v)
+            if prob.error(v, r) < tol:
+                break
+            try:
+                v = v + np.linalg.solve(np.vstack([J, t]), -np.r_[r, 0.0])
+            except np.linalg.LinAlgError:
+                v = None
+                break
+            if not np.all(np.isfinite(v)) or v[-1] <= 0:
+                v = None
+                break
+        else:
+            v = None
+        if v is None:
+            h /= 2
+            if h < 1e-3 * h0:
+                return None
+            continue
+        if family_share(prob, v) < PEAK_SHARE:
+            return None                          # a partner harmonic grows: a k:1 resonance, not this fold
+        E = prob.energy(v)
+        path.append((v[nD] / prob.beta, E, v[-1] * prob.w_r / (2 * math.pi), v))
+        shares = fundamental_shares(prob, v)
+        if (fell and E > E_top * (1 + FOLD_ENERGY_RTOL)) or shares[prob.r] < FUND_SHARE:
+            grown = shares - share0
+            grown[prob.r] = -np.inf
+            return "locked", (1, int(np.argmax(grown)) + 1)
+        if E > E_top and not fell:
+            E_top = E
+        elif E < E_top:
+            fell = True
+            if E < E_top * (1 - FOLD_PROBE_DROP):
+                top = int(np.argmax([p[1] for p in path]))
+                return "peak", (path[:top + 1] if path[top][1] > E0 else [])
+        t = _null_direction(J, v - u)
+        u = v
+    return None
 
 
 def family_share(prob, u):
@@ -147,6 +231,21 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         """The family met a resonance at the last point: jump it (True) or end the family (False)."""
         nonlocal end, message, ratio, falls, partner
         a0, E0, f0, u0 = pts[-1]
+        beyond = _past_fold(prob, pts) if v is None and len(pts) >= 2 else None
+        if beyond is not None and beyond[0] == "peak":    # the family's own fold, its energy folding with a
+            pts.extend(beyond[1])
+            end = "peak"
+            a_p, E_p, f_p, _ = pts[-1]
+            message = (f"the family folds back at E = {E_p:.4g} J, f = {f_p:.5g} Hz: followed past the largest "
+                       f"amplitude it reaches, its energy turns back too and falls, with no partner mode in the "
+                       f"orbit: the family's energy maximum")
+            return False
+        if beyond is not None:                 # its energy folds and recovers as another mode's fundamental grows
+            end, partner = "locked", beyond[1]
+            message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: past its largest amplitude the "
+                       f"energy folds and recovers as mode {partner[1]}'s motion at the same frequency grows (a "
+                       f"1:1 internal resonance with mode {partner[1]}), no backbone of the followed mode beyond")
+            return False
         base = [p for p in pts if math.log(a0 / p[0]) <= 0.3]     # the trend over the last 30 % in amplitude
         slope = math.log(f0 / base[0][2]) / math.log(a0 / base[0][0]) if base[0] is not pts[-1] else 0.0
         jumped = _jump(prob, pts, slope) if len(gaps) < max_jumps else None

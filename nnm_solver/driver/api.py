@@ -284,10 +284,12 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     return it
 
 
-def _skeleton_system(model, mode):
-    """The modal system of the skeleton (driver/skeleton.py): every mode, or a Ritz basis for a large model."""
+def _skeleton_system(model, mode, harmonics=SKELETON_HARMONICS):
+    """The modal system of the skeleton (driver/skeleton.py) with ``harmonics``: every mode, or for a large model
+    the Ritz basis for those harmonics (model/ritz.py; the one a harmonic-balance branch with as many harmonics
+    built already, from its cache)."""
     if model.n > RITZ_MIN_DOF:
-        return ritz_system(model, mode, SKELETON_HARMONICS)
+        return ritz_system(model, mode, harmonics)
     return modal_system(model)
 
 

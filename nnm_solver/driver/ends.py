@@ -17,12 +17,17 @@ These functions only build the statuses, messages and records; the iterator (ite
 """
 from __future__ import annotations
 
-__all__ = ["PEAK_NEAR", "resonance", "off_family_note", "escape_below_peak", "escape_at_peak", "inside_tongue",
+__all__ = ["PEAK_NEAR", "AT_PEAK", "resonance", "off_family_note", "escape_below_peak", "escape_at_peak", "inside_tongue",
            "family_end"]
 
 #: a tongue entered, or a continuation stopped, above this fraction of the skeleton's energy maximum (or end)
 #: is "at" the end of the family
 PEAK_NEAR = 0.8
+
+#: a fold of the branch is the family's own energy maximum (escape_at_peak) above this fraction of the skeleton's:
+#: the skeleton resolves its maximum, and the branch's last point before the fold lies within a step of it, where the
+#: energy is flat (a fold of the branch well below it is another, e.g. a narrow fold pair the family passes)
+AT_PEAK = 0.95
 
 #: a departure from the backbone near the family's energy maximum with less than this fraction of the orbit in any
 #: harmonic k >= 2 has no partner harmonic: the fold of the family itself (escape_at_peak), not a tongue
@@ -63,13 +68,13 @@ def escape_below_peak(sk, tongue, bpoint):
 
 
 def escape_at_peak(sk, bpoint, point, fraction):
-    """Skip mode: the 'escape' message when the continuation left the backbone (last backbone point ``bpoint``)
-    at the family's own energy maximum: the skeleton ended at its peak, ``point`` is below ``bpoint`` in
-    energy (the energy turned back) or above the peak, ``bpoint`` lies above PEAK_NEAR of it, and no harmonic
-    k >= 2 carries more than PEAK_CONTENT of the orbit (``fraction``, tongue_skip.harmonic_content): no partner
-    harmonic, not a tongue but the fold of the family itself.  None otherwise."""
-    if (sk is None or sk.energy_peak is None or not (point.energy < bpoint.energy or point.energy > sk.energy_peak)
-            or not bpoint.energy >= PEAK_NEAR * sk.energy_peak or not fraction < PEAK_CONTENT):
+    """Skip mode: the 'escape' message when the continuation left the backbone (last backbone point ``bpoint``,
+    first point off it ``point``) at the family's own energy maximum: the skeleton ended at its peak, ``bpoint``
+    lies above AT_PEAK of it, and no harmonic k >= 2 carries more than PEAK_CONTENT of the orbit (``fraction``,
+    tongue_skip.harmonic_content): no partner harmonic, not a tongue but the fold of the family itself (the point
+    past it may lie below ``bpoint`` in energy, or just above it on the far side of the fold).  None otherwise."""
+    if (sk is None or sk.energy_peak is None or not bpoint.energy >= AT_PEAK * sk.energy_peak
+            or not fraction < PEAK_CONTENT):
         return None
     return (f"the backbone reached its family's energy maximum at E = {bpoint.energy:.4g} J, "
             f"f = {bpoint.frequency_hz:.5g} Hz (its skeleton: {sk.energy_peak:.4g} J, a softening family approaching "

@@ -23,7 +23,8 @@ kinetic energy, (k a_k)^2 normalised), and labelled
 * ``"backbone"`` otherwise (on the family, whatever the share);
 * ``"tongue k:1"`` above the family's energy maximum (a softening family's saddle: no backbone there), and
   above the energy where the family ends in a k:1 resonance (the skeleton ended ``locked`` or ``stuck``:
-  the branch's orbits there are that resonance's, e.g. the frequency locked while the energy grows).
+  the branch's orbits there are that resonance's, e.g. the frequency locked while the energy grows; ``"tongue
+  1:1"`` where another mode took the fundamental over).
 
 Where no skeleton covers the energy (no nonlinear elements, beyond its end) the harmonic share alone
 decides (tongue_skip.harmonic_label).
@@ -35,7 +36,7 @@ import math
 import numpy as np
 
 from ..analysis.harmonics import RESONANCE_FRACTION
-from .tongue_skip import fundamental_share
+from .tongue_skip import FOLD_CONTENT, fundamental_share
 
 __all__ = ["FamilyLabels", "OFF_FAMILY", "ON_FAMILY", "SHARE_DROP"]
 
@@ -52,6 +53,13 @@ SHARE_DROP = 0.02
 #: below this harmonic fraction and relative frequency shift from the linear mode a point is backbone
 #: without asking the skeleton (the linear regime)
 LINEAR_REGIME = 1e-3
+
+
+def _order(k, fraction):
+    """The order of the tongue a point off the family is in: its strongest harmonic k >= 2, or 1 (a 1:1
+    resonance, another mode at the fundamental) when no harmonic k >= 2 is present (below FOLD_CONTENT: a
+    single-harmonic balance, or round-off)."""
+    return max(k, 2) if fraction >= FOLD_CONTENT else 1
 
 
 class FamilyLabels:
@@ -96,11 +104,13 @@ class FamilyLabels:
             return content_label, None
         sk = self._skeleton() if self._skeleton is not None else None
         if sk is not None and sk.energy_peak is not None and energy > sk.energy_peak:
-            return f"tongue {max(k, 2)}:1", math.inf      # above the family's energy maximum: no backbone there
+            return f"tongue {_order(k, fraction)}:1", math.inf      # above the family's energy maximum: no backbone
+
         if sk is not None and sk.end in ("stuck", "locked") and len(sk.energy) and energy > sk.energy[-1]:
             # beyond where the family passes into (or stops at) a k:1 resonance: what the branch finds there is
             # that resonance's tongue, not the backbone family (its skeleton does not go on)
-            return f"tongue {max(sk.partner[0], 2)}:1", math.inf
+            k_end = sk.partner[0] if sk.partner[1] else _order(k, fraction)    # 1:1 with a named partner mode
+            return f"tongue {k_end}:1", math.inf
         dev = self.deviation(energy, frequency_hz, amps)
         if dev is None or not math.isfinite(dev):
             return content_label, None
@@ -109,5 +119,5 @@ class FamilyLabels:
         err = 2 * err if math.isfinite(err) else 0.0
         if dev > OFF_FAMILY + err or (dev > ON_FAMILY + err and (
                 fraction >= RESONANCE_FRACTION or self._share_drop(sk, energy, amps) > SHARE_DROP)):
-            return f"tongue {max(k, 2)}:1", dev
+            return f"tongue {_order(k, fraction)}:1", dev
         return "backbone", dev

@@ -213,13 +213,13 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
 def skeleton(model, mode, energy_max, system_of, harmonics=SKELETON_HARMONICS):
     """The Skeleton of linear mode ``mode`` (1-based) of ``model`` up to REACH x energy_max (J) with
     ``harmonics``, cached per model, mode and harmonics (a cached one that reaches far enough, or that ended,
-    is reused).  system_of(model, mode) gives the ModalSystem (every mode, or a Ritz basis for a large model;
-    driver/api.py)."""
+    is reused).  system_of(model, mode, harmonics) gives the ModalSystem (every mode, or the Ritz basis for those
+    harmonics for a large model; driver/api.py)."""
     with _lock:
         for (m, h, reach), sk in _cache.get(model, {}).items():
             if m == mode and h == harmonics and (reach >= REACH * energy_max or sk.end != "reach"):
                 return sk
-    sk = compute_skeleton(system_of(model, mode), mode, REACH * energy_max, harmonics)
+    sk = compute_skeleton(system_of(model, mode, harmonics), mode, REACH * energy_max, harmonics)
     with _lock:
         _cache.setdefault(model, {})[(mode, harmonics, REACH * energy_max)] = sk
     return sk

@@ -5,7 +5,8 @@ max_points, _tongue, _last_backbone, _problem, _system, _cs, _tol, _skeleton, _l
 _refusals, _finish).  A point that leaves the backbone (tongue_skip.leaves_backbone) is hidden while the
 tongue it entered is jumped over (tongue_skip.TongueSkipper, from the skeleton's orbits beyond the band or by
 rescaled backbone orbits) or traversed unseen until the backbone resumes above its entry; a departure at the
-family's own energy maximum with no partner harmonic ends the branch ``escape`` (ends.escape_at_peak), a tongue
+family's own energy maximum with no partner harmonic ends the branch ``escape`` (ends.escape_at_peak), one where
+its skeleton ends in a 1:1 resonance ends it ``tongue`` (ends.family_end), a tongue
 re-entered MAX_STALLS times from the same orbit or one the continuation cannot leave ends it ``tongue``.
 """
 from __future__ import annotations
@@ -15,7 +16,7 @@ import math
 import numpy as np
 
 from ..continuation.engine import pseudo_arclength
-from .ends import escape_at_peak, escape_below_peak, inside_tongue, resonance
+from .ends import PEAK_CONTENT, escape_at_peak, escape_below_peak, inside_tongue, resonance
 from .tongue_skip import (TongueSkipper, harmonic_content, harmonic_label, leaves_backbone, same_tongue,
                           tongue_record, upward_tangent)
 
@@ -55,6 +56,11 @@ class SkipMode:
         if at_peak is not None:                # the family's own fold at its energy maximum: no tongue to jump
             self._finish("escape", at_peak)
             raise StopIteration
+        sk = self._skeleton() if self._skeleton is not None else None
+        if (sk is not None and sk.partner[0] == 1 and sk.partner[1] and harmonic_content(point)[1] < PEAK_CONTENT
+                and self._family_ends("it turns back in energy with no harmonic k >= 2, into the 1:1 "
+                                      "resonance")):
+            raise StopIteration                # the family ends in a 1:1 resonance there: no tongue to jump over
         trend = np.sign(bpoint.frequency_hz - self.points[-2].frequency_hz) if len(self.points) > 1 else 0.0
         if self._skip(cp, point):
             return True

@@ -113,8 +113,10 @@ def is_fold(Q, k):
 def tongue_record(system, Q, k, bpoint, point, entry_index):
     """The record of a k:1 tongue entered from the backbone point ``bpoint`` (index entry_index) into ``point``
     (Q: its modal orbit): ratio, partner mode (partner_mode) and the entry and inside orbits.  Where Q holds
-    no harmonic k (is_fold) the record is a fold of the family: label "fold", order 1, partner_mode 0."""
-    fold = is_fold(Q, k)
+    no harmonic k (is_fold), or k = 1 (a point off the family with no harmonic k >= 2: its partner at the
+    fundamental, if any, is the skeleton's to name, ends.family_end), the record is a fold of the family: label
+    "fold", order 1, partner_mode 0."""
+    fold = k <= 1 or is_fold(Q, k)
     mode, mac = partner_mode(system, Q, k) if Q is not None and not fold else (0, float("nan"))
     extra = dict(note="the energy turned back with no harmonic k >= 2 in the orbit: a fold of the family, "
                       "not an internal resonance") if fold else {}
