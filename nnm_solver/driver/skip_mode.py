@@ -51,13 +51,13 @@ class SkipMode:
         if self._last_backbone is None or not leaves_backbone(point, self._last_backbone[1]):
             return False
         bpoint = self._last_backbone[1]
-        at_peak = escape_at_peak(self._skeleton() if self._skeleton is not None else None, bpoint, point,
-                                 harmonic_content(point)[1])
+        sk = self._skeleton() if self._skeleton is not None else None
+        fraction = harmonic_content(point)[1]
+        at_peak = escape_at_peak(sk, bpoint, point, fraction)
         if at_peak is not None:                # the family's own fold at its energy maximum: no tongue to jump
             self._finish("escape", at_peak)
             raise StopIteration
-        sk = self._skeleton() if self._skeleton is not None else None
-        if (sk is not None and sk.partner[0] == 1 and sk.partner[1] and harmonic_content(point)[1] < PEAK_CONTENT
+        if (sk is not None and sk.partner[0] == 1 and sk.partner[1] and fraction < PEAK_CONTENT
                 and self._family_ends("it turns back in energy with no harmonic k >= 2, into the 1:1 "
                                       "resonance")):
             raise StopIteration                # the family ends in a 1:1 resonance there: no tongue to jump over
