@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .hill_copies import hard_copies
 from .hill_structured import _classes, _exp_transform, _HillOperator, _iterate, _setup, velocity_overlaps
 
 #: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
@@ -81,6 +82,28 @@ def _secular(problem, A, w, bp, C):
             dW = (dinv.real @ BB + 1j * (dinv.imag @ BB)).reshape(S_, nb * ns * ns)
             return sk, inv, blockdiag(W), blockdiag(dW)
 
+        def logderiv(nu):
+            """p'/p at the points nu (S,)."""
+            sk, inv, Wb, dWb = parts(nu)
+            G = np.linalg.solve(eye[None] + Ct[None] @ Wb, Ct[None] @ dWb)
+            return np.trace(G, axis1=1, axis2=2) + (2.0 * sk[:, :, None] * inv).sum(axis=(1, 2))
+
+        def eigvecs(nu):
+            """(c (S, N_b, n), mean harmonic (S,)): the eigenvectors at the exponents nu, c_kj = -(1 / q0_kj)
+            sum_s Bq_sj (C~ z)_ks with z the null vector of I + W C~ (one step of inverse iteration)."""
+            S_ = len(nu)
+            _, inv, Wb, _ = parts(nu)
+            Mz = eye[None] + Wb @ Ct[None]
+            z = np.linalg.solve(Mz, np.ones((S_, r, 1)) / np.sqrt(r))[..., 0]
+            if not np.all(np.isfinite(z)):
+                z = np.linalg.svd(Mz)[2][:, -1, :].conj()                            # (S, r)
+            z /= np.linalg.norm(z, axis=1, keepdims=True)
+            f = (z @ Ct.T).reshape(S_, nb, ns)                                     # (C~ z)_(k, s)
+            c = np.zeros((S_, nb, n), dtype=complex)
+            c[:, :, tm] = -inv * (f @ B)
+            p = (np.abs(c) ** 2).sum(axis=2)
+            return c, (kk[None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
+
         bad = np.zeros(S, dtype=bool)             # classes the secular route cannot vouch for: the structured route's
         with np.errstate(all="ignore"):
             recentred = np.zeros(S, dtype=int)
@@ -91,11 +114,7 @@ def _secular(problem, A, w, bp, C):
                     act = np.flatnonzero(~conv)
                     if not len(act):
                         break
-                    sk, inv, Wb, dWb = parts(nu[act])
-                    Mm = eye[None] + Ct[None] @ Wb
-                    G = np.linalg.solve(Mm, Ct[None] @ dWb)
-                    L = np.trace(G, axis1=1, axis2=2) + (2.0 * sk[:, :, None] * inv).sum(axis=(1, 2))
-                    step = -1.0 / L
+                    step = -1.0 / logderiv(nu[act])
                     broken = ~np.isfinite(step)
                     bad[act[broken]] = conv[act[broken]] = True
                     step[broken] = 0.0
@@ -104,17 +123,7 @@ def _secular(problem, A, w, bp, C):
                 bad |= ~conv
                 # the eigenvectors: z = null vector of I + W C~, c_kj = -(1 / q0_kj) sum_s Bq_sj (C~ z)_ks
                 nu[bad] = np.where(np.isfinite(nu[bad]), nu[bad], 1j)
-                sk, inv, Wb, dWb = parts(nu)
-                Mz = eye[None] + Wb @ Ct[None]
-                z = np.linalg.solve(Mz, np.ones((S, r, 1)) / np.sqrt(r))[..., 0]         # inverse iteration
-                if not np.all(np.isfinite(z)):
-                    z = np.linalg.svd(Mz)[2][:, -1, :].conj()                            # (S, r)
-                z /= np.linalg.norm(z, axis=1, keepdims=True)
-                f = (z @ Ct.T).reshape(S, nb, ns)                                          # (C~ z)_(k, s)
-                c = np.zeros((S, nb, n), dtype=complex)
-                c[:, :, tm] = -inv * (f @ B)
-                p = (np.abs(c) ** 2).sum(axis=2)
-                cent = (kk[None] * p).sum(axis=1) / np.maximum(p.sum(axis=1), 1e-300)
+                c, cent = eigvecs(nu)
                 move = (np.abs(cent) > 0.5) & ~bad
                 if not np.any(move):
                     break
@@ -142,7 +151,17 @@ def _secular(problem, A, w, bp, C):
             if bad.sum() > SECULAR_MAX_HARD:
                 return None
             op = _HillOperator(omega2, Bq, Cexp, H, w)
-            found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel, warm=True)
+
+            def vectors(z):
+                cz, centz = eigvecs(z)
+                cz = np.where(np.isfinite(cz), cz, 0.0)
+                resz = op.eigen_residual(cz, z) / np.maximum(1.0, np.abs(z))
+                return centz, resz, velocity_overlaps(cz, vel)[:, nb - 1]
+
+            found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL)
+            if found is None:
+                found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
+                                 warm=True)
             if found is None:
                 found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
                                  warm=False)
@@ -164,3 +183,4 @@ def _secular(problem, A, w, bp, C):
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
     return mu[np.argsort(-np.abs(mu), kind="stable")]
+

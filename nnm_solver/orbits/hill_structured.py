@@ -359,7 +359,23 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     rel = res / np.maximum(1.0, np.abs(theta))
     ok = (rel < 1e3 * RESIDUAL_TOL) & (triv0 <= TRIVIAL_COS)
     ok[nc] = (rel[nc] < 1e3 * RESIDUAL_TOL) & ~_trivial_pair(triv0[nc])
-    nu, cc = theta[ok], np.abs(cent[ok])
+    kept = central_pool(theta[ok], np.abs(cent[ok]), 2 * nc)
+    if kept is None:
+        return None
+    # warm start for the next orbit of this problem: the shifts at the kept exponents of each block
+    t = np.argmin(np.abs(theta - sigma[:, None]) + 1e9 * (triv > 0.5), axis=1)
+    nu_t = theta[np.arange(S), t]
+    nu_t[is_lat] = lattice
+    problem._hill_warm = ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy())
+    return kept
+
+
+def central_pool(nu, cc, need, tie=0.0):
+    """The ``need`` kept exponents among the eigenvalues nu (units of omega) whose eigenvectors have |mean harmonic|
+    cc, as the dense route keeps them: with their conjugates and Hamiltonian partners -conj, -nu (exact eigenvalues
+    too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic|, repeats dropped.  None when
+    fewer than ``need`` are central (|mean harmonic| <= CENTROID_MAX), or when the next one's |mean harmonic| is
+    within ``tie`` of the last kept one's (an ordering too close to call)."""
     nu = np.concatenate([nu, np.conj(nu), -np.conj(nu), -nu])
     cc = np.tile(cc, 4)
     order = np.argsort(cc, kind="stable")
@@ -367,14 +383,10 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     same = np.abs(nu[:, None] - nu[None, :]) <= 1e-8 * np.maximum(1.0, np.abs(nu))[None, :]
     first = ~np.any(np.tril(same, -1), axis=1)                      # not a repeat of an earlier (more central) one
     pool, pool_c = nu[first], cc[first]
-    need = 2 * nc
     if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
         return None
-    # warm start for the next orbit of this problem: the shifts at the kept exponents of each block
-    t = np.argmin(np.abs(theta - sigma[:, None]) + 1e9 * (triv > 0.5), axis=1)
-    nu_t = theta[np.arange(S), t]
-    nu_t[is_lat] = lattice
-    problem._hill_warm = ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy())
+    if tie > 0 and len(pool) > need and pool_c[need] - pool_c[need - 1] < tie:
+        return None
     return np.array(pool[:need])
 
 
