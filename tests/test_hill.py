@@ -201,3 +201,44 @@ def test_reversible_route_needs_the_symmetry():
     uf = full.pack(Af, w)
     Af_, wf, _, bpf, Cf = hill._galerkin_blocks(full, uf, None)
     assert reversible_multipliers(full, wf, bpf, Cf) is None
+
+
+def test_hard_classes_by_their_copies_equal_dense_inside_a_tongue(beam_tongue):
+    """Inside the 5:1 tongue the class near the trivial pair's copies is found by its copies at every lattice point
+    (orbits/hill_copies.py) instead of the structured route's subspace iteration: at the points where the copies
+    answer, the kept multipliers equal the dense route's (1e-8) with the same flags; they answer most hard points
+    (the others: the pair colliding with the trivial one next to the folds), and they are not the sole judge of
+    a point the dense route calls unstable (both flags occur among their answers; measured: 14 answered, 8
+    declined, 3 of the 14 unstable)."""
+    from nnm_solver.orbits import hill_secular
+    m, b = beam_tongue
+    problem, us = _orbits(m, b, 5, every=3)
+    answered, declined = [], 0
+    copies = hill_secular.hard_copies
+
+    def counting(*args, **kw):
+        nonlocal declined
+        found = copies(*args, **kw)
+        if found is None:
+            declined += 1
+        else:
+            answered.append(len(answered) + declined)
+        return found
+
+    hill_secular.hard_copies = counting
+    flags = []
+    try:
+        for u in us:
+            before = len(answered)
+            mu = hill.hill_multipliers(problem, u, method="secular")
+            if len(answered) == before:
+                continue
+            A, w, _, bp, C = hill._galerkin_blocks(problem, u, None)
+            ref = without_nearest_to_one(hill._dense(problem, w, bp, C))
+            assert _matched(without_nearest_to_one(mu), ref) < 1e-8
+            assert is_stable(without_nearest_to_one(mu)) == is_stable(ref)
+            flags.append(is_stable(ref))
+    finally:
+        hill_secular.hard_copies = copies
+    assert len(answered) >= 5 and len(answered) > declined, (len(answered), declined)
+    assert True in flags and False in flags

@@ -32,8 +32,10 @@ COPY_RADIUS = 0.3
 COPY_TIE = 1e-4
 #: the radius of the ring of extra starts around 0 and the hard classes' lattice points (units of omega)
 COPY_RING = 0.03
-#: Newton iterations for the copies (a start that has not converged by then is dropped)
-COPY_ITER = 15
+#: Newton iterations for the copies (a start that has not converged by then is dropped), and their step tolerance
+#: (relative; Newton converges quadratically at a simple zero: the error after a step of 1e-10 is ~1e-20)
+COPY_ITER = 12
+COPY_TOL = 1e-10
 #: the discs around 0 whose zeros are counted (radii tried in turn until the count is an integer, units of
 #: omega), the nodes of the trapezoidal rule, and the disc where more than the trivial pair's two zeros decline
 COPY_COUNT_RADII = (0.02, 0.012, 0.03)
@@ -78,7 +80,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
             step = -1.0 / L
             step[~np.isfinite(step)] = np.nan
             z[act] += step
-            conv[act] |= ~(np.abs(step) > tol * np.maximum(1.0, np.abs(z[act])))
+            conv[act] |= ~(np.abs(step) > max(tol, COPY_TOL) * np.maximum(1.0, np.abs(z[act])))
             lost = ~(np.abs(z[act] - home[act]) < COPY_RADIUS)          # wandered off (or not finite): dropped
             z[act[lost]] = np.nan
             conv[act[lost]] = True
