@@ -268,14 +268,17 @@ def test_skip_backbone_does_not_crawl_at_a_tongue_it_keeps_re_entering():
     from nnm_solver.driver.skip_mode import MAX_STALLS
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     b = nnm.continue_nnm(model, 20, 40.0, method="hb", harmonics=3, condensed=True, floquet=False, tongues="skip")
-    # by round-off (numpy/scipy builds) the branch ends after MAX_STALLS re-entries from the same orbit, or at the
-    # entry where the family's skeleton ends (no solution at a larger amplitude): both end the branch there
+    # by round-off (numpy/scipy builds, BLAS threads) the branch ends after MAX_STALLS re-entries from the same orbit,
+    # at the entry where the family's skeleton ends (no solution at a larger amplitude), or at the entry after the
+    # traversal inside the tongue reached energy_max without finding the backbone again (seen 2026-12-05 with two
+    # OpenBLAS threads, the same code passing with one: 126 orbits inside, not kept): all end the branch there
     assert b.status == "tongue", b.message
     if "from the same orbit" in b.message:
         assert b.tongues[-1]["stalls"] == MAX_STALLS
     else:
         # builder 1.3: the 3:1 with mode 41; builder 1.4: with mode 42 (the second anti-symmetric wing torsion)
-        assert "the backbone family itself ends there" in b.message, b.message
+        assert ("the backbone family itself ends there" in b.message
+                or "could not be jumped over (energy_max reached inside it" in b.message), b.message
         assert any(f"with mode {p}" in b.message for p in (41, 42)), b.message
     assert len(b) < 60 and not b.tongues[-1]["skipped"]
     assert np.sum(np.isclose(b.energy, b.energy.max(), rtol=1e-9)) <= MAX_STALLS + 1

@@ -38,7 +38,9 @@ Two routes to the same eigenvalues (``method=``):
   harmonic, no overlap with the velocity's copies, distinct pairs) and kept with its Hamiltonian partner -nu.
   O(classes x N_b x n) a Newton iteration: ~5-15 ms for the 38-DOF beam at H = 5 (0.5-0.7 s dense).  Where an
   exponent comes within SECULAR_LATTICE_GAP of the trivial pair's copies i k (internal resonances: tongues, their
-  branch points) the structured route decides (then the dense one).
+  branch points) its copies at every i k are found by Newton and the kept ones chosen as the dense route chooses
+  them (hill_copies.py: ~2 ms); next to a fold or a branch point, where the pair collides with the trivial one,
+  the structured route decides (then the dense one).
 * ``"reversible"``: the dense route on the symmetry blocks of a time-symmetric orbit (hill_reversible.py: time
   reversal makes the problem linear in lambda^2, half-wave symmetry splits it by the parity of the harmonics): the
   same eigenpairs from matrices of n (2H + 1) / 2 rows, ~1/30 of the dense route's work; the dense route where the

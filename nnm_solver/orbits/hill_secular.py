@@ -1,6 +1,7 @@
 r"""Hill's multipliers by the secular route (hill.py explains the routes): the Floquet exponents as the zeros of the
 small determinant det(I + C~ W(nu)) of the springs' coordinates, by batched Newton warm-started at the previous
-orbit's, each checked; the classes it cannot vouch for go to the structured route (hill_structured.py)."""
+orbit's, each checked; a class next to the trivial pair's copies (inside an internal-resonance tongue) by its copies
+(hill_copies.py); what neither can vouch for goes to the structured route (hill_structured.py)."""
 from __future__ import annotations
 
 import numpy as np
@@ -138,7 +139,8 @@ def _secular(problem, A, w, bp, C):
             bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
             bad |= velocity_overlaps(c, vel).max(axis=-1) > 0.5
             lat = np.round(nu.imag)
-            bad |= (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
+            near = (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
+            bad |= near
             mu = np.exp(2 * np.pi * nu)
             close = (np.abs(mu[:, None] - mu[None, :]) < SECULAR_DISTINCT) | \
                 (np.abs(mu[:, None] - 1.0 / mu[None, :]) < SECULAR_DISTINCT)
@@ -146,11 +148,10 @@ def _secular(problem, A, w, bp, C):
             bad |= close.any(axis=0) | close.any(axis=1)
         good = ~bad
         if np.any(bad):
-            # the classes near the trivial pair's copies (internal resonances), or unconverged: the structured route
-            # on those classes alone (its blocks at the lattice i k hold the hybrids the dense route may keep)
+            # the classes near the trivial pair's copies (internal resonances) by their copies, if all are; else (or where the copies decline) the structured route on those classes alone (its blocks
+            # at the lattice i k hold the hybrids the dense route may keep)
             if bad.sum() > SECULAR_MAX_HARD:
                 return None
-            op = _HillOperator(omega2, Bq, Cexp, H, w)
 
             def vectors(z):
                 cz, centz = eigvecs(z)
@@ -158,7 +159,9 @@ def _secular(problem, A, w, bp, C):
                 resz = op.eigen_residual(cz, z) / np.maximum(1.0, np.abs(z))
                 return centz, resz, velocity_overlaps(cz, vel)[:, nb - 1]
 
-            found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL)
+            found = None
+            if np.all(near[bad]):
+                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL)
             if found is None:
                 found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
                                  warm=True)
