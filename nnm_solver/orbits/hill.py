@@ -50,6 +50,8 @@ Two routes to the same eigenvalues (``method=``):
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg as sla
 
@@ -82,13 +84,19 @@ def derivative_matrix(basis):
     return Dm
 
 
+@functools.lru_cache(maxsize=32)
+def _hill_basis(H, samples):
+    """The Hill basis (full, H harmonics, its sampling): the same for every orbit of a branch, built once."""
+    return HBBasis(H, "full", samples)
+
+
 def _galerkin_blocks(problem, u, harmonics):
     """(A, omega, H, bp, C): the orbit's coefficients and frequency, the Hill basis and the springs' Galerkin
     blocks C (n_s, N_b, N_b) of g'(d(t)) in it (real basis 1, cos, sin)."""
     A, w = problem.unpack(u)
     s = problem.sys
     H = int(harmonics or problem.basis.harmonics)
-    bp = HBBasis(H, "full", max(4 * H + 4, 2 * problem.basis.harmonics + 2 * H + 2))
+    bp = _hill_basis(H, max(4 * H + 4, 2 * problem.basis.harmonics + 2 * H + 2))
     theta = 2 * np.pi * np.arange(bp.samples) / bp.samples
     d = problem.basis.functions(theta) @ (A @ s.Bq.T)
     C = np.einsum("jk,ks,kl->sjl", bp.P, s.tangent(d), bp.E)

@@ -44,6 +44,14 @@ def _exp_transform(H):
     return T
 
 
+@functools.lru_cache(maxsize=16)
+def _exp_inverse(H):
+    """T^-1 (N_b, N_b) of _exp_transform(H): the exp(i k theta) coefficients of the real-basis ones (read-only)."""
+    Tinv = np.linalg.inv(_exp_transform(H))
+    Tinv.setflags(write=False)
+    return Tinv
+
+
 class _HillOperator:
     """The Hill matrix of one orbit in exp(i k theta) and modal coordinates, time in units of 1 / omega
     (exponents nu = lambda / omega, multipliers exp(2 pi nu)): products with L and shifted solves
@@ -160,7 +168,7 @@ def _setup(problem, A, w, bp):
     s, n = problem.sys, problem.n
     H = bp.harmonics
     nb = 2 * H + 1
-    Tinv = np.linalg.inv(_exp_transform(H))
+    Tinv = _exp_inverse(H)
     omega2 = s.omega2 / w ** 2
     Bq = s.Bq
     touched = np.linalg.norm(Bq, axis=0) > 0
