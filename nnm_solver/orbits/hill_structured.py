@@ -157,7 +157,8 @@ def _rayleigh_ritz(op, V):
     theta, Y = np.linalg.eig(Hm)
     X = V @ Y
     R = LV @ Y - X * theta[:, None, :]
-    res = np.linalg.norm(R, axis=1) / np.maximum(np.linalg.norm(X, axis=1), 1e-300)
+    # |X| = |Y| column by column (V orthonormal)
+    res = np.sqrt((R.real ** 2 + R.imag ** 2).sum(axis=1)) / np.maximum(np.sqrt((np.abs(Y) ** 2).sum(axis=1)), 1e-300)
     return V, theta, X, res
 
 
