@@ -120,9 +120,8 @@ def _group(s, n, w, h, ic, is_, C):
     BB = Bq[:, :, None] * Bq[:, None, :]                                       # (n_s, n, n)
 
     def K(idx, hr):
-        Cs = C[:, idx][:, :, idx]                                              # (n_s, r, r)
-        Kb = np.tensordot(Cs, BB, axes=([0], [0]))                             # (r, r, n, n)
-        Kb = np.ascontiguousarray(Kb.transpose(0, 2, 1, 3)).reshape(len(idx) * n, len(idx) * n)
+        Cs = C[:, idx[:, None], idx[None, :]]                                  # (n_s, r, r)
+        Kb = np.einsum("sab,sij->aibj", Cs, BB).reshape(len(idx) * n, len(idx) * n)
         Kb[np.diag_indices_from(Kb)] += np.repeat(-(hr * w) ** 2, n) + np.tile(om2, len(idx))
         return Kb
 
