@@ -86,8 +86,12 @@ def derivative_matrix(basis):
 
 @functools.lru_cache(maxsize=32)
 def _hill_basis(H, samples):
-    """The Hill basis (full, H harmonics, its sampling): the same for every orbit of a branch, built once."""
-    return HBBasis(H, "full", samples)
+    """The Hill basis (full, H harmonics, its sampling): the same for every orbit of a branch, built once (its
+    arrays read-only: one object is shared by every caller)."""
+    bp = HBBasis(H, "full", samples)
+    for a in (bp.h, bp.sine, bp.E, bp.P, bp.at_zero, bp.slope_at_zero):
+        a.setflags(write=False)
+    return bp
 
 
 def _galerkin_blocks(problem, u, harmonics):

@@ -2,10 +2,11 @@ r"""The hard classes of the secular route (hill_secular.py; hill.py explains the
 the trivial pair's copies i k (an internal resonance k:1, its tongue), found by its copies.
 
 In the truncated Hill matrix a class's exponent nu = i k0 + d (|d| small) has a zero of the characteristic
-polynomial p near every point i k, k = 0..H, and its partner's there too: i k + d and i k - d (and, for a complex
-d, their conjugates'), each with its own eigenvector; they are exact copies of one another only without the
-truncation.  The dense route keeps, of all of them, those whose eigenvectors have the smallest |mean harmonic|:
-below a tongue the copy at i k0 (the class's mode on the fundamental), inside it the one near 0, where the
+polynomial p near the points i k, k0 - H <= k <= k0 + H, and its partner's there too: i k + d and i k - d (and, for
+a complex d, their conjugates'), each with its own eigenvector; they are exact copies of one another only without
+the truncation.  The candidates are sought at k = 0 .. max(H, |k0|) (the others are their images -conj: the
+Hill matrix is real and Hamiltonian).  The dense route keeps, of all of them, those whose eigenvectors have the
+smallest |mean harmonic|: below a tongue the copy at i k0 (the class's mode on the fundamental), inside it the one near 0, where the
 eigenvector mixes with the continued mode's.  Measured on NLvib's beam (example 09, 5:1 tongue), dense route:
 below, 4.987 i with mean harmonic -0.02 is kept against +-0.009 i with 0.04; inside, the real pair +-0.017 with 0
 against 4.975 i with -2.8 (the orbit is unstable there).  So here every such zero is found by Newton on p'/p
@@ -16,8 +17,8 @@ route chooses them (hill_structured.central_pool).
 Declined (None; then the structured route decides, as before): a pair within COPY_CLUSTER of 0 (colliding with
 the trivial pair: next to a fold of the energy or a branch point, a cluster Newton cannot resolve; told by the
 count of zeros in that disc, (1 / 2 pi i) \oint p'/p dnu by the trapezoidal rule), a zero found on the orbit's
-velocity, a count of zeros near 0 that the zeros found do not account for, too few central ones, or a near tie
-of |mean harmonic| at the cut."""
+velocity, a class's own exponent not among the zeros found, a count of zeros near 0 that the zeros found do not
+account for, too few central ones, or a near tie of |mean harmonic| at the cut."""
 from __future__ import annotations
 
 import numpy as np
@@ -48,8 +49,9 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
 
     nu_hard : the hard classes' secular exponents (each within the secular route's lattice gap of a point i k);
     logderiv(nu) : p'/p at the points nu (S,); vectors(nu) : (mean harmonic, Hill residual, |cos| with the orbit's
-    velocity) (S,) of the eigenvectors at the zeros nu; tol : Newton's relative step tolerance; residual_tol : the
-    largest relative Hill residual of an accepted eigenpair."""
+    velocity) (S,) of the eigenvectors at the zeros nu; tol : Newton's relative step tolerance (at least COPY_TOL:
+    after a step that small the error of a simple zero is its square); residual_tol : the largest relative Hill
+    residual of an accepted eigenpair."""
     # a pair colliding with the trivial pair (next to a fold of the energy, or a branch point): more than the
     # trivial pair's two zeros within COPY_CLUSTER of 0; Newton is no tool for that cluster: the structured route
     if not abs(_zeros_in(logderiv, COPY_CLUSTER) - 2) < 0.05:
@@ -58,13 +60,18 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
     k0 = np.round(nu_hard.imag)
     d = nu_hard - 1j * k0
     offsets = np.concatenate([d, -d, np.conj(d), -np.conj(d)])
-    lattice = 1j * np.arange(H + 1, dtype=float)
+    # the lattice points 0 .. max(H, |k0|): a class's own central copy may lie beyond H (e.g. mode 2 of a cantilever
+    # at 5.02 i on a branch computed with H = 3); those below 0 are the images (-conj) of these
+    lattice = 1j * np.arange(max(H, int(np.abs(k0).max())) + 1, dtype=float)
     start = (lattice[:, None] + offsets[None, :]).ravel()
     home = np.repeat(lattice, len(offsets))
     # and a ring of starts around 0 and the classes' own lattice points (d itself may be the trivial pair's zero)
     ring = COPY_RING * np.exp(0.25j * np.pi * np.array([1, 3, 5, 7]))          # off the axes: Newton on a real
     # function from a real start would stay on the real axis
-    centres = 1j * np.unique(np.concatenate([[0.0], np.abs(k0[np.abs(k0) <= H])]))
+    # (where the secular Newton ended on the trivial pair's zero at 0, the class's own exponent is unknown: a ring
+    # around every lattice point)
+    at_trivial = np.abs(nu_hard) <= COPY_TOL ** 0.5
+    centres = lattice if np.any(at_trivial) else 1j * np.unique(np.concatenate([[0.0], np.abs(k0)]))
     start = np.concatenate([start, (centres[:, None] + ring[None, :]).ravel()])
     home = np.concatenate([home, np.repeat(centres, len(ring))])
     keep = _first(start, 1e-10) & (np.abs(start - home) > 1e-12)
@@ -91,6 +98,12 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
         z = z[_first(z, 1e-8)]
         cent, res, triv0 = vectors(z)
     ok = (res < residual_tol) & np.isfinite(cent)
+    # the classes' own exponents (converged zeros, started from themselves) must be among those found, but where
+    # the secular Newton converged on the trivial pair's zero at 0 (no start there: the ring looks around it)
+    own = ~at_trivial
+    if not np.all(np.min(np.abs(nu_hard[own, None] - z[ok][None, :]), axis=1, initial=np.inf)
+                  <= 1e-8 * np.maximum(1.0, np.abs(nu_hard[own]))):
+        return None
     if np.any(ok & (triv0 > TRIVIAL_COS)):
         return None         # a zero on the orbit's velocity: the trivial pair's, or a pair colliding with it
     # every zero near 0 found?  p has there the trivial pair's two and those found (with their images): the count

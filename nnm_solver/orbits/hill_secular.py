@@ -35,8 +35,9 @@ def _secular(problem, A, w, bp, C):
     mean harmonic below 1/2) and refined there.  Each class gives its pair nu, -nu (the matrix is Hamiltonian).
     Checked before use: the Hill residual of the eigenvector rebuilt from the null vector of M, the mean harmonic,
     no eigenvector on the orbit's velocity (or its copies), distinct pairs (a duplicate, or a collision in
-    progress), no exponent near the trivial pair's copies i k (internal resonances, branch points).
-    Anything else: None, and the structured route (then the dense one) decides."""
+    progress), no exponent near the trivial pair's copies i k (internal resonances, branch points).  The converged
+    classes near those copies are found by their copies (hill_copies.py); what that declines, and anything else,
+    goes to the structured route on those classes (then None: the whole structured route, then the dense one)."""
     n, H = problem.n, bp.harmonics
     nb = 2 * H + 1
     Tinv, omega2, touched, Ah, vel = _setup(problem, A, w, bp)
@@ -139,6 +140,8 @@ def _secular(problem, A, w, bp, C):
             bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
             bad |= velocity_overlaps(c, vel).max(axis=-1) > 0.5
             lat = np.round(nu.imag)
+            # (a class whose Newton did not converge may sit there too: hill_copies then finds its own exponent, or
+            # declines when that is not a zero)
             near = (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
             bad |= near
             mu = np.exp(2 * np.pi * nu)
@@ -148,8 +151,9 @@ def _secular(problem, A, w, bp, C):
             bad |= close.any(axis=0) | close.any(axis=1)
         good = ~bad
         if np.any(bad):
-            # the classes near the trivial pair's copies (internal resonances) by their copies, if all are; else (or where the copies decline) the structured route on those classes alone (its blocks
-            # at the lattice i k hold the hybrids the dense route may keep)
+            # the classes near the trivial pair's copies (internal resonances) by their copies, if all are; else (or
+            # where the copies decline) the structured route on those classes alone (its blocks at the lattice i k
+            # hold the hybrids the dense route may keep)
             if bad.sum() > SECULAR_MAX_HARD:
                 return None
 
@@ -186,4 +190,3 @@ def _secular(problem, A, w, bp, C):
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
     return mu[np.argsort(-np.abs(mu), kind="stable")]
-
