@@ -12,7 +12,7 @@ below, 4.987 i with mean harmonic -0.02 is kept against +-0.009 i with 0.04; ins
 against 4.975 i with -2.8 (the orbit is unstable there).  So here every such zero is found by Newton on p'/p
 from i k + {d, -d, conj d, -conj d} and from a ring around 0 and i k0 (near 0 with the trivial pair's double
 zero divided out: p'/p - 2 / nu), each checked by its Hill residual, and the kept ones are chosen as the dense
-route chooses them (hill_structured.central_pool).
+route chooses them (hill_shared.central_pool).
 
 Declined (None; then the structured route decides, as before): a pair within COPY_CLUSTER of 0 (colliding with
 the trivial pair: next to a fold of the energy or a branch point, a cluster Newton cannot resolve; told by the
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_structured import TRIVIAL_COS, central_pool
+from .hill_shared import TRIVIAL_COS, central_pool
 
 __all__ = ["hard_copies"]
 

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from .hill_copies import hard_copies
-from .hill_structured import _classes, _exp_transform, _HillOperator, _iterate, _setup, velocity_overlaps
+from .hill_shared import _classes, _exp_transform, _setup, velocity_overlaps
+from .hill_structured import _HillOperator, _iterate
 
 #: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
 #: accepted eigenpair, and the checks that send a point to the structured route: an exponent this close (units of

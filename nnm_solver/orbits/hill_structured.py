@@ -1,11 +1,12 @@
 r"""Hill's multipliers by the structured route (hill.py explains the routes): shift-invert subspace iteration on
-the Hill matrix, one small block per Floquet exponent, the springs' low-rank part by Woodbury; the shared pieces of
-the secular route (the operator, the classes of exponents, the central-copy ordering)."""
+the Hill matrix, one small block per Floquet exponent, the springs' low-rank part by Woodbury (the operator, which
+the secular route uses too; what else the routes share: hill_shared.py)."""
 from __future__ import annotations
 
-import functools
-
 import numpy as np
+
+from .hill_shared import (CENTROID_MAX, TRIVIAL_COS, _classes, _exp_transform, _setup, central_pool,
+                          velocity_overlaps)
 
 #: vectors per exponent in the structured route (a collision of two exponents needs 2, the trivial pair beside a
 #: real pair near +1 needs 4)
@@ -14,8 +15,6 @@ BLOCK = 4
 #: relative residual ||L x - theta x|| / max(1, |theta|) (theta in units of omega) of an accepted eigenpair
 RESIDUAL_TOL = 1e-11
 
-#: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
-CENTROID_MAX = 0.6
 
 #: iterations of the structured route before it gives up (and the dense route is taken)
 MAX_SWEEPS = 40
@@ -26,30 +25,6 @@ LATTICE_GAP = 0.02
 #: the shift of the block around the trivial pair (units of omega), and its largest number of sweeps
 ZERO_SHIFT = 0.03 + 0.03j
 ZERO_SWEEPS = 12
-
-#: eigenvectors of the shifted blocks within this |cos| of the orbit's velocity are the trivial pair's, not kept
-#: (the trivial block's two nearest the velocity are; the trivial pair is reported as exactly 1, 1)
-TRIVIAL_COS = 0.999
-
-
-def _exp_transform(H):
-    """T (N_b, N_b) complex: real-basis coefficients a = T c of the exp(i k theta) coefficients c, k = -H..H
-    (column k + H); the real basis is 1, cos 1, sin 1, ..., cos H, sin H."""
-    nb = 2 * H + 1
-    T = np.zeros((nb, nb), dtype=complex)
-    T[0, H] = 1.0
-    for h in range(1, H + 1):
-        T[2 * h - 1, H + h] = T[2 * h - 1, H - h] = 1.0       # a_cos = c_h + c_-h
-        T[2 * h, H + h], T[2 * h, H - h] = 1j, -1j           # a_sin = i (c_h - c_-h)
-    return T
-
-
-@functools.lru_cache(maxsize=16)
-def _exp_inverse(H):
-    """T^-1 (N_b, N_b) of _exp_transform(H): the exp(i k theta) coefficients of the real-basis ones (read-only)."""
-    Tinv = np.linalg.inv(_exp_transform(H))
-    Tinv.setflags(write=False)
-    return Tinv
 
 
 class _HillOperator:
@@ -162,45 +137,6 @@ def _rayleigh_ritz(op, V):
     return V, theta, X, res
 
 
-def _setup(problem, A, w, bp):
-    """What the structured and secular routes share: (T^-1, omega2 / w^2, touched modes tm, the averaged stiffness's
-    (beta2, Vbar), the classes to find (every touched class but the continued one), the untouched modes' exact
-    exponents, the orbit's velocity in exp(i k theta) (N_b, n))."""
-    s, n = problem.sys, problem.n
-    H = bp.harmonics
-    nb = 2 * H + 1
-    Tinv = _exp_inverse(H)
-    omega2 = s.omega2 / w ** 2
-    Bq = s.Bq
-    touched = np.linalg.norm(Bq, axis=0) > 0
-    # the orbit's velocity in exp(i k theta): the trivial pair's eigenvector (dq/dtheta = sum i k c_k e^{ik theta})
-    Ah = np.zeros((nb, n))
-    orbit = problem.basis
-    for j in np.flatnonzero(orbit.h <= H):
-        hj = orbit.h[j]
-        row = 0 if hj == 0 else (2 * hj if orbit.sine[j] else 2 * hj - 1)
-        Ah[row] += A[j]
-    vel = (1j * np.arange(-H, H + 1))[:, None] * (Tinv @ Ah)                  # (N_b, n)
-    return Tinv, omega2, touched, Ah, vel
-
-
-def _classes(omega2, Bq, Cexp, touched, Ah, H):
-    """(tm, beta2, Vbar, classes, nu_exact): the touched modes, the averaged stiffness Omega^2 + Bq^T <g'> Bq on
-    them (eigenvalues, vectors), the classes to find (all but the continued one's: the trivial pair), and the
-    untouched modes' exponents +- i omega_j (exact)."""
-    Gbar = Cexp[:, H, H].real                                                 # <g'> (n_s,) / omega^2
-    tm = np.flatnonzero(touched)
-    Kbar = np.diag(omega2[tm]) + (Bq[:, tm].T * Gbar) @ Bq[:, tm]
-    beta2, Vbar = np.linalg.eigh(Kbar)
-    shape = np.abs(Ah[1, tm]) + np.abs(Ah[2, tm])                             # the fundamental's shape
-    own = int(np.argmax(np.abs(Vbar.T @ shape))) if len(tm) else -1
-    classes = [j for j in range(len(tm)) if j != own]
-    nu_exact = []
-    for j in np.flatnonzero(~touched):                                        # +- i omega_j, exact
-        nu_exact += [1j * np.sqrt(omega2[j]), -1j * np.sqrt(omega2[j])]
-    return tm, beta2, Vbar, classes, nu_exact
-
-
 def _structured(problem, A, w, bp, C):
     """Multipliers (2n,) by the structured route, or None when it cannot vouch for them (then: dense)."""
     n, H = problem.n, bp.harmonics
@@ -220,29 +156,6 @@ def _structured(problem, A, w, bp, C):
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])
     return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-
-@functools.lru_cache(maxsize=16)
-def _offsets(nb):
-    """D (N_b^2, 2 N_b - 1): column p + N_b - 1 of G.ravel() @ D sums the entries G[k, k - p] of an (N_b, N_b)
-    matrix (its p-th diagonal: vectors moved by p harmonics against each other)."""
-    k, l = np.divmod(np.arange(nb * nb), nb)
-    D = np.zeros((nb * nb, 2 * nb - 1))
-    D[np.arange(nb * nb), k - l + nb - 1] = 1.0
-    return D
-
-
-def velocity_overlaps(x1, vel):
-    """|cos| (..., 2 N_b - 1) between vectors x1 (..., N_b, n) and the orbit's velocity vel (N_b, n) moved by p
-    harmonics (column p + N_b - 1, p = -2H..2H): the trivial pair's eigenvector and its copies."""
-    nb = vel.shape[0]
-    D = _offsets(nb)
-    G = x1 @ np.conj(vel).T                                                  # <vel_l, x1_k>
-    ip = np.abs(G.reshape(G.shape[:-2] + (nb * nb,)) @ D)                   # sum_k <vel_{k-p}, x1_k>
-    vk = (np.abs(vel) ** 2).sum(axis=1)
-    nv = np.sqrt(np.tile(vk, nb) @ D)                                        # |vel| over the overlapping k
-    nrm = np.sqrt((x1.real ** 2 + x1.imag ** 2).sum(axis=(-2, -1)))[..., None]
-    return np.where(nv > 0, ip / np.maximum(nv * nrm, 1e-300), 0.0)
 
 
 def _trivial_overlap(op, X, vel):
@@ -379,24 +292,3 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     return kept
 
 
-def central_pool(nu, cc, need, tie=0.0):
-    """The ``need`` kept exponents among the eigenvalues nu (units of omega) whose eigenvectors have |mean harmonic|
-    cc, as the dense route keeps them: with their conjugates and Hamiltonian partners -conj, -nu (exact eigenvalues
-    too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic|, repeats dropped.  None when
-    fewer than ``need`` are central (|mean harmonic| <= CENTROID_MAX), or when the next one's |mean harmonic| is
-    within ``tie`` of the last kept one's (an ordering too close to call)."""
-    nu = np.concatenate([nu, np.conj(nu), -np.conj(nu), -nu])
-    cc = np.tile(cc, 4)
-    order = np.argsort(cc, kind="stable")
-    nu, cc = nu[order], cc[order]
-    same = np.abs(nu[:, None] - nu[None, :]) <= 1e-8 * np.maximum(1.0, np.abs(nu))[None, :]
-    first = ~np.any(np.tril(same, -1), axis=1)                      # not a repeat of an earlier (more central) one
-    pool, pool_c = nu[first], cc[first]
-    if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
-        return None
-    if tie > 0 and len(pool) > need and pool_c[need] - pool_c[need - 1] < tie:
-        return None
-    return np.array(pool[:need])
-
-
-# --------------------------------------------------------------------------- the secular route
