@@ -6,8 +6,8 @@ polynomial p near the points i k, k0 - H <= k <= k0 + H, and its partner's there
 a complex d, their conjugates'), each with its own eigenvector; they are exact copies of one another only without
 the truncation.  The candidates are sought at k = 0 .. max(H, |k0|) (the others are their images -conj: the
 Hill matrix is real and Hamiltonian).  The dense route keeps, of all of them, those whose eigenvectors have the
-smallest |mean harmonic|: below a tongue the copy at i k0 (the class's mode on the fundamental), inside it the one near 0, where the
-eigenvector mixes with the continued mode's.  Measured on NLvib's beam (example 09, 5:1 tongue), dense route:
+smallest |mean harmonic|: below a tongue the copy at i k0 (the class's mode on the fundamental), inside it the
+one near 0, where the eigenvector mixes with the continued mode's.  Measured on NLvib's beam (example 09, 5:1 tongue), dense route:
 below, 4.987 i with mean harmonic -0.02 is kept against +-0.009 i with 0.04; inside, the real pair +-0.017 with 0
 against 4.975 i with -2.8 (the orbit is unstable there).  So here every such zero is found by Newton on p'/p
 from i k + {d, -d, conj d, -conj d} and from a ring around 0 and i k0 (near 0 with the trivial pair's double
@@ -44,14 +44,15 @@ COPY_COUNT_NODES = 32
 COPY_CLUSTER = 0.004
 
 
-def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
+def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     """The 2 len(nu_hard) kept exponents (units of omega) of the hard classes, or None (module docstring).
 
     nu_hard : the hard classes' secular exponents (each within the secular route's lattice gap of a point i k);
     logderiv(nu) : p'/p at the points nu (S,); vectors(nu) : (mean harmonic, Hill residual, |cos| with the orbit's
     velocity) (S,) of the eigenvectors at the zeros nu; tol : Newton's relative step tolerance (at least COPY_TOL:
     after a step that small the error of a simple zero is its square); residual_tol : the largest relative Hill
-    residual of an accepted eigenpair."""
+    residual of an accepted eigenpair; found : a list that receives the accepted zeros when the answer is not None
+    (for the structured route's warm start)."""
     # a pair colliding with the trivial pair (next to a fold of the energy, or a branch point): more than the
     # trivial pair's two zeros within COPY_CLUSTER of 0; Newton is no tool for that cluster: the structured route
     if not abs(_zeros_in(logderiv, COPY_CLUSTER) - 2) < 0.05:
@@ -119,7 +120,10 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol):
         return None
     if np.round(count.real) != 2 + len(images):
         return None
-    return central_pool(z[ok], np.abs(cent[ok]), 2 * len(d), tie=COPY_TIE)
+    kept = central_pool(z[ok], np.abs(cent[ok]), 2 * len(d), tie=COPY_TIE)
+    if kept is not None and found is not None:
+        found.extend(z[ok])
+    return kept
 
 
 def _zeros_in(logderiv, radius):

@@ -8,7 +8,7 @@ import numpy as np
 
 from .hill_copies import hard_copies
 from .hill_shared import _classes, _exp_transform, _setup, velocity_overlaps
-from .hill_structured import _HillOperator, _iterate
+from .hill_structured import _HillOperator, _iterate, warm_from_zeros
 
 #: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
 #: accepted eigenpair, and the checks that send a point to the structured route: an exponent this close (units of
@@ -166,7 +166,13 @@ def _secular(problem, A, w, bp, C):
 
             found = None
             if np.all(near[bad]):
-                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL)
+                zeros = []
+                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL, zeros)
+                if found is not None:    # the structured route's warm start from this orbit, as if it had answered
+                    zeros = np.asarray(zeros)
+                    cz = np.where(np.isfinite(c_ := eigvecs(zeros)[0]), c_, 0.0)
+                    warm_from_zeros(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
+                                    nu[bad], zeros, cz)
             if found is None:
                 found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
                                  warm=True)

@@ -176,6 +176,58 @@ def _trivial_pair(cos):
     return out
 
 
+def _cold_start(op, tm, Vbar, beta2, classes, vel):
+    """(shifts (S,), first halves of the start vectors (S, N_b, n, BLOCK)) of _iterate's blocks without a warm
+    start: one per class at the averaged stiffness' frequency, its mode on the fundamental and its neighbours; one
+    per point i k, k = 0..H, the trivial pair's copy there (the velocity moved by k harmonics)."""
+    nc, b, nb, n, H = len(classes), BLOCK, op.nb, op.n, op.H
+    S = nc + H + 1
+    sigma = np.concatenate([1j * np.sqrt(np.maximum(beta2[classes], 0.0)) + 1e-9, 1j * np.arange(H + 1) + ZERO_SHIFT])
+    c = np.zeros((S, nb, n, b), dtype=complex)
+    rng = np.random.default_rng(12345)
+    bell = np.exp(-0.5 * np.arange(-H, H + 1) ** 2)[:, None]
+    for i, j in enumerate(classes):
+        v = np.zeros(n)
+        v[tm] = Vbar[:, j]
+        c[i, H, :, 0] = v
+        if H >= 1:
+            c[i, H + 1, :, 1] = v
+            c[i, H - 1, :, 2] = v
+        c[i, :, :, 3] = rng.standard_normal((nb, n)) * bell
+    for k in range(H + 1):                 # the trivial pair's copy at i k: the velocity moved by k harmonics
+        i = nc + k
+        c[i, :nb - k, :, 0] = vel[k:]
+        c[i, :, :, 1] = np.roll(np.abs(c[i, :, :, 0]), 1, axis=0)
+        for col in range(2, b):
+            c[i, :, :, col] = rng.standard_normal((nb, n)) * np.roll(bell, -k, axis=0)
+    return sigma, c
+
+
+def warm_from_zeros(problem, op, tm, Vbar, beta2, classes, vel, nu_classes, zeros, vectors):
+    """Store _iterate's warm start from eigenpairs found otherwise (hill_copies.py): each block starts from the
+    eigenvectors of the zeros nearest its shift (the class's exponent nu_classes (units of omega), or i k), the cold
+    start's vectors where fewer are known.  So the structured route, asked at a later orbit of the branch, starts
+    from this orbit as it would from its own last answer.  zeros (Z,) and vectors (Z, N_b, n): the eigenpairs."""
+    nc, b, nb, n, H = len(classes), BLOCK, op.nb, op.n, op.H
+    S = nc + H + 1
+    sigma, c = _cold_start(op, tm, Vbar, beta2, classes, vel)
+    sigma[:nc] = nu_classes
+    lattice = 1j * np.arange(H + 1)
+    for i in range(S):
+        centre = sigma[i] if i < nc else lattice[i - nc]
+        dist = np.abs(zeros - centre)
+        near = np.argsort(dist, kind="stable")[:b]
+        near = near[dist[near] < 0.5]
+        # the known eigenvectors first; at 0 the trivial pair's start (the velocity) stays in the first column
+        first = 1 if i == nc else 0
+        near = near[:b - first]
+        c[i, :, :, first:first + len(near)] = np.moveaxis(vectors[near], 0, -1)
+    shifts = sigma.copy()
+    shifts[nc:] = lattice + ZERO_SHIFT
+    X = op.lift(c, shifts)
+    problem._hill_warm = ((nb, n, S), (shifts + 1e-9j * np.maximum(1.0, np.abs(shifts))) * op.w, X)
+
+
 def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     """The 2 len(classes) kept exponents nu (units of omega) of the touched modes, or None.
 
@@ -193,24 +245,7 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
         sigma = warm[1] / op.w                 # the exponents in rad/s, in units of this orbit's omega
         V = op.lift(warm[2][:, :op.m].reshape(S, nb, n, b), sigma)
     else:
-        sigma = np.concatenate([1j * np.sqrt(np.maximum(beta2[classes], 0.0)) + 1e-9, lattice])
-        c = np.zeros((S, nb, n, b), dtype=complex)
-        rng = np.random.default_rng(12345)
-        bell = np.exp(-0.5 * np.arange(-H, H + 1) ** 2)[:, None]
-        for i, j in enumerate(classes):
-            v = np.zeros(n)
-            v[tm] = Vbar[:, j]
-            c[i, H, :, 0] = v
-            if H >= 1:
-                c[i, H + 1, :, 1] = v
-                c[i, H - 1, :, 2] = v
-            c[i, :, :, 3] = rng.standard_normal((nb, n)) * bell
-        for k in range(H + 1):                 # the trivial pair's copy at i k: the velocity moved by k harmonics
-            i = nc + k
-            c[i, :nb - k, :, 0] = vel[k:]
-            c[i, :, :, 1] = np.roll(np.abs(c[i, :, :, 0]), 1, axis=0)
-            for col in range(2, b):
-                c[i, :, :, col] = rng.standard_normal((nb, n)) * np.roll(bell, -k, axis=0)
+        sigma, c = _cold_start(op, tm, Vbar, beta2, classes, vel)
         V = op.lift(c, sigma)
     sigma[is_lat] = lattice
     sigma = _keep_off_lattice(sigma)
