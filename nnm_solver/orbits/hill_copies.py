@@ -49,10 +49,10 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
 
     nu_hard : the hard classes' secular exponents (each within the secular route's lattice gap of a point i k);
     logderiv(nu) : p'/p at the points nu (S,); vectors(nu) : (mean harmonic, Hill residual, |cos| with the orbit's
-    velocity) (S,) of the eigenvectors at the zeros nu; tol : Newton's relative step tolerance (at least COPY_TOL:
-    after a step that small the error of a simple zero is its square); residual_tol : the largest relative Hill
-    residual of an accepted eigenpair; found : a list that receives the accepted zeros when the answer is not None
-    (for the structured route's warm start)."""
+    velocity (S,), the eigenvectors (S, N_b, n)) at the zeros nu; tol : Newton's relative step tolerance (at least
+    COPY_TOL: after a step that small the error of a simple zero is its square); residual_tol : the largest relative
+    Hill residual of an accepted eigenpair; found : a list that receives (zeros, eigenvectors) of the accepted
+    candidates when the answer is not None (for the structured route's warm start)."""
     # a pair colliding with the trivial pair (next to a fold of the energy, or a branch point): more than the
     # trivial pair's two zeros within COPY_CLUSTER of 0; Newton is no tool for that cluster: the structured route
     if not abs(_zeros_in(logderiv, COPY_CLUSTER) - 2) < 0.05:
@@ -97,7 +97,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
         if not len(z):
             return None
         z = z[_first(z, 1e-8)]
-        cent, res, triv0 = vectors(z)
+        cent, res, triv0, vecs = vectors(z)
     ok = (res < residual_tol) & np.isfinite(cent)
     # the classes' own exponents (converged zeros, started from themselves) must be among those found, but where
     # the secular Newton converged on the trivial pair's zero at 0 (no start there: the ring looks around it)
@@ -122,7 +122,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
         return None
     kept = central_pool(z[ok], np.abs(cent[ok]), 2 * len(d), tie=COPY_TIE)
     if kept is not None and found is not None:
-        found.extend(z[ok])
+        found.append((z[ok], vecs[ok]))
     return kept
 
 

@@ -162,23 +162,19 @@ def _secular(problem, A, w, bp, C):
                 cz, centz = eigvecs(z)
                 cz = np.where(np.isfinite(cz), cz, 0.0)
                 resz = op.eigen_residual(cz, z) / np.maximum(1.0, np.abs(z))
-                return centz, resz, velocity_overlaps(cz, vel)[:, nb - 1]
+                return centz, resz, velocity_overlaps(cz, vel)[:, nb - 1], cz
 
+            hard = [classes[i] for i in np.flatnonzero(bad)]
             found = None
             if np.all(near[bad]):
-                zeros = []
-                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL, zeros)
+                pairs = []
+                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL, pairs)
                 if found is not None:    # the structured route's warm start from this orbit, as if it had answered
-                    zeros = np.asarray(zeros)
-                    cz = np.where(np.isfinite(c_ := eigvecs(zeros)[0]), c_, 0.0)
-                    warm_from_zeros(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
-                                    nu[bad], zeros, cz)
+                    warm_from_zeros(problem, op, tm, Vbar, beta2, hard, vel, nu[bad], *pairs[0])
             if found is None:
-                found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
-                                 warm=True)
+                found = _iterate(problem, op, tm, Vbar, beta2, hard, vel, warm=True)
             if found is None:
-                found = _iterate(problem, op, tm, Vbar, beta2, [classes[i] for i in np.flatnonzero(bad)], vel,
-                                 warm=False)
+                found = _iterate(problem, op, tm, Vbar, beta2, hard, vel, warm=False)
             if found is None:
                 return None
             mf = np.exp(2 * np.pi * np.asarray(found))
