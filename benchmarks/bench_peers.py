@@ -204,6 +204,33 @@ def events(b):
     return ", ".join(f"{e['kind']} {e['energy']:.6g} J" for e in b.events) or "none"
 
 
+def dense_check(model, H, E, f, b_hb, cap):
+    """The same HB path with the dense Hill route (hill.py's reference): its events, and how the default route's
+    branch compares (points, stability flags point by point, events' kinds and energies)."""
+    from nnm_solver.orbits.harmonic_balance import HBProblem
+    from threadpoolctl import threadpool_limits
+    saved = HBProblem.hill_method
+    HBProblem.hill_method = "dense"
+    try:
+        with threadpool_limits(1):
+            t = time.process_time()
+            b_d = nnm_path(model, H, E, f, method="hb", harmonics=H, floquet=True, max_period_step=cap)
+            cpu = time.process_time() - t
+    finally:
+        HBProblem.hill_method = saved
+    same_points = len(b_d.energy) == len(b_hb.energy)
+    flags = int(np.sum(np.asarray(b_d.stable) != np.asarray(b_hb.stable))) if same_points else None
+    kinds = [e["kind"] for e in b_d.events] == [e["kind"] for e in b_hb.events]
+    worst = (max((abs(a["energy"] / b["energy"] - 1) for a, b in zip(b_hb.events, b_d.events)), default=0.0)
+             if kinds else None)
+    print(f"dense Hill route: {len(b_d.energy)} points in {cpu:.2f} s CPU, events {events(b_d)}; default route: "
+          f"{'the same points' if same_points else 'other points'}, stability flags differing at "
+          f"{flags if same_points else '-'} points, events {'of the same kinds' if kinds else 'of other kinds'}"
+          + (f", largest relative energy difference {worst:.1e}" if kinds else ""))
+    return dict(points=len(b_d.energy), cpu=cpu, events=[(e["kind"], e["energy"]) for e in b_d.events],
+                same_points=same_points, flags_differing=flags, same_kinds=kinds, worst_event_rdiff=worst)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cases", nargs="+", default=["04", "09"], choices=sorted(CASES))
@@ -214,6 +241,9 @@ def main(argv=None):
     ap.add_argument("--hb-period-steps", nargs="+", type=float, default=[HB_PERIOD_STEP],
                     help="period caps of the HB runs with multipliers (the first one also for the run without and "
                          "the agreement; each further one adds a row)")
+    ap.add_argument("--dense-check", action="store_true",
+                    help="also follow the HB path once with the dense Hill route (every eigenpair of the Hill matrix, "
+                         "the reference) and compare its flags and events with the default route's (~1-2 min on 09)")
     args = ap.parse_args(argv)
     octave = shutil.which(args.octave)
     nlvib = nlvib_dir(args.nlvib)
@@ -264,6 +294,8 @@ def main(argv=None):
             results[case] = dict(rows=rows, agreement_hb=agree_hb, agreement_shooting=agree_sh,
                                  events_hb=[(e["kind"], e["energy"]) for e in b_hb.events],
                                  events_shooting=[(e["kind"], e["energy"]) for e in b_sh.events])
+            if args.dense_check:
+                results[case]["dense_check"] = dense_check(model, H, E, f, b_hb, args.hb_period_steps[0])
     if args.json:
         for case in results.values():
             for r in case["rows"].values():
