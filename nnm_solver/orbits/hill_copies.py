@@ -7,12 +7,12 @@ a complex d, their conjugates'), each with its own eigenvector; they are exact c
 the truncation.  The candidates are sought at k = 0 .. max(H, |k0|) (the others are their images -conj: the
 Hill matrix is real and Hamiltonian).  The dense route keeps, of all of them, those whose eigenvectors have the
 smallest |mean harmonic|: below a tongue the copy at i k0 (the class's mode on the fundamental), inside it the
-one near 0, where the eigenvector mixes with the continued mode's.  Measured on NLvib's beam (example 09, 5:1 tongue), dense route:
-below, 4.987 i with mean harmonic -0.02 is kept against +-0.009 i with 0.04; inside, the real pair +-0.017 with 0
-against 4.975 i with -2.8 (the orbit is unstable there).  So here every such zero is found by Newton on p'/p
-from i k + {d, -d, conj d, -conj d} and from a ring around 0 and i k0 (near 0 with the trivial pair's double
-zero divided out: p'/p - 2 / nu), each checked by its Hill residual, and the kept ones are chosen as the dense
-route chooses them (hill_shared.central_pool).
+one near 0, where the eigenvector mixes with the continued mode's.  Measured on NLvib's beam (example 09, 5:1
+tongue), dense route: below, 4.987 i with mean harmonic -0.02 is kept against +-0.009 i with 0.04; inside, the
+real pair +-0.017 with 0 against 4.975 i with -2.8 (the orbit is unstable there).  So here every such zero is
+found by Newton on p'/p from i k + {d, -d, conj d, -conj d} and from a ring around 0 and i k0 (near 0 with the
+trivial pair's double zero divided out: p'/p - 2 / nu), each checked by its Hill residual, and the kept ones are
+chosen as the dense route chooses them (hill_shared.central_pool).
 
 Declined (None; then the structured route decides, as before): a pair within COPY_CLUSTER of 0 (colliding with
 the trivial pair: next to a fold of the energy or a branch point, a cluster Newton cannot resolve; told by the
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_shared import TRIVIAL_COS, central_pool
+from .hill_shared import TRIVIAL_COS, central_pool, distinct
 
 __all__ = ["hard_copies"]
 
@@ -75,7 +75,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     centres = lattice if np.any(at_trivial) else 1j * np.unique(np.concatenate([[0.0], np.abs(k0)]))
     start = np.concatenate([start, (centres[:, None] + ring[None, :]).ravel()])
     home = np.concatenate([home, np.repeat(centres, len(ring))])
-    keep = _first(start, 1e-10) & (np.abs(start - home) > 1e-12)
+    keep = distinct(start, 1e-10) & (np.abs(start - home) > 1e-12)
     z, home = start[keep].copy(), home[keep]
     at0 = home == 0
     with np.errstate(all="ignore"):
@@ -96,7 +96,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
         z = z[ok]
         if not len(z):
             return None
-        z = z[_first(z, 1e-8)]
+        z = z[distinct(z, 1e-8)]
         cent, res, triv0, vecs = vectors(z)
     ok = (res < residual_tol) & np.isfinite(cent)
     # the classes' own exponents (converged zeros, started from themselves) must be among those found, but where
@@ -112,7 +112,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     for radius in COPY_COUNT_RADII:
         inner = z[ok & (np.abs(z) < radius)]
         images = np.concatenate([inner, np.conj(inner), -inner, -np.conj(inner)])
-        images = images[_first(images, 1e-8)]
+        images = images[distinct(images, 1e-8)]
         count = _zeros_in(logderiv, radius)
         if abs(count - np.round(count.real)) < 0.05:
             break                        # an integer: no zero near the circle (else the next radius)
@@ -132,9 +132,3 @@ def _zeros_in(logderiv, radius):
     circle = radius * np.exp(2j * np.pi * (np.arange(COPY_COUNT_NODES) + 0.5) / COPY_COUNT_NODES)
     with np.errstate(all="ignore"):
         return np.mean(circle * logderiv(circle))
-
-
-def _first(z, rtol):
-    """Mask of the points of z that are not a repeat (within rtol, relative to max(1, |z|)) of an earlier one."""
-    same = np.abs(z[:, None] - z[None, :]) <= rtol * np.maximum(1.0, np.abs(z))[None, :]
-    return ~np.any(np.tril(same, -1), axis=1)

@@ -8,7 +8,7 @@ import functools
 
 import numpy as np
 
-__all__ = ["CENTROID_MAX", "TRIVIAL_COS", "central_pool", "velocity_overlaps"]
+__all__ = ["CENTROID_MAX", "TRIVIAL_COS", "central_pool", "distinct", "velocity_overlaps"]
 
 #: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
 CENTROID_MAX = 0.6
@@ -111,8 +111,7 @@ def central_pool(nu, cc, need, tie=0.0):
     cc = np.tile(cc, 4)
     order = np.argsort(cc, kind="stable")
     nu, cc = nu[order], cc[order]
-    same = np.abs(nu[:, None] - nu[None, :]) <= 1e-8 * np.maximum(1.0, np.abs(nu))[None, :]
-    first = ~np.any(np.tril(same, -1), axis=1)                      # not a repeat of an earlier (more central) one
+    first = distinct(nu, 1e-8)                      # not a repeat of an earlier (more central) one
     pool, pool_c = nu[first], cc[first]
     if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
         return None
@@ -121,4 +120,8 @@ def central_pool(nu, cc, need, tie=0.0):
     return np.array(pool[:need])
 
 
-# --------------------------------------------------------------------------- the secular route
+def distinct(z, rtol):
+    """Mask of the points of z (complex) that are not a repeat, within rtol relative to max(1, |z|), of an earlier
+    one."""
+    same = np.abs(z[:, None] - z[None, :]) <= rtol * np.maximum(1.0, np.abs(z))[None, :]
+    return ~np.any(np.tril(same, -1), axis=1)

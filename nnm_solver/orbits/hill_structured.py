@@ -15,7 +15,6 @@ BLOCK = 4
 #: relative residual ||L x - theta x|| / max(1, |theta|) (theta in units of omega) of an accepted eigenpair
 RESIDUAL_TOL = 1e-11
 
-
 #: iterations of the structured route before it gives up (and the dense route is taken)
 MAX_SWEEPS = 40
 
@@ -217,7 +216,7 @@ def warm_from_zeros(problem, op, tm, Vbar, beta2, classes, vel, nu_classes, zero
         centre = sigma[i] if i < nc else lattice[i - nc]
         dist = np.abs(zeros - centre)
         near = np.argsort(dist, kind="stable")[:b]
-        near = near[dist[near] < 0.5]
+        near = near[dist[near] < 0.5]                 # this point's, not the next lattice point's (1 apart)
         # the known eigenvectors first; at 0 the trivial pair's start (the velocity) stays in the first column
         first = 1 if i == nc else 0
         near = near[:b - first]
@@ -325,5 +324,3 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     nu_t[is_lat] = lattice
     problem._hill_warm = ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy())
     return kept
-
-
