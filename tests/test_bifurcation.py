@@ -6,6 +6,8 @@ import pytest
 
 import nnm_solver as nnm
 from conftest import two_dof_model
+from nnm_solver.orbits.harmonic_balance import HBProblem
+from nnm_solver.orbits.hb_basis import HBBasis
 from nnm_solver.stability.events import classify_multipliers, stability_changes
 
 
@@ -337,6 +339,7 @@ def _fold_and_crossing_step(s_fold, s_cross):
 
         def at(self, s):
             self.cache[float(s)] = None
+            return s, None, None
 
         def energy(self, s):
             self.at(s)
@@ -371,6 +374,43 @@ def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
     else:
         assert kinds == ["fold", "branch_point"] and "stability_change" not in events[0]
         assert abs(events[1]["x0"][0] - s_cross) < 1e-6 and events[1]["stability_change"] == "loss"
+
+
+@pytest.mark.parametrize("spread, merged", [(5e-5, True), (5e-6, False)])
+def test_a_crossing_within_the_orbits_energy_spread_is_the_folds(spread, merged):
+    """An approximate orbit (harmonic balance) defines its energy only to its spread over the period
+    (HBProblem.energy_spread); the same crossing 15 % of the step past the fold (2.25e-5 J below it) is the fold's
+    when that spread is larger than its distance in energy, a branch point of its own when it is smaller."""
+    from nnm_solver.stability.events import locate_between
+    loc, point, slope = _fold_and_crossing_step(0.3, 0.45)
+    loc.problem.energy_spread = lambda u: spread
+    events, _ = locate_between(loc, 1.0, (point(0.0), slope(0.0)), (point(1.0), slope(1.0)), 5, point)
+    kinds = [e["kind"] for e in events]
+    if merged:
+        assert kinds == ["fold"] and events[0]["stability_change"] == "loss"
+        assert "within the orbit's energy spread" in events[0]["note"] and events[0]["detail"] == "energy maximum"
+    else:
+        assert kinds == ["fold", "branch_point"] and "stability_change" not in events[0]
+
+
+def test_hb_energy_spread_vanishes_on_exact_orbits_and_measures_the_truncation():
+    """The energy of an HB orbit varies over its period by what the truncation leaves out: ~0 for the linear mode
+    (an exact orbit), and on the 2-DOF benchmark's NNM 1 it shrinks with the harmonics (H = 3 -> 9 at ~20 J)."""
+    from nnm_solver.model.modal import modal_system
+    m = two_dof_model()
+    spreads = []
+    for H in (3, 9):
+        b = nnm.continue_nnm(m, 1, 20.0, method="hb", harmonics=H, floquet=False)
+        system = modal_system(m)
+        problem = HBProblem(system, 0, HBBasis(H, b.settings.basis))
+        rel = []
+        for i in (0, len(b.energy) - 1):
+            A = np.array([system.to_modal(x) for x in np.asarray(b.coefficients_at(i))])
+            u = problem.pack(A, 2 * np.pi * b.frequency_hz[i])
+            rel.append(problem.energy_spread(u) / b.energy[i])
+        assert rel[0] < 1e-9
+        spreads.append(rel[1])
+    assert spreads[1] < 1e-3 * spreads[0] and spreads[0] > 1e-6, spreads
 
 
 def test_locator_prediction_is_on_its_hyperplane_and_exact_for_a_cubic_branch():

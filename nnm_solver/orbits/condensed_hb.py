@@ -249,6 +249,14 @@ class CondensedHBProblem:
             E += 0.5 * g @ self.lin.R1 @ g
         return float(E)
 
+    def energy_spread(self, u):
+        """max - min of the energy over one period (J), HBProblem.energy_spread of the reconstructed orbit (complete
+        basis; None for a truncated one)."""
+        if not self.lin.complete:
+            return None
+        full, uf = self.uncondensed(u)
+        return full.energy_spread(uf)
+
     # --------------------------------------------------------------- stability
     def uncondensed(self, u):
         """(HBProblem, u) of the same orbit in the uncondensed equations (complete basis only)."""

@@ -166,12 +166,23 @@ def _trivial_overlap(op, X, vel):
     return cos.max(axis=-1), cos[..., op.nb - 1]
 
 
-def _trivial_pair(cos):
-    """The trivial pair among the trivial block's Ritz vectors: the two nearest the velocity (|cos| (b,) with it),
-    if they are near it at all."""
+def _trivial_pair(cos, theta=None):
+    """The trivial pair among the trivial block's Ritz pairs (|cos| (b,) of the vectors with the velocity, exponents
+    theta (b,)).  Without theta (while iterating: which vectors the block need not converge): the two vectors
+    nearest the velocity, if they are near it at all.  With theta (the converged block's answer): the two
+    exponents nearest 0 among the vectors near the velocity, as the dense route sets the two
+    multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the pair that
+    passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the velocity too
+    (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's beam, example
+    09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit called stable)."""
     out = np.zeros(len(cos), dtype=bool)
-    two = np.argsort(-cos, kind="stable")[:2]
-    out[two] = cos[two] > 0.5
+    if theta is None:
+        two = np.argsort(-cos, kind="stable")[:2]
+        out[two] = cos[two] > 0.5
+        return out
+    near = np.flatnonzero(cos > 0.5)
+    two = near[np.argsort(np.abs(theta[near]), kind="stable")[:2]]
+    out[two] = True
     return out
 
 
@@ -313,8 +324,17 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     # the pool: converged eigenpairs but the trivial pair, their conjugates and Hamiltonian partners -conj (exact
     # eigenvalues too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic| as the dense route
     rel = res / np.maximum(1.0, np.abs(theta))
-    ok = (rel < 1e3 * RESIDUAL_TOL) & (triv0 <= TRIVIAL_COS)
-    ok[nc] = (rel[nc] < 1e3 * RESIDUAL_TOL) & ~_trivial_pair(triv0[nc])
+    # the trivial pair is left out of the pool: in the trivial block the two exponents nearest 0 among the vectors
+    # near the velocity; in the others the vectors on the velocity (TRIVIAL_COS) but, within LATTICE_GAP of 0,
+    # those that are not the two nearest 0 (next to a fold the pair through +1 lies on the velocity too)
+    ok = rel < 1e3 * RESIDUAL_TOL
+    on_vel = triv0 > TRIVIAL_COS
+    for i in range(S):
+        if i == nc:
+            ok[i] &= ~_trivial_pair(triv0[i], theta[i])
+        elif np.any(on_vel[i]):
+            ok[i] &= ~on_vel[i] | ((np.abs(theta[i]) < LATTICE_GAP) & ~_trivial_pair(np.where(on_vel[i], 1.0, 0.0),
+                                                                                    theta[i]))
     kept = central_pool(theta[ok], np.abs(cent[ok]), 2 * nc)
     if kept is None:
         return None

@@ -115,12 +115,33 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             # (by the distance along the branch, not by energy, which is flat there)
             events[-1]["stability_change"] = change
             return events, end
+        if located and fold is not None and kind == "branch_point":
+            spread = _energy_spread(loc, fold[0])
+            if spread and abs(pe.energy - fold[1].energy) <= spread:
+                # an approximate orbit (harmonic balance) defines its energy only to its spread over the period; a
+                # +1 crossing closer to the fold than that is the fold's pair, displaced by the truncation (NLvib's
+                # beam, example 09, H = 5: 1e-4 relative past its 5:1 tongue's energy maximum, spread 3e-3)
+                events[-1]["stability_change"] = change
+                events[-1]["note"] = (f"the multiplier through +1 located {abs(pe.energy - fold[1].energy):.3g} J "
+                                      f"away, within the orbit's energy spread {spread:.3g} J")
+                return events, end
         crit = pu.floquet[0]
         through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
         events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
                                                     f"(next point: {crit:.5g})", stability_change=change,
                                    **({} if located else dict(located=False))))
     return events, end
+
+
+def _energy_spread(loc, sigma):
+    """The problem's energy_spread (J) of the orbit at sigma, or None (exact orbits: shooting)."""
+    spread = getattr(loc.problem, "energy_spread", None)
+    if spread is None:
+        return None
+    try:
+        return spread(loc.at(sigma)[0])
+    except CorrectorFailure:
+        return None
 
 
 def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
