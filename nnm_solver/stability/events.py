@@ -94,6 +94,13 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             # sides of the located fold are those of the step's two ends
             events[-1]["stability_change"] = change
             return events, end
+        if fold is not None and kind == "branch_point":
+            spread = _within_spread(loc, fold, s, pa.stable)
+            if spread:        # (the same rule as below, decided without locating the crossing)
+                events[-1]["stability_change"] = change
+                events[-1]["note"] = (f"the multiplier through +1 leaves the circle within the fold orbit's energy "
+                                      f"spread {spread:.3g} J of the fold")
+                return events, end
         try:
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
                 sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
@@ -144,16 +151,46 @@ def _energy_spread(loc, sigma):
         return None
 
 
-def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
-    """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
-    that distance (known ones, e.g. the root finder's last iterates, or new ones at that distance) have the
-    flags of the step's ends a (sigma = 0) and b (sigma = s)?"""
+def _within_spread(loc, fold, s, stable_a):
+    """The fold orbit's energy spread (J) if the stability flag of the step (stable at a for stable_a, else at b)
+    changes within it of the fold (sigma, point), else None: the flag just beside the fold on the stable end's side
+    (reach x the step) is stable, and where the energy on the unstable end's side has moved from the fold's by the
+    spread (or at that end, if it has not) it is unstable.  Corrector points only, and two multiplier sets: the
+    crossing itself need not be located (~10-20 eigenproblems at a fold, where the multiplier 1 is four-fold)."""
+    sigma, point = fold
+    spread = _energy_spread(loc, sigma)
+    if not spread:
+        return None
+    left, right = _sides(loc, sigma, s)
+    near, far = (left, s) if stable_a else (right, 0.0)          # the stable end's side, the unstable end
+    Ef = point.energy
+    try:
+        if not loc.stable(near):
+            return None
+        g_far = abs(loc.energy(far) - Ef) - spread
+        if g_far > 0:
+            far = loc.root(lambda x: abs(loc.energy(x) - Ef) - spread, sigma, far, -spread, g_far)
+        return spread if not loc.stable(far) else None
+    except CorrectorFailure:
+        return None
+
+
+def _sides(loc, sigma, s, reach=FOLD_REACH):
+    """Points on the two sides of sigma within reach x the step s: known ones (e.g. the root finder's last
+    iterates), else new ones at that distance (sigma keys)."""
     delta = reach * abs(s)
     left, right = loc.around(sigma)
     if left is None or sigma - left > delta:
         left = max(sigma - delta, 0.0)
     if right is None or right - sigma > delta:
         right = min(sigma + delta, s)
+    return left, right
+
+
+def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
+    """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
+    that distance (_sides) have the flags of the step's ends a (sigma = 0) and b (sigma = s)?"""
+    left, right = _sides(loc, sigma, s, reach)
     try:
         return loc.stable(left) == stable_a and loc.stable(right) == stable_b
     except CorrectorFailure:
