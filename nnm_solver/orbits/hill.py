@@ -28,8 +28,9 @@ Two routes to the same eigenvalues (``method=``):
   The shifts start at the frequencies of the averaged stiffness Omega^2 + Bq^T <g'> Bq (or at the previous
   call's exponents, a warm start), move with the Rayleigh quotient and are recentred by whole harmonics
   when the block's eigenvector is centred on another harmonic (the copies); the kept eigenvalues are then
-  chosen as the dense route chooses them (smallest |mean k|, conjugates included), the trivial pair
-  (eigenvectors along the orbit's velocity) set to exactly 1.  Should anything not converge or not add up
+  chosen as the dense route chooses them (smallest |mean k|, conjugates included), the trivial pair (the two
+  exponents nearest 0 among the eigenvectors along the orbit's velocity: next to a fold the pair through +1 lies
+  along it too) set to exactly 1.  Should anything not converge or not add up
   (a missing exponent, an eigenvector on the velocity), the dense route is taken: same answers, its cost.
 * ``"secular"``: the same elimination taken to the end (the nonlinearity lives on few coordinates): lambda = nu
   omega is an eigenvalue where the r x r matrix I + C~ W(nu) is singular, W(nu) = blockdiag_k Bq Q0_k(nu)^-1 Bq^T;
