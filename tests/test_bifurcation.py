@@ -312,18 +312,19 @@ def test_similar_mode_loss_of_stability_matches_hills_equation():
     assert abs(changes[0]["energy"] / exact - 1) < 2e-8, (changes[0]["energy"], exact)
 
 
-def _fold_and_crossing_step(s_fold, s_cross, rate=1.0):
-    """A synthetic step sigma 0 -> 1: the energy 1 - 1e-3 (sigma - s_fold)^2 (a fold at s_fold) and a real pair
-    through +1 at s_cross (rho = 1 + rate (ds + 0.3 ds^2)).  Returns (locator, point(sigma), slope(sigma))."""
+def _fold_and_crossing_step(s_fold, s_cross, rate=1.0, curvature=-1e-3):
+    """A synthetic step sigma 0 -> 1: the energy 1 + curvature (sigma - s_fold)^2 (a fold at s_fold: a maximum for
+    curvature < 0) and a real pair through +1 at s_cross (rho = 1 + rate (ds + 0.3 ds^2): a loss of stability for
+    rate > 0, a gain for rate < 0).  Returns (locator, point(sigma), slope(sigma))."""
     import types
     from nnm_solver.stability.floquet import is_stable, sort_multipliers
     from nnm_solver.stability.locator import Locator
 
     def energy(s):
-        return 1.0 - 1e-3 * (s - s_fold) ** 2
+        return 1.0 + curvature * (s - s_fold) ** 2
 
     def slope(s):
-        return -2e-3 * (s - s_fold)
+        return 2 * curvature * (s - s_fold)
 
     def mults(s):
         rho = 1.0 + rate * ((s - s_cross) + 0.3 * (s - s_cross) ** 2)      # not linear: regula falsi does not land on the
@@ -376,24 +377,30 @@ def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
         assert abs(events[1]["x0"][0] - s_cross) < 1e-6 and events[1]["stability_change"] == "loss"
 
 
-@pytest.mark.parametrize("spread, rate, merged", [(5e-5, 1.0, True), (5e-6, 1.0, False), (3e-5, 1e-9, True),
-                                                  (2e-5, 1e-9, False)])
-def test_a_crossing_within_the_orbits_energy_spread_is_the_folds(spread, rate, merged):
+@pytest.mark.parametrize("spread, rate, curvature, path, s_cross", [
+    (5e-5, 1.0, -1e-3, "leaves", 0.45), (5e-6, 1.0, -1e-3, None, 0.45), (3e-5, 1e-9, -1e-3, "located", 0.45),
+    (2e-5, 1e-9, -1e-3, None, 0.45), (5e-5, -1.0, -1e-3, "leaves", 0.45), (5e-5, 1.0, 1e-3, "leaves", 0.45),
+    (5e-6, -1.0, 1e-3, None, 0.45), (5e-5, 1.0, -1e-3, "leaves", 0.15), (5e-6, -1.0, 1e-3, None, 0.15)])
+def test_a_crossing_within_the_orbits_energy_spread_is_the_folds(spread, rate, curvature, path, s_cross):
     """An approximate orbit (harmonic balance) defines its energy only to its spread over the period
-    (HBProblem.energy_spread); the same crossing 15 % of the step past the fold (2.25e-5 J below it) is the fold's
-    when that spread is larger than its distance in energy, a branch point of its own when it is smaller.  Decided
-    from the flag where the energy has moved by the spread (events._within_spread) or, where the pair grows so
-    slowly (rate 1e-9) that the flag there is still stable (|mu| - 1 < 1e-5), from the located crossing."""
+    (HBProblem.energy_spread); a crossing 15 % of the step past or before the fold (2.25e-5 J from it) is the fold's
+    when that spread is larger than its distance in energy, a branch point of its own when it is smaller: losses and
+    gains (rate < 0), energy maxima and minima (curvature > 0).  Decided from the flag where the energy has moved by
+    the spread ("leaves": events._within_spread) or, where the pair grows so slowly (rate 1e-9) that the flag there
+    is still stable (|mu| - 1 < 1e-5), from the located crossing ("located")."""
     from nnm_solver.stability.events import locate_between
-    loc, point, slope = _fold_and_crossing_step(0.3, 0.45, rate)
+    loc, point, slope = _fold_and_crossing_step(0.3, s_cross, rate, curvature)
     loc.problem.energy_spread = lambda u: spread
     events, _ = locate_between(loc, 1.0, (point(0.0), slope(0.0)), (point(1.0), slope(1.0)), 5, point)
     kinds = [e["kind"] for e in events]
-    if merged:
-        assert kinds == ["fold"] and events[0]["stability_change"] == "loss"
-        assert "energy spread" in events[0]["note"] and events[0]["detail"] == "energy maximum"
+    change = "loss" if rate > 0 else "gain"
+    if path:
+        assert kinds == ["fold"] and events[0]["stability_change"] == change
+        assert events[0]["note"].startswith(f"the multiplier through +1 {path}")
+        assert events[0]["detail"] == ("energy maximum" if curvature < 0 else "energy minimum")
     else:
         assert kinds == ["fold", "branch_point"] and "stability_change" not in events[0]
+        assert events[1]["stability_change"] == change and abs(events[1]["x0"][0] - s_cross) < 1e-3
 
 
 def test_hb_energy_spread_vanishes_on_exact_orbits_and_measures_the_truncation():

@@ -21,6 +21,10 @@ MAX_SWEEPS = 40
 #: shifts are kept this far (in units of omega) from i k omega, where the trivial pair's copies make Q singular
 LATTICE_GAP = 0.02
 
+#: largest |exponent| (units of omega) of the trivial pair as the block at 0 finds it (exactly 0 split by round-off
+#: into +-sqrt(eps)-sized values by its Jordan block; 1e-8 to 1e-5 measured)
+TRIVIAL_NU = 1e-4
+
 #: the shift of the block around the trivial pair (units of omega), and its largest number of sweeps
 ZERO_SHIFT = 0.03 + 0.03j
 ZERO_SWEEPS = 12
@@ -166,20 +170,15 @@ def _trivial_overlap(op, X, vel):
     return cos.max(axis=-1), cos[..., op.nb - 1]
 
 
-def _trivial_pair(cos, theta=None):
-    """The trivial pair among the trivial block's Ritz pairs (|cos| (b,) of the vectors with the velocity, exponents
-    theta (b,)).  Without theta (while iterating: which vectors the block need not converge): the two vectors
-    nearest the velocity, if they are near it at all.  With theta (the converged block's answer): the two
-    exponents nearest 0 among the vectors near the velocity, as the dense route sets the two
-    multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the pair that
-    passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the velocity too
-    (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's beam, example
-    09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit called stable)."""
+def _trivial_pair(cos, theta):
+    """The trivial pair among a block's converged Ritz pairs (|cos| (b,) of the vectors with the velocity, exponents
+    theta (b,)): the two exponents nearest 0 among the vectors near the velocity (|cos| > 0.5), as the dense route
+    sets the two multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the
+    pair that passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the
+    velocity too (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's
+    beam, example 09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit
+    called stable).  Fewer than two when fewer vectors are near the velocity (the caller checks)."""
     out = np.zeros(len(cos), dtype=bool)
-    if theta is None:
-        two = np.argsort(-cos, kind="stable")[:2]
-        out[two] = cos[two] > 0.5
-        return out
     near = np.flatnonzero(cos > 0.5)
     two = near[np.argsort(np.abs(theta[near]), kind="stable")[:2]]
     out[two] = True
@@ -337,9 +336,12 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     # those that are not the two nearest 0 (next to a fold the pair through +1 lies on the velocity too)
     ok = rel < 1e3 * RESIDUAL_TOL
     on_vel = triv0 > TRIVIAL_COS
+    trivial = _trivial_pair(triv0[nc], theta[nc])
+    if trivial.sum() != 2 or not np.all(ok[nc][trivial]) or np.any(np.abs(theta[nc][trivial]) > TRIVIAL_NU):
+        return None        # the block at 0 does not hold the trivial pair: what else it holds is not known either
     for i in range(S):
         if i == nc:
-            ok[i] &= ~_trivial_pair(triv0[i], theta[i])
+            ok[i] &= ~trivial
         elif np.any(on_vel[i]):
             ok[i] &= ~on_vel[i] | ((np.abs(theta[i]) < LATTICE_GAP) & ~_trivial_pair(np.where(on_vel[i], 1.0, 0.0),
                                                                                     theta[i]))

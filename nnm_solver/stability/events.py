@@ -146,33 +146,38 @@ def _energy_spread(loc, sigma):
     if spread is None:
         return None
     try:
-        return spread(loc.at(sigma)[0])
+        value = spread(loc.at(sigma)[0])
     except CorrectorFailure:
         return None
+    return float(value) if value is not None and np.isfinite(value) and value > 0 else None
 
 
 def _within_spread(loc, fold, s, stable_a):
-    """The fold orbit's energy spread (J) if the stability flag of the step (stable at a for stable_a, else at b)
-    changes within it of the fold (sigma, point), else None: the flag just beside the fold on the stable end's side
-    (reach x the step) is stable, and where the energy on the unstable end's side has moved from the fold's by the
-    spread (or at that end, if it has not) it is unstable.  Corrector points only, and two multiplier sets: the
-    crossing itself need not be located (~10-20 eigenproblems at a fold, where the multiplier 1 is four-fold)."""
+    """The fold orbit's energy spread (J) if the step's stability flag (stable at a = sigma 0 for stable_a, else at
+    b = sigma s) changes within it of the fold (sigma, point), else None: where the energy has moved from the fold's
+    by the spread on each side of it (or at the step's end, if it has not), the flags are those of the step's ends,
+    so the change lies between, at energies within the spread (the fold is the step's energy extremum).  Corrector
+    points and two multiplier sets: the crossing itself need not be located (~10-20 eigenproblems at a fold, where
+    the multiplier 1 is four-fold)."""
     sigma, point = fold
     spread = _energy_spread(loc, sigma)
     if not spread:
         return None
-    left, right = _sides(loc, sigma, s)
-    near, far = (left, s) if stable_a else (right, 0.0)          # the stable end's side, the unstable end
     Ef = point.energy
+
+    def away(end):
+        g_end = abs(loc.energy(end) - Ef) - spread
+        if g_end <= 0:
+            return end
+        return loc.root(lambda x: abs(loc.energy(x) - Ef) - spread, sigma, end, -spread, g_end)
+
     try:
-        if not loc.stable(near):
-            return None
-        g_far = abs(loc.energy(far) - Ef) - spread
-        if g_far > 0:
-            far = loc.root(lambda x: abs(loc.energy(x) - Ef) - spread, sigma, far, -spread, g_far)
-        return spread if not loc.stable(far) else None
+        left, right = away(0.0), away(s)
+        if loc.stable(left) == stable_a and loc.stable(right) != stable_a:
+            return spread
     except CorrectorFailure:
-        return None
+        pass
+    return None
 
 
 def _sides(loc, sigma, s, reach=FOLD_REACH):
