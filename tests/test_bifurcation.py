@@ -378,15 +378,15 @@ def test_stability_change_is_the_folds_only_where_the_fold_is(s_cross, merged):
 
 
 @pytest.mark.parametrize("spread, rate, curvature, path, s_cross", [
-    (5e-5, 1.0, -1e-3, "leaves", 0.45), (5e-6, 1.0, -1e-3, None, 0.45), (3e-5, 1e-9, -1e-3, "located", 0.45),
-    (2e-5, 1e-9, -1e-3, None, 0.45), (5e-5, -1.0, -1e-3, "leaves", 0.45), (5e-5, 1.0, 1e-3, "leaves", 0.45),
-    (5e-6, -1.0, 1e-3, None, 0.45), (5e-5, 1.0, -1e-3, "leaves", 0.15), (5e-6, -1.0, 1e-3, None, 0.15)])
+    (5e-5, 1.0, -1e-3, "crosses", 0.45), (5e-6, 1.0, -1e-3, None, 0.45), (3e-5, 1e-9, -1e-3, "located", 0.45),
+    (2e-5, 1e-9, -1e-3, None, 0.45), (5e-5, -1.0, -1e-3, "crosses", 0.45), (5e-5, 1.0, 1e-3, "crosses", 0.45),
+    (5e-6, -1.0, 1e-3, None, 0.45), (5e-5, 1.0, -1e-3, "crosses", 0.15), (5e-6, -1.0, 1e-3, None, 0.15)])
 def test_a_crossing_within_the_orbits_energy_spread_is_the_folds(spread, rate, curvature, path, s_cross):
     """An approximate orbit (harmonic balance) defines its energy only to its spread over the period
     (HBProblem.energy_spread); a crossing 15 % of the step past or before the fold (2.25e-5 J from it) is the fold's
     when that spread is larger than its distance in energy, a branch point of its own when it is smaller: losses and
     gains (rate < 0), energy maxima and minima (curvature > 0).  Decided from the flag where the energy has moved by
-    the spread ("leaves": events._within_spread) or, where the pair grows so slowly (rate 1e-9) that the flag there
+    the spread ("crosses": events._within_spread) or, where the pair grows so slowly (rate 1e-9) that the flag there
     is still stable (|mu| - 1 < 1e-5), from the located crossing ("located")."""
     from nnm_solver.stability.events import locate_between
     loc, point, slope = _fold_and_crossing_step(0.3, s_cross, rate, curvature)

@@ -311,7 +311,9 @@ def _run(args):
           f"{branch.status}: {branch.message}" if len(branch) else f"no point converged: {branch.message}")
     for e in branch.events:
         print(f"  {e['kind']:<12} at point {e['index']:>4}: E = {e['energy']:.4e} J, f = {e['frequency_hz']:.5f} Hz"
-              f"  ({e['detail']})")
+              f"  ({e['detail']}" + (f"; {e['stability_change']} of stability" if e.get("kind") == "fold"
+                                     and e.get("stability_change") else "")
+              + (f"; {e['note']}" if e.get("note") else "") + ")")
     print(accuracy_line(branch))
     if len(branch):
         name = save_branch(out, branch)

@@ -98,8 +98,8 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             spread = _within_spread(loc, fold, s, pa.stable)
             if spread:        # (the same rule as below, decided without locating the crossing)
                 events[-1]["stability_change"] = change
-                events[-1]["note"] = (f"the multiplier through +1 leaves the circle within the fold orbit's energy "
-                                      f"spread {spread:.3g} J of the fold")
+                events[-1]["note"] = (f"the multiplier through +1 crosses within the fold orbit's energy spread "
+                                      f"{spread:.3g} J of the fold")
                 return events, end
         try:
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
@@ -130,7 +130,7 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                 # beam, example 09, H = 5: 1e-4 relative past its 5:1 tongue's energy maximum, spread 3e-3)
                 events[-1]["stability_change"] = change
                 events[-1]["note"] = (f"the multiplier through +1 located {abs(pe.energy - fold[1].energy):.3g} J "
-                                      f"away, within the orbit's energy spread {spread:.3g} J")
+                                      f"away, within the fold orbit's energy spread {spread:.3g} J")
                 return events, end
         crit = pu.floquet[0]
         through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
