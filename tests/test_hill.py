@@ -285,7 +285,7 @@ def test_trivial_pair_is_kept_by_its_exponents_next_to_a_fold():
     0.9997 for a real pair +-3.7e-7, 1.0000 for the trivial pair +-1.4e-8 -- and the other way round at other
     orbits).  The structured route takes as the trivial pair the two exponents nearest 0 among the vectors near the
     velocity (the dense route's two multipliers nearest +1), so the real pair stays, whichever vectors are nearer."""
-    from nnm_solver.orbits.hill_structured import _trivial_pair
+    from nnm_solver.orbits.hill_shared import _trivial_pair
     theta = np.array([-3.7e-7, 3.7e-7, 1.4e-8j, -1.4e-8j])
     for cos in ([0.99999, 0.99999, 0.9997, 0.9997], [0.9997, 0.9997, 0.99999, 0.99999]):
         assert list(_trivial_pair(np.array(cos), theta)) == [False, False, True, True]

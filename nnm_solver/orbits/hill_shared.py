@@ -1,7 +1,8 @@
 r"""What the Hill routes beyond the dense one share (hill.py explains the routes): the exp(i k theta) form of the
 harmonic basis, the orbit's setup (its velocity: the trivial pair's eigenvector; the touched modes; the classes of
 exponents to find, one per touched mode but the continued one), the overlaps of vectors with the velocity and its
-copies, and the dense route's rule for the kept exponents (central_pool: the smallest |mean harmonic|)."""
+copies, the dense route's rule for the kept exponents (central_pool: the smallest |mean harmonic|) and for the
+trivial pair (_trivial_pair: the two exponents nearest 0 on the velocity)."""
 from __future__ import annotations
 
 import functools
@@ -99,6 +100,21 @@ def velocity_overlaps(x1, vel):
     nv = np.sqrt(np.tile(vk, nb) @ D)                                        # |vel| over the overlapping k
     nrm = np.sqrt((x1.real ** 2 + x1.imag ** 2).sum(axis=(-2, -1)))[..., None]
     return np.where(nv > 0, ip / np.maximum(nv * nrm, 1e-300), 0.0)
+
+
+def _trivial_pair(cos, theta):
+    """The trivial pair among converged eigenpairs (a structured block's Ritz pairs) (|cos| (b,) of the vectors with the velocity, exponents
+    theta (b,)): the two exponents nearest 0 among the vectors near the velocity (|cos| > 0.5), as the dense route
+    sets the two multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the
+    pair that passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the
+    velocity too (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's
+    beam, example 09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit
+    called stable).  Fewer than two when fewer vectors are near the velocity (the caller checks)."""
+    out = np.zeros(len(cos), dtype=bool)
+    near = np.flatnonzero(cos > 0.5)
+    two = near[np.argsort(np.abs(theta[near]), kind="stable")[:2]]
+    out[two] = True
+    return out
 
 
 def central_pool(nu, cc, need, tie=0.0):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_shared import (CENTROID_MAX, TRIVIAL_COS, _classes, _exp_transform, _setup, central_pool,
+from .hill_shared import (CENTROID_MAX, TRIVIAL_COS, _classes, _exp_transform, _setup, _trivial_pair, central_pool,
                           velocity_overlaps)
 
 #: vectors per exponent in the structured route (a collision of two exponents needs 2, the trivial pair beside a
@@ -168,21 +168,6 @@ def _trivial_overlap(op, X, vel):
     x1 = np.moveaxis(X[:, :op.m].reshape(S, op.nb, op.n, b), 3, 1)          # (S, b, N_b, n)
     cos = velocity_overlaps(x1, vel)
     return cos.max(axis=-1), cos[..., op.nb - 1]
-
-
-def _trivial_pair(cos, theta):
-    """The trivial pair among a block's converged Ritz pairs (|cos| (b,) of the vectors with the velocity, exponents
-    theta (b,)): the two exponents nearest 0 among the vectors near the velocity (|cos| > 0.5), as the dense route
-    sets the two multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the
-    pair that passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the
-    velocity too (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's
-    beam, example 09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit
-    called stable).  Fewer than two when fewer vectors are near the velocity (the caller checks)."""
-    out = np.zeros(len(cos), dtype=bool)
-    near = np.flatnonzero(cos > 0.5)
-    two = near[np.argsort(np.abs(theta[near]), kind="stable")[:2]]
-    out[two] = True
-    return out
 
 
 def _cold_start(op, tm, Vbar, beta2, classes, vel):
