@@ -327,8 +327,8 @@ def _fold_and_crossing_step(s_fold, s_cross, rate=1.0, curvature=-1e-3):
         return 2 * curvature * (s - s_fold)
 
     def mults(s):
-        rho = 1.0 + rate * ((s - s_cross) + 0.3 * (s - s_cross) ** 2)      # not linear: regula falsi does not land on the
-        #                                                           crossing, where the pair is 1, 1 (trivial)
+        # not linear: regula falsi does not land on the crossing, where the pair is 1, 1 (trivial)
+        rho = 1.0 + rate * ((s - s_cross) + 0.3 * (s - s_cross) ** 2)
         m = ([np.exp(1j * np.arccos(rho)), np.exp(-1j * np.arccos(rho))] if rho <= 1 else
              [rho + np.sqrt(rho * rho - 1), 1 / (rho + np.sqrt(rho * rho - 1))])
         return sort_multipliers(np.array(m + [np.exp(0.7j), np.exp(-0.7j), 1.0, 1.0]))

@@ -177,7 +177,7 @@ class HBProblem:
         return ""
 
     def energy(self, u):
-        """Energy (J) of the orbit u at t = 0 (an HB orbit's energy is constant only to its truncation: energy_spread)."""
+        """Energy (J) of the orbit u at t = 0 (constant along an HB orbit only to its truncation: energy_spread)."""
         q0, v0 = self.initial_state(u)
         return self.sys.energy(q0, v0)
 

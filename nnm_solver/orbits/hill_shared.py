@@ -103,9 +103,10 @@ def velocity_overlaps(x1, vel):
 
 
 def _trivial_pair(cos, theta):
-    """The trivial pair among converged eigenpairs (a structured block's Ritz pairs) (|cos| (b,) of the vectors with the velocity, exponents
-    theta (b,)): the two exponents nearest 0 among the vectors near the velocity (|cos| > 0.5), as the dense route
-    sets the two multipliers nearest +1 to 1.  Not the two vectors nearest the velocity: next to an energy fold the
+    """The trivial pair among converged eigenpairs, e.g. a structured block's Ritz pairs (|cos| (b,) of the vectors
+    with the velocity, exponents theta (b,)): the two exponents nearest 0 among the vectors near the velocity
+    (|cos| > 0.5), as the dense route sets the two multipliers nearest +1 to 1.  Not the two vectors nearest the
+    velocity: next to an energy fold the
     pair that passes through +1 there joins the trivial pair's Jordan chain, its eigenvectors turn towards the
     velocity too (a four-fold exponent 0 at the fold), and the vectors alone no longer tell the pairs apart (NLvib's
     beam, example 09, just past its 5:1 tongue's energy maximum: a real pair +-3.7e-7 kept as trivial, the orbit

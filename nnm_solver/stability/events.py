@@ -15,7 +15,8 @@ stored with their orbit (x0, v0 in m, m/s; period in s).  A change of stability 
 critical multiplier on its unstable side: ``branch_point`` (a real pair through +1 away from a fold:
 pitchfork or transcritical), ``period_doubling`` (through -1), ``torus`` (a complex quadruple leaves
 the unit circle: a Krein collision); at an energy fold the stability change is part of the ``fold``
-(its key ``stability_change`` is then "loss" or "gain").
+(its key ``stability_change`` is then "loss" or "gain"), also where the +1 crossing lies within the fold
+orbit's energy spread of it (harmonic balance: the truncation displaces it; the fold's key ``note`` says so).
 """
 
 from __future__ import annotations
@@ -180,22 +181,16 @@ def _within_spread(loc, fold, s, stable_a):
     return None
 
 
-def _sides(loc, sigma, s, reach=FOLD_REACH):
-    """Points on the two sides of sigma within reach x the step s: known ones (e.g. the root finder's last
-    iterates), else new ones at that distance (sigma keys)."""
+def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
+    """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
+    that distance (known ones, e.g. the root finder's last iterates, or new ones at that distance) have the
+    flags of the step's ends a (sigma = 0) and b (sigma = s)?"""
     delta = reach * abs(s)
     left, right = loc.around(sigma)
     if left is None or sigma - left > delta:
         left = max(sigma - delta, 0.0)
     if right is None or right - sigma > delta:
         right = min(sigma + delta, s)
-    return left, right
-
-
-def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
-    """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
-    that distance (_sides) have the flags of the step's ends a (sigma = 0) and b (sigma = s)?"""
-    left, right = _sides(loc, sigma, s, reach)
     try:
         return loc.stable(left) == stable_a and loc.stable(right) == stable_b
     except CorrectorFailure:
