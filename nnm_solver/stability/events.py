@@ -95,13 +95,10 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             # sides of the located fold are those of the step's two ends
             events[-1]["stability_change"] = change
             return events, end
-        if fold is not None and kind == "branch_point":
-            spread = _within_spread(loc, fold, s, pa.stable)
-            if spread:        # (the same rule as below, decided without locating the crossing)
-                events[-1]["stability_change"] = change
-                events[-1]["note"] = (f"the multiplier through +1 crosses within the fold orbit's energy spread "
-                                      f"{spread:.3g} J of the fold")
-                return events, end
+        spread = _energy_spread(loc, fold[0]) if fold is not None and kind == "branch_point" else None
+        if spread and _within_spread(loc, fold, s, pa.stable, spread):   # (the rule below, not located)
+            return _the_folds(events, change, f"the multiplier through +1 crosses within the fold orbit's energy "
+                                              f"spread {spread:.3g} J of the fold"), end
         try:
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
                 sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
@@ -123,16 +120,12 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             # (by the distance along the branch, not by energy, which is flat there)
             events[-1]["stability_change"] = change
             return events, end
-        if located and fold is not None and kind == "branch_point":
-            spread = _energy_spread(loc, fold[0])
-            if spread and abs(pe.energy - fold[1].energy) <= spread:
-                # an approximate orbit (harmonic balance) defines its energy only to its spread over the period; a
-                # +1 crossing closer to the fold than that is the fold's pair, displaced by the truncation (NLvib's
-                # beam, example 09, H = 5: 1e-4 relative past its 5:1 tongue's energy maximum, spread 3e-3)
-                events[-1]["stability_change"] = change
-                events[-1]["note"] = (f"the multiplier through +1 located {abs(pe.energy - fold[1].energy):.3g} J "
-                                      f"away, within the fold orbit's energy spread {spread:.3g} J")
-                return events, end
+        if located and spread and abs(pe.energy - fold[1].energy) <= spread:
+            # an approximate orbit (harmonic balance) defines its energy only to its spread over the period; a +1
+            # crossing closer to the fold than that is the fold's pair, displaced by the truncation (NLvib's beam,
+            # example 09, H = 5: 1e-4 relative past its 5:1 tongue's energy maximum, spread 3e-3)
+            return _the_folds(events, change, f"the multiplier through +1 located {abs(pe.energy - fold[1].energy):.3g}"
+                                              f" J away, within the fold orbit's energy spread {spread:.3g} J"), end
         crit = pu.floquet[0]
         through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
         events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
@@ -153,17 +146,21 @@ def _energy_spread(loc, sigma):
     return float(value) if value is not None and np.isfinite(value) and value > 0 else None
 
 
-def _within_spread(loc, fold, s, stable_a):
-    """The fold orbit's energy spread (J) if the step's stability flag (stable at a = sigma 0 for stable_a, else at
-    b = sigma s) changes within it of the fold (sigma, point), else None: where the energy has moved from the fold's
+def _the_folds(events, change, note):
+    """The step's stability change given to its fold (the last event), with a note on why: the events."""
+    events[-1]["stability_change"] = change
+    events[-1]["note"] = note
+    return events
+
+
+def _within_spread(loc, fold, s, stable_a, spread):
+    """Does the step's stability flag (stable at a = sigma 0 for stable_a, else at b = sigma s) change within the fold
+    orbit's energy spread (J) of the fold (sigma, point)?  Where the energy has moved from the fold's
     by the spread on each side of it (or at the step's end, if it has not), the flags are those of the step's ends,
     so the change lies between, at energies within the spread (the fold is the step's energy extremum).  Corrector
     points and two multiplier sets: the crossing itself need not be located (~10-20 eigenproblems at a fold, where
     the multiplier 1 is four-fold)."""
     sigma, point = fold
-    spread = _energy_spread(loc, sigma)
-    if not spread:
-        return None
     Ef = point.energy
 
     def away(end):
@@ -174,11 +171,9 @@ def _within_spread(loc, fold, s, stable_a):
 
     try:
         left, right = away(0.0), away(s)
-        if loc.stable(left) == stable_a and loc.stable(right) != stable_a:
-            return spread
+        return loc.stable(left) == stable_a and loc.stable(right) != stable_a
     except CorrectorFailure:
-        pass
-    return None
+        return False
 
 
 def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
