@@ -172,7 +172,7 @@ class CondensedHBProblem:
     def jacobian(self, u):
         D, a, w, Omega2, W, G, d, F, r = self._parts(u)
         bs, nb, ns = self.basis, self.nb, self.ns
-        C = np.einsum("jk,ks,kl->sjl", bs.P, self.sys.tangent(d), bs.E)       # dF[j, s] / dD[l, s]
+        C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
         nD = nb * ns
         J = np.zeros((len(r), len(u)))
         # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]

@@ -231,7 +231,7 @@ class ForcedHBProblem(_ForcedProtocol):
     def jacobian(self, u):
         A, w, d, V, r = self._parts(u)
         s, bs, nb, n = self.sys, self.basis, self.nb, self.n
-        C = np.einsum("jk,ks,kl->sjl", bs.P, s.tangent(d), bs.E)
+        C = bs.galerkin(s.tangent(d))
         J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
         J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w * w).ravel()
         J += w * np.kron(self.Dm, self.Cq)
@@ -340,7 +340,7 @@ class CondensedForcedHBProblem(_ForcedProtocol):
     def jacobian(self, u):
         D, w, z, dz, W, G, d, F, Fh, r = self._parts(u)
         bs, nb, ns = self.basis, self.nb, self.ns
-        C = np.einsum("jk,ks,kl->sjl", bs.P, self.sys.tangent(d), bs.E)          # dF[j, s] / dD[l, s]
+        C = bs.galerkin(self.sys.tangent(d))          # dF[j, s] / dD[l, s]
         nD = nb * ns
         JD = np.einsum("jsat,tal->jslt", self.flexibility(G), C).reshape(nD, nD)
         JD[np.diag_indices(nD)] += 1.0
@@ -389,7 +389,7 @@ def damped_hill_multipliers(system, basis, A, omega, damping_q, harmonics=None):
     d = basis.functions(theta) @ (A @ s.Bq.T)
     nb = len(bp)
     Cmat = np.diag(damping_q) if np.ndim(damping_q) == 1 else np.asarray(damping_q)
-    C = np.einsum("jk,ks,kl->sjl", bp.P, s.tangent(d), bp.E)
+    C = bp.galerkin(s.tangent(d))
     Kh = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
     Kh[np.diag_indices(nb * n)] += np.tile(s.omega2, nb)
     D = np.kron(derivative_matrix(bp), np.eye(n)) * omega

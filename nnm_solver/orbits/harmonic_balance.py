@@ -136,7 +136,7 @@ class HBProblem:
     def jacobian(self, u):
         A, w, d, r = self._parts(u)
         s, bs, nb, n = self.sys, self.basis, self.nb, self.n
-        C = np.einsum("jk,ks,kl->sjl", bs.P, s.tangent(d), bs.E)
+        C = bs.galerkin(s.tangent(d))
         J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
         J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w ** 2).ravel()
         J /= self.w_r ** 2

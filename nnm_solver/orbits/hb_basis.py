@@ -45,6 +45,12 @@ class HBBasis:
     def __len__(self):
         return len(self.h)
 
+    def galerkin(self, g_prime):
+        """The Galerkin blocks C (n_s, N_b, N_b) of the stiffnesses g_prime (N, n_s) sampled at this basis's
+        instants: C_s = P diag(g_prime[:, s]) E, i.e. C_s[j, l] = the coefficient on c_j of g'_s(t) c_l(t) (the
+        springs' part of the HB Jacobian and of Hill's matrix; N/m, per spring)."""
+        return (self.P[None, :, :] * np.asarray(g_prime).T[:, None, :]) @ self.E
+
     def functions(self, theta):
         """c_j(theta) (len(theta), N_b)."""
         ht = np.outer(np.asarray(theta, dtype=float), self.h)

@@ -104,7 +104,7 @@ def _galerkin_blocks(problem, u, harmonics):
     bp = _hill_basis(H, max(4 * H + 4, 2 * problem.basis.harmonics + 2 * H + 2))
     theta = 2 * np.pi * np.arange(bp.samples) / bp.samples
     d = problem.basis.functions(theta) @ (A @ s.Bq.T)
-    C = np.einsum("jk,ks,kl->sjl", bp.P, s.tangent(d), bp.E)
+    C = bp.galerkin(s.tangent(d))
     return A, w, H, bp, C
 
 

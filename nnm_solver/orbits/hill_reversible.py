@@ -76,21 +76,22 @@ def reversible_multipliers(problem, w, bp, C):
     orbit is not time-symmetric (C couples cosines with sines)."""
     s, n = problem.sys, problem.n
     H = bp.harmonics
-    h, sine, groups = _layout(H)
+    h, sine, _ = _layout(H)
     if len(bp) != len(h) or not np.array_equal(bp.h, h) or not np.array_equal(bp.sine, sine):
         return None
     rev, half = _symmetries(C, h, sine)
     if not rev:
         return None
-    if not half:                                      # one group: every cosine, every sine
-        groups = ((np.flatnonzero(~sine), np.flatnonzero(sine)),)
+    # the Galerkin matrix of the springs' stiffness, N_b n x N_b n (basis index major), once for every block
+    Bq = s.Bq
+    Kh = np.einsum("sjl,sim->jilm", C, Bq[:, :, None] * Bq[:, None, :]).ravel()
     lams, cents = [], []
-    for ic, is_ in groups:
-        lam, cent = _group(s, n, w, h, ic, is_, C)
+    for blk in _block_layout(H, n, half):
+        lam, cent = _group(blk, n, w, s.omega2, Kh)
         lams.append(lam)
         cents.append(cent)
     lam, cent = np.concatenate(lams), np.concatenate(cents)
-    keep = np.argsort(np.abs(cent), kind="stable")[:n]
+    keep = np.argsort(cent, kind="stable")[:n]
     lam = lam[keep]
     T = 2 * np.pi / w
     mu = np.exp(np.concatenate([lam, -lam]) * T)
@@ -98,54 +99,61 @@ def reversible_multipliers(problem, w, bp, C):
 
 
 @functools.lru_cache(maxsize=64)
-def _group_layout(H, n, ic_t, is_t):
-    """Index arrays of one symmetry block (its cosines ic and sines is_ of the real basis, tuples): for the sines,
-    the position of the cosine of the same order in the block (kc), their orders hs, the orders of the cosines
-    hc; the rows of the block's modal unknowns (cosines first) in the whole basis (N_b, n) (rows, cols)."""
-    h, _, _ = _layout(H)
-    ic, is_ = np.array(ic_t, dtype=int), np.array(is_t, dtype=int)
-    hc, hs = h[ic].astype(float), h[is_].astype(float)
-    pos_c = {int(hh): i for i, hh in enumerate(hc)}
-    kc = np.array([pos_c[int(hh)] for hh in hs], dtype=int)
-    return ic, is_, hc, hs, kc
+def _block_layout(H, n, half):
+    """Index arrays of the symmetry blocks of the real Hill basis of H harmonics for n modal coordinates (half: split
+    by the parity of the harmonics), built once per (H, n, half): a tuple with, for each block, its cosines ic and
+    sines is_ (basis indices), their orders hc, hs, the position kc of each sine's cosine among the block's
+    cosines, the flat indices of the block's cosine-cosine and sine-sine entries in the whole Galerkin matrix
+    (N_b n x N_b n, basis index major), the mode of each row (for Omega^2 on the diagonals), the cosine row of each
+    sine row (cos_rows), the position of the constant among the cosines (or -1)."""
+    h, sine, groups = _layout(H)
+    if not half:
+        groups = ((np.flatnonzero(~sine), np.flatnonzero(sine)),)
+    N = len(h) * n
+    blocks = []
+    for ic, is_ in groups:
+        hc, hs = h[ic].astype(float), h[is_].astype(float)
+        pos_c = {int(hh): i for i, hh in enumerate(hc)}
+        kc = np.array([pos_c[int(hh)] for hh in hs], dtype=int)
+        rc = (ic[:, None] * n + np.arange(n)[None, :]).ravel()
+        rs = (is_[:, None] * n + np.arange(n)[None, :]).ravel()
+        cos_rows = (kc[:, None] * n + np.arange(n)[None, :]).ravel()
+        zero = np.flatnonzero(hc == 0)
+        blocks.append(dict(nic=len(ic), nis=len(is_), hs=hs, kc=kc,
+                           cc=(rc[:, None] * N + rc[None, :]).ravel(), ss=(rs[:, None] * N + rs[None, :]).ravel(),
+                           hc2=np.repeat(hc ** 2, n), hs_rep=np.repeat(hs, n), mode_c=np.tile(np.arange(n), len(ic)),
+                           mode_s=np.tile(np.arange(n), len(is_)), cos_rows=cos_rows,
+                           zero=int(zero[0]) if len(zero) else -1))
+    return tuple(blocks)
 
 
-def _group(s, n, w, h, ic, is_, C):
-    """(lambda (R,), |mean harmonic| (R,)) of one symmetry block: the cosines ic and the sines is_ of the basis
-    (indices; the sine of order h follows its cosine), R = n (len(ic) + len(is_)); one lambda = sqrt(mu) per mu."""
-    ic, is_, hc, hs, kc = _group_layout(int(h[-1]), n, tuple(int(i) for i in ic), tuple(int(i) for i in is_))
-    Bq, om2 = s.Bq, s.omega2
-    nic, nis = len(ic), len(is_)
+def _group(blk, n, w, om2, Kh):
+    """(lambda (R,), |mean harmonic| (R,)) of one symmetry block (_block_layout), R = n (its cosines + its sines);
+    Kh: the springs' Galerkin matrix, flattened; one lambda = sqrt(mu) per mu."""
+    nic, nis, hs_rep, cos_rows = blk["nic"], blk["nis"], blk["hs_rep"], blk["cos_rows"]
     nc, ns_ = nic * n, nis * n
-    BB = Bq[:, :, None] * Bq[:, None, :]                                       # (n_s, n, n)
-
-    def K(idx, hr):
-        Cs = C[:, idx[:, None], idx[None, :]]                                  # (n_s, r, r)
-        Kb = np.einsum("sab,sij->aibj", Cs, BB).reshape(len(idx) * n, len(idx) * n)
-        Kb[np.diag_indices_from(Kb)] += np.repeat(-(hr * w) ** 2, n) + np.tile(om2, len(idx))
-        return Kb
-
-    Kc, Ks = K(ic, hc), K(is_, hs)
+    R = nc + ns_
+    Kc = Kh[blk["cc"]].reshape(nc, nc)
+    Kc.flat[::nc + 1] += om2[blk["mode_c"]] - blk["hc2"] * w * w
     # D (times omega): (sin h)' = h cos h, (cos h)' = -h sin h; so (Dsc X) takes the rows of X's cosine of each
     # sine's order times -h omega, (Dcs Y) puts h omega times Y's sine rows on the cosine rows, Dsc Dcs = -(h omega)^2
-    M = np.zeros((nc + ns_, nc + ns_))
+    two_hw = -2.0 * w * hs_rep
+    M = np.zeros((R, R))
     M[:nc, :nc] = -Kc
-    cos_rows = (kc[:, None] * n + np.arange(n)[None, :]).ravel()              # the cosine row of each sine row
-    sin_cols = nc + np.arange(ns_)
-    M[cos_rows, sin_cols] = -2.0 * np.repeat(hs * w, n)
-    M[nc:, :nc] = (-2.0 * np.repeat(hs * w, n))[:, None] * Kc[cos_rows]
-    M[nc:, nc:] = -Ks
-    M[sin_cols, sin_cols] -= 4.0 * np.repeat((hs * w) ** 2, n)
+    M[cos_rows, nc + np.arange(ns_)] = two_hw
+    M[nc:, :nc] = two_hw[:, None] * Kc[cos_rows]
+    M[nc:, nc:] = -Kh[blk["ss"]].reshape(ns_, ns_)
+    M.flat[nc * (R + 1)::R + 1] -= om2[blk["mode_s"]] - (hs_rep * w) ** 2 + 4.0 * (hs_rep * w) ** 2
     mu, X = np.linalg.eig(M)
     lam = np.sqrt(mu.astype(complex))
     # mean harmonic of [a_c; a_s] ~ [lambda a_c; b] in exp(i k theta): c_{+-h} = (a_cos -+ i a_sin) / 2, c_0 = a_0
-    Nb = len(h)
-    a = np.zeros((Nb, n, len(mu)), dtype=complex)
-    a[ic] = (lam[None, :] * X[:nc]).reshape(nic, n, -1)
-    a[is_] = X[nc:].reshape(nis, n, -1)
-    acos, asin = a[1::2], a[2::2]
+    ac = (lam[None, :] * X[:nc]).reshape(nic, n, R)
+    asin = X[nc:].reshape(nis, n, R)
+    acos = ac[blk["kc"]]
     w_pos = (np.abs(acos - 1j * asin) ** 2).sum(axis=1)
     w_neg = (np.abs(acos + 1j * asin) ** 2).sum(axis=1)
-    total = 4 * (np.abs(a[0]) ** 2).sum(axis=0) + (w_pos + w_neg).sum(axis=0)
-    cent = (h[1::2] @ (w_pos - w_neg)) / np.maximum(total, 1e-300)
+    total = (w_pos + w_neg).sum(axis=0)
+    if blk["zero"] >= 0:
+        total = total + 4 * (np.abs(ac[blk["zero"]]) ** 2).sum(axis=0)
+    cent = (blk["hs"] @ (w_pos - w_neg)) / np.maximum(total, 1e-300)
     return lam, np.abs(cent)
