@@ -8,7 +8,8 @@ from scipy.integrate import solve_ivp
 
 import nnm_solver as nnm
 from nnm_solver.model.modal import modal_system
-from nnm_solver.orbits.forced_hb import CondensedForcedHBProblem, ForcedBasis, ForcedHBProblem
+from nnm_solver.orbits.forced_hb import ForcedBasis, ForcedHBProblem
+from nnm_solver.orbits.forced_hb_condensed import CondensedForcedHBProblem
 
 # x'' + 2 zeta x' + x + k3 x^3 = F cos(w t): bistable between its two folds near w = 1.15 and 1.21
 K3, ZETA, F = 0.1, 0.05, 0.3

@@ -214,3 +214,16 @@ def test_single_harmonic_backbones_end_at_their_fold_not_in_a_tongue_with_their_
                              or (t["label"] == "tongue 1:1" and t.get("family_end") and t["partner_mode"] not in (0, 19))
                              for t in b.tongues), [(t["label"], t["partner_mode"]) for t in b.tongues]
     assert b.status in ("escape", "tongue") and "mode 19" not in b.message, b.message
+
+
+@pytest.mark.parametrize("reach", [1e8, 1e9, 1e10])
+def test_skeleton_starts_at_the_linear_mode_whatever_its_reach(reach):
+    """The skeleton's first amplitude is 1e-6 of its reach in energy, lowered until the frequency is linear.  For a
+    reach far above the family's interesting range (a tongue's continuation asks for 100x its entry energy, 10x
+    that for the skeleton) that first amplitude has no solution from the linear guess: the start must go on
+    lowering it (it stopped there, 'no harmonic-balance solution at the linear mode', leaving no skeleton)."""
+    from nnm_solver.driver.skeleton import compute_skeleton
+    from nnm_solver.model.modal import modal_system
+    sk = compute_skeleton(modal_system(two_dof()), 1, reach)
+    assert len(sk.energy) > 100 and "linear mode" not in sk.message
+    assert abs(sk.frequency_hz[0] / (1 / (2 * np.pi)) - 1) < 1e-6 and sk.energy[0] <= 1e-6 * reach

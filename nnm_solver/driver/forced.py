@@ -24,8 +24,9 @@ from ..errors import NNMInputError
 from ..model.damping import modal_damping
 from ..model.modal import modal_system
 from ..model.model import Model
-from ..orbits.forced_hb import (FORCED_BASES, CondensedForcedHBProblem, ForcedBasis, ForcedHBProblem,
-                                damped_hill_multipliers)
+from ..orbits.forced_hb import FORCED_BASES, ForcedBasis, ForcedHBProblem
+from ..orbits.forced_hb_condensed import CondensedForcedHBProblem
+from ..orbits.forced_hill import damped_hill_multipliers
 from ..results.forced import STABILITY_METHODS, ForcedResponse
 from ..stability.floquet import is_stable
 from .api import HILL_AUTO_SIZE, check_positive

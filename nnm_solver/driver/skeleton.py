@@ -200,11 +200,12 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
     r = int(mode) - 1
     prob = CondensedHBProblem(system, r, HBBasis(harmonics, "odd" if system.elements.odd else "full"))
     # start in the linear regime: at most 1e-6 of the reach (E = w^2 a^2 / 2 for the linear mode), lower until
-    # the frequency is the linear one to 1e-8
+    # the frequency is the linear one to 1e-8 (also where Newton finds no orbit there: a reach far above the
+    # family's end, e.g. 1e6 x a tongue's entry energy on the 2-DOF benchmark, puts 1e-6 of it beyond the family)
     a0 = math.sqrt(2e-6 * E_reach) / prob.w_r
     for _ in range(20):
         u = solve_at_amplitude(prob, prob.start(a0)[0])
-        if u is None or abs(u[-1] - 1.0) < 1e-8:
+        if u is not None and abs(u[-1] - 1.0) < 1e-8:
             break
         a0 /= 4
     return Skeleton(prob, *amplitude_family(prob, E_reach, a0), mode)

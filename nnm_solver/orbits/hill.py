@@ -61,7 +61,7 @@ from .hill_reversible import reversible_multipliers
 from .hill_secular import _secular
 from .hill_structured import _structured
 
-__all__ = ["hill_multipliers", "derivative_matrix", "HILL_METHODS", "DENSE_MAX_ROWS"]
+__all__ = ["hill_multipliers", "derivative_matrix", "central_exponents", "HILL_METHODS", "DENSE_MAX_ROWS"]
 
 
 #: the routes of hill_multipliers(method=...)
@@ -135,6 +135,19 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
     return _dense(problem, w, bp, C)
 
 
+def central_exponents(V, bp, n):
+    """Indices of the 2n eigenvectors (columns of V: the displacement part, N_b n rows on the full basis bp, basis
+    index major) whose mean harmonic in exp(i k theta) is smallest in modulus (the ordering in the module docstring;
+    stable sort)."""
+    a = V.reshape(len(bp), n, -1)
+    ac, as_ = a[1::2], a[2::2]                                    # cos / sin coefficients, h = 1..H
+    w_pos = (np.abs(ac - 1j * as_) ** 2).sum(axis=1)               # |c_{+h}|^2 of exp(+i h theta) (x4)
+    w_neg = (np.abs(ac + 1j * as_) ** 2).sum(axis=1)               # |c_{-h}|^2
+    total = 4 * (np.abs(a[0]) ** 2).sum(axis=0) + (w_pos + w_neg).sum(axis=0)
+    centroid = (bp.h[1::2] @ (w_pos - w_neg)) / np.maximum(total, 1e-300)
+    return np.argsort(np.abs(centroid), kind="stable")[:2 * n]
+
+
 def _dense(problem, w, bp, C):
     s, n = problem.sys, problem.n
     nb = len(bp)
@@ -147,14 +160,7 @@ def _dense(problem, w, bp, C):
     L[m:, :m] = -(D @ D + Kh)
     L[m:, m:] = -2.0 * D
     lam, V = sla.eig(L, check_finite=False)
-    a = V[:m].reshape(nb, n, -1)
-    ac, as_ = a[1::2], a[2::2]                                    # cos / sin coefficients, h = 1..H
-    w_pos = (np.abs(ac - 1j * as_) ** 2).sum(axis=1)               # |c_{+h}|^2 of exp(+i h theta) (x4)
-    w_neg = (np.abs(ac + 1j * as_) ** 2).sum(axis=1)               # |c_{-h}|^2
-    total = 4 * (np.abs(a[0]) ** 2).sum(axis=0) + (w_pos + w_neg).sum(axis=0)
-    centroid = (bp.h[1::2] @ (w_pos - w_neg)) / np.maximum(total, 1e-300)
-    keep = np.argsort(np.abs(centroid), kind="stable")[:2 * n]
-    mu = np.exp(lam[keep] * 2 * np.pi / w)
+    mu = np.exp(lam[central_exponents(V[:m], bp, n)] * 2 * np.pi / w)
     return mu[np.argsort(-np.abs(mu), kind="stable")]
 
 
