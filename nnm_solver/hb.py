@@ -34,7 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .driver.api import HILL_AUTO_SIZE, continue_nnm
+from .driver.api import continue_nnm
+from .driver.problems import HILL_AUTO_SIZE
 from .errors import NNMInputError
 from .results.settings import HarmonicBalanceSettings
 

@@ -126,7 +126,7 @@ def _past_fold(prob, pts, tol=1e-10):
       internal resonance with that mode (1-based), which ends the followed mode's family;
     * None when the path cannot tell within FOLD_PROBE_STEPS steps or Newton fails."""
     nD = prob.nb * prob.ns
-    (_, _, _, u1), (a0, E0, f0, u0) = pts[-2], pts[-1]
+    (_, _, _, u1), (_, E0, _, u0) = pts[-2], pts[-1]
     h = h0 = float(np.linalg.norm(u0 - u1))
     if not h > 0:
         return None

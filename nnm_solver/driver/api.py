@@ -23,20 +23,11 @@ from .skeleton import SKELETON_HARMONICS, skeleton
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
-from ..orbits.condensed_hb import CondensedHBProblem
-from ..orbits.harmonic_balance import HBProblem
-from ..orbits.hb_basis import BASES, HBBasis
-from ..integrators.registry import get_integrator
-from ..orbits.shooting import ShootingProblem
-from ..results.settings import HarmonicBalanceSettings, ShootingSettings
+from .problems import (METHODS, RITZ_MIN_DOF, check_positive, hb_problem, modal_basis, shooting_problem,
+                       start_amplitude)
+from .problems import method_options as split_options
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
-
-#: fraction of the linear potential energy carried by the springs at the first point
-START_NONLINEARITY = 1e-5
-
-#: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
-METHODS = ("shooting", "hb")
 
 #: default largest relative change of the period in one step (max_period_step=None), by method: 0.005.  Shooting's
 #: orbits meet internal-resonance tongues of every order, whose entrances are narrow in period.  For harmonic
@@ -47,24 +38,6 @@ METHODS = ("shooting", "hb")
 #: combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable interval between two
 #: Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
 MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.005}
-
-#: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
-HILL_AUTO_SIZE = 1000
-
-_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None, integrator="newmark")
-_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None, condensed=False, modal_basis=None)
-
-#: harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs
-RITZ_MIN_DOF = 2000
-MODAL_BASES = ("full", "ritz")
-
-
-def check_positive(name, value, integer=False):
-    """NNMInputError unless ``value`` is a positive finite number (an integer if ``integer``)."""
-    ok = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.number))
-    if not ok or isinstance(value, bool) or not np.isfinite(value) or value <= 0:
-        raise NNMInputError(f"{name} must be a positive {'integer' if integer else 'number'}, got {value!r}")
-
 
 def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=True):
     """Validate the arguments every branch computation shares; returns the 0-based mode index.
@@ -83,131 +56,6 @@ def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min,
             raise NNMInputError(f"mode must be an integer in 1..{model.n} (1-based), got {mode!r}")
         return int(mode) - 1
     return model.check_mode(mode)
-
-
-def start_amplitude(system, k, energy_max, energy_min=None):
-    """Modal amplitude a (sqrt(kg) m) of the first point along linear mode k (0-based).
-
-    With energy_min: the linear amplitude of that energy.  Otherwise nearly linear: the springs hold
-    START_NONLINEARITY of the linear potential w^2 a^2 / 2, and the energy stays below 1 % of energy_max.
-    """
-    w2 = system.omega2[k]
-    if energy_min is not None:
-        return math.sqrt(2.0 * energy_min / w2)
-    a_cap = math.sqrt(2.0 * energy_max * 1e-2 / w2)
-    b = np.abs(system.Bq[:, k])
-    C = np.abs(system.coefficients)
-    touched = b > 0
-    if not np.any(C * touched[:, None]) and not np.any((system.kinks[..., 0] != 0) * touched[:, None]):
-        return math.sqrt(2.0 * energy_max * 1e-6 / w2)
-    elements = system.elements
-
-    def share(a):  # bound on (nonlinear potential) / (linear potential) at amplitude a; grows with a
-        with np.errstate(over="ignore"):      # inf at huge energy_max amplitudes: above the threshold anyway
-            return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
-
-    lo, hi = 1e-30, a_cap
-    if share(hi) <= START_NONLINEARITY:
-        return a_cap
-    for _ in range(200):  # bisection in log a
-        mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if share(mid) < START_NONLINEARITY else (lo, mid)
-        if hi / lo < 1 + 1e-12:
-            break
-    return hi
-
-
-def _method_options(method, options):
-    """Split the method-specific options; NNMInputError for an option of the other method."""
-    if method == "harmonic_balance":
-        method = "hb"
-    if method not in METHODS:
-        raise NNMInputError(f"method must be one of {METHODS}, got {method!r}")
-    own, other = (_SHOOTING_OPTIONS, _HB_OPTIONS) if method == "shooting" else (_HB_OPTIONS, _SHOOTING_OPTIONS)
-    for key in options:
-        if key not in own:
-            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'!r}" if key in other else ""
-            raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
-    return method, {**own, **options}
-
-
-def _modal_basis(model, opts):
-    """The modal basis harmonic balance works in: "full" (every mode, exact) or "ritz" (model/ritz.py)."""
-    basis = opts.get("modal_basis")
-    if basis is None:
-        return "ritz" if model.n > RITZ_MIN_DOF else "full"
-    if basis not in MODAL_BASES:
-        raise NNMInputError(f"modal_basis must be one of {MODAL_BASES} or None (automatic), got {basis!r}")
-    return basis
-
-
-def _shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
-    spp = opts["steps_per_period"]
-    check_positive("steps_per_period", spp, integer=True)
-    if spp < 8:
-        raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
-    odd = system.elements.odd
-    symmetric = odd if opts["symmetric"] is None else bool(opts["symmetric"])
-    if symmetric and not odd:
-        raise NNMInputError("symmetric=True (half-period shooting) needs odd nonlinear forces; "
-                            "use symmetric=False (or leave it unset) for elements with even powers or an asymmetric "
-                            "piecewise-linear law")
-    reversible = opts["reversible"]
-    if reversible is None and opts["symmetric"] is None and not symmetric:
-        reversible = True                      # even forces: full period, orbits still start at rest
-    integrator = get_integrator(opts["integrator"])
-    problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
-                              reversible=reversible, max_rel_period_step=opts["max_period_step"],
-                              integrator=integrator)
-    n = system.n
-    q0 = np.zeros(n)
-    q0[k] = a0
-    u0 = problem.pack(q0, np.zeros(n), integrator.linear_period(math.sqrt(system.omega2[k]), problem.spp))
-    p0 = problem.pack(q0 / a0, np.zeros(n), 0.0)
-    settings = ShootingSettings(steps_per_period=problem.spp, tol=tol, symmetric=symmetric,
-                                reversible=problem.reversible, energy_max=energy_max, integrator=integrator.name,
-                                floquet=True if floquet is None else bool(floquet))
-    return problem, u0, p0, settings
-
-
-def _hb_problem(system, k, a0, opts, tol, energy_max, floquet):
-    basis, harmonics, samples = opts["basis"], opts["harmonics"], opts["samples"]
-    if basis is None:
-        basis = "odd" if system.elements.odd else "full"
-    if basis not in BASES:
-        raise NNMInputError(f"basis must be one of {BASES}, got {basis!r}")
-    check_positive("harmonics", harmonics, integer=True)
-    if samples is not None:
-        check_positive("samples", samples, integer=True)
-        if samples < 2 * harmonics + 1:
-            raise NNMInputError(f"samples={samples} is too few for {harmonics} harmonics; use at least "
-                                f"{2 * harmonics + 1} (more than {4 * harmonics} avoids aliasing of the cubic)")
-    if basis == "odd" and not system.elements.odd:
-        raise NNMInputError("basis='odd' needs odd nonlinear forces; use basis='full' for elements with even powers "
-                            "or an asymmetric piecewise-linear law")
-    condensed = opts["condensed"]
-    if not isinstance(condensed, (bool, np.bool_)):
-        raise NNMInputError(f"condensed must be True or False, got {condensed!r}")
-    hb = HBBasis(harmonics, basis, samples)
-    steps = dict(max_rel_step=opts["max_rel_step"], max_rel_period_step=opts["max_period_step"])
-    if condensed:                              # unknowns: the elements' deformations per harmonic (condensed_hb.py)
-        problem = CondensedHBProblem(system, k, hb, **steps)
-        u0, p0 = problem.start(a0)
-    else:
-        problem = HBProblem(system, k, hb, **steps)
-        A0 = np.zeros((len(hb), system.n))
-        A0[int(np.flatnonzero((hb.h == 1) & ~hb.sine)[0]), k] = a0
-        u0 = problem.pack(A0, problem.w_r)
-        p0 = np.zeros_like(u0)
-        p0[:-1] = A0.ravel() / a0
-    if floquet is None:
-        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
-    cutoff = getattr(system, "cutoff_hz", None)
-    settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
-                                       energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed),
-                                       modal_basis="full" if cutoff is None else "ritz",
-                                       cutoff_hz=0.0 if cutoff is None else float(cutoff))
-    return problem, u0, p0, settings
 
 
 def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
@@ -234,12 +82,12 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     """
     if tongues not in ("follow", "skip"):
         raise NNMInputError(f"tongues must be 'follow' or 'skip', got {tongues!r}")
-    method, opts = _method_options(method, method_options)
+    method, opts = split_options(method, method_options)
     if max_period_step is None:
         max_period_step = MAX_PERIOD_STEP[method]
     if tol is None:
         tol = 1e-6 if method == "shooting" else 1e-8
-    ritz = method == "hb" and _modal_basis(model, opts) == "ritz"
+    ritz = method == "hb" and modal_basis(model, opts) == "ritz"
     k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=not ritz)
     for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step),
                         ("max_period_step", max_period_step)):
@@ -257,7 +105,7 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     else:
         system = modal_system(model)
     a0 = start_amplitude(system, k, energy_max, energy_min)
-    build = _shooting_problem if method == "shooting" else _hb_problem
+    build = shooting_problem if method == "shooting" else hb_problem
     problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
                                       tol, energy_max, floquet)
     f_method = 1.0 / problem.state(u0)[2]      # the linear mode's frequency as the method computes it (labels.py)

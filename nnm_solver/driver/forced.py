@@ -29,7 +29,7 @@ from ..orbits.forced_hb_condensed import CondensedForcedHBProblem
 from ..orbits.forced_hill import damped_hill_multipliers
 from ..results.forced import STABILITY_METHODS, ForcedResponse
 from ..stability.floquet import is_stable
-from .api import HILL_AUTO_SIZE, check_positive
+from .problems import HILL_AUTO_SIZE, check_positive
 
 __all__ = ["forced_response", "CONDENSE_RATIO"]
 

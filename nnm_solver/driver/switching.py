@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
-from .api import NNMIterator, check_positive
+from .api import NNMIterator
+from .problems import check_positive
 from ..errors import NNMInputError
 from ..model.modal import modal_system
 from ..orbits.shooting import ShootingProblem

@@ -43,7 +43,7 @@ import numpy as np
 from ...model.elements import CubicSpring
 from ...errors import NNMFileError, NNMInputError
 from ...model.model import Model
-from .common import DofMap, Units, direction_name, existing, read_dof_map_file
+from .common import Units, direction_name, existing, read_dof_map_file
 
 if sys.version_info >= (3, 11):
     import tomllib
