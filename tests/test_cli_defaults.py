@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 import nnm_solver as nnm
+from nnm_solver.cli import outputs
 from nnm_solver.cli import solve as cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,7 +48,7 @@ def test_progress_shows_no_nan_before_the_first_point():
 def test_branch_on_a_shipped_example_goes_to_the_current_folder(tmp_path, monkeypatch, capsys):
     before = hashlib.sha1(SHIPPED.read_bytes()).hexdigest()
     monkeypatch.chdir(tmp_path)
-    assert cli._default_out(SHIPPED) == (tmp_path / "two_dof_branches.h5", "two_dof.h5 is a shipped example")
+    assert outputs.default_out(SHIPPED) == (tmp_path / "two_dof_branches.h5", "two_dof.h5 is a shipped example")
     code = cli.main([str(SHIPPED), "--mode", "2", "--energy-max", "0.01", "--max-points", "3"])
     out = capsys.readouterr().out
     assert code == 0
@@ -59,9 +60,9 @@ def test_branch_on_a_shipped_example_goes_to_the_current_folder(tmp_path, monkey
 def test_default_out_is_the_file_unless_it_cannot_be_written(tmp_path, monkeypatch):
     p = tmp_path / "m.h5"
     p.write_bytes(b"")
-    assert cli._default_out(p) == (p, "")
-    assert cli._default_out(tmp_path / "m.mat") == (tmp_path / "m.h5", "")
+    assert outputs.default_out(p) == (p, "")
+    assert outputs.default_out(tmp_path / "m.mat") == (tmp_path / "m.h5", "")
     monkeypatch.chdir(tmp_path / "..")
     monkeypatch.setattr("os.access", lambda path, mode: False)        # (root may write anywhere)
-    out, reason = cli._default_out(p)
+    out, reason = outputs.default_out(p)
     assert out == Path.cwd() / "m_branches.h5" and reason == f"{p} is not writable"

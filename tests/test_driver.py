@@ -1,5 +1,4 @@
 """The driver's public iterator API (iter_nnm), the background job and the element module."""
-import queue as queue_mod
 import threading
 
 import numpy as np

@@ -157,7 +157,6 @@ def test_reversible_flags_and_events_equal_dense(monkeypatch, case):
     DENSE_MAX_ROWS rows) against the whole Hill matrix: the 2-DOF pitchfork (H = 7) and the 3-DOF chain's two Krein
     collisions (H = 15): the same points, flags, events (to 1e-8 in energy) and multipliers point by point, and the
     reversible route answered every call itself (no fallback to the whole matrix)."""
-    from nnm_solver.orbits import hill_reversible
     if case == "pitchfork":
         m, E, H, kinds = two_dof_model(), 57.0, 7, ["branch_point"]
     else:

@@ -3,6 +3,8 @@
 
 Layer: the top; imports any layer of nnm_solver.
 """
-from .solve import SHIPPED_EXAMPLES, accuracy_line, list_modes, main
+from .modes import list_modes
+from .outputs import SHIPPED_EXAMPLES
+from .solve import accuracy_line, main
 
 __all__ = ["main", "list_modes", "accuracy_line", "SHIPPED_EXAMPLES"]

@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import NNMInputError, run_reporting_errors
+from .modes import list_modes
+from .outputs import output_file
 
 
 def _load(path):
@@ -47,43 +49,6 @@ def accuracy_line(branch):
             f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
 
 
-def list_modes(model, reference=None, count=30, out=sys.stdout):
-    from ..model import MAX_DENSE_DOF, sparse_modes
-    # a model too large for the dense eigensolution (a full FE model): its lowest modes by sparse Lanczos
-    freqs = sparse_modes(model, count)[0] if model.n > MAX_DENSE_DOF else model.linear_modes()[0]
-    labels = model.mode_labels or []
-    table = None
-    if reference and "table2_hz" in reference:
-        table = np.asarray(reference["table2_hz"], dtype=float)
-    head = f"{'mode':>4}  {'freq (Hz)':>11}"
-    if table is not None:
-        head += f"  {'reference':>10}  {'diff':>7}"
-    print(head + "  label", file=out)
-    for k in range(min(count, model.n)):
-        line = f"{k + 1:>4}  {freqs[k]:>11.4f}"
-        if table is not None:
-            if k < len(table):
-                line += f"  {table[k]:>10.4f}  {100 * (freqs[k] / table[k] - 1):>+6.2f}%"
-            else:
-                line += " " * 21
-        label = labels[k] if k < len(labels) else ""
-        print(line + ("  " + label if label else ""), file=out)
-    source = str(reference.get("source", "")) if table is not None else ""
-    print(list_modes_legend(table is not None, bool(labels), source), file=out)
-
-
-def list_modes_legend(reference, labels, source=""):
-    """The line under --list-modes' table saying what its columns are (reference, labels: whether the
-    table has the reference and label columns; source: where the reference frequencies come from)."""
-    words = ["mode: the number --mode takes (1-based)", "freq: linear natural frequency (Hz)"]
-    if reference:
-        words += [f"reference: the file's reference frequency of that mode (Hz; /extra/reference/table2_hz"
-                  f"{', from the ' + source if source else ''})", "diff: freq / reference - 1"]
-    if labels:
-        words.append("label: the mode's description stored in the file")
-    return "columns: " + "; ".join(words)
-
-
 def _progress(job, stream, interval=0.2):
     """One progress line, rewritten in place until the job is done (the latest point's E and f once
     there is one; before it, the time waited: the first run after installing compiles the solver)."""
@@ -105,45 +70,6 @@ def _progress(job, stream, interval=0.2):
         stream.flush()
         time.sleep(interval)
     stream.write("\n")
-
-
-#: the example files shipped with the viewer (nnm_viewer/data), never written to by default
-SHIPPED_EXAMPLES = ("paris.h5", "two_dof.h5")
-
-
-def _is_shipped_example(path):
-    """True if ``path`` is one of the example files shipped in the nnm_viewer package (found
-    without importing the viewer)."""
-    import importlib.util
-
-    try:
-        spec = importlib.util.find_spec("nnm_viewer")
-        p = Path(path).resolve()
-    except (ImportError, ValueError, OSError):
-        return False
-    if spec is None or not spec.submodule_search_locations or p.name not in SHIPPED_EXAMPLES:
-        return False
-    return any(p == (Path(loc) / "data" / p.name).resolve() for loc in spec.submodule_search_locations)
-
-
-def _default_out(path):
-    """(the file a branch computed on ``path`` is appended to, the reason it is not ``path`` or ''):
-    ``path`` itself (FILE.h5 for a .mat file), unless it is a shipped example or cannot be written;
-    then ``<stem>_branches.h5`` in the current folder."""
-    import os
-
-    from ..files.importers import is_import_path
-
-    p = Path(path)
-    out = p.with_suffix(".h5") if is_import_path(p) else p
-    folder = out.parent if str(out.parent) else Path(".")
-    if _is_shipped_example(out):
-        reason = f"{out.name} is a shipped example"
-    elif not os.access(folder, os.W_OK) or (out.exists() and not os.access(out, os.W_OK)):
-        reason = f"{out} is not writable"
-    else:
-        return out, ""
-    return Path.cwd() / f"{p.stem}_branches.h5", reason
 
 
 def main(argv=None):
@@ -203,20 +129,6 @@ def main(argv=None):
     return run_reporting_errors("nnm-solve", _run, args)
 
 
-def _output_file(args, notice):
-    """The HDF5 file results go to: --out (an importable model path becomes <stem>.h5), else FILE, or
-    ./<stem>_branches.h5 when FILE is a shipped example or cannot be written (``notice`` says so)."""
-    from ..files.importers import is_import_path
-
-    if args.out:
-        out = Path(args.out)
-        return out.with_suffix(".h5") if is_import_path(out) else out
-    out, reason = _default_out(args.file)
-    if reason:
-        print(f"nnm-solve: {reason}: " + notice.format(out=out), flush=True)
-    return out
-
-
 def _method_arguments(args):
     """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
     if args.method == "shooting":
@@ -258,7 +170,7 @@ def _run_forced(args):
         if not 0 <= d < model.n:
             raise NNMInputError(f"--force-dof {d} is not a DOF of the model (0..{model.n - 1})")
         force[d] += v
-    out = _output_file(args, "the response will be saved to {out} (--out chooses another file)")
+    out = output_file(args, "the response will be saved to {out} (--out chooses another file)")
     t0 = time.perf_counter()
     r = forced_response(model, force, tuple(args.f_range), args.damping, harmonics=args.harmonics)
     dof = int(dofs[0])
@@ -283,7 +195,7 @@ def _run(args):
     if args.mode is None or args.energy_max is None:
         raise NNMInputError("give --list-modes, or --mode N and --energy-max E to compute a branch")
     _check_arguments(model, args)            # bad input: its one line, before any notice about the output file
-    out = _output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
+    out = output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
     check_branch_file(out, model)              # a file of another model: refused before anything is computed
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
@@ -351,7 +263,7 @@ def _run_sweep(args, parser):
             if value is not None:
                 options[key] = value
     model, _ = _load(args.file)
-    out = _output_file(args, "the branches will be saved to {out} (--out chooses another file)")
+    out = output_file(args, "the branches will be saved to {out} (--out chooses another file)")
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     client = args.scheduler or args.workers

@@ -1,0 +1,46 @@
+"""``nnm-solve FILE --list-modes``: the table of a model's linear modes (1-based numbers, Hz), with the file's
+reference frequencies and mode labels where it has them."""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+__all__ = ["list_modes", "list_modes_legend"]
+
+
+def list_modes(model, reference=None, count=30, out=sys.stdout):
+    from ..model import MAX_DENSE_DOF, sparse_modes
+    # a model too large for the dense eigensolution (a full FE model): its lowest modes by sparse Lanczos
+    freqs = sparse_modes(model, count)[0] if model.n > MAX_DENSE_DOF else model.linear_modes()[0]
+    labels = model.mode_labels or []
+    table = None
+    if reference and "table2_hz" in reference:
+        table = np.asarray(reference["table2_hz"], dtype=float)
+    head = f"{'mode':>4}  {'freq (Hz)':>11}"
+    if table is not None:
+        head += f"  {'reference':>10}  {'diff':>7}"
+    print(head + "  label", file=out)
+    for k in range(min(count, model.n)):
+        line = f"{k + 1:>4}  {freqs[k]:>11.4f}"
+        if table is not None:
+            if k < len(table):
+                line += f"  {table[k]:>10.4f}  {100 * (freqs[k] / table[k] - 1):>+6.2f}%"
+            else:
+                line += " " * 21
+        label = labels[k] if k < len(labels) else ""
+        print(line + ("  " + label if label else ""), file=out)
+    source = str(reference.get("source", "")) if table is not None else ""
+    print(list_modes_legend(table is not None, bool(labels), source), file=out)
+
+
+def list_modes_legend(reference, labels, source=""):
+    """The line under --list-modes' table saying what its columns are (reference, labels: whether the
+    table has the reference and label columns; source: where the reference frequencies come from)."""
+    words = ["mode: the number --mode takes (1-based)", "freq: linear natural frequency (Hz)"]
+    if reference:
+        words += [f"reference: the file's reference frequency of that mode (Hz; /extra/reference/table2_hz"
+                  f"{', from the ' + source if source else ''})", "diff: freq / reference - 1"]
+    if labels:
+        words.append("label: the mode's description stored in the file")
+    return "columns: " + "; ".join(words)
