@@ -88,23 +88,34 @@ class Skeleton:
         self.blips = n - len(keep)            # points left out below the end: inside narrow tongues
         self._interp = None
         self._shares = None
-        self.truncation = self._truncation()
+        self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
+        self._truncation = np.full(len(self.energy), np.nan)
+        self._estimated = np.zeros(len(self.energy), dtype=bool)
 
-    def _truncation(self):
-        """Estimated relative frequency error of each point from the truncation of the harmonics: the change of
-        its frequency with two harmonics fewer (the same modal amplitude), an upper estimate."""
-        from ..orbits.condensed_hb import CondensedHBProblem
-        from ..orbits.hb_basis import HBBasis
-        prob = self.problem
-        step = 2 if prob.basis.kind == "odd" else 1
-        if prob.basis.harmonics <= step:
-            return np.full(len(self.energy), np.nan)
-        lower = CondensedHBProblem(prob.sys, prob.r, HBBasis(prob.basis.harmonics - step, prob.basis.kind), prob.lin)
-        out = []
-        for u in self.orbits:
-            v = solve_at_amplitude(lower, lower.from_family(prob, u))
-            out.append(abs(v[-1] / u[-1] - 1.0) if v is not None else np.nan)
-        return np.asarray(out)
+    def _truncation_of(self, i):
+        """Estimated relative frequency error of point i from the truncation of the harmonics: the change of its
+        frequency with two harmonics fewer (the same modal amplitude), an upper estimate; NaN where not estimated.
+        Computed when first asked (a solve per point: half the skeleton's cost if done for every point, while the
+        labels ask only at the branch's energies outside the linear regime) and kept."""
+        if not self._estimated[i]:
+            from ..orbits.condensed_hb import CondensedHBProblem
+            from ..orbits.hb_basis import HBBasis
+            prob = self.problem
+            step = 2 if prob.basis.kind == "odd" else 1
+            if prob.basis.harmonics > step:
+                if self._lower is None:
+                    self._lower = CondensedHBProblem(prob.sys, prob.r, HBBasis(prob.basis.harmonics - step,
+                                                                               prob.basis.kind), prob.lin)
+                u = self.orbits[i]
+                v = solve_at_amplitude(self._lower, self._lower.from_family(prob, u))
+                self._truncation[i] = abs(v[-1] / u[-1] - 1.0) if v is not None else np.nan
+            self._estimated[i] = True
+        return self._truncation[i]
+
+    @property
+    def truncation(self):
+        """Estimated relative frequency error of every point (_truncation_of; computes the ones not asked yet)."""
+        return np.array([self._truncation_of(i) for i in range(len(self.energy))])
 
     def truncation_at(self, E):
         """Estimated relative frequency error (truncation of the harmonics) of the skeleton at energy E (J): the
@@ -112,7 +123,8 @@ class Skeleton:
         if not self.covers(E):
             return float("nan")
         j = int(np.clip(np.searchsorted(self.energy, E) - 1, 0, len(self.energy) - 2))
-        return float(np.nanmax(self.truncation[j:j + 2])) if np.any(np.isfinite(self.truncation[j:j + 2])) else float("nan")
+        pair = np.array([self._truncation_of(j), self._truncation_of(j + 1)])
+        return float(np.nanmax(pair)) if np.any(np.isfinite(pair)) else float("nan")
 
     def frequency_at(self, E):
         """Skeleton frequency (Hz) at energy E (J), interpolated in log E (monotone cubic, PCHIP: 1e-7 between
