@@ -227,6 +227,13 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     end, message, gaps = "reach", "", []
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
+    shares = {}                        # id of a point's orbit -> its family_share (pts keeps the orbits alive)
+
+    def share_of(u):
+        if id(u) not in shares:
+            shares[id(u)] = family_share(prob, u)
+        return shares[id(u)]
+
     def resonance(v, what):
         """The family met a resonance at the last point: jump it (True) or end the family (False)."""
         nonlocal end, message, ratio, falls, partner
@@ -291,10 +298,10 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         # (the interpolation in energy between points stays at 1e-5 where f(E) is steep, e.g. near a saddle)
         ratio = min(STEP_MAX, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
         ratio = max(ratio, STEP_MIN)
-        share = family_share(prob, v)
+        share = share_of(v)
         # the energy falling while no partner grows (the points inside a narrow tongue are not the family's: their
         # energy rises above it and falls back, with the partner's share)
-        kept = share >= PEAK_SHARE and family_share(prob, pts[-2][3]) >= PEAK_SHARE
+        kept = share >= PEAK_SHARE and share_of(pts[-2][3]) >= PEAK_SHARE
         falls = falls + 1 if E < pts[-2][1] and kept else 0
         if falls >= PEAK_RUN:
             end, message = "peak", "the family's energy turns back: its maximum"
