@@ -19,7 +19,7 @@ from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
 from .iterator import NNMIterator
 from .labels import FamilyLabels
-from .skeleton import SKELETON_HARMONICS, skeleton
+from .skeleton import FOLLOW_REACH, REACH, SKELETON_HARMONICS, skeleton
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
@@ -122,7 +122,8 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
     # the skeleton (driver/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
     # balance it has the branch's harmonics (at most SKELETON_HARMONICS): the same truncation
     sk_h = SKELETON_HARMONICS if method == "shooting" else min(int(opts["harmonics"]), SKELETON_HARMONICS)
-    guide = _skeleton_guide(model, mode, energy_max, sk_h) if model.springs else None
+    reach = REACH if tongues == "skip" else FOLLOW_REACH
+    guide = _skeleton_guide(model, mode, energy_max, sk_h, reach) if model.springs else None
     labels = FamilyLabels(guide, math.sqrt(system.omega2[k]) / (2 * math.pi), f_method,
                           getattr(getattr(problem, "integrator", None), "order", 0))
     it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
@@ -141,7 +142,7 @@ def _skeleton_system(model, mode, harmonics=SKELETON_HARMONICS):
     return modal_system(model)
 
 
-def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS):
+def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS, reach=REACH):
     """A callable giving the Skeleton of the branch (computed at its first call, when a point leaves the linear
     regime), or None when it cannot be computed (labels then come from the harmonic share, and the jumps
     rescale the backbone's orbits only)."""
@@ -150,7 +151,7 @@ def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS):
     def guide():
         if not found:
             try:
-                found.append(skeleton(model, mode, energy_max, _skeleton_system, harmonics))
+                found.append(skeleton(model, mode, energy_max, _skeleton_system, harmonics, reach))
             except (NNMInputError, np.linalg.LinAlgError, ValueError, RuntimeError):
                 found.append(None)
         return found[0]

@@ -42,10 +42,14 @@ import numpy as np
 
 from .amplitude_family import PEAK_SHARE, solve_at_amplitude, family_share, amplitude_family
 
-__all__ = ["Skeleton", "skeleton", "amplitude_family"]
+__all__ = ["Skeleton", "skeleton", "amplitude_family", "REACH", "FOLLOW_REACH"]
 
-#: the skeleton is computed up to this multiple of the branch's energy_max
+#: the skeleton is computed up to this multiple of the branch's energy_max (tongues="skip": its jumps' targets lie
+#: beyond the tongues) ...
 REACH = 10.0
+#: ... or this one for a branch that follows its tongues (tongues="follow": the labels, up to energy_max; the same
+#: points as a REACH one, stepped from the same start)
+FOLLOW_REACH = 2.0
 
 #: the skeleton is at a k:1 band where k f is within this relative distance of the partner's frequency
 ENTRY_BAND = 0.01
@@ -205,8 +209,9 @@ class Skeleton:
         return out
 
 
-def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
-    """The Skeleton of linear mode ``mode`` (1-based) of the ModalSystem ``system`` up to E_reach (J)."""
+def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS, E_start=None):
+    """The Skeleton of linear mode ``mode`` (1-based) of the ModalSystem ``system`` up to E_reach (J).  E_start (J,
+    default E_reach): the reach its first amplitude is chosen for (below)."""
     from ..orbits.condensed_hb import CondensedHBProblem
     from ..orbits.hb_basis import HBBasis
     r = int(mode) - 1
@@ -214,7 +219,7 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
     # start in the linear regime: at most 1e-6 of the reach (E = w^2 a^2 / 2 for the linear mode), lower until
     # the frequency is the linear one to 1e-8 (also where Newton finds no orbit there: a reach far above the
     # family's end, e.g. 1e6 x a tongue's entry energy on the 2-DOF benchmark, puts 1e-6 of it beyond the family)
-    a0 = math.sqrt(2e-6 * E_reach) / prob.w_r
+    a0 = math.sqrt(2e-6 * (E_reach if E_start is None else E_start)) / prob.w_r
     for _ in range(20):
         u = solve_at_amplitude(prob, prob.start(a0)[0])
         if u is not None and abs(u[-1] - 1.0) < 1e-8:
@@ -223,16 +228,19 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS):
     return Skeleton(prob, *amplitude_family(prob, E_reach, a0), mode)
 
 
-def skeleton(model, mode, energy_max, system_of, harmonics=SKELETON_HARMONICS):
-    """The Skeleton of linear mode ``mode`` (1-based) of ``model`` up to REACH x energy_max (J) with
-    ``harmonics``, cached per model, mode and harmonics (a cached one that reaches far enough, or that ended,
-    is reused).  system_of(model, mode, harmonics) gives the ModalSystem (every mode, or the Ritz basis for those
-    harmonics for a large model; driver/api.py)."""
+def skeleton(model, mode, energy_max, system_of, harmonics=SKELETON_HARMONICS, reach=REACH):
+    """The Skeleton of linear mode ``mode`` (1-based) of ``model`` up to reach x energy_max (J) with ``harmonics``,
+    cached per model, mode and harmonics (a cached one that reaches far enough, or that ended, is reused).
+    system_of(model, mode, harmonics) gives the ModalSystem (every mode, or the Ritz basis for those harmonics for a
+    large model; driver/api.py).  Whatever the reach, the stepping starts where a REACH x energy_max one starts, so
+    a shorter reach (FOLLOW_REACH: a branch that follows its tongues needs the skeleton only for its labels, up to
+    its energy_max) gives the first points of the longer one, the same numbers."""
+    E_reach = reach * energy_max
     with _lock:
-        for (m, h, reach), sk in _cache.get(model, {}).items():
-            if m == mode and h == harmonics and (reach >= REACH * energy_max or sk.end != "reach"):
+        for (m, h, r), sk in _cache.get(model, {}).items():
+            if m == mode and h == harmonics and (r >= E_reach or sk.end != "reach"):
                 return sk
-    sk = compute_skeleton(system_of(model, mode, harmonics), mode, REACH * energy_max, harmonics)
+    sk = compute_skeleton(system_of(model, mode, harmonics), mode, E_reach, harmonics, E_start=REACH * energy_max)
     with _lock:
-        _cache.setdefault(model, {})[(mode, harmonics, REACH * energy_max)] = sk
+        _cache.setdefault(model, {})[(mode, harmonics, E_reach)] = sk
     return sk
