@@ -227,3 +227,19 @@ def test_skeleton_starts_at_the_linear_mode_whatever_its_reach(reach):
     sk = compute_skeleton(modal_system(two_dof()), 1, reach)
     assert len(sk.energy) > 100 and "linear mode" not in sk.message
     assert abs(sk.frequency_hz[0] / (1 / (2 * np.pi)) - 1) < 1e-6 and sk.energy[0] <= 1e-6 * reach
+
+
+def test_a_follow_branch_skeleton_is_the_first_points_of_the_skip_one():
+    """tongues='follow' steps the skeleton only to FOLLOW_REACH x energy_max (its labels), from the start of the
+    REACH one (tongues='skip'): its points below energy_max are the longer one's, the same numbers, so the labels of
+    a branch do not depend on the tongue mode it was computed in."""
+    from nnm_solver.driver.skeleton import FOLLOW_REACH, REACH
+    E_max = 3e5
+    short = skeleton(two_dof(), 1, E_max, _skeleton_system, reach=FOLLOW_REACH)     # new models: no cache shared
+    long_ = skeleton(two_dof(), 1, E_max, _skeleton_system, reach=REACH)
+    assert short.end == "reach" and FOLLOW_REACH * E_max <= short.energy[-1] < REACH * E_max <= long_.energy[-1]
+    k = int(np.searchsorted(short.energy, E_max))
+    assert k > 100 and len(long_.energy) > len(short.energy)
+    assert np.array_equal(short.energy[:k], long_.energy[:k]) and np.array_equal(short.frequency_hz[:k], long_.frequency_hz[:k])
+    E = np.geomspace(1e-3, E_max, 40)
+    assert [short.truncation_at(x) for x in E] == [long_.truncation_at(x) for x in E]

@@ -114,7 +114,9 @@ class FamilyLabels:
         dev = self.deviation(energy, frequency_hz, amps)
         if dev is None or not math.isfinite(dev):
             return content_label, None
-        # the skeleton's own truncation error widens both thresholds
+        if dev <= ON_FAMILY:           # on the family whatever the widening below (it only raises the thresholds)
+            return "backbone", dev
+        # the skeleton's own truncation error widens both thresholds (a solve per skeleton point: asked only here)
         err = sk.truncation_at(energy)
         err = 2 * err if math.isfinite(err) else 0.0
         if dev > OFF_FAMILY + err or (dev > ON_FAMILY + err and (
