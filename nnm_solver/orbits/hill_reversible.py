@@ -143,6 +143,7 @@ def _group(blk, n, w, om2, Kh):
     M[cos_rows, nc + np.arange(ns_)] = two_hw
     M[nc:, :nc] = two_hw[:, None] * Kc[cos_rows]
     M[nc:, nc:] = -Kh[blk["ss"]].reshape(ns_, ns_)
+    # the sine block's diagonal: -Ks's (Omega^2 - (h omega)^2) and 4 Dsc Dcs = -4 (h omega)^2
     M.flat[nc * (R + 1)::R + 1] -= om2[blk["mode_s"]] - (hs_rep * w) ** 2 + 4.0 * (hs_rep * w) ** 2
     mu, X = np.linalg.eig(M)
     lam = np.sqrt(mu.astype(complex))
