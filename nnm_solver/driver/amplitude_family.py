@@ -60,9 +60,10 @@ def solve_at_amplitude(prob, u, tol=1e-10, iterations=30):
     free = np.r_[0:nD, nD + 1]
     u = u.copy()
     for _ in range(iterations):
-        r, J = prob.jacobian(u)
-        if prob.error(u, r) < tol:
+        parts = prob._parts(u)                  # the residual first: no Jacobian at the converged point
+        if prob.error(u, parts[-1]) < tol:
             return u
+        r, J = prob.jacobian_of(parts)
         try:
             du = np.linalg.solve(J[:, free], -r)
         except np.linalg.LinAlgError:

@@ -170,11 +170,16 @@ class CondensedHBProblem:
         return self._parts(u)[-1]
 
     def jacobian(self, u):
-        D, a, w, Omega2, W, G, d, F, r = self._parts(u)
+        return self.jacobian_of(self._parts(u))
+
+    def jacobian_of(self, parts):
+        """(r, J) from the parts of the residual already computed at u (``_parts``: e.g. where a Newton loop
+        tested the residual first and needs the Jacobian only when it is not converged)."""
+        D, a, w, Omega2, W, G, d, F, r = parts
         bs, nb, ns = self.basis, self.nb, self.ns
         C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
         nD = nb * ns
-        J = np.zeros((len(r), len(u)))
+        J = np.zeros((len(r), nD + 2))                                       # unknowns: D, a, omega
         # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
         JD = np.einsum("jst,tjl->jslt", G, C).reshape(nD, nD)
         JD[np.diag_indices(nD)] += 1.0
