@@ -60,7 +60,7 @@ def solve_at_amplitude(prob, u, tol=1e-10, iterations=30):
     free = np.r_[0:nD, nD + 1]
     u = u.copy()
     for _ in range(iterations):
-        parts = prob._parts(u)                  # the residual first: no Jacobian at the converged point
+        parts = prob.residual_parts(u)          # the residual first: no Jacobian at the converged point
         if prob.error(u, parts[-1]) < tol:
             return u
         r, J = prob.jacobian_of(parts)

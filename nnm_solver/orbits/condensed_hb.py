@@ -172,6 +172,10 @@ class CondensedHBProblem:
     def jacobian(self, u):
         return self.jacobian_of(self._parts(u))
 
+    def residual_parts(self, u):
+        """The residual's intermediate results at u, its last item the residual: what ``jacobian_of`` needs."""
+        return self._parts(u)
+
     def jacobian_of(self, parts):
         """(r, J) from the parts of the residual already computed at u (``_parts``: e.g. where a Newton loop
         tested the residual first and needs the Jacobian only when it is not converged)."""
