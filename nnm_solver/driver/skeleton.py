@@ -116,11 +116,6 @@ class Skeleton:
             self._estimated[i] = True
         return self._truncation[i]
 
-    @property
-    def truncation(self):
-        """Estimated relative frequency error of every point (_truncation_of; computes the ones not asked yet)."""
-        return np.array([self._truncation_of(i) for i in range(len(self.energy))])
-
     def truncation_at(self, E):
         """Estimated relative frequency error (truncation of the harmonics) of the skeleton at energy E (J): the
         largest of its two neighbouring points' (NaN outside its range or where not estimated)."""

@@ -229,17 +229,10 @@ class CondensedHBProblem:
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m), for a complete basis."""
         return self.amplitudes(u)[0] if self.lin.complete else None
 
-    def _at_zero(self):
-        """(c_j(0), d c_j / d theta (0)) of the basis (its cached ones where it has them)."""
-        b = self.basis
-        if getattr(b, "at_zero", None) is not None:
-            return b.at_zero, b.slope_at_zero
-        return b.functions([0.0])[0], b.derivatives([0.0])[0]
-
     def state(self, u):
         """(q0, v0, T): modal initial state (complete basis) and period (s) of the orbit u."""
         A, w, _, _ = self.amplitudes(u)
-        c0, s0 = self._at_zero()
+        c0, s0 = self.basis.state_at_zero()
         return c0 @ A, w * (s0 @ A), 2 * np.pi / w
 
     def modal_orbit(self, u, samples=None):
@@ -252,7 +245,7 @@ class CondensedHBProblem:
         """Energy (J) of the orbit u: the modes' kinetic and linear potential energy at t = 0 plus the
         element potentials (and the left-out modes' share through R0, R1 for a truncated basis)."""
         A, w, F, Omega2 = self.amplitudes(u)
-        c0, s0 = self._at_zero()
+        c0, s0 = self.basis.state_at_zero()
         q0, v0 = c0 @ A, w * (s0 @ A)
         E = 0.5 * v0 @ v0 + 0.5 * q0 @ (self.lin.omega2 * q0)
         D = self.unpack(u)[0]

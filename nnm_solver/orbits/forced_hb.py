@@ -90,6 +90,10 @@ class _ForcedProtocol:
 
     load = 1.0
 
+    def pack(self, X, omega):
+        """u of the coefficients X (N_b, n or n_s) and omega (rad/s)."""
+        return np.concatenate([np.asarray(X, dtype=float).ravel(), [omega / self.w_ref]])
+
     def error(self, u, r):
         """Relative residual ||r|| / ||unknown coefficients|| (both in the same units)."""
         return float(np.linalg.norm(r) / max(np.linalg.norm(u[:-1]), 1e-300))
@@ -169,9 +173,6 @@ class ForcedHBProblem(_ForcedProtocol):
         self.max_rel_freq_step = max_rel_freq_step
 
     # --------------------------------------------------------------- packing
-    def pack(self, A, omega):
-        return np.concatenate([np.asarray(A, dtype=float).ravel(), [omega / self.w_ref]])
-
     def unpack(self, u):
         return u[:-1].reshape(self.nb, self.n), u[-1] * self.w_ref
 

@@ -64,9 +64,6 @@ class CondensedForcedHBProblem(_ForcedProtocol):
         self.max_rel_freq_step = max_rel_freq_step
 
     # --------------------------------------------------------------- packing
-    def pack(self, D, omega):
-        return np.concatenate([np.asarray(D, dtype=float).ravel(), [omega / self.w_ref]])
-
     def unpack(self, u):
         """(D (N_b, n_s) m, omega rad/s)."""
         return u[:-1].reshape(self.nb, self.ns), u[-1] * self.w_ref

@@ -80,12 +80,7 @@ class HBProblem:
     def initial_state(self, u):
         """Modal displacement and velocity at t = 0: (q0, v0)."""
         A, w = self.unpack(u)
-        b = self.basis
-        c0 = getattr(b, "at_zero", None)
-        if c0 is None:
-            c0, s0 = b.functions([0.0])[0], b.derivatives([0.0])[0]
-        else:
-            s0 = b.slope_at_zero
+        c0, s0 = self.basis.state_at_zero()
         return c0 @ A, w * (s0 @ A)
 
     # --------------------------------------------------------------- results (driver protocol)

@@ -45,6 +45,13 @@ class HBBasis:
     def __len__(self):
         return len(self.h)
 
+    def state_at_zero(self):
+        """(c_j(0), d c_j / d theta (0)) (N_b,) each: the cached ones, or computed for a basis built without them."""
+        c0 = getattr(self, "at_zero", None)
+        if c0 is None:
+            return self.functions([0.0])[0], self.derivatives([0.0])[0]
+        return c0, self.slope_at_zero
+
     def galerkin(self, g_prime):
         """The Galerkin blocks C (n_s, N_b, N_b) of the stiffnesses g_prime (N, n_s) sampled at this basis's
         instants: C_s = P diag(g_prime[:, s]) E, i.e. C_s[j, l] = the coefficient on c_j of g'_s(t) c_l(t) (the
