@@ -245,13 +245,11 @@ def test_a_follow_branch_skeleton_is_the_first_points_of_the_skip_one():
     assert [short.truncation_at(x) for x in E] == [long_.truncation_at(x) for x in E]
 
 
-@pytest.mark.xfail(strict=True, reason="the skeleton's known limit (docs/continuation.md): past the 2-DOF's 5:1 "
-                                       "tongue its verdict depends on where its steps fall; labels there are wrong")
 def test_two_dof_backbone_past_its_five_to_one_tongue_is_labelled_backbone():
     """Past the 5:1 tongue (entry fold 109148 J) the 2-DOF's NNM 1 backbone goes on at 0.2236 Hz at 1.5e5 J rising
     smoothly (HB with one harmonic, where no tongue exists, agrees to 1e-4 up to 4.4e5 J).  The follow branch's
-    points there must be labelled backbone whatever energy_max; with 1e6 J they are labelled 'tongue 1:1' (the
-    skeleton ends 'locked' at 1.32e5 J).  Strict: passes (and so fails here) once the skeleton is fixed."""
+    points there must be labelled backbone whatever energy_max; with 1e6 J they were labelled 'tongue 1:1' (the
+    skeleton, stepped onto a tongue's sheet, ended 'locked' at 1.32e5 J) before the one-harmonic guide."""
     model = two_dof()
     b = nnm.continue_nnm(model, 1, 1e6, floquet=False)
     h1 = nnm.continue_nnm(model, 1, 2e6, method="hb", harmonics=1, floquet=False)
@@ -261,3 +259,26 @@ def test_two_dof_backbone_past_its_five_to_one_tongue_is_labelled_backbone():
     on = beyond[np.abs(f[beyond] / f1 - 1) < 1e-3]          # the branch's points on the one-harmonic backbone
     assert len(on) >= 2
     assert all(b.labels[i] == "backbone" for i in on)
+
+
+@pytest.mark.parametrize("reach", [3e6, 1e7, 1e8, 1e9])
+def test_two_dof_skeleton_past_its_tongues_is_the_same_backbone_whatever_its_reach(reach):
+    """The 2-DOF's NNM 1 meets its 3:1 (~2 kJ), 5:1 (~5e4 J) and further tongues (~4e5 J, ~6e6 J) on the way up.
+    Whatever the reach (which places the steps), the skeleton reaches it and, away from those tongues, lies on
+    one family: near the one-harmonic family's (no tongue possible there; 1e-3, measured 1.7e-4 to 3.6e-4) with
+    less than 0.5 % of the orbit in partner harmonics, and, at 1.5e5 and 1e6 J, shooting's
+    backbone past the 5:1 tongue (the follow branch's 0.223604 Hz at 1.47e5 J; HB H = 9 of the guide's scan,
+    0.224278 Hz at 1e6 J) to 1e-4.  Before the guide the skeleton jumped onto orbits at 0.2249 Hz with 10 % of a
+    partner harmonic past 1.3e5 J (reaches 3e6, 1e8, 1e9 J) or ended 'locked' there (1e7 J)."""
+    from nnm_solver.driver.amplitude_family import family_share
+    from nnm_solver.driver.skeleton import compute_skeleton
+    from nnm_solver.model.modal import modal_system
+    sk = compute_skeleton(modal_system(two_dof()), 1, reach)
+    assert sk.end == "reach", sk.message
+    h1 = compute_skeleton(modal_system(two_dof()), 1, 3e7, harmonics=1)
+    for E in (1e4, 1.5e5, 2.5e5, 1e6, 3e6):
+        assert abs(sk.frequency_at(E) / h1.frequency_at(E) - 1) < 1e-3, E
+        i = int(np.searchsorted(sk.energy, E))
+        assert family_share(sk.problem, sk.orbits[i]) > 0.995, E      # no partner harmonic takes a share
+    assert abs(sk.frequency_at(147310.0) / 0.223604 - 1) < 1e-4
+    assert abs(sk.frequency_at(1e6) / 0.224278 - 1) < 1e-4

@@ -18,6 +18,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import os
+from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_JUMP
+_TRACE = os.environ.get("TRACE")
 
 __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
 
@@ -48,6 +51,12 @@ FOLD_SLOPE = 4.0
 #: largest on the way with the followed mode keeping FUND_SHARE of the fundamental; a 1:1 resonance when the energy
 #: comes back above it (by FOLD_ENERGY_RTOL) or another mode takes the fundamental first
 FOLD_PROBE_STEPS, FOLD_PROBE_DROP, FUND_SHARE, FOLD_ENERGY_RTOL = 300, 0.1, 0.9, 1e-9
+
+#: the stepping moves to the backbone's sheet (family_guide.py) at most this many times
+MAX_SWITCHES = 40
+#: ... and steps on from where that sheet begins by this amplitude ratio, growing (the backbone just past a tongue
+#: bends: the partner's harmonic decays there; with full steps its frequency between points is off by 1e-6)
+SHEET_RATIO = 1.005
 
 #: a step moving ln f by more than JUMP_FACTOR x the previous step's + JUMP_FLOOR is halved
 JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
@@ -229,16 +238,38 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
     shares = {}                        # id of a point's orbit -> its family_share (pts keeps the orbits alive)
+    guide = OneHarmonicGuide(prob) if prob.basis.harmonics > 1 and os.environ.get("NOGUIDE") is None else None
+    dev_checked, ddev_prev, switches = 0.0, 0.0, 0
 
     def share_of(u):
         if id(u) not in shares:
             shares[id(u)] = family_share(prob, u)
         return shares[id(u)]
 
+    def to_sheet(a, found):
+        """Go on from the backbone's sheet found at amplitude a (found: (orbit, share)), from where it begins
+        (family_guide.sheet_start): the stepping's points above that amplitude are left out."""
+        nonlocal ratio, falls, ddev_prev, dlnf_prev, dev_checked, switches
+        a, v, share = sheet_start(prob, guide, pts, a, found)
+        del pts[next((i for i, p in enumerate(pts) if p[0] >= a), len(pts)):]
+        gaps[:] = [g for g in gaps if g[2] < a]
+        shares[id(v)] = share
+        E = prob.energy(v)
+        gaps.append((pts[-1][1], E, a, "sheet"))
+        pts.append((a, E, v[-1] * prob.w_r / (2 * math.pi), v))
+        ratio, falls, ddev_prev, dlnf_prev, switches = SHEET_RATIO, 0, 0.0, 0.0, switches + 1
+        dev_checked = guide.deviation(a, v)
+        if _TRACE: print("sheet", a, pts[-2][1], E, pts[-1][2])
+
     def resonance(v, what):
         """The family met a resonance at the last point: jump it (True) or end the family (False)."""
-        nonlocal end, message, ratio, falls, partner
+        nonlocal end, message, ratio, falls, partner, ddev_prev
         a0, E0, f0, u0 = pts[-1]
+        if guide is not None and switches < MAX_SWITCHES:
+            landed = guided_jump(prob, guide, pts, share_of(u0))
+            if landed is not None:             # the backbone's sheet beyond: where it begins, from there on
+                to_sheet(*landed)
+                return True
         beyond = _past_fold(prob, pts) if v is None and len(pts) >= 2 else None
         if beyond is not None and beyond[0] == "peak":    # the family's own fold, its energy folding with a
             pts.extend(beyond[1])
@@ -258,9 +289,9 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         slope = math.log(f0 / base[0][2]) / math.log(a0 / base[0][0]) if base[0] is not pts[-1] else 0.0
         jumped = _jump(prob, pts, slope) if len(gaps) < max_jumps else None
         if jumped is not None:
-            gaps.append((E0, jumped[1], jumped[0]))
+            gaps.append((E0, jumped[1], jumped[0], "jump"))
             pts.append(jumped)
-            ratio, falls = STEP_MAX, 0
+            ratio, falls, ddev_prev = STEP_MAX, 0, 0.0
             return True
         if v is None and _folds_at_peak(prob, pts):
             end = "peak"
@@ -284,7 +315,11 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         guess[nD] = a * prob.beta
         v = solve_at_amplitude(prob, guess)
         dlnf = math.log(v[-1] * prob.w_r / (2 * math.pi) / f0) if v is not None else math.inf
-        if v is None or abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR:
+        dev = guide.deviation(a, v) if guide is not None and v is not None else None
+        dev_last = guide.deviation(a0, u0) if dev is not None else None
+        ddev = dev - dev_last if dev is not None and dev_last is not None else 0.0
+        if (v is None or abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR
+                or abs(ddev) > JUMP_FACTOR * abs(ddev_prev) + DEV_JUMP):
             if ratio > STEP_MIN:
                 ratio = 1 + (ratio - 1) / 2
                 continue
@@ -294,12 +329,18 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             break
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
-        dlnf_prev = dlnf
+        dlnf_prev, ddev_prev = dlnf, ddev
         # the next step: grown by half, at most STEP_MAX, and moving the frequency by about DLNF_MAX at most
         # (the interpolation in energy between points stays at 1e-5 where f(E) is steep, e.g. near a saddle)
         ratio = min(STEP_MAX, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
         ratio = max(ratio, STEP_MIN)
         share = share_of(v)
+        if dev is not None and abs(dev - dev_checked) > DEV_CHECK:
+            other = nearer_sheet(guide, a, v, share)
+            if other is not None and switches < MAX_SWITCHES:    # the backbone's sheet beyond a tongue the
+                to_sheet(a, other)                                # stepping slid into
+                continue
+            dev_checked = dev
         # the energy falling while no partner grows (the points inside a narrow tongue are not the family's: their
         # energy rises above it and falls back, with the partner's share)
         kept = share >= PEAK_SHARE and share_of(pts[-2][3]) >= PEAK_SHARE

@@ -72,6 +72,9 @@ class Skeleton:
         self.problem, self.mode = prob, int(mode)
         self.partner = (int(partner[0]), int(partner[1]))
         self.gaps = gaps
+        #: energies (J) where the stepping moved onto the backbone's sheet beyond a tongue it had slid into
+        #: (family_guide.py): below each, back to the tongue's entry, the skeleton's points are the tongue's sheet
+        self.sheet_starts = [g[1] for g in gaps if g[3] == "sheet"]
         self.end, self.message = end, message
         E = np.asarray(E, dtype=float)
         n = len(E)
@@ -90,6 +93,8 @@ class Skeleton:
         self.amplitude = np.asarray(a, dtype=float)[keep]
         self.orbits = [us[i] for i in keep]
         self.blips = n - len(keep)            # points left out below the end: inside narrow tongues
+        starts = {float(E0) for E0 in self.sheet_starts}
+        self._starts = np.array([float(E0) in starts for E0 in self.energy])   # the first points of new sheets
         self._interp = None
         self._shares = None
         self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
@@ -121,19 +126,38 @@ class Skeleton:
         largest of its two neighbouring points' (NaN outside its range or where not estimated)."""
         if not self.covers(E):
             return float("nan")
-        j = int(np.clip(np.searchsorted(self.energy, E) - 1, 0, len(self.energy) - 2))
+        j = self._pair(E)[0]
         pair = np.array([self._truncation_of(j), self._truncation_of(j + 1)])
         return float(np.nanmax(pair)) if np.any(np.isfinite(pair)) else float("nan")
 
+    def _pair(self, E):
+        """(j, t): E (J) lies at t between points j and j + 1 in log E.  Just below a sheet start (between it and
+        the point before it), the pair is the start and the point after it (t < 0): the backbone's sheet extends a
+        little below where the stepping met it, and the point before is the tongue's sheet."""
+        x = np.log(self.energy)
+        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
+        if j + 2 < len(x) and self._starts[j + 1] and E < self.energy[j + 1]:
+            j += 1
+        return j, (math.log(E) - x[j]) / (x[j + 1] - x[j])
+
     def frequency_at(self, E):
         """Skeleton frequency (Hz) at energy E (J), interpolated in log E (monotone cubic, PCHIP: 1e-7 between
-        points 5 % apart in amplitude); NaN outside its range."""
+        points 5 % apart in amplitude) on the sheet it lies on (_pair); NaN outside its range."""
         if not self.covers(E):
             return float("nan")
         if self._interp is None:
             from scipy.interpolate import PchipInterpolator
-            self._interp = PchipInterpolator(np.log(self.energy), self.frequency_hz)
-        return float(self._interp(math.log(E)))
+            cuts = [0] + [int(i) for i in np.flatnonzero(self._starts)] + [len(self.energy)]
+            self._interp = {}
+            for lo, hi in zip(cuts[:-1], cuts[1:]):
+                if hi - lo >= 2:
+                    f = PchipInterpolator(np.log(self.energy[lo:hi]), self.frequency_hz[lo:hi], extrapolate=True)
+                    self._interp.update({i: f for i in range(lo, hi)})
+        j, t = self._pair(E)
+        f = self._interp.get(j)
+        if f is None or j + 1 not in self._interp or self._interp[j + 1] is not f:
+            return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
+        return float(f(math.log(E)))
 
     def share_at(self, E):
         """Fundamental share (tongue_skip.fundamental_share: the fraction of the modal orbit's harmonic
@@ -144,21 +168,17 @@ class Skeleton:
             return float("nan")
         if self._shares is None:
             self._shares = np.full(len(self.energy), np.nan)
-        x = np.log(self.energy)
-        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
+        j, t = self._pair(E)
         for i in (j, j + 1):
             if not np.isfinite(self._shares[i]):
                 self._shares[i] = fundamental_share(harmonic_label(self.problem.modal_orbit(self.orbits[i]))[3])
-        t = (math.log(E) - x[j]) / (x[j + 1] - x[j])
         return float((1 - t) * self._shares[j] + t * self._shares[j + 1])
 
     def covers(self, E):
         return len(self.energy) >= 2 and self.energy[0] <= E <= self.energy[-1]
 
     def _interpolated(self, E):
-        x = np.log(self.energy)
-        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
-        t = (math.log(E) - x[j]) / (x[j + 1] - x[j])
+        j, t = self._pair(E)
         return (1 - t) * self.orbits[j] + t * self.orbits[j + 1]
 
     def orbit_at(self, E):

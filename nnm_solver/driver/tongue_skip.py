@@ -235,8 +235,12 @@ class TongueSkipper:
             return
         band = [] if fold else sk.targets(E_base, k, partner_hz)
         # then the family just above the entry (a tongue the skeleton does not place, or one re-entered)
-        near = [E_base * (1 + d) for d in JUMPS if sk.covers(E_base * (1 + d))
-                and not any(abs(E_base * (1 + d) / E_t - 1) < 0.01 for E_t in band)]
+        # (from where the skeleton's own stepping found the backbone's sheet beyond the tongue, when it did: below
+        # that its points are the tongue's sheet)
+        starts = [E * (1 + 1e-9) for E in sk.sheet_starts if E_base < E <= E_base * (1 + JUMPS[-1])][:1]
+        near = starts + [E_base * (1 + d) for d in JUMPS if sk.covers(E_base * (1 + d))
+                         and not any(abs(E_base * (1 + d) / E_t - 1) < 0.01 for E_t in band)
+                         and not (starts and E_base * (1 + d) < starts[0])]
         for E_t in band + near:
             side = np.sign(k * sk.frequency_at(E_t) / partner_hz - 1.0) if E_t in band else None
             refined = sk.family_orbit(self.system, E_t, self.settings, self.tol)

@@ -1,0 +1,193 @@
+r"""The one-harmonic guide of the skeleton's stepping (amplitude_family.py): which sheet is the backbone.
+
+With the fundamental alone (H = 1) the harmonic-balance family of a mode has no k:1 internal resonance with
+k >= 2 (no harmonic k exists to resonate with a partner mode), so it passes every tongue smoothly.  The skeleton
+with SKELETON_HARMONICS harmonics does not: near a k:1 resonance its family is a tongue's sheet, on which the
+partner's k-th harmonic grows and the frequency moves away from the one-harmonic family, while the backbone
+beyond the tongue is another sheet, nearer the one-harmonic family, that the stepping does not reach by small
+steps (measured on the 2-DOF benchmark's NNM 1 at its 5:1 tongue: the sheet stepped into lies 3.2e-3 above the
+one-harmonic frequency at 1e5 J with 0.6 % of the orbit in partner harmonics, the backbone 6e-5 below it with
+0.12 %; the stepping followed the sheet to its fold at 1.3e5 J and beyond onto other sheets).
+
+The guide steps the one-harmonic family to the amplitudes asked (``OneHarmonicGuide.at``) and
+``nearer_sheet`` solves the skeleton's equations at the same modal amplitude from the one-harmonic orbit: where
+that lands on another orbit, nearer the one-harmonic frequency and with less of the orbit in partner harmonics
+(``family_share``), the stepping continues from there (the backbone beyond the tongue); the sheet's points above
+its energies are then left out by the skeleton (a tongue's points lie above the family's later ones).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_JUMP"]
+
+#: the stepping asks the guide again when its relative frequency distance from the one-harmonic family has moved by
+#: this much since it last asked (a tongue's sheet moves away from it)
+DEV_CHECK = 2e-4
+
+#: a step moving the distance from the guide by more than JUMP_FACTOR x the previous step's + DEV_JUMP is halved (a
+#: jump onto another sheet, amplitude_family.py)
+DEV_JUMP = 5e-4
+
+#: a switch to the backbone's sheet is placed where that sheet begins to this ratio in amplitude (sheet_start)
+SHEET_RESOLUTION = 1.01
+
+#: the guide's own steps: at most this ratio of modal amplitudes (its family is smooth)
+GUIDE_STEP = 1.25
+
+
+class OneHarmonicGuide:
+    """The followed mode's family with the fundamental alone, on the skeleton problem ``prob``'s modal system
+    (module docstring), stepped upward in the modal amplitude a (sqrt(kg) m) as it is asked; ends (``at`` gives
+    None) where its Newton fails (a 1:1 resonance or a fold of the one-harmonic family)."""
+
+    def __init__(self, prob):
+        from ..orbits.condensed_hb import CondensedHBProblem
+        from ..orbits.hb_basis import HBBasis
+        self.skeleton_problem = prob
+        self.prob = CondensedHBProblem(prob.sys, prob.r, HBBasis(1, prob.basis.kind), prob.lin)
+        self._nD = self.prob.nb * self.prob.ns
+        self._a, self._u = [], []
+        self._end = math.inf
+
+    def _solve(self, a, guess):
+        from .amplitude_family import solve_at_amplitude
+        guess = guess.copy()
+        guess[self._nD] = a * self.prob.beta
+        return solve_at_amplitude(self.prob, guess)
+
+    def at(self, a):
+        """The guide's orbit (u of its one-harmonic problem) at modal amplitude a, or None beyond its end."""
+        if not a < self._end:
+            return None
+        if not self._a:
+            u = self._solve(a, self.prob.start(a)[0])
+            if u is None:
+                self._end = a
+                return None
+            self._a.append(a)
+            self._u.append(u)
+            return u
+        j = int(np.searchsorted(self._a, a))
+        if j < len(self._a) and self._a[j] == a:
+            return self._u[j]
+        if j < len(self._a):                     # between stored points (or below them): from the nearest below
+            i = max(j - 1, 0)
+            guess = self._u[i].copy()
+            guess[:self._nD] *= a / self._a[i]
+            u = self._solve(a, guess)
+            if u is not None:                    # kept (the stepping asks again for its last point)
+                self._a.insert(j, a)
+                self._u.insert(j, u)
+            return u
+        while self._a[-1] < a:                   # beyond: step the family up to a
+            a0, u0 = self._a[-1], self._u[-1]
+            a1 = min(a, a0 * GUIDE_STEP)
+            guess = u0.copy()
+            if len(self._a) > 1:                 # secant predictor in ln a
+                guess = u0 + (u0 - self._u[-2]) * (math.log(a1 / a0) / math.log(a0 / self._a[-2]))
+            u = self._solve(a1, guess)
+            if u is None:
+                self._end = a1
+                return None
+            self._a.append(a1)
+            self._u.append(u)
+        return self._u[-1]
+
+    def deviation(self, a, u):
+        """Relative frequency distance f / f_guide(a) - 1 of the skeleton's orbit u at modal amplitude a from the
+        guide's; None beyond the guide's end."""
+        g = self.at(a)
+        return None if g is None else float(u[-1] / g[-1] - 1.0)
+
+
+def nearer_sheet(guide, a, v, share_v):
+    """The skeleton's orbit at modal amplitude a solved from the guide's orbit there, when it is another orbit than
+    v (the stepping's, family_share share_v) that lies nearer the guide's frequency and holds less of its orbit in
+    partner harmonics: (u, share) of the backbone's sheet; else None."""
+    from .amplitude_family import solve_at_amplitude, family_share
+    prob = guide.skeleton_problem
+    g = guide.at(a)
+    if g is None:
+        return None
+    c = solve_at_amplitude(prob, prob.from_family(guide.prob, g), iterations=60)
+    if c is None or np.linalg.norm(c - v) <= 1e-6 * np.linalg.norm(v):
+        return None
+    share_c = family_share(prob, c)
+    if abs(c[-1] / g[-1] - 1.0) < abs(v[-1] / g[-1] - 1.0) and share_c > share_v:
+        return c, share_c
+    return None
+
+
+def better_of(guide, a, c, v):
+    """Is the skeleton's orbit c at modal amplitude a another orbit than v, nearer the guide's frequency and with
+    less of its orbit in partner harmonics?"""
+    from .amplitude_family import family_share
+    g = guide.at(a)
+    prob = guide.skeleton_problem
+    return (g is not None and np.linalg.norm(c - v) > 1e-6 * np.linalg.norm(v)
+            and abs(c[-1] / g[-1] - 1.0) < abs(v[-1] / g[-1] - 1.0)
+            and family_share(prob, c) > family_share(prob, v))
+
+
+def _stepping_orbit(prob, pts, a):
+    """The stepping's orbit at modal amplitude a between its points (solved from their interpolation in ln a), or
+    None above its last point or where that does not converge."""
+    from .amplitude_family import solve_at_amplitude
+    j = next((i for i, p in enumerate(pts) if p[0] >= a), None)
+    if j is None or j == 0:
+        return None
+    (a0, _, _, u0), (a1, _, _, u1) = pts[j - 1], pts[j]
+    t = math.log(a / a0) / math.log(a1 / a0)
+    return solve_at_amplitude(prob, (1 - t) * u0 + t * u1)
+
+
+def sheet_start(prob, guide, pts, a, found):
+    """Where the backbone's sheet found at amplitude a (found: (orbit, share) from nearer_sheet or guided_jump)
+    begins along the stepping's points pts: that sheet followed down in amplitude (steps of SHEET_RESOLUTION,
+    secant predictor) while it is still better_of the stepping's sheet at the same amplitude (above the stepping's
+    last point: while it converges).  (a, u, share) of its lowest such orbit."""
+    from .amplitude_family import solve_at_amplitude, family_share
+    nD = prob.nb * prob.ns
+    (v, share), last = found, None
+    while a / SHEET_RESOLUTION > pts[0][0]:
+        a_t = a / SHEET_RESOLUTION
+        guess = v.copy()
+        if last is not None:
+            guess = v + (v - last) * (math.log(a_t / a) / math.log(a / (last[nD] / prob.beta)))
+        guess[nD] = a_t * prob.beta
+        c = solve_at_amplitude(prob, guess)
+        if c is None:
+            break
+        if a_t <= pts[-1][0]:
+            w = _stepping_orbit(prob, pts, a_t)
+            if w is None or not better_of(guide, a_t, c, w):
+                break
+        a, v, last, share = a_t, c, v, family_share(prob, c)
+    return a, v, share
+
+
+def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
+    """Past the stepping's last point (a0, E0, f0, u0) = pts[-1], where its family folds or jumps: the skeleton's
+    orbits at a0 (1 + delta) solved from the guide's orbits there; the first that lies nearer the guide's frequency
+    than the last point (or within DEV_CHECK of it) and holds no more of its orbit in partner harmonics (family_share, share0 the last
+    point's): (a, (u, share)); else None."""
+    from .amplitude_family import solve_at_amplitude, family_share
+    a0, u0 = pts[-1][0], pts[-1][3]
+    dev0 = guide.deviation(a0, u0)
+    if dev0 is None:
+        return None
+    for delta in jumps:
+        a = a0 * (1 + delta)
+        g = guide.at(a)
+        if g is None:
+            return None
+        c = solve_at_amplitude(prob, prob.from_family(guide.prob, g), iterations=60)
+        if c is None:
+            continue
+        share = family_share(prob, c)
+        if abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), DEV_CHECK) and share >= share0:
+            return a, (c, share)
+    return None
