@@ -109,8 +109,11 @@ def test_skip_mode_returns_the_backbone_and_tongues_match_follow():
             continue
         for e in (e for e in tb.events if e["kind"] == "fold"):           # every fold of a tongue follow saw ...
             assert min(abs(E / e["energy"] - 1) for E in folds_follow) < 1e-5   # ... is one of follow's
+        # the tongue's tip, far below its entry (the 3:1's tip 285.6 J; its entry, where the skip branch leaves the
+        # backbone, is 1841 J since the skeleton tells the tongue's sheet from the backbone's (family_guide.py):
+        # 3457 J before, the skeleton then following the tongue's upper sheet towards its 4708 J fold)
         tip = min(e["energy"] for e in tb.events if e["kind"] == "fold")
-        assert tip < 0.1 * t["entry_energy"]                              # the tongue's tip, far below
+        assert tip < 0.2 * t["entry_energy"]
 
 
 def test_events_labels_and_tongues_survive_the_file(tmp_path):

@@ -19,7 +19,9 @@ import math
 
 import numpy as np
 import os
-from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_JUMP
+from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
+from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_JUMP,
+                           JUMP_ENERGY_POWER)
 _TRACE = os.environ.get("TRACE")
 
 __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
@@ -62,27 +64,6 @@ SHEET_RATIO = 1.005
 JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
 
 
-def solve_at_amplitude(prob, u, tol=1e-10, iterations=30):
-    """Solve the condensed HB equations at the fixed modal amplitude held in u (Newton on all the other
-    unknowns); the solution or None."""
-    nD = prob.nb * prob.ns
-    free = np.r_[0:nD, nD + 1]
-    u = u.copy()
-    for _ in range(iterations):
-        parts = prob.residual_parts(u)          # the residual first: no Jacobian at the converged point
-        if prob.error(u, parts[-1]) < tol:
-            return u
-        r, J = prob.jacobian_of(parts)
-        try:
-            du = np.linalg.solve(J[:, free], -r)
-        except np.linalg.LinAlgError:
-            return None
-        u[free] += du
-        if not np.all(np.isfinite(u)) or u[-1] <= 0:
-            return None
-    return None
-
-
 def _partner(prob, u):
     """(k, 1-based mode) of the strongest higher-harmonic (k >= 2) amplitude of another mode in the orbit u
     (velocity-weighted)."""
@@ -113,14 +94,6 @@ def _null_direction(J, along):
     """The unit tangent of the solution curve (null vector of the n x (n + 1) Jacobian J), oriented along ``along``."""
     t = np.linalg.svd(J)[2][-1]
     return t if t @ along >= 0 else -t
-
-
-def fundamental_shares(prob, u):
-    """The modes' shares of the orbit u's fundamental (h = 1), sum over cos and sin of A^2 normalised: at a
-    1:1 internal resonance another mode takes the followed one's."""
-    A = prob.amplitudes(u)[0][prob.basis.h == 1]
-    W = (A ** 2).sum(axis=0)
-    return W / max(W.sum(), 1e-300)
 
 
 def _past_fold(prob, pts, tol=1e-10):
@@ -185,25 +158,13 @@ def _past_fold(prob, pts, tol=1e-10):
     return None
 
 
-def family_share(prob, u):
-    """1 - the share of the other modes' higher harmonics (k >= 2) in the orbit u, velocity-weighted
-    (sum (h_j A_jk)^2 over those / over all): what a partner mode takes from the followed one.  A change of
-    shape at the fundamental, or the followed mode's own harmonics (an anharmonic orbit near a saddle), are
-    the family's own."""
-    A = prob.amplitudes(u)[0]
-    h = prob.basis.h
-    W = (h[:, None] * A) ** 2
-    partner = W[h >= 2].sum() - W[h >= 2, prob.r].sum()
-    return float(1.0 - partner / max(W.sum(), 1e-300))
-
-
 def _jump(prob, pts, slope):
     """Past a resonance the family does not pass smoothly: from the last point, the amplitudes a (1 + delta),
     delta in JUMPS, the orbit scaled and its frequency moved along the trend ``slope`` = d ln f / d ln a
     (or by JUMP_SHIFTS); accepted when Newton converges onto an orbit whose frequency keeps the trend (within
     3 times the move expected + JUMP_LIMIT) and whose fundamental share is at least SHARE_KEPT of the last
     point's.  (a, E, f, u) or None."""
-    a0, _, f0, u0 = pts[-1]
+    a0, E0, f0, u0 = pts[-1]
     nD = prob.nb * prob.ns
     share0 = family_share(prob, u0)
     for delta in JUMPS:
@@ -217,9 +178,10 @@ def _jump(prob, pts, slope):
             if v is None:
                 continue
             f = v[-1] * prob.w_r / (2 * math.pi)
+            E = prob.energy(v)
             if (abs(math.log(f / f0) - expected) <= 3 * abs(expected) + JUMP_LIMIT
-                    and family_share(prob, v) >= SHARE_KEPT * share0):
-                return a0 * (1 + delta), prob.energy(v), f, v
+                    and family_share(prob, v) >= SHARE_KEPT * share0 and E <= E0 * (1 + delta) ** JUMP_ENERGY_POWER):
+                return a0 * (1 + delta), E, f, v
     return None
 
 
@@ -336,7 +298,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         ratio = max(ratio, STEP_MIN)
         share = share_of(v)
         if dev is not None and abs(dev - dev_checked) > DEV_CHECK:
-            other = nearer_sheet(guide, a, v, share)
+            other = nearer_sheet(guide, a, v)
             if other is not None and switches < MAX_SWITCHES:    # the backbone's sheet beyond a tongue the
                 to_sheet(a, other)                                # stepping slid into
                 continue

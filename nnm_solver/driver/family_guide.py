@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+from .amplitude_orbit import solve_at_amplitude, family_share
+
 __all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_JUMP"]
 
 #: the stepping asks the guide again when its relative frequency distance from the one-harmonic family has moved by
@@ -33,6 +35,12 @@ DEV_JUMP = 5e-4
 
 #: a switch to the backbone's sheet is placed where that sheet begins to this ratio in amplitude (sheet_start)
 SHEET_RESOLUTION = 1.01
+
+#: an orbit of the backbone's sheet holds at most this much more energy than the tongue's sheet at the same amplitude
+ENERGY_SLACK = 0.01
+#: and a jump of 1 + delta in amplitude raises the energy at most (1 + delta) ** JUMP_ENERGY_POWER (a hardening cubic
+#: family: E ~ a^4; more is another mode's motion taking the energy)
+JUMP_ENERGY_POWER = 6
 
 #: the guide's own steps: at most this ratio of modal amplitudes (its family is smooth)
 GUIDE_STEP = 1.25
@@ -53,7 +61,6 @@ class OneHarmonicGuide:
         self._end = math.inf
 
     def _solve(self, a, guess):
-        from .amplitude_family import solve_at_amplitude
         guess = guess.copy()
         guess[self._nD] = a * self.prob.beta
         return solve_at_amplitude(self.prob, guess)
@@ -103,39 +110,35 @@ class OneHarmonicGuide:
         return None if g is None else float(u[-1] / g[-1] - 1.0)
 
 
-def nearer_sheet(guide, a, v, share_v):
-    """The skeleton's orbit at modal amplitude a solved from the guide's orbit there, when it is another orbit than
-    v (the stepping's, family_share share_v) that lies nearer the guide's frequency and holds less of its orbit in
-    partner harmonics: (u, share) of the backbone's sheet; else None."""
-    from .amplitude_family import solve_at_amplitude, family_share
+def nearer_sheet(guide, a, v):
+    """The skeleton's orbit at modal amplitude a solved from the guide's orbit there, when it is better_of v (the
+    stepping's orbit there): (u, family_share) of the backbone's sheet; else None."""
     prob = guide.skeleton_problem
     g = guide.at(a)
     if g is None:
         return None
     c = solve_at_amplitude(prob, prob.from_family(guide.prob, g), iterations=60)
-    if c is None or np.linalg.norm(c - v) <= 1e-6 * np.linalg.norm(v):
+    if c is None or not better_of(guide, a, c, v):
         return None
-    share_c = family_share(prob, c)
-    if abs(c[-1] / g[-1] - 1.0) < abs(v[-1] / g[-1] - 1.0) and share_c > share_v:
-        return c, share_c
-    return None
+    return c, family_share(prob, c)
 
 
 def better_of(guide, a, c, v):
-    """Is the skeleton's orbit c at modal amplitude a another orbit than v, nearer the guide's frequency and with
-    less of its orbit in partner harmonics?"""
-    from .amplitude_family import family_share
+    """Is the skeleton's orbit c at modal amplitude a another orbit than v, nearer the guide's frequency, with less
+    of its orbit in partner harmonics and no more energy (a tongue's sheet holds the partner's energy besides the
+    followed mode's; an orbit at the same amplitude with more is another mode's motion at the fundamental, which
+    family_share does not count)?"""
     g = guide.at(a)
     prob = guide.skeleton_problem
     return (g is not None and np.linalg.norm(c - v) > 1e-6 * np.linalg.norm(v)
             and abs(c[-1] / g[-1] - 1.0) < abs(v[-1] / g[-1] - 1.0)
-            and family_share(prob, c) > family_share(prob, v))
+            and family_share(prob, c) > family_share(prob, v)
+            and prob.energy(c) <= prob.energy(v) * (1 + ENERGY_SLACK))
 
 
 def _stepping_orbit(prob, pts, a):
     """The stepping's orbit at modal amplitude a between its points (solved from their interpolation in ln a), or
     None above its last point or where that does not converge."""
-    from .amplitude_family import solve_at_amplitude
     j = next((i for i, p in enumerate(pts) if p[0] >= a), None)
     if j is None or j == 0:
         return None
@@ -149,7 +152,6 @@ def sheet_start(prob, guide, pts, a, found):
     begins along the stepping's points pts: that sheet followed down in amplitude (steps of SHEET_RESOLUTION,
     secant predictor) while it is still better_of the stepping's sheet at the same amplitude (above the stepping's
     last point: while it converges).  (a, u, share) of its lowest such orbit."""
-    from .amplitude_family import solve_at_amplitude, family_share
     nD = prob.nb * prob.ns
     (v, share), last = found, None
     while a / SHEET_RESOLUTION > pts[0][0]:
@@ -172,10 +174,9 @@ def sheet_start(prob, guide, pts, a, found):
 def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
     """Past the stepping's last point (a0, E0, f0, u0) = pts[-1], where its family folds or jumps: the skeleton's
     orbits at a0 (1 + delta) solved from the guide's orbits there; the first that lies nearer the guide's frequency
-    than the last point (or within DEV_CHECK of it) and holds no more of its orbit in partner harmonics (family_share, share0 the last
-    point's): (a, (u, share)); else None."""
-    from .amplitude_family import solve_at_amplitude, family_share
-    a0, u0 = pts[-1][0], pts[-1][3]
+    than the last point (or within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share,
+    share0 the last point's) and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
+    a0, E0, _, u0 = pts[-1]
     dev0 = guide.deviation(a0, u0)
     if dev0 is None:
         return None
@@ -188,6 +189,7 @@ def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
         if c is None:
             continue
         share = family_share(prob, c)
-        if abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), DEV_CHECK) and share >= share0:
+        if (abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), DEV_CHECK) and share >= share0
+                and prob.energy(c) <= E0 * (1 + delta) ** JUMP_ENERGY_POWER):
             return a, (c, share)
     return None
