@@ -10,7 +10,9 @@ fundamental share (``family_share``); the family ends at the reach, at its energ
 energy with PEAK_SHARE kept, or a fold in amplitude where the family, followed past it by arclength with no
 partner growing, turns back in energy too: _past_fold; when that cannot tell, the slope test _folds_at_peak after
 the jumps fail),
-where a partner takes the orbit over (SHARE_MIN) or where no jump lands.
+where a partner takes the orbit over (SHARE_MIN) or where no jump lands.  With more than one harmonic the
+stepping is guided by the one-harmonic family (family_guide.py): it moves onto the backbone's sheet where it had
+slid onto a tongue's, halves the steps that jump away from the guide, and jumps from the guide's orbits first.
 ``amplitude_family`` returns the raw points and how the family ended; skeleton.Skeleton reads them.
 """
 from __future__ import annotations
@@ -18,11 +20,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import os
+
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
 from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_JUMP,
                            JUMP_ENERGY_POWER)
-_TRACE = os.environ.get("TRACE")
 
 __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
 
@@ -200,7 +201,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
     shares = {}                        # id of a point's orbit -> its family_share (pts keeps the orbits alive)
-    guide = OneHarmonicGuide(prob) if prob.basis.harmonics > 1 and os.environ.get("NOGUIDE") is None else None
+    guide = OneHarmonicGuide(prob) if prob.basis.harmonics > 1 else None
     dev_checked, ddev_prev, switches = 0.0, 0.0, 0
 
     def share_of(u):
@@ -221,7 +222,6 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         pts.append((a, E, v[-1] * prob.w_r / (2 * math.pi), v))
         ratio, falls, ddev_prev, dlnf_prev, switches = SHEET_RATIO, 0, 0.0, 0.0, switches + 1
         dev_checked = guide.deviation(a, v)
-        if _TRACE: print("sheet", a, pts[-2][1], E, pts[-1][2])
 
     def resonance(v, what):
         """The family met a resonance at the last point: jump it (True) or end the family (False)."""
