@@ -22,7 +22,8 @@ import math
 import numpy as np
 
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
-from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_JUMP,
+from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_CHECK_REL,
+                           DEV_JUMP,
                            JUMP_ENERGY_POWER)
 
 __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
@@ -297,7 +298,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         ratio = min(STEP_MAX, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
         ratio = max(ratio, STEP_MIN)
         share = share_of(v)
-        if dev is not None and abs(dev - dev_checked) > DEV_CHECK:
+        if dev is not None and abs(dev - dev_checked) > max(DEV_CHECK, DEV_CHECK_REL * abs(dev_checked)):
             other = nearer_sheet(guide, a, v)
             if other is not None and switches < MAX_SWITCHES:    # the backbone's sheet beyond a tongue the
                 to_sheet(a, other)                                # stepping slid into

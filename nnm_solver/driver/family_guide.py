@@ -23,11 +23,13 @@ import numpy as np
 
 from .amplitude_orbit import solve_at_amplitude, family_share
 
-__all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_JUMP"]
+__all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_CHECK_REL",
+           "DEV_JUMP"]
 
 #: the stepping asks the guide again when its relative frequency distance from the one-harmonic family has moved by
-#: this much since it last asked (a tongue's sheet moves away from it)
-DEV_CHECK = 2e-4
+#: DEV_CHECK, or by DEV_CHECK_REL of that distance where it is larger, since it last asked (a tongue's sheet moves
+#: away from it; NLvib's beam, example 09, moves 3e-2 away by its own harmonics)
+DEV_CHECK, DEV_CHECK_REL = 2e-4, 0.1
 
 #: a step moving the distance from the guide by more than JUMP_FACTOR x the previous step's + DEV_JUMP is halved (a
 #: jump onto another sheet, amplitude_family.py)
@@ -42,8 +44,12 @@ ENERGY_SLACK = 0.01
 #: family: E ~ a^4; more is another mode's motion taking the energy)
 JUMP_ENERGY_POWER = 6
 
-#: the guide's own steps: at most this ratio of modal amplitudes (its family is smooth)
-GUIDE_STEP = 1.25
+#: the guide's own steps: ratios of modal amplitudes between these, where the secant predictor's frequency is within
+#: GUIDE_PREDICTION of the solution (its family is smooth: large steps in the linear regime)
+GUIDE_STEP_MIN, GUIDE_STEP_MAX, GUIDE_PREDICTION = 1.01, 2.0, 1e-3
+#: ... and its orbits between them interpolated by a polynomial of this degree in ln a (frequency to 5e-5 on the
+#: 2-DOF benchmark's NNM 1 and NLvib's beam, where the one-harmonic frequency doubles)
+GUIDE_ORDER = 3
 
 
 class OneHarmonicGuide:
@@ -59,55 +65,94 @@ class OneHarmonicGuide:
         self._nD = self.prob.nb * self.prob.ns
         self._a, self._u = [], []
         self._end = math.inf
+        self._ratio = GUIDE_STEP_MIN
 
     def _solve(self, a, guess):
         guess = guess.copy()
         guess[self._nD] = a * self.prob.beta
         return solve_at_amplitude(self.prob, guess)
 
-    def at(self, a):
-        """The guide's orbit (u of its one-harmonic problem) at modal amplitude a, or None beyond its end."""
+    def _step(self, a1):
+        """(orbit, predictor's relative frequency error) of the guide at a1 above its last point, from the secant
+        predictor in ln a; (None, inf) where Newton fails."""
+        a0, u0 = self._a[-1], self._u[-1]
+        guess = u0 * (a1 / a0)
+        if len(self._a) > 1:
+            guess = u0 + (u0 - self._u[-2]) * (math.log(a1 / a0) / math.log(a0 / self._a[-2]))
+        u = self._solve(a1, guess)
+        return (None, math.inf) if u is None else (u, abs(u[-1] / guess[-1] - 1.0))
+
+    def _cover(self, a):
+        """Solve the guide up to modal amplitude a (or at a, below its first point); False beyond its end."""
         if not a < self._end:
-            return None
-        if not self._a:
-            u = self._solve(a, self.prob.start(a)[0])
+            return False
+        if not self._a or a < self._a[0]:        # the first point (or one below the first)
+            u = self._solve(a, self.prob.start(a)[0] if not self._a else self._u[0] * (a / self._a[0]))
             if u is None:
-                self._end = a
-                return None
-            self._a.append(a)
-            self._u.append(u)
-            return u
-        j = int(np.searchsorted(self._a, a))
-        if j < len(self._a) and self._a[j] == a:
-            return self._u[j]
-        if j < len(self._a):                     # between stored points (or below them): from the nearest below
-            i = max(j - 1, 0)
-            guess = self._u[i].copy()
-            guess[:self._nD] *= a / self._a[i]
-            u = self._solve(a, guess)
-            if u is not None:                    # kept (the stepping asks again for its last point)
-                self._a.insert(j, a)
-                self._u.insert(j, u)
-            return u
-        while self._a[-1] < a:                   # beyond: step the family up to a
-            a0, u0 = self._a[-1], self._u[-1]
-            a1 = min(a, a0 * GUIDE_STEP)
-            guess = u0.copy()
-            if len(self._a) > 1:                 # secant predictor in ln a
-                guess = u0 + (u0 - self._u[-2]) * (math.log(a1 / a0) / math.log(a0 / self._a[-2]))
-            u = self._solve(a1, guess)
-            if u is None:
-                self._end = a1
-                return None
+                self._end = a if not self._a else self._end
+                return False
+            self._a.insert(0, a)
+            self._u.insert(0, u)
+        while self._a[-1] < a:                   # step the family up past a
+            a1 = self._a[-1] * self._ratio
+            u, err = self._step(a1)
+            if u is None or (err > GUIDE_PREDICTION and len(self._a) > 1):
+                if self._ratio > GUIDE_STEP_MIN:     # too far for the interpolation (or for Newton): shorter
+                    self._ratio = max(GUIDE_STEP_MIN, 1 + (self._ratio - 1) / 2)
+                    continue
+                if u is None:                        # the family ends between: at a itself, if there
+                    u = self._step(a)[0] if a < a1 else None
+                    if u is None:
+                        self._end = min(a, a1)
+                        return False
+                    a1 = a
+            # the next step: the secant predictor's error grows as the square of the step
+            grow = math.sqrt(GUIDE_PREDICTION / max(err, 1e-300)) if len(self._a) > 1 else 2.0
+            self._ratio = min(GUIDE_STEP_MAX, max(GUIDE_STEP_MIN, 1 + (self._ratio - 1) * min(2.0, grow)))
             self._a.append(a1)
             self._u.append(u)
-        return self._u[-1]
+        return True
+
+    def at(self, a):
+        """The guide's orbit (u of its one-harmonic problem) at modal amplitude a, or None beyond its end: solved at
+        amplitudes GUIDE_STEP_MIN..GUIDE_STEP_MAX apart and interpolated between them (GUIDE_ORDER in ln a; the skeleton asks at every
+        step, for a frequency to compare and a first guess, which need no Newton solve of their own)."""
+        if not self._cover(a):
+            return None
+        j = int(np.searchsorted(self._a, a))
+        if self._a[j] == a:
+            return self._u[j]
+        x, w = self._weights(j, a)
+        u = sum(wk * self._u[k] for k, wk in zip(x, w))
+        u[self._nD] = a * self.prob.beta
+        return u
+
+    def _weights(self, j, a):
+        """The stored points around a (a between points j - 1 and j) and their Lagrange weights in ln a."""
+        n = min(len(self._a), GUIDE_ORDER + 1)  # the nearest n points around a
+        i = min(max(j - n // 2, 0), len(self._a) - n)
+        x = range(i, i + n)
+        t = [math.log(self._a[k]) for k in x]
+        s = math.log(a)
+        w = []
+        for m in range(n):
+            p = 1.0
+            for q in range(n):
+                if q != m:
+                    p *= (s - t[q]) / (t[m] - t[q])
+            w.append(p)
+        return x, w
 
     def deviation(self, a, u):
         """Relative frequency distance f / f_guide(a) - 1 of the skeleton's orbit u at modal amplitude a from the
-        guide's; None beyond the guide's end."""
-        g = self.at(a)
-        return None if g is None else float(u[-1] / g[-1] - 1.0)
+        guide's (its frequency interpolated alone); None beyond the guide's end."""
+        if not self._cover(a):
+            return None
+        j = int(np.searchsorted(self._a, a))
+        if self._a[j] == a:
+            return float(u[-1] / self._u[j][-1] - 1.0)
+        x, w = self._weights(j, a)
+        return float(u[-1] / sum(wk * self._u[k][-1] for k, wk in zip(x, w)) - 1.0)
 
 
 def nearer_sheet(guide, a, v):

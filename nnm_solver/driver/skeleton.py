@@ -51,6 +51,9 @@ REACH = 10.0
 #: points as a REACH one, stepped from the same start)
 FOLLOW_REACH = 2.0
 
+#: the skeleton starts where its frequency has moved from the linear mode's by about this much
+START_SHIFT = 1e-6
+
 #: the skeleton is at a k:1 band where k f is within this relative distance of the partner's frequency
 ENTRY_BAND = 0.01
 
@@ -240,6 +243,15 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS, E_star
         if u is not None and abs(u[-1] - 1.0) < 1e-8:
             break
         a0 /= 4
+    # then raise it to where the frequency has moved by about START_SHIFT (below, the stepping would only retrace
+    # the linear mode, a third of its points on NLvib's examples; the labels ask the skeleton only beyond a shift of
+    # 1e-3): the shift grows as a^2 (or faster) from the linear mode
+    shift = abs(u[-1] - 1.0) if u is not None else 0.0
+    if 0.0 < shift < START_SHIFT / 10:
+        a1 = a0 * min(math.sqrt(START_SHIFT / shift), 1e3)
+        v = solve_at_amplitude(prob, prob.start(a1)[0])
+        if v is not None and abs(v[-1] - 1.0) <= 2 * START_SHIFT:
+            a0 = a1
     return Skeleton(prob, *amplitude_family(prob, E_reach, a0), mode)
 
 
