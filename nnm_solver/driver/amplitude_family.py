@@ -30,7 +30,9 @@ __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamenta
 
 #: modal amplitude steps: largest and smallest ratio a_{i+1} / a_i, and the largest move of ln f in a step
 STEP_MAX, STEP_MIN = 1.05, 1.0005
-DLNF_MAX = 0.002
+DLNF_MAX = 0.005
+#: while the frequency is within LINEAR_SHIFT of the first point's (the linear regime), steps up to STEP_MAX_LINEAR
+STEP_MAX_LINEAR, LINEAR_SHIFT = 1.2, 1e-4
 
 #: energy falling over this many steps in a row with at least PEAK_SHARE kept (family_share): the family's energy
 #: maximum (with less, a resonance)
@@ -293,9 +295,11 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
         dlnf_prev, ddev_prev = dlnf, ddev
-        # the next step: grown by half, at most STEP_MAX, and moving the frequency by about DLNF_MAX at most
-        # (the interpolation in energy between points stays at 1e-5 where f(E) is steep, e.g. near a saddle)
-        ratio = min(STEP_MAX, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
+        # the next step: grown by half, at most STEP_MAX (STEP_MAX_LINEAR while the frequency is within LINEAR_SHIFT
+        # of the first point's), and moving the frequency by about DLNF_MAX at most (the skeleton's interpolation
+        # between points stays at ~1e-7, Skeleton.frequency_at)
+        cap = STEP_MAX_LINEAR if abs(v[-1] / pts[0][3][-1] - 1.0) < LINEAR_SHIFT else STEP_MAX
+        ratio = min(cap, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
         ratio = max(ratio, STEP_MIN)
         share = share_of(v)
         if dev is not None and abs(dev - dev_checked) > max(DEV_CHECK, DEV_CHECK_REL * abs(dev_checked)):

@@ -144,23 +144,47 @@ class Skeleton:
         return j, (math.log(E) - x[j]) / (x[j + 1] - x[j])
 
     def frequency_at(self, E):
-        """Skeleton frequency (Hz) at energy E (J), interpolated in log E (monotone cubic, PCHIP: 1e-7 between
-        points 5 % apart in amplitude) on the sheet it lies on (_pair); NaN outside its range."""
+        """Skeleton frequency (Hz) at energy E (J) on the sheet it lies on (_pair); NaN outside its range.  Each sheet
+        is a parametric cubic spline (ln E and f against the chord length in (ln a, ln E)), solved for ln E: smooth
+        in that parameter also where f(E) is steep (next to a saddle, where dE/da vanishes), and accurate to ~1e-7
+        between points 1 % apart in frequency (a monotone PCHIP in ln E, used before, needed 0.2 % for ~1e-5)."""
         if not self.covers(E):
             return float("nan")
         if self._interp is None:
-            from scipy.interpolate import PchipInterpolator
-            cuts = [0] + [int(i) for i in np.flatnonzero(self._starts)] + [len(self.energy)]
-            self._interp = {}
-            for lo, hi in zip(cuts[:-1], cuts[1:]):
-                if hi - lo >= 2:
-                    f = PchipInterpolator(np.log(self.energy[lo:hi]), self.frequency_hz[lo:hi], extrapolate=True)
-                    self._interp.update({i: f for i in range(lo, hi)})
+            self._interp = self._sheets()
         j, t = self._pair(E)
-        f = self._interp.get(j)
-        if f is None or j + 1 not in self._interp or self._interp[j + 1] is not f:
+        sheet = self._interp.get(j)
+        if sheet is None or self._interp.get(j + 1) is not sheet:
             return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
-        return float(f(math.log(E)))
+        lo, c, lnE, f = sheet
+        x = math.log(E)
+        if t < 0:                                   # just below a sheet's start: extrapolated along it
+            return float(f(c[0] + t * (c[1] - c[0])))
+        a, b = c[j - lo], c[j + 1 - lo]
+        g = lambda s: float(lnE(s)) - x             # noqa: E731
+        ga, gb = g(a), g(b)
+        if ga == 0.0:
+            return float(f(a))
+        if ga * gb > 0:                             # no sign change (a spline wiggle at round-off): linear
+            return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
+        from scipy.optimize import brentq
+        return float(f(brentq(g, a, b, xtol=1e-14 * max(1.0, abs(b)))))
+
+    def _sheets(self):
+        """{point index: (first index, chord parameters, spline of ln E, spline of f)} of each sheet (the points
+        between sheet starts) with at least two points."""
+        from scipy.interpolate import CubicSpline
+        cuts = [0] + [int(i) for i in np.flatnonzero(self._starts)] + [len(self.energy)]
+        out = {}
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            if hi - lo < 2:
+                continue
+            la, lE = np.log(self.amplitude[lo:hi]), np.log(self.energy[lo:hi])
+            c = np.r_[0.0, np.cumsum(np.hypot(np.diff(la), np.diff(lE)))]
+            kind = "not-a-knot" if hi - lo >= 4 else "natural"
+            sheet = (lo, c, CubicSpline(c, lE, bc_type=kind), CubicSpline(c, self.frequency_hz[lo:hi], bc_type=kind))
+            out.update({i: sheet for i in range(lo, hi)})
+        return out
 
     def share_at(self, E):
         """Fundamental share (tongue_skip.fundamental_share: the fraction of the modal orbit's harmonic
