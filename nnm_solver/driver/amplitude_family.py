@@ -1,8 +1,8 @@
 r"""The backbone family stepped in the followed mode's modal amplitude (the skeleton's points, skeleton.py).
 
 The family is the set of orbits whose fundamental component in the followed mode r is a cos(w t) (a in
-sqrt(kg) m, mass-normalised modal coordinates).  For a rising geometrically (STEP_MIN..STEP_MAX a step, the
-step halved where ln f moves more than the trend allows) the condensed harmonic-balance equations
+sqrt(kg) m, mass-normalised modal coordinates).  For a rising geometrically (STEP_MIN..STEP_MAX a step, up to
+STEP_MAX_LINEAR in the linear regime, the step halved where ln f moves more than the trend allows) the condensed harmonic-balance equations
 (orbits/condensed_hb.py) are solved at fixed a by Newton's method (``solve_at_amplitude``) from the secant predictor.
 Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (JUMPS, with frequency shifts
 JUMP_SHIFTS) are tried and kept when they land on the family's frequency trend with SHARE_KEPT of its
@@ -193,7 +193,8 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     """Step the condensed problem ``prob`` in its modal amplitude from a_start (sqrt(kg) m, linear regime)
     until the energy exceeds E_reach (J) or the family ends (module docstring).  Returns (a, E, f (Hz), u,
     end, message, gaps, partner) with the raw points (blips inside tongues included) as lists; gaps: the
-    (E_before J, E_after J, a_after) of the resonances jumped; partner: (k, 1-based mode) of the k:1
+    (E_before J, E_after J, a_after, kind) of the resonances jumped (kind "jump") and of the moves onto the
+    backbone's sheet (kind "sheet", family_guide.py); partner: (k, 1-based mode) of the k:1
     resonance that ended the family ((1, 0) when none did)."""
     u = solve_at_amplitude(prob, prob.start(a_start)[0])
     if u is None:
@@ -203,28 +204,29 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     end, message, gaps = "reach", "", []
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
-    shares = {}                        # id of a point's orbit -> its family_share (pts keeps the orbits alive)
+    shares = {}                        # id of a point's orbit -> (the orbit, its family_share): the orbit is kept
+                                       # with it (points are dropped at a sheet switch: a freed id is reused)
     guide = OneHarmonicGuide(prob) if prob.basis.harmonics > 1 else None
-    dev_checked, ddev_prev, switches = 0.0, 0.0, 0
+    dev_checked, ddev_prev, switches, fresh = 0.0, 0.0, 0, False
 
     def share_of(u):
-        if id(u) not in shares:
-            shares[id(u)] = family_share(prob, u)
-        return shares[id(u)]
+        if id(u) not in shares or shares[id(u)][0] is not u:
+            shares[id(u)] = (u, family_share(prob, u))
+        return shares[id(u)][1]
 
     def to_sheet(a, found):
         """Go on from the backbone's sheet found at amplitude a (found: (orbit, share)), from where it begins
         (family_guide.sheet_start): the stepping's points above that amplitude are left out."""
-        nonlocal ratio, falls, ddev_prev, dlnf_prev, dev_checked, switches
+        nonlocal ratio, falls, ddev_prev, dlnf_prev, dev_checked, switches, fresh
         a, v, share = sheet_start(prob, guide, pts, a, found)
         del pts[next((i for i, p in enumerate(pts) if p[0] >= a), len(pts)):]
         gaps[:] = [g for g in gaps if g[2] < a]
-        shares[id(v)] = share
+        shares[id(v)] = (v, share)
         E = prob.energy(v)
         gaps.append((pts[-1][1], E, a, "sheet"))
         pts.append((a, E, v[-1] * prob.w_r / (2 * math.pi), v))
         ratio, falls, ddev_prev, dlnf_prev, switches = SHEET_RATIO, 0, 0.0, 0.0, switches + 1
-        dev_checked = guide.deviation(a, v)
+        dev_checked, fresh = guide.deviation(a, v) or 0.0, True
 
     def resonance(v, what):
         """The family met a resonance at the last point: jump it (True) or end the family (False)."""
@@ -252,7 +254,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             return False
         base = [p for p in pts if math.log(a0 / p[0]) <= 0.3]     # the trend over the last 30 % in amplitude
         slope = math.log(f0 / base[0][2]) / math.log(a0 / base[0][0]) if base[0] is not pts[-1] else 0.0
-        jumped = _jump(prob, pts, slope) if len(gaps) < max_jumps else None
+        jumped = _jump(prob, pts, slope) if sum(g[3] == "jump" for g in gaps) < max_jumps else None
         if jumped is not None:
             gaps.append((E0, jumped[1], jumped[0], "jump"))
             pts.append(jumped)
@@ -274,7 +276,8 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         a0, _, f0, u0 = pts[-1]
         a = a0 * ratio
         guess = u0.copy()
-        if len(pts) > 1:               # secant predictor in ln a
+        if len(pts) > 1 and not fresh:  # secant predictor in ln a (not across a sheet switch: the point before
+                                        # is on the tongue's sheet)
             a1, u1 = pts[-2][0], pts[-2][3]
             guess = u0 + (u0 - u1) * (math.log(ratio) / math.log(a0 / a1))
         guess[nD] = a * prob.beta
@@ -288,13 +291,16 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             if ratio > STEP_MIN:
                 ratio = 1 + (ratio - 1) / 2
                 continue
-            what = "no solution at a larger amplitude" if v is None else f"its frequency jumps by {100 * dlnf:.2g} %"
+            jumps = abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR
+            what = ("no solution at a larger amplitude" if v is None else
+                    f"its frequency jumps by {100 * dlnf:.2g} %" if jumps else
+                    f"its frequency moves by {100 * ddev:.2g} % from the one-harmonic family's in one step")
             if resonance(v, what):
                 continue
             break
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
-        dlnf_prev, ddev_prev = dlnf, ddev
+        dlnf_prev, ddev_prev, fresh = dlnf, ddev, False
         # the next step: grown by half, at most STEP_MAX (STEP_MAX_LINEAR while the frequency is within LINEAR_SHIFT
         # of the first point's), and moving the frequency by about DLNF_MAX at most (the skeleton's interpolation
         # between points stays at ~1e-7, Skeleton.frequency_at)

@@ -12,8 +12,8 @@ one-harmonic frequency at 1e5 J with 0.6 % of the orbit in partner harmonics, th
 The guide steps the one-harmonic family to the amplitudes asked (``OneHarmonicGuide.at``) and
 ``nearer_sheet`` solves the skeleton's equations at the same modal amplitude from the one-harmonic orbit: where
 that lands on another orbit, nearer the one-harmonic frequency and with less of the orbit in partner harmonics
-(``family_share``), the stepping continues from there (the backbone beyond the tongue); the sheet's points above
-its energies are then left out by the skeleton (a tongue's points lie above the family's later ones).
+(``family_share``), the stepping continues from there (the backbone beyond the tongue), from where that sheet
+begins (``sheet_start``); the stepping's points above that amplitude are dropped.
 """
 from __future__ import annotations
 
@@ -76,7 +76,8 @@ class OneHarmonicGuide:
         """(orbit, predictor's relative frequency error) of the guide at a1 above its last point, from the secant
         predictor in ln a; (None, inf) where Newton fails."""
         a0, u0 = self._a[-1], self._u[-1]
-        guess = u0 * (a1 / a0)
+        guess = u0.copy()
+        guess[:self._nD] *= a1 / a0
         if len(self._a) > 1:
             guess = u0 + (u0 - self._u[-2]) * (math.log(a1 / a0) / math.log(a0 / self._a[-2]))
         u = self._solve(a1, guess)
@@ -87,7 +88,10 @@ class OneHarmonicGuide:
         if not a < self._end:
             return False
         if not self._a or a < self._a[0]:        # the first point (or one below the first)
-            u = self._solve(a, self.prob.start(a)[0] if not self._a else self._u[0] * (a / self._a[0]))
+            guess = self.prob.start(a)[0] if not self._a else self._u[0].copy()
+            if self._a:
+                guess[:self._nD] *= a / self._a[0]
+            u = self._solve(a, guess)
             if u is None:
                 self._end = a if not self._a else self._end
                 return False
@@ -115,8 +119,9 @@ class OneHarmonicGuide:
 
     def at(self, a):
         """The guide's orbit (u of its one-harmonic problem) at modal amplitude a, or None beyond its end: solved at
-        amplitudes GUIDE_STEP_MIN..GUIDE_STEP_MAX apart and interpolated between them (GUIDE_ORDER in ln a; the skeleton asks at every
-        step, for a frequency to compare and a first guess, which need no Newton solve of their own)."""
+        amplitudes GUIDE_STEP_MIN..GUIDE_STEP_MAX apart and interpolated between them (degree GUIDE_ORDER in ln a;
+        the skeleton asks at every step, for a frequency to compare and a first guess, which need no Newton solve of
+        their own)."""
         if not self._cover(a):
             return None
         j = int(np.searchsorted(self._a, a))
@@ -170,9 +175,9 @@ def nearer_sheet(guide, a, v):
 
 def better_of(guide, a, c, v):
     """Is the skeleton's orbit c at modal amplitude a another orbit than v, nearer the guide's frequency, with less
-    of its orbit in partner harmonics and no more energy (a tongue's sheet holds the partner's energy besides the
-    followed mode's; an orbit at the same amplitude with more is another mode's motion at the fundamental, which
-    family_share does not count)?"""
+    of its orbit in partner harmonics and no more energy, to ENERGY_SLACK (a tongue's sheet holds the partner's energy
+    besides the followed mode's; an orbit at the same amplitude with more is another mode's motion at the
+    fundamental, which family_share does not count)?"""
     g = guide.at(a)
     prob = guide.skeleton_problem
     return (g is not None and np.linalg.norm(c - v) > 1e-6 * np.linalg.norm(v)
@@ -189,7 +194,9 @@ def _stepping_orbit(prob, pts, a):
         return None
     (a0, _, _, u0), (a1, _, _, u1) = pts[j - 1], pts[j]
     t = math.log(a / a0) / math.log(a1 / a0)
-    return solve_at_amplitude(prob, (1 - t) * u0 + t * u1)
+    guess = (1 - t) * u0 + t * u1
+    guess[prob.nb * prob.ns] = a * prob.beta
+    return solve_at_amplitude(prob, guess)
 
 
 def sheet_start(prob, guide, pts, a, found):

@@ -17,8 +17,9 @@ lies above the family's later points and are left out.  Stepping in a ends where
   ``energy_peak``: no backbone at higher energy (``end = "peak"``);
 * the frequency jumps (a step of the smallest size still moves it much more than the trend) or Newton
   fails at the smallest step: the family met an internal resonance it does not pass smoothly; jumps of
-  1-20 % in amplitude are tried (``JUMPS``: accepted on the family's frequency trend with its fundamental
-  share kept, ``gaps`` records them), and where none lands the family ends there (``end = "locked"`` or
+  1-20 % in amplitude are tried (from the one-harmonic guide's orbits first, family_guide.py; then ``JUMPS``:
+  accepted on the family's frequency trend with its fundamental share kept; ``gaps`` records them, with the
+  moves onto the backbone's sheet where the stepping had slid onto a tongue's), and where none lands the family ends there (``end = "locked"`` or
   ``"stuck"``; ``message`` names the resonance and the partner); so too where other modes' higher
   harmonics take more than 1 - SHARE_MIN of the orbit (velocity-weighted: a partner takes the orbit over)
   or where the energy turns back while a partner grows.
@@ -75,9 +76,6 @@ class Skeleton:
         self.problem, self.mode = prob, int(mode)
         self.partner = (int(partner[0]), int(partner[1]))
         self.gaps = gaps
-        #: energies (J) where the stepping moved onto the backbone's sheet beyond a tongue it had slid into
-        #: (family_guide.py): below each, back to the tongue's entry, the skeleton's points are the tongue's sheet
-        self.sheet_starts = [g[1] for g in gaps if g[3] == "sheet"]
         self.end, self.message = end, message
         E = np.asarray(E, dtype=float)
         n = len(E)
@@ -96,8 +94,12 @@ class Skeleton:
         self.amplitude = np.asarray(a, dtype=float)[keep]
         self.orbits = [us[i] for i in keep]
         self.blips = n - len(keep)            # points left out below the end: inside narrow tongues
-        starts = {float(E0) for E0 in self.sheet_starts}
+        starts = {float(g[1]) for g in gaps if g[3] == "sheet"}
         self._starts = np.array([float(E0) in starts for E0 in self.energy])   # the first points of new sheets
+        #: energies (J) where the stepping moved onto the backbone's sheet beyond a tongue it had slid onto
+        #: (family_guide.py), among the points kept: below each, back to the tongue's entry, the skeleton's points
+        #: are the tongue's sheet
+        self.sheet_starts = [float(E0) for E0 in self.energy[self._starts]]
         self._interp = None
         self._shares = None
         self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
@@ -135,19 +137,22 @@ class Skeleton:
 
     def _pair(self, E):
         """(j, t): E (J) lies at t between points j and j + 1 in log E.  Just below a sheet start (between it and
-        the point before it), the pair is the start and the point after it (t < 0): the backbone's sheet extends a
-        little below where the stepping met it, and the point before is the tongue's sheet."""
+        the point before it, down by at most the sheet's first interval), the pair is the start and the point after it
+        (t < 0): the backbone's sheet extends a little below where the stepping met it (sheet_start stops where it
+        is no longer nearer the guide than the tongue's sheet), and the point before is the tongue's sheet."""
         x = np.log(self.energy)
         j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
-        if j + 2 < len(x) and self._starts[j + 1] and E < self.energy[j + 1]:
+        if (j + 2 < len(x) and self._starts[j + 1] and E < self.energy[j + 1]
+                and math.log(E) >= 2 * x[j + 1] - x[j + 2]):      # at most one of its first intervals below
             j += 1
         return j, (math.log(E) - x[j]) / (x[j + 1] - x[j])
 
     def frequency_at(self, E):
         """Skeleton frequency (Hz) at energy E (J) on the sheet it lies on (_pair); NaN outside its range.  Each sheet
         is a parametric cubic spline (ln E and f against the chord length in (ln a, ln E)), solved for ln E: smooth
-        in that parameter also where f(E) is steep (next to a saddle, where dE/da vanishes), and accurate to ~1e-7
-        between points 1 % apart in frequency (a monotone PCHIP in ln E, used before, needed 0.2 % for ~1e-5)."""
+        in that parameter also where f(E) is steep (next to a saddle, where dE/da vanishes).  Measured between points up
+        to 0.5 % apart in frequency (amplitude_family.DLNF_MAX): 3e-7 on the 2-DOF benchmark, 7e-9 on NLvib's example
+        04 (a monotone PCHIP in ln E, used before, gave 9e-7 and 3e-7 with points 0.2 % apart)."""
         if not self.covers(E):
             return float("nan")
         if self._interp is None:

@@ -237,7 +237,8 @@ class TongueSkipper:
         # then the family just above the entry (a tongue the skeleton does not place, or one re-entered)
         # (from where the skeleton's own stepping found the backbone's sheet beyond the tongue, when it did: below
         # that its points are the tongue's sheet)
-        starts = [E * (1 + 1e-9) for E in sk.sheet_starts if E_base < E <= E_base * (1 + JUMPS[-1])][:1]
+        starts = [E * (1 + 1e-9) for E in sk.sheet_starts if E_base < E <= E_base * (1 + JUMPS[-1])
+                  and sk.covers(E * (1 + 1e-9))][:1]
         near = starts + [E_base * (1 + d) for d in JUMPS if sk.covers(E_base * (1 + d))
                          and not any(abs(E_base * (1 + d) / E_t - 1) < 0.01 for E_t in band)
                          and not (starts and E_base * (1 + d) < starts[0])]
