@@ -19,8 +19,8 @@ lies above the family's later points and are left out.  Stepping in a ends where
   fails at the smallest step: the family met an internal resonance it does not pass smoothly; jumps of
   1-20 % in amplitude are tried (from the one-harmonic guide's orbits first, family_guide.py; then ``JUMPS``:
   accepted on the family's frequency trend with its fundamental share kept; ``gaps`` records them, with the
-  moves onto the backbone's sheet where the stepping had slid onto a tongue's), and where none lands the family ends there (``end = "locked"`` or
-  ``"stuck"``; ``message`` names the resonance and the partner); so too where other modes' higher
+  moves onto the backbone's sheet where the stepping had slid onto a tongue's), and where none lands the family
+  ends there (``end = "locked"`` or ``"stuck"``; ``message`` names the resonance and the partner); so too where other modes' higher
   harmonics take more than 1 - SHARE_MIN of the orbit (velocity-weighted: a partner takes the orbit over)
   or where the energy turns back while a partner grows.
 
