@@ -308,10 +308,11 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         ratio = min(cap, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
         ratio = max(ratio, STEP_MIN)
         share = share_of(v)
-        if dev is not None and abs(dev - dev_checked) > max(DEV_CHECK, DEV_CHECK_REL * abs(dev_checked)):
+        if (dev is not None and switches < MAX_SWITCHES
+                and abs(dev - dev_checked) > max(DEV_CHECK, DEV_CHECK_REL * abs(dev_checked))):
             other = nearer_sheet(guide, a, v)
-            if other is not None and switches < MAX_SWITCHES:    # the backbone's sheet beyond a tongue the
-                to_sheet(a, other)                                # stepping slid into
+            if other is not None:      # the backbone's sheet beyond a tongue the stepping slid onto
+                to_sheet(a, other)
                 continue
             dev_checked = dev
         # the energy falling while no partner grows (the points inside a narrow tongue are not the family's: their
