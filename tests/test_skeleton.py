@@ -291,3 +291,44 @@ def test_two_dof_skeleton_past_its_tongues_is_the_same_backbone_whatever_its_rea
         assert family_share(sk.problem, sk.orbits[i]) > 0.995, E      # no partner harmonic takes a share
     assert abs(sk.frequency_at(147310.0) / 0.223604 - 1) < 1e-4
     assert abs(sk.frequency_at(1e6) / 0.224278 - 1) < 1e-4
+
+
+def _chain3(spring):
+    K = 2 * np.eye(3) - np.eye(3, k=1) - np.eye(3, k=-1)
+    return nnm.Model(np.eye(3), K, springs=[spring])
+
+
+def test_three_dof_chain_skeleton_past_a_three_to_one_tongue_is_where_the_branch_returns():
+    """A 3-DOF chain with a cubic spring between masses 1 and 2, NNM 2 (0.2251 Hz linear, hardening): its follow
+    branch (HB, 15 harmonics: another truncation than the skeleton's 9) goes through a 3:1 tongue (entered at
+    ~1 kJ, up to 1.4 kJ and down to 460 J) and comes back onto the backbone at ~725 J.  The skeleton moves onto the
+    backbone's sheet there (0.2432 Hz at 1 kJ) and the branch's points after the tongue lie on it to 1e-4, labelled
+    backbone; the skeleton before its one-harmonic guide stayed on the tongue's sheet (0.2439 Hz at 1 kJ, 2.8e-3
+    off the branch that had come back)."""
+    model = _chain3(nnm.CubicSpring(dof=0, other=1, k3=2.0))
+    b = nnm.continue_nnm(model, 2, 1e4, method="hb", harmonics=15, floquet=False)
+    assert b.status == "done", b.message
+    E, f = np.asarray(b.energy), np.asarray(b.frequency_hz)
+    inside = np.flatnonzero(b.labels == "tongue 3:1")
+    assert len(inside) and E[inside].max() < 2e3
+    above = np.arange(inside.max() + 1, len(E))                 # after the traversal: back on the backbone
+    sk = skeleton(model, 2, 1e4, _skeleton_system)
+    assert len(above) >= 5 and set(b.labels[above]) == {"backbone"} and E[above].min() < 1e3
+    assert max(abs(f[i] / sk.frequency_at(E[i]) - 1) for i in above) < 1e-4
+
+
+def test_soft_three_dof_chain_skeleton_keeps_its_family_where_the_one_harmonic_guide_fails():
+    """A softening 3-DOF chain (cubic spring -0.5 at mass 1), NNM 1: past ~0.85 J the one-harmonic family lies more
+    than 2 % from the skeleton (18 % near its own fold at 1.3 J) and says nothing about sheets there (GUIDE_TRUST).
+    The skeleton goes on along its family, continuous in frequency (steps < 3 %), into the 3:1 internal resonance
+    with mode 3 that takes it over (locked above 1.5 J; the follow branch's points up to 1.3 J lie on it).  Trusting
+    the guide there, it had moved onto orbits at 0.045 Hz (half the family's frequency) at 1.05 J."""
+    from nnm_solver.driver.skeleton import compute_skeleton
+    from nnm_solver.model.modal import modal_system
+    model = _chain3(nnm.CubicSpring(dof=0, k3=-0.5))
+    sk = compute_skeleton(modal_system(model), 1, 5.0)
+    assert sk.end == "locked" and sk.partner == (3, 3) and sk.energy[-1] > 1.5, sk.message
+    assert np.max(np.abs(np.diff(np.log(sk.frequency_hz)))) < 0.03
+    b = nnm.continue_nnm(model, 1, 1.3, floquet=False, integrator="gauss6", steps_per_period=100)
+    on = np.asarray(b.energy) > 0.5
+    assert max(abs(f / sk.frequency_at(E) - 1) for E, f in zip(b.energy[on], b.frequency_hz[on])) < 1e-3

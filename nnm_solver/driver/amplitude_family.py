@@ -24,7 +24,7 @@ import numpy as np
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
 from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_CHECK_REL,
                            DEV_JUMP,
-                           JUMP_ENERGY_POWER)
+                           JUMP_ENERGY_POWER, GUIDE_TRUST)
 
 __all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
 
@@ -284,8 +284,9 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         v = solve_at_amplitude(prob, guess)
         dlnf = math.log(v[-1] * prob.w_r / (2 * math.pi) / f0) if v is not None else math.inf
         dev = guide.deviation(a, v) if guide is not None and v is not None else None
+        dev = dev if dev is not None and abs(dev) <= GUIDE_TRUST else None          # the guide trusted there only
         dev_last = guide.deviation(a0, u0) if dev is not None else None
-        ddev = dev - dev_last if dev is not None and dev_last is not None else 0.0
+        ddev = dev - dev_last if dev_last is not None and abs(dev_last) <= GUIDE_TRUST else 0.0
         if (v is None or abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR
                 or abs(ddev) > JUMP_FACTOR * abs(ddev_prev) + DEV_JUMP):
             if ratio > STEP_MIN:

@@ -44,6 +44,12 @@ ENERGY_SLACK = 0.01
 #: family: E ~ a^4; more is another mode's motion taking the energy)
 JUMP_ENERGY_POWER = 6
 
+#: the guide arbitrates between sheets only where it lies within this relative frequency of the skeleton (its
+#: one-harmonic truncation still a fair model of the backbone; the soft 3-DOF chain's mode 1 moves 18 % away near the
+#: one-harmonic family's own fold); and the sheets it chooses between lie within SHEET_FREQUENCY of each other in
+#: ln f (measured: the 2-DOF benchmark's tongue sheets 0.3-0.8 % from its backbone)
+GUIDE_TRUST, SHEET_FREQUENCY = 0.02, 0.03
+
 #: the guide's own steps: ratios of modal amplitudes between these, where the secant predictor's frequency is within
 #: GUIDE_PREDICTION of the solution (its family is smooth: large steps in the linear regime)
 GUIDE_STEP_MIN, GUIDE_STEP_MAX, GUIDE_PREDICTION = 1.01, 2.0, 1e-3
@@ -174,14 +180,16 @@ def nearer_sheet(guide, a, v):
 
 
 def better_of(guide, a, c, v):
-    """Is the skeleton's orbit c at modal amplitude a another orbit than v, nearer the guide's frequency, with less
-    of its orbit in partner harmonics and no more energy, to ENERGY_SLACK (a tongue's sheet holds the partner's energy
-    besides the followed mode's; an orbit at the same amplitude with more is another mode's motion at the
-    fundamental, which family_share does not count)?"""
+    """Is the skeleton's orbit c at modal amplitude a another orbit than v, within SHEET_FREQUENCY of its frequency,
+    nearer the guide's (where the guide is trusted, GUIDE_TRUST), with less of its orbit in partner harmonics and no
+    more energy, to ENERGY_SLACK (a tongue's sheet holds the partner's energy besides the followed mode's; an orbit
+    at the same amplitude with more is another mode's motion at the fundamental, which family_share does not
+    count)?"""
     g = guide.at(a)
     prob = guide.skeleton_problem
     return (g is not None and np.linalg.norm(c - v) > 1e-6 * np.linalg.norm(v)
-            and abs(c[-1] / g[-1] - 1.0) < abs(v[-1] / g[-1] - 1.0)
+            and abs(math.log(c[-1] / v[-1])) <= SHEET_FREQUENCY
+            and abs(c[-1] / g[-1] - 1.0) < min(abs(v[-1] / g[-1] - 1.0), GUIDE_TRUST)
             and family_share(prob, c) > family_share(prob, v)
             and prob.energy(c) <= prob.energy(v) * (1 + ENERGY_SLACK))
 
@@ -213,7 +221,7 @@ def sheet_start(prob, guide, pts, a, found):
             guess = v + (v - last) * (math.log(a_t / a) / math.log(a / (last[nD] / prob.beta)))
         guess[nD] = a_t * prob.beta
         c = solve_at_amplitude(prob, guess)
-        if c is None:
+        if c is None or abs(math.log(c[-1] / v[-1])) > SHEET_FREQUENCY / 3:    # no solution, or another family
             break
         if a_t <= pts[-1][0]:
             w = _stepping_orbit(prob, pts, a_t)
@@ -225,12 +233,13 @@ def sheet_start(prob, guide, pts, a, found):
 
 def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
     """Past the stepping's last point (a0, E0, f0, u0) = pts[-1], where its family folds or jumps: the skeleton's
-    orbits at a0 (1 + delta) solved from the guide's orbits there; the first that lies nearer the guide's frequency
-    than the last point (or within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share,
-    share0 the last point's) and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
+    orbits at a0 (1 + delta) solved from the guide's orbits there (where the guide is trusted, GUIDE_TRUST); the
+    first that lies within SHEET_FREQUENCY of the last point's frequency, nearer the guide's than the last point (or
+    within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share, share0 the last point's)
+    and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
     a0, E0, _, u0 = pts[-1]
     dev0 = guide.deviation(a0, u0)
-    if dev0 is None:
+    if dev0 is None or not abs(dev0) <= GUIDE_TRUST:
         return None
     for delta in jumps:
         a = a0 * (1 + delta)
@@ -242,6 +251,7 @@ def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
             continue
         share = family_share(prob, c)
         if (abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), DEV_CHECK) and share >= share0
+                and abs(math.log(c[-1] / u0[-1])) <= SHEET_FREQUENCY
                 and prob.energy(c) <= E0 * (1 + delta) ** JUMP_ENERGY_POWER):
             return a, (c, share)
     return None
