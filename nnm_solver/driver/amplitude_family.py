@@ -266,7 +266,9 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
                        f"with no partner mode in the orbit and its energy still growing with the amplitude there, so "
                        f"the energy turns back with it: the family's energy maximum")
             return False
-        k, p = partner = _partner(prob, u0 if v is None else v)
+        # the partner: the strongest in the orbit the stepping found (it jumped there, or a partner took it over),
+        # but in the last orbit where no solution was found or the step only left the one-harmonic family's trend
+        k, p = partner = _partner(prob, u0 if v is None or "one-harmonic" in what else v)
         end = "stuck" if v is None else "locked"
         message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: {what} (a {k}:1 internal resonance with "
                    f"mode {p}) and no jump of up to {100 * JUMPS[-1]:g} % in amplitude passes it")
