@@ -233,7 +233,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         nonlocal end, message, ratio, falls, partner, ddev_prev
         a0, E0, f0, u0 = pts[-1]
         if guide is not None and switches < MAX_SWITCHES:
-            landed = guided_jump(prob, guide, pts, share_of(u0))
+            landed = guided_jump(prob, guide, pts, share_of(u0), JUMPS)
             if landed is not None:             # the backbone's sheet beyond: where it begins, from there on
                 to_sheet(*landed)
                 return True

@@ -24,7 +24,7 @@ import numpy as np
 from .amplitude_orbit import solve_at_amplitude, family_share
 
 __all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_CHECK_REL",
-           "DEV_JUMP"]
+           "DEV_JUMP", "GUIDE_TRUST", "JUMP_ENERGY_POWER"]
 
 #: the stepping asks the guide again when its relative frequency distance from the one-harmonic family has moved by
 #: DEV_CHECK, or by DEV_CHECK_REL of that distance where it is larger, since it last asked (a tongue's sheet moves
@@ -231,12 +231,12 @@ def sheet_start(prob, guide, pts, a, found):
     return a, v, share
 
 
-def guided_jump(prob, guide, pts, share0, jumps=(0.01, 0.02, 0.05, 0.1, 0.2)):
+def guided_jump(prob, guide, pts, share0, jumps):
     """Past the stepping's last point (a0, E0, f0, u0) = pts[-1], where its family folds or jumps: the skeleton's
-    orbits at a0 (1 + delta) solved from the guide's orbits there (where the guide is trusted, GUIDE_TRUST); the
-    first that lies within SHEET_FREQUENCY of the last point's frequency, nearer the guide's than the last point (or
-    within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share, share0 the last point's)
-    and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
+    orbits at a0 (1 + delta), delta in ``jumps``, solved from the guide's orbits there (where the guide is trusted,
+    GUIDE_TRUST); the first that lies within SHEET_FREQUENCY of the last point's frequency, nearer the guide's than
+    the last point (or within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share, share0
+    the last point's) and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
     a0, E0, _, u0 = pts[-1]
     dev0 = guide.deviation(a0, u0)
     if dev0 is None or not abs(dev0) <= GUIDE_TRUST:
