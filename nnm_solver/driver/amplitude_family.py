@@ -3,7 +3,8 @@ r"""The backbone family stepped in the followed mode's modal amplitude (the skel
 The family is the set of orbits whose fundamental component in the followed mode r is a cos(w t) (a in
 sqrt(kg) m, mass-normalised modal coordinates).  For a rising geometrically (STEP_MIN..STEP_MAX a step, up to
 STEP_MAX_LINEAR in the linear regime, the step halved where ln f moves more than the trend allows) the condensed
-harmonic-balance equations (orbits/condensed_hb.py) are solved at fixed a by Newton's method (``solve_at_amplitude``) from the secant predictor.
+harmonic-balance equations (orbits/condensed_hb.py) are solved at fixed a by Newton's method
+(``solve_at_amplitude``) from the secant predictor.
 Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (JUMPS, with frequency shifts
 JUMP_SHIFTS) are tried and kept when they land on the family's frequency trend with SHARE_KEPT of its
 fundamental share (``family_share``); the family ends at the reach, at its energy maximum (PEAK_RUN steps of falling

@@ -20,9 +20,9 @@ lies above the family's later points and are left out.  Stepping in a ends where
   1-20 % in amplitude are tried (from the one-harmonic guide's orbits first, family_guide.py; then ``JUMPS``:
   accepted on the family's frequency trend with its fundamental share kept; ``gaps`` records them, with the
   moves onto the backbone's sheet where the stepping had slid onto a tongue's), and where none lands the family
-  ends there (``end = "locked"`` or ``"stuck"``; ``message`` names the resonance and the partner); so too where other modes' higher
-  harmonics take more than 1 - SHARE_MIN of the orbit (velocity-weighted: a partner takes the orbit over)
-  or where the energy turns back while a partner grows.
+  ends there (``end = "locked"`` or ``"stuck"``; ``message`` names the resonance and the partner); so too
+  where other modes' higher harmonics take more than 1 - SHARE_MIN of the orbit (velocity-weighted: a partner
+  takes the orbit over) or where the energy turns back while a partner grows.
 
 Where the full branch (any method, any number of harmonics) enters a k:1 tongue with a partner mode of
 frequency f_p, the resonance band is where k f(E) crosses f_p; the skeleton says at which energies the
