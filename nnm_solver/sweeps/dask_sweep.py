@@ -62,6 +62,10 @@ EVENT_INTERVAL = 0.25
 #: seconds to wait for a scheduler given by address
 CONNECT_TIMEOUT = 10.0
 
+#: a branch the cluster lost while its worker lived on (its scattered model lost with another worker) is submitted
+#: again at most this many times
+LOST_RETRIES = 2
+
 def _compute(model, variant, mode, energy_max, options, topic):
     """One branch on a worker: continue_nnm, streamed progress, the columns sent back (not the model)."""
     t0, c0 = time.perf_counter(), time.thread_time()
@@ -235,6 +239,20 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
     topic = f"nnm-sweep-{uuid.uuid4().hex[:12]}"
     futures = {}
     pending_names = set()
+    scattered = {}
+    resubmitted = [0] * len(tasks)
+    token = uuid.uuid4().hex[:8]
+
+    def submit(i):
+        """Submit task i, its variant's model scattered to every worker (again where the cluster lost it)."""
+        vi, mode, name = tasks[i]
+        if vi not in scattered or scattered[vi].status != "finished":
+            scattered[vi] = client.scatter(_worker_model(models[vi]), broadcast=True, hash=False)
+        fut = client.submit(_compute, scattered[vi], variants[vi].name, mode, energy_max, options, topic,
+                            key=f"nnm-{name}-{token}-{resubmitted[i]}", pure=False)
+        futures[fut] = i
+        pending_names.add(name)
+        return fut
 
     def on_event(event):  # in the client's event-loop thread
         msg = event[1]
@@ -246,6 +264,16 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
     def finish(fut):
         i = futures.pop(fut)
         vi, mode, name = tasks[i]
+        exc = fut.exception() if fut.status == "error" else None
+        killed = exc is not None and type(exc).__name__ == "KilledWorker"
+        if (fut.status in ("cancelled", "lost") and resubmitted[i] < LOST_RETRIES
+                and not (stop is not None and stop.is_set())):
+            # the cluster cancelled the branch without an error of its own: the model scattered to the workers was
+            # lost (a worker that held its only copy died: the scheduler's memory manager keeps one replica of a
+            # broadcast once the tasks have read it), so the branch is submitted again with the model scattered anew
+            resubmitted[i] += 1
+            ac.add(submit(i))
+            return
         pending_names.discard(name)
         state.running.pop(name, None)
         info = {"variant": variants[vi].name, "source": "computed"}
@@ -255,8 +283,7 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
             info.update(worker=payload.get("worker", ""), pid=payload.get("pid"), seconds=payload.get("seconds"),
                         cpu_seconds=payload.get("cpu_seconds"))
         else:
-            exc = fut.exception() if fut.status == "error" else None
-            if exc is not None and type(exc).__name__ == "KilledWorker":
+            if killed:
                 msg = (f"the worker computing this branch died (killed, out of memory or crashed) and so did its "
                        f"retries ({exc}); nothing was saved for it: run the sweep again with the same out file to "
                        f"retry it")
@@ -275,16 +302,8 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
 
     try:
         client.subscribe_topic(topic, on_event)
-        scattered = {}
-        token = uuid.uuid4().hex[:8]
         for i in todo:
-            vi, mode, name = tasks[i]
-            if vi not in scattered:
-                scattered[vi] = client.scatter(_worker_model(models[vi]), broadcast=True, hash=False)
-            fut = client.submit(_compute, scattered[vi], variants[vi].name, mode, energy_max, options, topic,
-                                key=f"nnm-{name}-{token}", pure=False)
-            futures[fut] = i
-            pending_names.add(name)
+            submit(i)
         ac = dd.as_completed(list(futures), raise_errors=False)
         last = 0.0
         while not ac.is_empty():
