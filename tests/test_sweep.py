@@ -265,27 +265,25 @@ def test_cli_sweep(tmp_path):
 
 def test_branch_is_recomputed_when_the_cluster_loses_its_scattered_model(client):
     """The model goes to every worker (scattered, broadcast), but the scheduler's memory manager keeps one replica of
-    it (it runs every 2 s; forced here at the start), and a worker dying with that replica takes the model with it:
-    its branches were then cancelled on their retry (lost dependencies) and reported lost (a sweep in a full test
-    session lost both branches that way, 2026-12-06).  The sweep now submits such a branch again with the model
-    scattered anew: both come back computed, the serial branches point for point."""
+    it where a task needs it (it runs every 2 s; forced here at every progress call), and a worker dying with that
+    replica takes the model with it: its branch was then cancelled on its retry (lost dependencies) and reported
+    lost (a sweep in a full test session lost both its branches that way, 2026-12-06).  The sweep now submits such
+    a branch again with the model scattered anew: it comes back computed, the serial branch point for point."""
     m = two_dof_model()
-    reduced, killed = [], []
+    killed = []
 
     def progress(state):
-        if not reduced:
-            client.amm.run_once()
-            reduced.append(True)
-        if killed or not any(p >= 1 for p in state.running.values()):
+        if killed:
             return
+        client.amm.run_once()
         holders = [list(w) for key, w in client.who_has().items() if str(key).startswith("Model-")]
-        if len(holders) == 1 and len(holders[0]) == 1:        # the one worker holding the model: it computes
-            pid = client.run(os.getpid, workers=holders[0])[holders[0][0]]
+        if state.running.get("base:mode1", 0) >= 1 and len(holders) == 1 and len(holders[0]) == 1:
+            pid = client.run(os.getpid, workers=holders[0])[holders[0][0]]        # the worker computing it
             os.kill(pid, signal.SIGKILL)
             killed.append(pid)
 
-    got = nnm.sweep(m, [1, 2], client=client, progress=progress, **LONG)
-    assert killed, "the model's replicas were not reduced to one"
-    for mode, b in zip((1, 2), got):
-        assert b.sweep_info["source"] == "computed", b.message
-        assert_same(nnm.continue_nnm(m, mode, **LONG), b)
+    got = nnm.sweep(m, [1], client=client, progress=progress, **LONG)
+    assert killed, "the model's replicas were not reduced to one while the branch ran"
+    assert got[0].sweep_info["source"] == "computed", got[0].message
+    assert got[0].sweep_info["pid"] != killed[0]
+    assert_same(nnm.continue_nnm(m, 1, **LONG), got[0])
