@@ -264,11 +264,12 @@ def test_cli_sweep(tmp_path):
 
 
 def test_branch_is_recomputed_when_the_cluster_loses_its_scattered_model(client):
-    """The model goes to every worker (scattered, broadcast), but the scheduler's memory manager keeps one replica of
-    it where a task needs it (it runs every 2 s; forced here at every progress call), and a worker dying with that
-    replica takes the model with it: its branch was then cancelled on its retry (lost dependencies) and reported
-    lost (a sweep in a full test session lost both its branches that way, 2026-12-06).  The sweep now submits such
-    a branch again with the model scattered anew: it comes back computed, the serial branch point for point."""
+    """The model goes to every worker (scattered, broadcast), but the scheduler's memory manager drops the copies on
+    workers that no running branch needs, keeping one (it runs every 2 s; forced here at every progress call: with
+    one branch, the copy kept is its worker's), and a worker dying with that copy takes the model with it: its
+    branch was then cancelled on its retry (lost dependencies) and reported lost (a sweep in a full test session lost
+    both its branches that way, 2026-12-06).  The sweep now submits such a branch again with the model scattered
+    anew: it comes back computed, the serial branch point for point."""
     m = two_dof_model()
     killed = []
 

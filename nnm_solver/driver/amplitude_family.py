@@ -229,8 +229,9 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         ratio, falls, ddev_prev, dlnf_prev, switches = SHEET_RATIO, 0, 0.0, 0.0, switches + 1
         dev_checked, fresh = guide.deviation(a, v) or 0.0, True
 
-    def resonance(v, what):
-        """The family met a resonance at the last point: jump it (True) or end the family (False)."""
+    def resonance(v, what, off_trend=False):
+        """The family met a resonance at the last point: jump it (True) or end the family (False).  off_trend: the
+        step found v but only left the one-harmonic family's trend (the partner is then read from the last point)."""
         nonlocal end, message, ratio, falls, partner, ddev_prev
         a0, E0, f0, u0 = pts[-1]
         if guide is not None and switches < MAX_SWITCHES:
@@ -269,7 +270,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             return False
         # the partner: the strongest in the orbit the stepping found (it jumped there, or a partner took it over),
         # but in the last orbit where no solution was found or the step only left the one-harmonic family's trend
-        k, p = partner = _partner(prob, u0 if v is None or "one-harmonic" in what else v)
+        k, p = partner = _partner(prob, u0 if v is None or off_trend else v)
         end = "stuck" if v is None else "locked"
         message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: {what} (a {k}:1 internal resonance with "
                    f"mode {p}) and no jump of up to {100 * JUMPS[-1]:g} % in amplitude passes it")
@@ -299,7 +300,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             what = ("no solution at a larger amplitude" if v is None else
                     f"its frequency jumps by {100 * dlnf:.2g} %" if jumps else
                     f"its frequency moves by {100 * ddev:.2g} % from the one-harmonic family's in one step")
-            if resonance(v, what):
+            if resonance(v, what, off_trend=v is not None and not jumps):
                 continue
             break
         E = prob.energy(v)

@@ -62,8 +62,8 @@ EVENT_INTERVAL = 0.25
 #: seconds to wait for a scheduler given by address
 CONNECT_TIMEOUT = 10.0
 
-#: a branch the cluster lost while its worker lived on (its scattered model lost with another worker) is submitted
-#: again at most this many times
+#: a branch the cluster cancelled because its scattered model was lost (the worker holding its last copy died) is
+#: submitted again, with the model scattered anew, at most this many times
 LOST_RETRIES = 2
 
 def _compute(model, variant, mode, energy_max, options, topic):
@@ -266,14 +266,20 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
         vi, mode, name = tasks[i]
         exc = fut.exception() if fut.status == "error" else None
         killed = exc is not None and type(exc).__name__ == "KilledWorker"
-        if (fut.status in ("cancelled", "lost") and resubmitted[i] < LOST_RETRIES
-                and not (stop is not None and stop.is_set())):
-            # the cluster cancelled the branch without an error of its own: the model scattered to the workers was
-            # lost (a worker that held its only copy died: the scheduler's memory manager keeps one replica of a
-            # broadcast once the tasks have read it), so the branch is submitted again with the model scattered anew
-            resubmitted[i] += 1
-            ac.add(submit(i))
+        if fut.status in ("cancelled", "lost") and stop is not None and stop.is_set():
+            futures[fut] = i                  # stopped: reported cancelled with the rest (below, finally)
             return
+        if fut.status in ("cancelled", "lost") and resubmitted[i] < LOST_RETRIES:
+            # the cluster cancelled the branch without an error of its own: the model scattered to the workers was
+            # lost (Dask's memory manager drops the copies on workers that no running task needs, keeping one, and
+            # the worker holding that one died), so the branch is submitted again with the model scattered anew
+            resubmitted[i] += 1
+            state.running.pop(name, None)
+            try:
+                ac.add(submit(i))
+                return
+            except Exception:                 # no worker to scatter to within the client's timeout: lost
+                pass
         pending_names.discard(name)
         state.running.pop(name, None)
         info = {"variant": variants[vi].name, "source": "computed"}
