@@ -40,9 +40,13 @@ def accuracy_line(branch):
     s = branch.settings
     err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
     ok = np.isfinite(err)
-    if s.method != "shooting" or not ok.any():
+    if not ok.any():
         return "  accuracy: no per-point error estimate"
     i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
+    if s.method != "shooting":                 # harmonic balance: the truncation of the harmonics (hb_error.py)
+        more = " (raise --harmonics)" if err[i] > 1e-4 else ""
+        return (f"  accuracy: harmonic balance, {s.harmonics} harmonics; estimated frequency error (truncation) "
+                f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
     steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
     more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
     return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "

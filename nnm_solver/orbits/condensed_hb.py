@@ -41,6 +41,7 @@ import numpy as np
 from ..stability.floquet import without_nearest_to_one
 from .harmonic_balance import HBProblem
 from .hb_basis import harmonics_in
+from .hb_error import HBTruncationError
 from .hill import hill_multipliers
 
 __all__ = ["LinearPart", "CondensedHBProblem"]
@@ -86,7 +87,7 @@ class LinearPart:
         return (self.Bq[None] * (W * W)[:, None, :]) @ self.Bq.T + self.R1[None]
 
 
-class CondensedHBProblem:
+class CondensedHBProblem(HBTruncationError):
     """Condensed harmonic-balance equations of one NNM branch (module docstring), for the
     pseudo-arclength engine; the same protocol and the same orbits as ``HBProblem``.
 
@@ -102,6 +103,7 @@ class CondensedHBProblem:
         self.basis = basis
         self.nb = len(basis)
         self.ns = self.lin.Bq.shape[0]
+        self._width = self.ns                          # columns of the coefficient block (hb_error.py)
         self.n = system.n
         self.w_r = float(np.sqrt(self.lin.omega2[self.r]))
         self.b_r = self.lin.Bq[:, self.r].copy()
@@ -122,7 +124,11 @@ class CondensedHBProblem:
         """(D (N_b, n_s) m, a sqrt(kg) m, omega rad/s)."""
         return u[:-2].reshape(self.nb, self.ns), u[-2] / self.beta, u[-1] * self.w_r
 
-    energy_gradient = HBProblem.energy_gradient          # dE/du by central differences (it needs only energy)
+    energy_gradient = HBProblem.energy_gradient_fd       # dE/du by central differences (it needs only energy)
+
+    def with_basis(self, basis):
+        """The same branch's condensed equations with another HBBasis (the same LinearPart and step limits)."""
+        return CondensedHBProblem(self.sys, self.r, basis, self.lin, self.max_rel_step, self.max_rel_period_step)
 
     def from_state(self, q0, v0, T):
         """u of a first guess from a modal state at rest (q0, v0 = 0) and a period T (s): its fundamental."""

@@ -42,11 +42,13 @@ import numpy as np
 from ..integrators.registry import record_orbit
 from ..stability.floquet import without_nearest_to_one
 from .hb_basis import BASES, HBBasis, harmonics_in  # noqa: F401
+from .hb_error import HBTruncationError
 from .hill import hill_multipliers
 
 
-class HBProblem:
-    """Harmonic-balance equations of one NNM branch, for ``continuation.pseudo_arclength``."""
+class HBProblem(HBTruncationError):
+    """Harmonic-balance equations of one NNM branch, for ``continuation.pseudo_arclength``; ``frequency_error``
+    (hb_error.py) estimates a converged orbit's truncation error."""
 
     #: the route of Hill's method for the multipliers (hill.HILL_METHODS: "auto", "dense", "structured")
     hill_method = "auto"
@@ -54,8 +56,10 @@ class HBProblem:
     def __init__(self, system, mode_index, basis, max_rel_step=0.4, max_rel_period_step=np.inf):
         self.sys = system
         self.n = system.n
+        self.mode_index = int(mode_index)
         self.basis = basis
         self.nb = len(basis)
+        self._width = self.n                           # columns of the coefficient block (hb_error.py)
         self.w_r = float(np.sqrt(system.omega2[mode_index]))
         self.h2 = (basis.h.astype(float) ** 2)[:, None]
         self.phase = basis.kind == "full"
@@ -65,6 +69,10 @@ class HBProblem:
         self.max_rel_period_step = max_rel_period_step
 
     # --------------------------------------------------------------- packing
+    def with_basis(self, basis):
+        """The same branch's equations with another HBBasis (the same step limits)."""
+        return HBProblem(self.sys, self.mode_index, basis, self.max_rel_step, self.max_rel_period_step)
+
     def pack(self, A, omega):
         return np.concatenate([np.asarray(A, dtype=float).ravel(), [omega / self.w_r]])
 
@@ -104,8 +112,21 @@ class HBProblem:
         theta = 2 * np.pi * np.arange(samples) / samples
         return self.basis.functions(theta) @ self.unpack(u)[0]
 
-    def energy_gradient(self, u, h=1e-7):
-        """dE/du by central differences (J per unit of u)."""
+    def energy_gradient(self, u):
+        """dE/du (J per unit of u) of the energy at t = 0, E = |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + V(Bq q0) with
+        q0 = sum_j c_j(0) A[j] and v0 = omega sum_j c_j'(0) A[j]: dE/dA[j] = c_j(0) (Omega^2 q0 + Bq^T g(Bq q0)) +
+        omega c_j'(0) v0, dE/d(omega / w_r) = w_r |v0|^2 / omega."""
+        A, w = self.unpack(u)
+        c0, s0 = self.basis.state_at_zero()
+        q0, v1 = c0 @ A, s0 @ A                                    # v0 = omega v1
+        s = self.sys
+        f = s.omega2 * q0 + s.force((s.Bq @ q0)[None])[0] @ s.Bq
+        gA = np.outer(c0, f) + (w * w) * np.outer(s0, v1)
+        return np.concatenate([gA.ravel(), [self.w_r * w * (v1 @ v1)]])
+
+    def energy_gradient_fd(self, u, h=1e-7):
+        """dE/du by central differences (J per unit of u): for problems whose energy has no closed-form gradient
+        (CondensedHBProblem), and to check energy_gradient."""
         g = np.zeros(len(u))
         for i in range(len(u)):
             e = np.zeros(len(u))

@@ -28,7 +28,8 @@ class Point:
     stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
     for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py);
     freq_error: estimated relative error of frequency_hz from the discretisation (NaN: not estimated;
-    see ShootingProblem.frequency_error); steps: time steps per period this point was computed with
+    shooting: the time step, ShootingProblem.frequency_error; harmonic balance: the truncation of the harmonics,
+    orbits/hb_error.py); steps: time steps per period this point was computed with
     (0: the branch settings' steps_per_period); fundamental_share: the fraction of the orbit's modal
     amplitude in its fundamental harmonic (1: a single harmonic; NaN: not measured).  ``point["energy"]``
     works too (first-release rows).
