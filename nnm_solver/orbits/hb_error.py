@@ -14,17 +14,19 @@ frequency when two more harmonics are added (H + 2), at the same energy:
   shooting_error.py).
 
 The frequency moved by that step estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
-(f_(H+2) being much nearer the exact one): against the frequency at H = 3 x 5 and 3 x 7 at the same energy, the
-estimate is 0.92-1.03 of the error on NLvib's beam (example 09, H = 5) and 2-DOF (example 04, H = 7) backbones, for
-the uncondensed and the condensed equations (tests/test_hb_error.py).  Where the harmonics decay slowly (non-smooth
-laws, a harmonic above H resonating with a mode) f_(H+2) is not much nearer and the estimate falls short, as it does
-where the error changes sign along the branch.  One Newton step is enough where it is short (ONE_STEP: a second
-one moves the estimate by ~2 % of itself or less); next to a new harmonic near a mode's frequency the larger
-problem is far from linear and the steps go on until the frequency settles (measured on the ECL beam at H = 5: a
-first step 0.24 of the converged H + 2 change, four steps 1.05).  What the estimate cannot see: a k:1 internal
-resonance with k above H + 2, whose narrow tongue the truncated orbit steps over (the beam near 0.04 J: the
-frequency at H = 15 differs by 2.6e-4 where H + 2 says 6e-6).  Cost: one Jacobian and one factorisation of the
-larger problem per point (a few next to a resonant harmonic), about one corrector iteration.
+(f_(H+2) being much nearer the exact one).  Against the frequency with 3H harmonics at the same energy (an
+independent fixed-energy Newton solve) the estimate is 0.97-1.0 of the error on a 2-DOF backbone (H = 5), 1.01-1.03
+on a 6-DOF chain (H = 7), and on NLvib's examples 0.92-1.0 (04, the 2-DOF, H = 7) and 0.98-1.1 (09, the beam, H = 5)
+except where the error changes sign along the branch (tests/test_hb_error.py, benchmarks/README.md).  Where the
+harmonics decay slowly (non-smooth laws) f_(H+2) is not much nearer and the estimate falls short.
+
+One Newton step is enough where it is short (ONE_STEP: a second one moves the estimate by ~2 % of itself or less);
+next to a new harmonic near a mode's frequency the larger problem is far from linear and the steps go on until the
+frequency settles (the ECL beam at H = 5: a first step gives 0.24 of the converged H + 2 change, four steps 1.05).
+What the estimate cannot see: a k:1 internal resonance with k above H + 2, whose narrow tongue the truncated orbit
+steps over (the beam near 0.04 J: the frequency with 15 harmonics differs by 2.6e-4 where H + 2 says 6e-6).  Cost:
+one Jacobian and one factorisation of the larger problem per point (a few next to a resonant harmonic), about one
+corrector iteration.
 """
 from __future__ import annotations
 
