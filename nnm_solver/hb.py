@@ -25,7 +25,7 @@ Basis (``basis=``):
 Unknowns u = [A (sqrt(kg) m) ; omega / w_r]; no amplitude normalisation: the pseudo-arclength
 engine (continuation.py) adds the arclength row.  Convergence: ||R|| / (w_r^2 ||A||) < tol.
 HB converges exponentially in the number of harmonics for these analytic orbits; ``branch.freq_error`` estimates
-each point's truncation error (the frequency's change at the same energy with two harmonics more, by one Newton step
+each point's truncation error (the frequency's change at the same energy with two harmonics more, by Newton steps
 of that larger problem: ``orbits/hb_error.py``; ``error_estimate=False`` turns it off).
 
 Each point's energy (J) is ``model.energy(x(0), v(0))``.  Floquet multipliers come from Hill's

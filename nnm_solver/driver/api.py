@@ -206,8 +206,8 @@ def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_po
     locate_events : locate folds and stability changes between points (default True).
     error_estimate : estimate each point's relative frequency error (branch.freq_error): shooting, from the time
         discretisation by step doubling (about 2 residual evaluations per point); harmonic balance, from the
-        truncation of the harmonics, by one Newton step with two harmonics more at the point's energy (one
-        Jacobian and factorisation of that size per point; orbits/hb_error.py).
+        truncation of the harmonics, the frequency's change at the point's energy with two harmonics more (a
+        Newton step of that larger problem per point, a few next to a resonant harmonic; orbits/hb_error.py).
     freq_tol : if given (e.g. 1e-6), the steps per period are raised wherever a point's estimated
         frequency error exceeds it, and the point is computed again (branch.steps has each point's).
 

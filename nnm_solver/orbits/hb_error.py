@@ -8,10 +8,10 @@ frequency when two more harmonics are added (H + 2), at the same energy:
 * the orbit u is embedded in the problem with harmonics up to H + 2 (the new coefficients zero): its residual there
   is, to round-off, the element forces' harmonics H + 1, H + 2 that the H-problem left out (and the corrector's
   leftover on the others);
-* one Newton step of the larger problem, orthogonal to the branch tangent as the corrector takes it, then moved
-  along the branch back to the point's energy (the frequency error at a fixed energy, what the FEP shows; next to an
-  energy fold, where the frequency at a fixed energy is not defined, the orthogonal step is kept, as for shooting,
-  shooting_error.py).
+* Newton steps of the larger problem (one where it is short, below), each orthogonal to the branch tangent as the
+  corrector takes it, then moved along the branch back to the point's energy (the frequency error at a fixed
+  energy, what the FEP shows; next to an energy fold, where the frequency at a fixed energy is not defined, the
+  orthogonal step is kept, as for shooting, shooting_error.py).
 
 The frequency moved by that step estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
 (f_(H+2) being much nearer the exact one).  Against the frequency with 3H harmonics at the same energy (an
