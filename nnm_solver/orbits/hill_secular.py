@@ -65,14 +65,20 @@ def _secular(problem, A, w, bp, C):
         eye = np.eye(r)
 
         BB = (B[:, None, :] * B[None, :, :]).reshape(ns * ns, -1).T            # (n_t, n_s^2): Bq_sj Bq_s'j
-        # the entries of the block diagonal (l, s), (l, s') of an r x r matrix, in W's order (l, s, s')
-        bl, bs, bt = np.meshgrid(np.arange(nb), np.arange(ns), np.arange(ns), indexing="ij")
-        brow, bcol = (bl * ns + bs).ravel(), (bl * ns + bt).ravel()
+        Ct3, Ct3T = Ct.reshape(r, nb, ns), Ct.reshape(nb, ns, r)
 
-        def blockdiag(Wf):
-            out = np.zeros((Wf.shape[0], r, r), dtype=complex)
-            out[:, brow, bcol] = Wf
-            return out
+        def times_w(Wf):
+            """C~ blockdiag_l W[l] (S, r, r) for the blocks Wf (S, N_b n_s^2) in (l, s, s') order, without forming
+            the block diagonal: one column scaling for a single element."""
+            if ns == 1:
+                return Ct[None] * Wf[:, None, :]
+            return np.einsum("ilt,kltu->kilu", Ct3, Wf.reshape(-1, nb, ns, ns)).reshape(-1, r, r)
+
+        def w_times(Wf):
+            """blockdiag_l W[l] C~ (S, r, r)."""
+            if ns == 1:
+                return Wf[:, :, None] * Ct[None]
+            return np.einsum("kltu,lui->klti", Wf.reshape(-1, nb, ns, ns), Ct3T).reshape(-1, r, r)
 
         def parts(nu):
             sk = nu[:, None] + 1j * kk[None, :]                              # (S, N_b)
@@ -83,20 +89,20 @@ def _secular(problem, A, w, bp, C):
             # W[l] = Bq diag(inv_l) Bq^T, as one product with the real BB (real and imaginary parts apart)
             W = (inv.real @ BB + 1j * (inv.imag @ BB)).reshape(S_, nb * ns * ns)
             dW = (dinv.real @ BB + 1j * (dinv.imag @ BB)).reshape(S_, nb * ns * ns)
-            return sk, inv, blockdiag(W), blockdiag(dW)
+            return sk, inv, W, dW
 
         def logderiv(nu):
             """p'/p at the points nu (S,)."""
-            sk, inv, Wb, dWb = parts(nu)
-            G = np.linalg.solve(eye[None] + Ct[None] @ Wb, Ct[None] @ dWb)
+            sk, inv, W, dW = parts(nu)
+            G = np.linalg.solve(eye[None] + times_w(W), times_w(dW))
             return np.trace(G, axis1=1, axis2=2) + (2.0 * sk[:, :, None] * inv).sum(axis=(1, 2))
 
         def eigvecs(nu):
             """(c (S, N_b, n), mean harmonic (S,)): the eigenvectors at the exponents nu, c_kj = -(1 / q0_kj)
             sum_s Bq_sj (C~ z)_ks with z the null vector of I + W C~ (one step of inverse iteration)."""
             S_ = len(nu)
-            _, inv, Wb, _ = parts(nu)
-            Mz = eye[None] + Wb @ Ct[None]
+            _, inv, W, _ = parts(nu)
+            Mz = eye[None] + w_times(W)
             z = np.linalg.solve(Mz, np.ones((S_, r, 1)) / np.sqrt(r))[..., 0]
             if not np.all(np.isfinite(z)):
                 z = np.linalg.svd(Mz)[2][:, -1, :].conj()                            # (S, r)
