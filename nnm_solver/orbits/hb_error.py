@@ -18,7 +18,8 @@ The frequency moved by that step estimates |f_H - f_(H+2)| / f, the error of f_H
 independent fixed-energy Newton solve) the estimate is 0.97-1.0 of the error on a 2-DOF backbone (H = 5), 1.01-1.03
 on a 6-DOF chain (H = 7), and on NLvib's examples 0.92-1.0 (04, the 2-DOF, H = 7) and 0.98-1.1 (09, the beam, H = 5)
 except where the error changes sign along the branch (tests/test_hb_error.py, benchmarks/README.md).  Where the
-harmonics decay slowly (non-smooth laws) f_(H+2) is not much nearer and the estimate falls short.
+harmonics decay slowly f_(H+2) is not much nearer and the estimate falls short: 0.7-0.8 of the error against
+Gauss-6 shooting on a 3-DOF chain at H = 9 whose frequency has risen 2.2-fold, less for non-smooth laws.
 
 One Newton step is enough where it is short (ONE_STEP: a second one moves the estimate by ~2 % of itself or less);
 next to a new harmonic near a mode's frequency the larger problem is far from linear and the steps go on until the
