@@ -110,7 +110,8 @@ def point_facts(e, along):
     if label:
         facts.append(label)
     if err is not None:
-        facts.append(f"estimated frequency error {err:.1e} (relative)")
+        facts.append(f"estimated frequency error {err:.1e} (relative)" if np.isfinite(err) else
+                     "frequency not resolved by the harmonics (no orbit with two more near it)")
     return facts
 
 

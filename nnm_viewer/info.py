@@ -3,6 +3,8 @@ multipliers, MAC with the linear modes) and the time series / Fourier coefficien
 chosen DOFs over one period (like the seed paper's Fig. 12)."""
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -249,7 +251,8 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label
     k3_factor None: no k3 line (a linear mode)."""
     lines = [f"**{where}**" if where else "",
              f"- frequency **{pd.frequency:.6g} Hz** (period {pd.period:.4g} s)"
-             + (f", estimated relative error {freq_error:.1e} (± {abs(freq_error) * pd.frequency:.2g} Hz)"
+             + ((f", estimated relative error {freq_error:.1e} (± {abs(freq_error) * pd.frequency:.2g} Hz)"
+                 if math.isfinite(freq_error) else ", not resolved by the harmonics (no orbit with two more near it)")
                 if freq_error is not None else "")
              + (f" · {method}" if method else ""),
              f"- energy **{pd.energy:.4g} J**",

@@ -20,7 +20,8 @@ ANIM_CACHE = 32
 
 def point_label_and_error(branch, along):
     """(label, estimated relative frequency error) of the computed point nearest to ``along``: the
-    branch's ``labels`` and ``freq_error`` (None where the branch, e.g. from an older file, has none)."""
+    branch's ``labels`` and ``freq_error`` (None where the branch, e.g. from an older file, has none; inf where a
+    harmonic-balance point's truncation does not resolve its orbit, orbits/hb_error.py)."""
     n = len(branch)
     i = int(np.clip(round(float(along)), 0, max(n - 1, 0)))
     labels = getattr(branch, "labels", None)
@@ -30,7 +31,7 @@ def point_label_and_error(branch, along):
     if err is not None:
         try:
             arr = np.asarray(err, dtype=float).reshape(-1)
-            value = float(arr[i]) if len(arr) == n and np.isfinite(arr[i]) else None
+            value = float(arr[i]) if len(arr) == n and not np.isnan(arr[i]) else None   # inf: not resolved
         except (TypeError, ValueError):
             value = None
     return label, value

@@ -12,10 +12,10 @@ from nnm_solver.orbits.hb_basis import HBBasis, harmonics_in
 from test_condensed_hb import ecl_beam, two_dof, two_springs_chain
 
 
-def fixed_energy_frequency(problem, u, harmonics):
-    """omega (rad/s) of the HB orbit with ``harmonics`` at the energy of the orbit u of ``problem`` (an HBProblem),
-    by Newton on [residual; energy - E0] from u (the new harmonics zero)."""
-    big = HBProblem(problem.sys, problem.mode_index, HBBasis(harmonics, problem.basis.kind))
+def fixed_energy_frequency(problem, u, harmonics, samples=None):
+    """omega (rad/s) of the HB orbit with ``harmonics`` (and ``samples``) at the energy of the orbit u of
+    ``problem`` (an HBProblem), by Newton on [residual; energy - E0] from u (the new harmonics zero)."""
+    big = HBProblem(problem.sys, problem.mode_index, HBBasis(harmonics, problem.basis.kind, samples))
     big.q_ref = problem.q_ref
     A, w = problem.unpack(u)
     v = big.pack(harmonics_in(big.basis, problem.basis, A), w)
@@ -30,19 +30,20 @@ def fixed_energy_frequency(problem, u, harmonics):
     return big.unpack(v)[1]
 
 
-def _changes(branch, mode, harmonics, reference):
-    """(estimate, |omega_reference / omega - 1|) of each point where the change exceeds 1e-9 (below, the
-    corrector's tolerance is the difference)."""
+def _changes(branch, mode, harmonics, reference, samples=None):
+    """(estimate, |omega_reference / omega - 1|) of each point where the change exceeds 1e-7 (below, the
+    corrector's tolerance, 1e-8 on the residual, is much of the difference)."""
     system = modal_system(branch.model)
-    prob = HBProblem(system, mode - 1, HBBasis(harmonics, branch.settings.basis))
+    prob = HBProblem(system, mode - 1, HBBasis(harmonics, branch.settings.basis, samples))
     est, true = [], []
     for i in range(len(branch.energy)):
         A = system.to_modal(branch.coefficients_at(i))
         u = prob.pack(A, 2 * np.pi * branch.frequency_hz[i])
         q0 = prob.initial_state(u)[0]
         prob.q_ref = q0 / np.linalg.norm(q0)          # the full basis's phase condition: t = 0 where the orbit rests
-        change = abs(fixed_energy_frequency(prob, u, reference(harmonics)) / (2 * np.pi * branch.frequency_hz[i]) - 1)
-        if change > 1e-9:
+        H_ref, samples_ref = reference(harmonics)
+        change = abs(fixed_energy_frequency(prob, u, H_ref, samples_ref) / (2 * np.pi * branch.frequency_hz[i]) - 1)
+        if change > 1e-7:
             est.append(branch.freq_error[i])
             true.append(change)
     return np.array(est), np.array(true)
@@ -69,37 +70,65 @@ def test_estimate_is_the_error_on_the_two_dof_backbone(basis, condensed):
     b = nnm.continue_nnm(two_dof(), 1, 5.0, method="hb", harmonics=5, basis=basis, condensed=condensed,
                          floquet=False, tongues="skip")
     assert b.status == "done" and np.isfinite(b.freq_error).all()
-    est, true = _changes(b, 1, 5, lambda H: 3 * H)
-    assert len(est) >= 20 and true.max() > 1e-6                # a nonlinear stretch, errors above the tolerance
+    est, true = _changes(b, 1, 5, lambda H: (3 * H, None))
+    assert len(est) >= 10 and true.max() > 1e-6                # a nonlinear stretch, errors above the tolerance
     ratio = est / true
     assert ratio.min() > 0.95 and ratio.max() < 1.02, (ratio.min(), ratio.max())
 
 
 @pytest.mark.parametrize("condensed", [False, True])
 def test_estimate_is_the_change_with_two_more_harmonics_on_a_chain(condensed):
-    """A 6-DOF chain with a grounded hardening and a relative softening spring, NNM 2 at H = 7 in the full basis:
-    the estimate is the change to H + 2 at the same energy (within 2 %)."""
-    b = nnm.continue_nnm(two_springs_chain(), 2, 0.3, method="hb", harmonics=7, basis="full", condensed=condensed,
+    """A 6-DOF chain with a grounded hardening and a relative softening spring, NNM 2 at H = 5 in the full basis to
+    0.3 J: the estimate is the change to H + 2 at the same energy (within 3 %)."""
+    b = nnm.continue_nnm(two_springs_chain(), 2, 0.3, method="hb", harmonics=5, basis="full", condensed=condensed,
                          floquet=False, tongues="skip")
-    est, true = _changes(b, 2, 7, lambda H: H + 2)
-    assert len(est) >= 10
-    assert np.all(np.abs(est / true - 1) < 0.02), est / true
+    est, true = _changes(b, 2, 5, lambda H: (H + 2, None))
+    assert len(est) >= 5
+    assert np.all(np.abs(est / true - 1) < 0.03), est / true
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("condensed", [False, True])
 def test_estimate_on_the_ecl_beam_past_its_tongues(condensed):
     """The ECL cantilever (tip cubic spring), NNM 1 to 0.5 J at H = 5 with its tongues skipped, where the 7th
-    harmonic nears mode 2 (the larger problem far from linear: several Newton steps): the estimate is 0.6-1.1 of the
-    change to H + 2 at the same energy at every point, its median 1 (measured: 0.91-1.06 uncondensed, 0.66-1.02
-    condensed).  Against 15 harmonics it cannot see the narrow tongues of k:1 resonances with k > 7 (documented in
-    hb_error.py): not asserted here."""
+    harmonic nears mode 2 (the larger problem far from linear: several Newton steps): the estimate is 0.9-1.1 of the
+    change to H + 2 at the same energy at every point, its median 1 (measured: 0.95-1.06), and finite everywhere.
+    Against 15 harmonics it cannot see the narrow tongues of k:1 resonances with k > 7 (documented in hb_error.py):
+    not asserted here."""
     b = nnm.continue_nnm(ecl_beam(), 1, 0.5, method="hb", harmonics=5, condensed=condensed, floquet=False,
                          tongues="skip")
-    est, true = _changes(b, 1, 5, lambda H: H + 2)
+    assert np.isfinite(b.freq_error).all()
+    est, true = _changes(b, 1, 5, lambda H: (H + 2, None))
     ratio = est / true
     assert len(ratio) > 100 and true.max() > 1e-3
-    assert ratio.min() > 0.6 and ratio.max() < 1.1 and abs(np.median(ratio) - 1) < 0.01, (ratio.min(), ratio.max())
+    assert ratio.min() > 0.9 and ratio.max() < 1.1 and abs(np.median(ratio) - 1) < 0.01, (ratio.min(), ratio.max())
+
+
+def test_estimate_keeps_the_sampling_density():
+    """A clearance (piecewise-linear, smoothed) at H = 5 with samples=128 against aliasing: the larger problem is
+    sampled as densely per harmonic, so the estimate is the change to H + 2 at that density (within 3 %), not the
+    aliasing of the default 4H + 4 samples (which differs by 10-100x here)."""
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]),
+                      springs=[nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.0, 3.0], breakpoints=[0.2], eps=0.02)])
+    b = nnm.continue_nnm(model, 1, 2.0, method="hb", harmonics=5, samples=128, floquet=False, tongues="skip",
+                         max_points=80)
+    est, true = _changes(b, 1, 5, lambda H: (H + 2, int(np.ceil(128 * (H + 2) / H))), samples=128)
+    assert len(est) >= 5
+    assert np.all(np.abs(est / true - 1) < 0.03), est / true
+
+
+@pytest.mark.slow
+def test_estimate_inside_an_unresolved_tongue_is_inf():
+    """2-DOF NNM 1 followed into its 3:1 tongue at H = 7 up to 2e4 J: where the orbit with two harmonics more is not
+    near (Newton on the larger problem does not settle, or leaves the energy), the estimate is inf, not a number
+    (it had given 4.6 and 11.8 there); those points are all in the tongue, the finite estimates stay below 0.05 and
+    the backbone's below 1e-2."""
+    b = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", harmonics=7, floquet=False, tongues="follow", max_points=800)
+    err, labels = b.freq_error, np.asarray(b.labels)
+    assert np.isinf(err).any() and not np.isnan(err).any()
+    assert set(labels[np.isinf(err)]) == {"tongue 3:1"}
+    assert err[np.isfinite(err)].max() < 0.05 and err[labels == "backbone"].max() < 1e-2
+    assert "not resolved by the truncation" in accuracy_line(b)
 
 
 def test_estimate_off_and_the_cli_line():

@@ -39,14 +39,25 @@ def accuracy_line(branch):
     """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator."""
     s = branch.settings
     err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
+    if np.isnan(err).all():
+        return "  accuracy: no per-point error estimate"
+    if s.method != "shooting":                 # harmonic balance: the truncation of the harmonics (hb_error.py)
+        fin = np.isfinite(err)
+        unresolved = int(np.sum(np.isinf(err)))
+        if not fin.any():
+            return (f"  accuracy: harmonic balance, {s.harmonics} harmonics; the truncation does not resolve any point "
+                    f"(raise --harmonics)")
+        i = int(np.flatnonzero(fin)[np.argmax(err[fin])])
+        more = " (raise --harmonics)" if err[i] > 1e-4 or unresolved else ""
+        text = (f"  accuracy: harmonic balance, {s.harmonics} harmonics; estimated frequency error (truncation) "
+                f"median {np.median(err[fin]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J)")
+        if unresolved:
+            text += f"; {unresolved} points not resolved by the truncation (no orbit with two harmonics more near them)"
+        return text + more
     ok = np.isfinite(err)
     if not ok.any():
         return "  accuracy: no per-point error estimate"
     i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
-    if s.method != "shooting":                 # harmonic balance: the truncation of the harmonics (hb_error.py)
-        more = " (raise --harmonics)" if err[i] > 1e-4 else ""
-        return (f"  accuracy: harmonic balance, {s.harmonics} harmonics; estimated frequency error (truncation) "
-                f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
     steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
     more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
     return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "

@@ -8,28 +8,33 @@ frequency when two more harmonics are added (H + 2), at the same energy:
 * the orbit u is embedded in the problem with harmonics up to H + 2 (the new coefficients zero): its residual there
   is, to round-off, the element forces' harmonics H + 1, H + 2 that the H-problem left out (and the corrector's
   leftover on the others);
-* Newton steps of the larger problem (one where it is short, below), each orthogonal to the branch tangent as the
-  corrector takes it, then moved along the branch back to the point's energy (the frequency error at a fixed
-  energy, what the FEP shows; next to an energy fold, where the frequency at a fixed energy is not defined, the
-  orthogonal step is kept, as for shooting, shooting_error.py).
+* Newton steps of the larger problem with the energy held at the point's (the frequency error at a fixed energy,
+  what the FEP shows); one where it is short (below).  Next to an energy fold, where the frequency at a fixed energy
+  is not defined, one step orthogonal to the branch tangent, as the corrector takes it (as for shooting,
+  shooting_error.py).
 
-The frequency moved by that step estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
+The frequency moved by the steps estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
 (f_(H+2) being much nearer the exact one).  Against the frequency with 3H harmonics at the same energy (an
 independent fixed-energy Newton solve) the estimate is 0.97-1.0 of the error on a 2-DOF backbone (H = 5), 1.01-1.03
 on a 6-DOF chain (H = 7), and on NLvib's examples 0.92-1.0 (04, the 2-DOF, H = 7) and 0.98-1.1 (09, the beam, H = 5)
 except where the error changes sign along the branch (tests/test_hb_error.py, benchmarks/README.md).  Where the
 harmonics decay slowly f_(H+2) is not much nearer and the estimate falls short: 0.7-0.8 of the error against
-Gauss-6 shooting on a 3-DOF chain at H = 9 whose frequency has risen 2.2-fold, less for non-smooth laws.
+Gauss-6 shooting on a 3-DOF chain at H = 9 whose frequency has risen 2.2-fold.  For non-smooth laws (a clearance)
+it is unreliable both ways (0.3-4 of the error against 31 harmonics).
 
-One Newton step is enough where it is short (ONE_STEP: a second one moves the estimate by ~2 % of itself or less);
-next to a new harmonic near a mode's frequency the larger problem is far from linear and the steps go on until the
-frequency settles (the ECL beam at H = 5: a first step gives 0.24 of the converged H + 2 change, four steps 1.05).
-What the estimate cannot see: a k:1 internal resonance with k above H + 2, whose narrow tongue the truncated orbit
-steps over (the beam near 0.04 J: the frequency with 15 harmonics differs by 2.6e-4 where H + 2 says 6e-6).  Cost:
-one Jacobian and one factorisation of the larger problem per point (a few next to a resonant harmonic), about one
-corrector iteration.
+One Newton step is enough where it is short (ONE_STEP; a second one moves the estimate by 0.07 % of itself at the
+median on the ECL beam, at most 9 %); next to a new harmonic near a mode's frequency the larger problem is far from
+linear and the steps go on until the frequency settles (the ECL beam at H = 5: a first step gives 0.24 of the
+converged H + 2 change).  Where they do not settle, or end away from the point's energy, the larger problem has no
+solution near the orbit (inside a tongue the truncation does not resolve) and the estimate is inf.  What the
+estimate cannot see: a k:1 internal resonance with k above H + 2, whose narrow tongue the truncated orbit steps over
+(the beam near 0.04 J: the frequency with 15 harmonics differs by 2.6e-4 where H + 2 says 6e-6).  Cost: one Jacobian
+and one factorisation of the larger problem per point (a few next to a resonant harmonic); the corrector reuses its
+factorisation, so this is about 2x a corrector's factorisation at H = 7 ((N_b + 1)^3 / N_b^3 of it).
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -45,7 +50,10 @@ EXTRA_HARMONICS = 2
 #: until the frequency moves by at most SETTLED of the estimate, MAX_STEPS in all
 ONE_STEP = 1e-3
 SETTLED = 0.05
-MAX_STEPS = 6
+MAX_STEPS = 8
+#: steps that end farther than this from the point's energy (relative), or do not settle, found no solution of the
+#: larger problem near the orbit: the estimate is then inf (not resolved)
+UNSETTLED_ENERGY = 1e-3
 #: next to an energy fold the frequency at a fixed energy is not defined: there (the energy's rate along the branch
 #: tangent, d ln E per unit of the balanced norm, below this; about 2 in the linear regime, E ~ a^2) the step is
 #: the one orthogonal to the tangent, as for shooting (shooting_error.FOLD_COSINE; a cosine in the balanced norm would
@@ -60,10 +68,13 @@ class HBTruncationError:
     (columns of the coefficient block)."""
 
     def _larger(self):
-        """The same problem with EXTRA_HARMONICS more harmonics (made once)."""
+        """The same problem with EXTRA_HARMONICS more harmonics (made once), sampled at least as densely per
+        harmonic as this one (a user's ``samples`` against aliasing of non-polynomial laws)."""
         big = getattr(self, "_larger_problem", None)
         if big is None:
-            big = self.with_basis(HBBasis(self.basis.harmonics + EXTRA_HARMONICS, self.basis.kind))
+            H, N = self.basis.harmonics, self.basis.samples
+            H2 = H + EXTRA_HARMONICS
+            big = self.with_basis(HBBasis(H2, self.basis.kind, max(4 * H2 + 4, math.ceil(N * H2 / H))))
             self._larger_problem = big
         return big
 
@@ -78,32 +89,44 @@ class HBTruncationError:
         """Estimated relative error of the frequency of the converged orbit u from the truncation of the harmonics:
         (error, NaN), the second item being the time discretisation's part of shooting's estimate, which harmonic
         balance has not (the driver then locates events to its finest tolerance, as without an estimate).  J and
-        factor (the corrector's) are not needed: the step is one of the larger problem (module docstring).  NaN
-        when it fails (a singular Jacobian)."""
+        factor (the corrector's) are not needed (module docstring).  The error is inf where the larger problem has
+        no solution near the orbit (its Newton steps do not settle: the truncation does not resolve the orbit, e.g.
+        inside an internal-resonance tongue at too few harmonics), NaN where a step cannot be solved."""
         big = self._larger()
         if getattr(self, "q_ref", None) is not None:
-            big.q_ref = self.q_ref                 # the same phase condition (full basis)
+            big.q_ref = self.q_ref      # the phase condition's reference (full basis): the engine's accept() has set
+                                        # it to this orbit's own shape, which the larger orbit keeps
         u2, t2 = self._embed(big, u), self._embed(big, tangent)
         E0 = self.energy(u)        # the point's (a condensed problem's energy of u2 is not it: its eliminated
                                    # amplitudes see the new harmonics' forces)
         v = u2
-        with np.errstate(all="ignore"):
-            for step in range(MAX_STEPS):
-                r2, J2 = big.jacobian(v)
-                w = big.scale(v)
-                g = big.energy_gradient(v)
-                gp = g @ t2
-                fold = abs(gp) < FOLD_RATE * E0 * np.linalg.norm(w * t2)
-                du = LeastSquares(stacked(J2, w * w * t2)).solve(np.r_[-r2, 0.0])
-                if not fold:                       # along the branch back to the point's energy
-                    du = du - (g @ du + big.energy(v) - E0) / gp * t2
-                before = v[-1]
-                v = v + du
-                if not np.all(np.isfinite(v)) or fold:
-                    break                          # next to a fold: the orthogonal step, once
-                if step == 0 and np.linalg.norm(w * du) < ONE_STEP:
-                    break                          # a small step: its own error is of the order of its square
-                if step > 0 and abs(v[-1] - before) <= SETTLED * abs(v[-1] - u2[-1]):
-                    break
-            err = abs(v[-1] / u2[-1] - 1.0)
-        return (float(err) if np.isfinite(err) else float("nan")), float("nan")
+        settled = False
+        try:
+            with np.errstate(all="ignore"):
+                for step in range(MAX_STEPS):
+                    r2, J2 = big.jacobian(v)
+                    w = big.scale(v)
+                    g = big.energy_gradient(v)
+                    fold = abs(g @ t2) < FOLD_RATE * E0 * np.linalg.norm(w * t2)
+                    if fold:                   # next to a fold: the step orthogonal to the branch tangent, once
+                        du = LeastSquares(stacked(J2, w * w * t2)).solve(np.r_[-r2, 0.0])
+                    else:                      # Newton on [equations; energy - E0]
+                        du = LeastSquares(stacked(J2, g)).solve(np.r_[-r2, E0 - big.energy(v)])
+                    before = v[-1]
+                    v = v + du
+                    if not np.all(np.isfinite(v)):
+                        break
+                    if fold or (step == 0 and np.linalg.norm(w * du) < ONE_STEP):
+                        settled = True         # (a short step: its own error is of the order of its square)
+                        break
+                    if step > 0 and abs(v[-1] - before) <= SETTLED * abs(v[-1] - u2[-1]):
+                        settled = True
+                        break
+                err = abs(v[-1] / u2[-1] - 1.0)
+        except (np.linalg.LinAlgError, ValueError):
+            return float("nan"), float("nan")
+        if not np.isfinite(err):
+            return float("nan"), float("nan")
+        if not settled or abs(big.energy(v) / E0 - 1.0) > UNSETTLED_ENERGY:
+            return float("inf"), float("nan")
+        return float(err), float("nan")
