@@ -26,7 +26,8 @@ wherever no h_j omega equals a w_k (an exact internal resonance, where the uncon
 is free and the condensed equations have a pole).
 
 The linear part (``LinearPart``) is the modes' (w_k^2, b_k, phi_k) and, for a truncated modal basis of a
-large model (``truncated_linear_part``), the residual flexibility of the modes left out,
+large model (``LinearPart(omega2, Bq, R0=, R1=)``; the driver's large models take a Ritz basis instead,
+model/ritz.py), the residual flexibility of the modes left out,
 R0 + Omega^2 R1 with R0 = B (K^-1 - sum phi phi^T / w^2) B^T and R1 = B (K^-1 M K^-1 - sum phi phi^T / w^4) B^T:
 exact at Omega = 0, relative error O((Omega / w_cut)^4) for the left-out modes above w_cut.
 
