@@ -236,3 +236,23 @@ def test_fep_series_of_a_branch_without_multipliers_says_so():
     on = nnm.continue_nnm(m, 1, 1.0, max_points=8)
     assert BranchEntry(off, "NNM 1").series().label.endswith("(stability not computed)")
     assert "stability" not in BranchEntry(on, "NNM 1").series().label
+
+
+def test_point_facts_and_info_say_when_the_harmonics_do_not_resolve_a_point(two_dof_nnm1):
+    """A harmonic-balance point whose truncation estimate is inf (orbits/hb_error.py: no orbit with two harmonics
+    more near it) is shown as not resolved, not as an error of 'inf'; a finite estimate is shown as a number."""
+    from nnm_viewer.fep_view import point_facts
+    from nnm_viewer.info import info_markdown, point_data
+    from nnm_viewer.state import BranchEntry
+    b = two_dof_nnm1
+    err = np.full(len(b), 2e-5)
+    err[3] = np.inf
+    b2 = type(b).__new__(type(b))
+    b2.__dict__.update(b.__dict__)
+    b2.freq_error = err
+    e = BranchEntry(b2, "NNM 1")
+    assert any("not resolved by the harmonics" in f for f in point_facts(e, 3.0))
+    assert any("estimated frequency error 2.0e-05" in f for f in point_facts(e, 2.0))
+    pd = point_data(b2, 3.0)
+    assert "not resolved by the harmonics" in info_markdown(pd, b.model, b.model.linear_modes()[0], freq_error=np.inf)
+    assert "estimated relative error 2.0e-05" in info_markdown(pd, b.model, b.model.linear_modes()[0], freq_error=2e-5)
