@@ -348,3 +348,22 @@ def test_sweep_branch_of_a_recorded_variant_is_accepted(tmp_path, two_dof_nnm1):
     # a branch of the base model under another name is fine
     nnm.save_branch(p, two_dof_nnm1.subset(slice(0, 4)))
     assert len(nnm.load_branches(p)) == 2
+
+
+def test_subset_and_save_keep_the_located_events(two_dof_nnm1, tmp_path):
+    """A subset in order (the file's thinning, a save under another name) keeps the branch's located events between
+    its first and last rows, with their energies and orbits, and renumbers them to the first kept row after each;
+    rows out of order bracket them again from the rows."""
+    b = two_dof_nnm1
+    located = [e for e in b.events if e.get("located") and "x0" in e]
+    assert located
+    e = located[0]
+    rows = np.unique(np.r_[0, np.arange(1, len(b), 3), e["index"] - 1, len(b) - 1])    # thinned around it
+    c = b.subset(rows)
+    kept = [x for x in c.events if x["kind"] == e["kind"] and x["energy"] == e["energy"]]
+    assert len(kept) == 1 and kept[0]["x0"] == e["x0"]
+    assert rows[kept[0]["index"]] >= e["index"] > rows[kept[0]["index"] - 1]
+    assert all(x["energy"] != e["energy"] for x in b.subset(slice(0, e["index"] - 1)).events)   # before it: gone
+    p = tmp_path / "b.h5"
+    nnm.save_branch(p, b, name="renamed")
+    assert [x["energy"] for x in nnm.load_branches(p)[0].events] == [x["energy"] for x in b.events]

@@ -190,9 +190,16 @@ class Branch:
         return int(i) % len(self)
 
     def subset(self, index):
-        """Branch made of the rows ``index`` (slice, index array or boolean mask)."""
+        """Branch made of the rows ``index`` (slice, index array or boolean mask).  Rows kept in their order keep the
+        branch's events that lie between them (located ones keep their energies and orbits; ``index`` renumbered to
+        the first kept row after the event); otherwise the events are bracketed again from the rows."""
+        rows = np.arange(len(self))[index]
+        events = None
+        if len(rows) and np.all(np.diff(rows) > 0):
+            events = [dict(e, index=int(np.searchsorted(rows, e["index"]))) for e in self.events
+                      if rows[0] < e["index"] <= rows[-1]]
         return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
-                      self.x0[index], self.v0[index], self.floquet[index], self.stable[index], None, self.status,
+                      self.x0[index], self.v0[index], self.floquet[index], self.stable[index], events, self.status,
                       self.message, self.settings, self.name,
                       None if self.coefficients is None else self.coefficients[index], self.labels[index],
                       self.tongues, self.freq_error[index], self.steps[index], self.fundamental_share[index])
