@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import NNMInputError
-from ..stability.floquet import detect_events
+from ..stability.floquet import detect_events, events_of_rows
 from ..fourier import fourier_amplitudes
 from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
@@ -190,14 +190,9 @@ class Branch:
         return int(i) % len(self)
 
     def subset(self, index):
-        """Branch made of the rows ``index`` (slice, index array or boolean mask).  Rows kept in their order keep the
-        branch's events that lie between them (located ones keep their energies and orbits; ``index`` renumbered to
-        the first kept row after the event); otherwise the events are bracketed again from the rows."""
-        rows = np.arange(len(self))[index]
-        events = None
-        if len(rows) and np.all(np.diff(rows) > 0):
-            events = [dict(e, index=int(np.searchsorted(rows, e["index"]))) for e in self.events
-                      if rows[0] < e["index"] <= rows[-1]]
+        """Branch made of the rows ``index`` (slice, index array or boolean mask), with the events that lie between
+        them (floquet.events_of_rows: the located ones kept; bracketed again for rows out of order)."""
+        events = events_of_rows(self.events, np.arange(len(self))[index])
         return Branch(self.model, self.mode, self.energy[index], self.frequency_hz[index], self.period[index],
                       self.x0[index], self.v0[index], self.floquet[index], self.stable[index], events, self.status,
                       self.message, self.settings, self.name,

@@ -181,6 +181,16 @@ def real_crossing(mu):
     return float(np.max(np.abs(rho.real)) - 1.0)
 
 
+def events_of_rows(events, rows):
+    """The events of a branch that lie between its rows ``rows`` (original row numbers, in order), each with its
+    ``index`` (the first row after it) renumbered among those rows; located events keep their energies and orbits.
+    None when the rows are not in increasing order (the caller then brackets the events again, detect_events)."""
+    rows = np.asarray(rows)
+    if not len(rows) or not np.all(np.diff(rows) > 0):
+        return None
+    return [dict(e, index=int(np.searchsorted(rows, e["index"]))) for e in events if rows[0] < e["index"] <= rows[-1]]
+
+
 def detect_events(energy, frequency_hz, floquet, stable):
     """Folds and stability changes bracketed by the points of a branch (for branches whose events
     were not located, e.g. subsets and files of the first release; events.py locates them).
