@@ -1,6 +1,7 @@
 """The truncation error estimate of harmonic-balance branches (orbits/hb_error.py, ``branch.freq_error``) against
 independent fixed-energy solutions with more harmonics: a Newton solve of the HB equations with the energy as the
-extra equation (least squares, its own loop, not the estimate's tangent step), started from the branch's orbit."""
+extra equation (least squares, its own loop run to convergence, not the estimate's steps), started from the
+branch's orbit."""
 import numpy as np
 import pytest
 
