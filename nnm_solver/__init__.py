@@ -16,6 +16,9 @@ from .integrators import INTEGRATORS
 from .stability import STABILITY_TOL
 from .results import STATUSES, Branch, HarmonicBalanceSettings, MethodSettings, Point, ShootingSettings, plot_atlas, plot_fep
 from .fourier import fourier_amplitudes, fourier_coefficients
+from .driver import Continuation, HarmonicBalance, Shooting
+from .backbone import Follow, Skip
+from .results import TongueRecord
 from .driver import METHODS, Job, NNMIterator, continue_nnm, continue_tongue, iter_nnm, start_branch, switch_branch
 from .files import (Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit,
                     load_branches, load_extra, load_model, save_branch, save_model, store_ritz_basis)
@@ -49,7 +52,7 @@ __all__ = [
     "Model", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
     "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
-    "continue_tongue", "INTEGRATORS",
+    "continue_tongue", "INTEGRATORS", "Shooting", "HarmonicBalance", "Continuation", "Follow", "Skip", "TongueRecord",
     # sweeps and atlases (Dask, imported only when a sweep runs)
     "sweep", "Variant", "variant_grid", "load_sweep_file", "load_sweep", "SweepProgress", "plot_atlas",
     # results

@@ -40,7 +40,7 @@ MOVED = {
     "plotting": "results.plotting",
     "iterator": "driver.iterator",
     "refinement": "driver.refinement",
-    "tongue_skip": "driver.tongue_skip",
+    "tongue_skip": "backbone.content",
     "switching": "driver.switching",
     "jobs": "driver.jobs",
     "io": "files.io",

@@ -15,29 +15,62 @@ import math
 
 import numpy as np
 
+from dataclasses import fields, replace
+
+from ..backbone.labels import FamilyLabels
+from ..backbone.policy import policy_for
+from ..backbone.settings import TONGUE_MODES, Follow, Skip
+from ..backbone.skeleton import skeleton_of
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
 from .iterator import NNMIterator
-from .labels import FamilyLabels
-from .skeleton import FOLLOW_REACH, REACH, SKELETON_HARMONICS, skeleton
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
-from .problems import (METHODS, RITZ_MIN_DOF, check_positive, hb_problem, modal_basis, shooting_problem,
-                       start_amplitude)
-from .problems import method_options as split_options
+from .problems import METHODS, RITZ_MIN_DOF, check_positive, hb_problem, modal_basis, shooting_problem, start_amplitude
+from .settings import Continuation, HarmonicBalance, Shooting, method_of
 
-__all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS"]
+__all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS", "from_keywords"]
 
-#: default largest relative change of the period in one step (max_period_step=None), by method: 0.005.  Shooting's
-#: orbits meet internal-resonance tongues of every order, whose entrances are narrow in period.  For harmonic
-#: balance a 2 % cap takes about NLvib's points (issue 30: 23 instead of 70 on NLvib's example 04, 87 instead of
-#: 190 on 09, the same folds) but straight lines between its points then miss the curve by up to 2.4e-3 across a
-#: piecewise-linear kink and the energy-balance peak prediction by 1.3e-3 (tests/test_elements.py,
-#: tests/test_forced.py), so it is the user's choice (``max_period_step=0.02``); at 5 % a step of the 3-DOF
-#: combination-resonance branch (tests/test_bifurcation.py) stepped over its whole unstable interval between two
-#: Krein collisions (1.71-2.37 J; stable at both ends, so nothing to locate)
-MAX_PERIOD_STEP = {"shooting": 0.005, "hb": 0.005}
+
+def _tongues_of(tongues):
+    if isinstance(tongues, (Follow, Skip)):
+        return tongues
+    if tongues is None:
+        return Follow()
+    if tongues in TONGUE_MODES:
+        return TONGUE_MODES[tongues]()
+    raise NNMInputError(f"tongues must be Follow(), Skip(), 'follow' or 'skip', got {tongues!r}")
+
+
+def from_keywords(method=None, continuation=None, tongues=None, keywords=None):
+    """(method, continuation, tongues) settings objects from typed objects and/or the keywords of earlier
+    releases (``integrator=``, ``steps_per_period=``, ``harmonics=``, ``tol=``, ``max_points=``, ``step=``, ...),
+    each keyword replacing the field of that name.  NNMInputError for a keyword no object knows or that belongs
+    to the other method."""
+    keywords = dict(keywords or {})
+    m = method_of(method)
+    c = Continuation() if continuation is None else continuation
+    if not isinstance(c, Continuation):
+        raise NNMInputError(f"continuation must be a Continuation(...), got {type(c).__name__}")
+    t = _tongues_of(tongues)
+    own = {f.name for f in fields(m)}
+    other = {f.name for f in fields(HarmonicBalance if isinstance(m, Shooting) else Shooting)} - own
+    cont = {f.name for f in fields(Continuation)}
+    mk, ck = {}, {}
+    for key, value in keywords.items():
+        if key in own:
+            if value is not None or key in ("steps_per_period", "symmetric", "reversible", "samples", "basis",
+                                            "modal_basis", "freq_tol"):
+                mk[key] = value
+        elif key in cont:
+            if value is not None:
+                ck[key] = value
+        else:
+            where = f"; it belongs to method={'hb' if m.name == 'shooting' else 'shooting'!r}" if key in other else ""
+            raise NNMInputError(f"unknown option {key!r} for method={m.name!r}{where}")
+    return replace(m, **mk), replace(c, **ck), t
+
 
 def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=True):
     """Validate the arguments every branch computation shares; returns the 0-based mode index.
@@ -58,14 +91,13 @@ def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min,
     return model.check_mode(mode)
 
 
-def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points=500, energy_min=None,
-             floquet=None, step=None, max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=None,
-             locate_events=True, tongues="follow", error_estimate=True, freq_tol=None, _start=None, **method_options):
+def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues=None, energy_min=None,
+             floquet=None, locate_events=True, _start=None, **keywords):
     """Iterator over the converged orbits of the NNM branch of linear mode ``mode`` (1-based).
 
     Starts from a nearly linear orbit and continues in energy up to ``energy_max`` (J).  Yields
     ``Point`` objects (energy J, frequency_hz Hz, period s, x0, v0, floquet, stable, ...); returns an
-    NNMIterator, whose ``branch()`` collects them (see ``continue_nnm`` for the arguments)::
+    NNMIterator, whose ``branch()`` collects them (the arguments: ``continue_nnm``)::
 
         it = nnm.iter_nnm(model, 1, 1e3)
         for p in it:
@@ -73,40 +105,27 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
                 break                       # a stopping rule of one's own
         branch = it.branch()                # status 'stopped'
 
-    tongues : "follow" (the continuation follows the internal-resonance tongues it meets) or "skip"
-    (it jumps over them and returns the backbone; each tongue passed is listed in branch.tongues and
-    can be computed with ``continue_tongue``); see tongue_skip.py.  locate_events : locate folds and
-    stability changes between points (events.py).
-
     Bad arguments raise NNMInputError here, before any computation.
     """
-    if tongues not in ("follow", "skip"):
-        raise NNMInputError(f"tongues must be 'follow' or 'skip', got {tongues!r}")
-    method, opts = split_options(method, method_options)
-    if max_period_step is None:
-        max_period_step = MAX_PERIOD_STEP[method]
-    if tol is None:
-        tol = 1e-6 if method == "shooting" else 1e-8
-    ritz = method == "hb" and modal_basis(model, opts) == "ritz"
-    k = check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=not ritz)
-    for name, value in (("max_angle", max_angle), ("max_correction", max_correction), ("max_rel_step", max_rel_step),
-                        ("max_period_step", max_period_step)):
-        check_positive(name, value)
-    if step is not None:
-        check_positive("step", step)
+    method, cont, tongues = from_keywords(method, continuation, tongues, keywords)
+    name = method.name
+    tol = method.tol
+    ritz = name == "hb" and modal_basis(model, method.options()) == "ritz"
+    k = check_branch_arguments(model, mode, energy_max, tol, cont.max_points, energy_min, modes_known=not ritz)
+    for field_name in ("step", "step_min", "max_angle", "max_correction", "max_rel_step", "max_period_step"):
+        check_positive(field_name, getattr(cont, field_name))
+    freq_tol = getattr(method, "freq_tol", None)
     if freq_tol is not None:
         check_positive("freq_tol", freq_tol)
-        if method != "shooting":
-            raise NNMInputError("freq_tol refines the time step of shooting; harmonic balance has none "
-                                "(raise harmonics instead)")
     if ritz:                                   # the modes below a cutoff + residual flexibility (model/ritz.py)
-        check_positive("harmonics", opts["harmonics"], integer=True)
-        system = ritz_system(model, mode, opts["harmonics"])
+        check_positive("harmonics", method.harmonics, integer=True)
+        system = ritz_system(model, mode, method.harmonics)
     else:
         system = modal_system(model)
     a0 = start_amplitude(system, k, energy_max, energy_min)
-    build = shooting_problem if method == "shooting" else hb_problem
-    problem, u0, p0, settings = build(system, k, a0, dict(opts, max_rel_step=max_rel_step, max_period_step=max_period_step),
+    build = shooting_problem if name == "shooting" else hb_problem
+    problem, u0, p0, settings = build(system, k, a0, dict(method.options(), max_rel_step=cont.max_rel_step,
+                                                           max_period_step=cont.max_period_step),
                                       tol, energy_max, floquet)
     f_method = 1.0 / problem.state(u0)[2]      # the linear mode's frequency as the method computes it (labels.py)
     if _start is not None:                     # start at a given orbit, towards another (continue_tongue)
@@ -114,27 +133,25 @@ def iter_nnm(model, mode, energy_max, method="shooting", *, tol=None, max_points
         u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
         p0 = problem.pack(system.to_modal(xb), system.to_modal(vb), Tb) - u0
         problem.accept(u0, None)
-    cs = ContinuationSettings(step=0.5 if step is None else float(step), step_min=1e-8, step_max=np.inf,
-                              max_angle=max_angle, max_correction=max_correction)
+    cs = ContinuationSettings(step=cont.step, step_min=cont.step_min, step_max=np.inf, max_angle=cont.max_angle,
+                              max_correction=cont.max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
     if freq_tol is not None:
         settings = settings.replace(freq_tol=float(freq_tol))
-    # the skeleton (driver/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
-    # balance it has the branch's harmonics (at most SKELETON_HARMONICS): the same truncation
-    sk_h = SKELETON_HARMONICS if method == "shooting" else min(int(opts["harmonics"]), SKELETON_HARMONICS)
-    reach = REACH if tongues == "skip" else FOLLOW_REACH
-    guide = _skeleton_guide(model, mode, energy_max, sk_h, reach) if model.springs else None
-    labels = FamilyLabels(guide, math.sqrt(system.omega2[k]) / (2 * math.pi), f_method,
-                          getattr(getattr(problem, "integrator", None), "order", 0))
-    it = NNMIterator(model, mode, problem, system, engine, settings, energy_max, max_points, cs, tol,
-                     locate=locate_events, tongues=tongues, error_estimate=error_estimate, freq_tol=freq_tol,
-                     skeleton=guide, labels=labels)
-    it._start_is_low = _start is None
-    return it
+    # the skeleton (backbone/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
+    # balance it has the branch's harmonics (at most the skeleton's): the same truncation
+    sk_h = tongues.skeleton.harmonics if name == "shooting" else min(int(method.harmonics), tongues.skeleton.harmonics)
+    sk, failure = (skeleton_of(model, mode, energy_max, _skeleton_system, replace(tongues.skeleton, harmonics=sk_h),
+                               tongues.reach) if model.springs else (None, "the model has no nonlinear element"))
+    labels = FamilyLabels(sk, math.sqrt(system.omega2[k]) / (2 * math.pi), f_method,
+                          getattr(getattr(problem, "integrator", None), "order", 0), tongues.labels)
+    return NNMIterator(model, mode, problem, system, engine, settings, energy_max, cont.max_points, cs, tol,
+                       locate=locate_events, error_estimate=method.error_estimate, freq_tol=freq_tol, labels=labels,
+                       policy=policy_for(tongues, sk, failure), start_is_low=_start is None)
 
 
-def _skeleton_system(model, mode, harmonics=SKELETON_HARMONICS):
-    """The modal system of the skeleton (driver/skeleton.py) with ``harmonics``: every mode, or for a large model
+def _skeleton_system(model, mode, harmonics):
+    """The modal system of the skeleton (backbone/skeleton.py) with ``harmonics``: every mode, or for a large model
     the Ritz basis for those harmonics (model/ritz.py; the one a harmonic-balance branch with as many harmonics
     built already, from its cache)."""
     if model.n > RITZ_MIN_DOF:
@@ -142,89 +159,37 @@ def _skeleton_system(model, mode, harmonics=SKELETON_HARMONICS):
     return modal_system(model)
 
 
-def _skeleton_guide(model, mode, energy_max, harmonics=SKELETON_HARMONICS, reach=REACH):
-    """A callable giving the Skeleton of the branch (computed at its first call, when a point leaves the linear
-    regime), or None when it cannot be computed (labels then come from the harmonic share, and the jumps
-    rescale the backbone's orbits only)."""
-    found = []
-
-    def guide():
-        if not found:
-            try:
-                found.append(skeleton(model, mode, energy_max, _skeleton_system, harmonics, reach))
-            except (NNMInputError, np.linalg.LinAlgError, ValueError, RuntimeError):
-                found.append(None)
-        return found[0]
-    return guide
-
-
-def continue_nnm(model, mode, energy_max, steps_per_period=200, tol=None, max_points=500, on_point=None,
-                 stop=None, energy_min=None, symmetric=None, floquet=None, step=None, max_angle=0.35,
-                 max_correction=0.5, max_rel_step=0.4, reversible=None, max_period_step=None, *,
-                 method="shooting", tongues="follow", locate_events=True, integrator="newmark", error_estimate=True,
-                 freq_tol=None, **hb_options):
+def continue_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues=None, energy_min=None,
+                 floquet=None, locate_events=True, on_point=None, stop=None, **keywords):
     """Compute the NNM branch of linear mode ``mode`` (1-based) from low energy up to ``energy_max`` (J).
 
     Parameters
     ----------
-    method : "shooting" (Newmark shooting, the seed paper's method; default) or "hb" (harmonic
-        balance; options ``harmonics``, ``samples``, ``basis``, ``condensed``, see ``nnm_solver.hb``).
-        ``condensed=True`` solves the HB equations condensed exactly onto the nonlinear elements'
-        deformations (orbits/condensed_hb.py): n_s (H + 1) / 2 + 2 unknowns whatever the model size, the
-        same orbits as the uncondensed HB away from exact internal resonances.
-    steps_per_period : time steps per period; shooting.  The frequency error is O(steps^-order) (order 2
-        for Newmark), largest for orbits with strong higher harmonics (branch.freq_error estimates it).
-        Rounded up to a multiple of 4 for the default quarter-period shooting of symmetric orbits (to an even
-        number for half-period shooting); the branch's settings record the number used.
-    integrator : the shooting's time integrator, one of ``INTEGRATORS``: "newmark" (default; the seed
-        paper's average-acceleration scheme, order 2), "gauss4" / "gauss6" (Gauss-Legendre collocation,
-        orders 4 and 6, about 2x / 3x Newmark's cost per step; see integrators.py).
-    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11); default 1e-6 (HB: 1e-8 on
-        the relative residual).
-    max_points : largest number of points kept.
+    method : ``Shooting(...)`` (default: Gauss-Legendre order 6 at 100 steps a period, with the exact monodromy;
+        ``Shooting(integrator="newmark")`` is the seed paper's scheme) or ``HarmonicBalance(...)`` (harmonics,
+        samples, basis, ``condensed=True``: the equations condensed onto the nonlinear elements, whatever the model
+        size); or their names "shooting" / "hb".  driver/settings.py documents every field and default.
+    continuation : ``Continuation(...)``: step control and max_points (driver/settings.py).
+    tongues : ``Follow()`` (default: the continuation follows the internal-resonance tongues it meets, points
+        labelled against the backbone family) or ``Skip()`` (the backbone: tongues jumped from the skeleton, each
+        listed in branch.tongues and computable with ``continue_tongue``); or "follow" / "skip".
+        backbone/policy.py describes the algorithm, backbone/settings.py its settings.
+    energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
+    floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when the Hill matrix
+        has at most HILL_AUTO_SIZE rows).
+    locate_events : locate folds and stability changes between points (default True).
     on_point : optional callable(point: Point) called after each converged point.
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').
-    energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
-    symmetric : half-period shooting (valid for odd nonlinear forces; see orbits/shooting.py).  Default:
-        True when every element's force is odd, else full-period shooting (then ``reversible``
-        defaults to True: orbits start at rest).
-    reversible : orbits starting at rest (v0 = 0, default with symmetric) or general orbits with a
-        phase condition (False); see orbits.shooting.ShootingProblem.
-    floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when
-        the Hill matrix has at most HILL_AUTO_SIZE rows).
-    step : first step length, relative to the orbit (default 0.5: half the starting amplitude); steps
-        are measured in the balanced norm of continuation.py (state relative to its norm, period
-        relative to itself).
-    max_angle : largest turn (rad) of the branch tangent between two points.
-    max_correction : largest corrector displacement, relative to the step length.
-    max_rel_step : largest relative change of the orbit's state (amplitude and shape) in one step.
-    max_period_step : largest relative change of the period between two points (default: MAX_PERIOD_STEP of
-        the method, 0.005 for shooting, 0.02 for harmonic balance; keeps the
-        continuation from stepping over the entrance of internal-resonance tongues).
-    tongues : "follow" (default) or "skip" (return the backbone; tongues listed in branch.tongues,
-        each computable with ``continue_tongue``).
-    locate_events : locate folds and stability changes between points (default True).
-    error_estimate : estimate each point's relative frequency error (branch.freq_error): shooting, from the time
-        discretisation by step doubling (about 2 residual evaluations per point); harmonic balance, from the
-        truncation of the harmonics, the frequency's change at the point's energy with two harmonics more (a
-        Newton step of that larger problem per point, a few next to a resonant harmonic; orbits/hb_error.py).
-    freq_tol : if given (e.g. 1e-6), the steps per period are raised wherever a point's estimated
-        frequency error exceeds it, and the point is computed again (branch.steps has each point's).
+    **keywords : the keywords of earlier releases, each replacing the field of that name of the method or the
+        continuation settings (``integrator="gauss6"``, ``steps_per_period=100``, ``harmonics=9``,
+        ``condensed=True``, ``tol=1e-8``, ``max_points=200``, ``step=0.1``, ``max_period_step=0.02``,
+        ``freq_tol=1e-6``, ``error_estimate=False``, ...).
 
     Returns a Branch; its ``status`` and ``message`` say why the continuation stopped, and every
     point computed before a failure is kept.
     """
-    if method == "shooting":
-        opts = dict(steps_per_period=steps_per_period, symmetric=symmetric, reversible=reversible,
-                    integrator=integrator, **hb_options)
-    elif integrator != "newmark":
-        raise NNMInputError("integrator= belongs to method='shooting' (harmonic balance has no time steps)")
-    else:
-        opts = dict(hb_options)
-    it = iter_nnm(model, mode, energy_max, method, tol=tol, max_points=max_points, energy_min=energy_min,
-                  floquet=floquet, step=step, max_angle=max_angle, max_correction=max_correction,
-                  max_rel_step=max_rel_step, max_period_step=max_period_step, tongues=tongues,
-                  locate_events=locate_events, error_estimate=error_estimate, freq_tol=freq_tol, **opts)
+    it = iter_nnm(model, mode, energy_max, method, continuation=continuation, tongues=tongues, energy_min=energy_min,
+                  floquet=floquet, locate_events=locate_events, **keywords)
     while True:
         if stop is not None and stop.is_set():
             it.cancel()

@@ -19,12 +19,13 @@ from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 from ..stability.locator import event_rtol
-from .ends import family_end, off_family_note
+from ..backbone.content import content_of
+from ..backbone.jumps import land, upward_tangent
+from ..backbone.policy import Finish, FollowPolicy, Jump
+from ..continuation.engine import pseudo_arclength
 from .refinement import StepRefinement
-from .skip_mode import SkipMode
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
-from .tongue_skip import fundamental_share, harmonic_label, partner_harmonic
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
@@ -32,7 +33,7 @@ MAX_REFUSALS = 3
 __all__ = ["NNMIterator"]
 
 
-class NNMIterator(StepRefinement, SkipMode):
+class NNMIterator(StepRefinement):
     """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
 
     Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
@@ -43,8 +44,8 @@ class NNMIterator(StepRefinement, SkipMode):
     """
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
-                 tol=None, locate=True, tongues="follow", error_estimate=True, freq_tol=None, skeleton=None,
-                 labels=None):
+                 tol=None, locate=True, error_estimate=True, freq_tol=None, labels=None, policy=None,
+                 start_is_low=True):
         self.model = model
         self.freq_tol = None if not freq_tol else float(freq_tol)
         self._refine_pause = 0
@@ -67,13 +68,11 @@ class NNMIterator(StepRefinement, SkipMode):
         self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
         self.events = []
         self._landed = False
-        self.tongue_mode = tongues
-        self._skeleton = skeleton      # a callable giving the branch's Skeleton (skeleton.py), or None
-        self._labels = labels          # FamilyLabels (labels.py): point labels against the skeleton, or None
-        self.tongues = []
-        self._tongue = None            # the tongue being traversed (skip mode)
-        self._start_is_low = True      # the branch starts at low energy (not a tongue from its entry)
-        self._last_backbone = None     # (ContinuationPoint, Point) of the last backbone point
+        self._labels = labels          # FamilyLabels (backbone/labels.py): point labels against the skeleton, or None
+        self._policy = policy if policy is not None else FollowPolicy()   # backbone/policy.py: keep, jump or finish
+        self.tongues = []              # TongueRecords (results/tongues.py)
+        self._start_is_low = bool(start_is_low)   # the branch starts at low energy (not a tongue from its entry)
+        self._last_kept = None         # (ContinuationPoint, Point) of the last point kept
         self._refusals = 0             # steps refused in a row because an event in them was not located
         # the engine's next point, computed while the last point's multipliers are (in the worker thread)
         self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
@@ -98,8 +97,14 @@ class NNMIterator(StepRefinement, SkipMode):
                 point, (q0, v0, T) = self._record(cp, self._problem, later=self._ahead)
                 if self._refined(cp, point):
                     continue
-                if self.tongue_mode == "skip" and self._hidden(cp, point):
-                    continue
+                decision = self._decide(cp, point)
+                if isinstance(decision, Jump):
+                    decision = self._jump(cp, decision)
+                    if decision is None:        # landed beyond the tongue: the continuation restarts there
+                        continue
+                if isinstance(decision, Finish):
+                    self._apply(decision)
+                    raise StopIteration
                 if self._ahead:             # the next step runs while this point's eigenproblem does
                     self._engine.ahead()
                 self._settle(point)
@@ -110,8 +115,7 @@ class NNMIterator(StepRefinement, SkipMode):
                     point, (q0, v0, T) = located
                     break
                 command = REFUSE                # an event could not be located: a shorter step
-            if self.tongue_mode == "skip":
-                self._last_backbone = (cp, point)
+            self._last_kept = (cp, point)
             self._estimate_error(point)
             self._release(point)
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
@@ -127,7 +131,7 @@ class NNMIterator(StepRefinement, SkipMode):
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
-            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + off_family_note(self.points))
+            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._policy.note(self.points))
         elif N + 1 >= self.max_points:
             self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
                                        f"raise max_points to go on")
@@ -166,17 +170,67 @@ class NNMIterator(StepRefinement, SkipMode):
                                f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
 
     def _family_ends(self, reason):
-        """The continuation failed where the backbone family itself ends (ends.family_end): finish there.
+        """The continuation failed where the backbone family itself ends (the policy's ``stopped``): finish there.
         True when the branch was finished."""
-        end = family_end(self._skeleton() if self._skeleton is not None else None, self.points[-1], reason,
-                         len(self.points) - 1)
+        end = self._policy.stopped(self.points[-1], reason, len(self.points) - 1)
         if end is None:
             return False
-        status, message, record = end
-        if record is not None:
-            self.tongues.append(record)
-        self._finish(status, message)
+        self._apply(end)
         return True
+
+    def _decide(self, cp, point):
+        """The point's label (against the skeleton, with its error estimated first) and the policy's decision."""
+        obs = point._observed
+        if self._labels is not None:
+            self._estimate_error(point)
+            verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error)
+            point.label = verdict.text
+        else:
+            verdict = None
+        if verdict is None:
+            from ..backbone.labels import Verdict
+            verdict = Verdict(obs[0].label)
+        return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1] if self._last_kept else None,
+                                   len(self.points), self.tongues)
+
+    def _jump(self, cp, jump):
+        """Try the jump's targets (backbone/jumps.py) in turn; restart the continuation at the first that lands on
+        the family and record the tongue (None), or the policy's Finish when none lands."""
+        prob, (bcp, bpoint) = self._problem, self._last_kept
+        sk = self._policy.skeleton
+        tried = []
+        for E_t in jump.targets:
+            tried.append(E_t)
+            u, J = land(prob, self._system, sk, E_t, self._cs, self._tol)
+            if u is None:
+                continue
+            E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
+            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1))
+            if self._policy.landed(verdict, E, jump.base):
+                record = jump.record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f,
+                                             jump=f"the skeleton's orbit at {E_t:.4g} J",
+                                             attempts=jump.record.attempts + len(tried))
+                self._store(record, jump.index)
+                self._engine.restart(pseudo_arclength(prob, u, upward_tangent(prob, u, J, bcp.tangent), self._cs,
+                                                      self._tol))
+                self._prev = None          # no events are located across the jump
+                self._refusals = 0
+                return None
+        record = jump.record.replace(attempts=jump.record.attempts + len(tried))
+        return self._policy.no_landing(bpoint, record, tuple(tried), jump.index)
+
+    def _store(self, record, index):
+        """Add a tongue record (index -1) or replace the one at ``index``."""
+        if index is None or index < 0:
+            self.tongues.append(record)
+        else:
+            self.tongues[index] = record
+
+    def _apply(self, finish):
+        """Finish the branch as the policy decided."""
+        if finish.record is not None:
+            self._store(finish.record, finish.index)
+        self._finish(finish.status, finish.message)
 
     def _locate(self, cp, point, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at
@@ -206,8 +260,12 @@ class NNMIterator(StepRefinement, SkipMode):
         def record(sigma):
             u, J, p = loc.at(sigma)
             loc.refresh(u, J)
-            return self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
-                                known=loc.spectra.get(float(sigma)))[0]
+            pt = self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
+                              known=loc.spectra.get(float(sigma)))[0]
+            if self._labels is not None:
+                pt.label = self._labels.verdict(pt.energy, pt.frequency_hz, pt._observed[0]).text
+            pt._observed = None
+            return pt
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
@@ -253,22 +311,17 @@ class NNMIterator(StepRefinement, SkipMode):
             mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
         A = prob.coefficients(cp.u)
         Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-        label, k, frac, amps = harmonic_label(Q)
+        content = content_of(Q, self.mode - 1)
         energy = float(self.model.energy(x0, v0))
-        dev = None
-        if self._labels is not None:
-            kp = partner_harmonic(Q, self.mode - 1)[0] if Q is not None else k
-            label, dev = self._labels.label(energy, 1.0 / T, label, kp if kp > 1 else k, frac, amps)
         point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
-                      coefficients=None if A is None else sys_.to_physical(A), label=label)
+                      coefficients=None if A is None else sys_.to_physical(A), label=content.label)
         point.steps = int(getattr(prob, "spp", 0))
         point._collision = collision          # the Krein locator's coordinates
         point._spectrum = job
         point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
-        point._content = (k, frac)         # harmonic content, for the tongue-skipping test (no second integration)
-        point._dev = dev                   # distance from the skeleton's frequency (labels.py), None: not measured
-        point.fundamental_share = fundamental_share(amps)
+        point._observed = (content, Q)        # harmonic content and modal orbit, for the label and the policy
+        point.fundamental_share = content.share
         point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
         return point, (q0, vq0, T)
 
@@ -285,7 +338,6 @@ class NNMIterator(StepRefinement, SkipMode):
         """Branch of the points so far.  A running iteration left by ``break`` ends as 'stopped'."""
         if self.status == "running":
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
-        tongues = [{k: v for k, v in t.items() if k not in ("backbone", "last_energy", "trend")} for t in self.tongues]
         message = self.message
         if self.freq_tol:
             over = [p for p in self.points if p.freq_error > self.freq_tol]
@@ -301,4 +353,4 @@ class NNMIterator(StepRefinement, SkipMode):
                         "stability changes and branch points are not detected; pass floquet=True)")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=message,
-                                  events=self.events if self.locate else None, tongues=tongues)
+                                  events=self.events if self.locate else None, tongues=self.tongues)

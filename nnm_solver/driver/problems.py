@@ -1,7 +1,6 @@
 r"""The first orbit of a branch and the problem that continues it, for each method (the driver's api.py calls these).
 
-``start_amplitude``: the modal amplitude of the nearly linear first orbit; ``method_options``: the method's options
-checked and completed with its defaults; ``shooting_problem`` / ``hb_problem``: the periodic-orbit problem on the
+``start_amplitude``: the modal amplitude of the nearly linear first orbit; ``shooting_problem`` / ``hb_problem``: the periodic-orbit problem on the
 modal system (orbits/shooting.py, orbits/harmonic_balance.py, orbits/condensed_hb.py), its first point u0, the
 direction p0 to start along, and the branch's settings record (results/settings.py).
 """
@@ -20,7 +19,7 @@ from ..orbits.shooting import ShootingProblem
 from ..results.settings import HarmonicBalanceSettings, ShootingSettings
 
 __all__ = ["METHODS", "START_NONLINEARITY", "HILL_AUTO_SIZE", "RITZ_MIN_DOF", "MODAL_BASES", "check_positive",
-           "start_amplitude", "method_options", "modal_basis", "shooting_problem", "hb_problem"]
+           "start_amplitude", "modal_basis", "shooting_problem", "hb_problem"]
 
 #: fraction of the linear potential energy carried by the springs at the first point
 START_NONLINEARITY = 1e-5
@@ -30,9 +29,6 @@ METHODS = ("shooting", "hb")
 
 #: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
 HILL_AUTO_SIZE = 1000
-
-_SHOOTING_OPTIONS = dict(steps_per_period=200, symmetric=None, reversible=None, integrator="newmark")
-_HB_OPTIONS = dict(harmonics=7, samples=None, basis=None, condensed=False, modal_basis=None)
 
 #: harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs
 RITZ_MIN_DOF = 2000
@@ -78,20 +74,6 @@ def start_amplitude(system, k, energy_max, energy_min=None):
     return hi
 
 
-def method_options(method, options):
-    """Split the method-specific options; NNMInputError for an option of the other method."""
-    if method == "harmonic_balance":
-        method = "hb"
-    if method not in METHODS:
-        raise NNMInputError(f"method must be one of {METHODS}, got {method!r}")
-    own, other = (_SHOOTING_OPTIONS, _HB_OPTIONS) if method == "shooting" else (_HB_OPTIONS, _SHOOTING_OPTIONS)
-    for key in options:
-        if key not in own:
-            where = f"; it belongs to method={'hb' if method == 'shooting' else 'shooting'!r}" if key in other else ""
-            raise NNMInputError(f"unknown option {key!r} for method={method!r}{where}")
-    return method, {**own, **options}
-
-
 def modal_basis(model, opts):
     """The modal basis harmonic balance works in: "full" (every mode, exact) or "ritz" (model/ritz.py)."""
     basis = opts.get("modal_basis")
@@ -103,7 +85,8 @@ def modal_basis(model, opts):
 
 
 def shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
-    spp = opts["steps_per_period"]
+    integrator = get_integrator(opts["integrator"])
+    spp = integrator.steps if opts["steps_per_period"] is None else opts["steps_per_period"]
     check_positive("steps_per_period", spp, integer=True)
     if spp < 8:
         raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
@@ -116,7 +99,6 @@ def shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
     reversible = opts["reversible"]
     if reversible is None and opts["symmetric"] is None and not symmetric:
         reversible = True                      # even forces: full period, orbits still start at rest
-    integrator = get_integrator(opts["integrator"])
     problem = ShootingProblem(system, k, spp, symmetric=symmetric, max_rel_step=opts["max_rel_step"],
                               reversible=reversible, max_rel_period_step=opts["max_period_step"],
                               integrator=integrator)

@@ -60,4 +60,5 @@ class StepRefinement:
     def _release(point):
         """Drop the Jacobian and factorisation a kept point carried for its error estimate (O(n^2) each)."""
         point._solution = None
+        point._observed = None
 

@@ -10,7 +10,6 @@ import numpy as np
 from ..errors import NNMInputError
 from ..results.branch import Point
 from .api import iter_nnm
-from .tongue_skip import leaves_backbone
 
 __all__ = ["continue_tongue", "BACK_ON_BACKBONE", "ON_BACKBONE_RTOL"]
 
@@ -62,13 +61,11 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     tol = options.pop("tol")
     it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
                   _start=start, **options)
-    entry = Point(E_in, tongue["entry_frequency_hz"], tongue["entry_period"], start[0][0], start[0][1],
-                  np.full(2 * branch.model.n, np.nan, dtype=complex), True)
     last, inside, in_tongue, below = E_in, False, False, 0
     for p in it:
         inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
         in_tongue = in_tongue or p.label != "backbone"
-        if inside and p.energy > E_in and p.energy > last and not leaves_backbone(p, entry):
+        if inside and p.energy > E_in and p.energy > last and p.label == "backbone":
             it.cancel(f"back on the backbone at E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz, above the "
                       f"tongue's entry at {E_in:.6g} J")
             break
@@ -84,6 +81,6 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
     out = it.branch()
     if out.status == "cancelled":
         out.status = "done"
-    ratio = tongue["label"].split()[-1]          # 'tongue 3:1' -> '3:1'
+    ratio = f"{tongue['order']}:1"
     out.name = f"{branch.name or f'NNM {branch.mode}'}: {ratio} tongue at {tongue['entry_frequency_hz']:.6g} Hz"
     return out

@@ -204,6 +204,8 @@ def _free_name(path):
 
 
 def _jsonable(obj):
+    if hasattr(obj, "as_dict"):              # typed records (results/tongues.py)
+        obj = obj.as_dict()
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

@@ -7,7 +7,8 @@ Layer: imports ``nnm_solver.orbits`` and the layers below it.
 from .branch import STATUSES, Branch, Point
 from .plotting import EVENT_MARKERS, plot_atlas, plot_fep
 from .settings import HarmonicBalanceSettings, MethodSettings, ShootingSettings
+from .tongues import TongueRecord
 from .stops import STOP_STATUSES
 
 __all__ = ["Branch", "Point", "STATUSES", "STOP_STATUSES", "MethodSettings", "ShootingSettings",
-           "HarmonicBalanceSettings", "plot_fep", "plot_atlas", "EVENT_MARKERS"]
+           "HarmonicBalanceSettings", "TongueRecord", "plot_fep", "plot_atlas", "EVENT_MARKERS"]

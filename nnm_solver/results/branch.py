@@ -12,6 +12,7 @@ from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
 from .settings import settings_from_dict
 from .stops import STOP_STATUSES
+from .tongues import TongueRecord
 
 __all__ = ["Branch", "Point", "STATUSES"]
 
@@ -87,7 +88,7 @@ class Branch:
                           steps, fundamental_share)
         self.events = list(detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
                            if events is None else events)
-        self.tongues = list(tongues or [])
+        self.tongues = [TongueRecord.from_mapping(t) for t in (tongues or [])]
 
     def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None,
                      freq_error=None, steps=None, fundamental_share=None):
@@ -179,8 +180,8 @@ class Branch:
             if not -len(items) <= item < len(items):
                 raise NNMInputError(f"{what[:-1]} {item} is out of range: the branch lists {len(items)} {what}")
             return items[int(item)]
-        if not isinstance(item, dict):
-            raise NNMInputError(f"give one of branch.{what} (a dict) or its index, got {type(item).__name__}")
+        if not isinstance(item, (dict, TongueRecord)):
+            raise NNMInputError(f"give one of branch.{what} (a record) or its index, got {type(item).__name__}")
         return item
 
     def check_index(self, i):
@@ -322,7 +323,9 @@ class Branch:
                       self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
                       self.status, self.message, settings, self.name,
                       None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
-                      [dict(t, entry_energy=t["entry_energy"] * sc.energy) for t in self.tongues], self.freq_error,
+                      [t.replace(entry_energy=t.entry_energy * sc.energy,
+                                 exit_energy=None if t.exit_energy is None else t.exit_energy * sc.energy)
+                       for t in self.tongues], self.freq_error,
                       self.steps, self.fundamental_share)
 
 

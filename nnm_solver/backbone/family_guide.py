@@ -2,7 +2,7 @@ r"""The one-harmonic guide of the skeleton's stepping (amplitude_family.py): whi
 
 With the fundamental alone (H = 1) the harmonic-balance family of a mode has no k:1 internal resonance with
 k >= 2 (no harmonic k exists to resonate with a partner mode), so it passes every tongue smoothly.  The skeleton
-with SKELETON_HARMONICS harmonics does not: near a k:1 resonance its family is a tongue's sheet, on which the
+with s.harmonics harmonics does not: near a k:1 resonance its family is a tongue's sheet, on which the
 partner's k-th harmonic grows and the frequency moves away from the one-harmonic family, while the backbone
 beyond the tongue is another sheet, nearer the one-harmonic family, that the stepping does not reach by small
 steps (measured on the 2-DOF benchmark's NNM 1 at its 5:1 tongue: the sheet stepped into lies 3.2e-3 above the
@@ -22,40 +22,15 @@ import math
 import numpy as np
 
 from .amplitude_orbit import solve_at_amplitude, family_share
+from .settings import SkeletonSettings
 
-__all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump", "DEV_CHECK", "DEV_CHECK_REL",
-           "DEV_JUMP", "GUIDE_TRUST", "JUMP_ENERGY_POWER"]
+__all__ = ["OneHarmonicGuide", "nearer_sheet", "better_of", "sheet_start", "guided_jump"]
 
-#: the stepping asks the guide again when its relative frequency distance from the one-harmonic family has moved by
-#: DEV_CHECK, or by DEV_CHECK_REL of that distance where it is larger, since it last asked (a tongue's sheet moves
-#: away from it; NLvib's beam, example 09, moves 3e-2 away by its own harmonics)
-DEV_CHECK, DEV_CHECK_REL = 2e-4, 0.1
 
-#: a step moving the distance from the guide by more than JUMP_FACTOR x the previous step's + DEV_JUMP is halved (a
-#: jump onto another sheet, amplitude_family.py)
-DEV_JUMP = 5e-4
 
-#: a switch to the backbone's sheet is placed where that sheet begins to this ratio in amplitude (sheet_start)
-SHEET_RESOLUTION = 1.01
 
-#: an orbit of the backbone's sheet holds at most this much more energy than the tongue's sheet at the same amplitude
-ENERGY_SLACK = 0.01
-#: and a jump of 1 + delta in amplitude raises the energy at most (1 + delta) ** JUMP_ENERGY_POWER (a hardening cubic
-#: family: E ~ a^4; more is another mode's motion taking the energy)
-JUMP_ENERGY_POWER = 6
 
-#: the guide arbitrates between sheets only where it lies within this relative frequency of the skeleton (its
-#: one-harmonic truncation still a fair model of the backbone; the soft 3-DOF chain's mode 1 moves 18 % away near the
-#: one-harmonic family's own fold); and the sheets it chooses between lie within SHEET_FREQUENCY of each other in
-#: ln f (measured: the 2-DOF benchmark's tongue sheets 0.3-0.8 % from its backbone)
-GUIDE_TRUST, SHEET_FREQUENCY = 0.02, 0.03
 
-#: the guide's own steps: ratios of modal amplitudes between these, where the secant predictor's frequency is within
-#: GUIDE_PREDICTION of the solution (its family is smooth: large steps in the linear regime)
-GUIDE_STEP_MIN, GUIDE_STEP_MAX, GUIDE_PREDICTION = 1.01, 2.0, 1e-3
-#: ... and its orbits between them interpolated by a polynomial of this degree in ln a (frequency to 5e-5 on the
-#: 2-DOF benchmark's NNM 1 and NLvib's beam, where the one-harmonic frequency doubles)
-GUIDE_ORDER = 3
 
 
 class OneHarmonicGuide:
@@ -63,7 +38,7 @@ class OneHarmonicGuide:
     (module docstring), stepped upward in the modal amplitude a (sqrt(kg) m) as it is asked; ends (``at`` gives
     None) where its Newton fails (a 1:1 resonance or a fold of the one-harmonic family)."""
 
-    def __init__(self, prob):
+    def __init__(self, prob, settings=SkeletonSettings()):
         from ..orbits.condensed_hb import CondensedHBProblem
         from ..orbits.hb_basis import HBBasis
         self.skeleton_problem = prob
@@ -71,7 +46,8 @@ class OneHarmonicGuide:
         self._nD = self.prob.nb * self.prob.ns
         self._a, self._u = [], []
         self._end = math.inf
-        self._ratio = GUIDE_STEP_MIN
+        self.s = settings
+        self._ratio = settings.guide_step_min
 
     def _solve(self, a, guess):
         guess = guess.copy()
@@ -91,6 +67,7 @@ class OneHarmonicGuide:
 
     def _cover(self, a):
         """Solve the guide up to modal amplitude a (or at a, below its first point); False beyond its end."""
+        s = self.s
         if not a < self._end:
             return False
         if not self._a or a < self._a[0]:        # the first point (or one below the first)
@@ -106,9 +83,9 @@ class OneHarmonicGuide:
         while self._a[-1] < a:                   # step the family up past a
             a1 = self._a[-1] * self._ratio
             u, err = self._step(a1)
-            if u is None or (err > GUIDE_PREDICTION and len(self._a) > 1):
-                if self._ratio > GUIDE_STEP_MIN:     # too far for the interpolation (or for Newton): shorter
-                    self._ratio = max(GUIDE_STEP_MIN, 1 + (self._ratio - 1) / 2)
+            if u is None or (err > s.guide_prediction and len(self._a) > 1):
+                if self._ratio > s.guide_step_min:     # too far for the interpolation (or for Newton): shorter
+                    self._ratio = max(s.guide_step_min, 1 + (self._ratio - 1) / 2)
                     continue
                 if u is None:                        # the family ends between: at a itself, if there
                     u = self._step(a)[0] if a < a1 else None
@@ -117,15 +94,15 @@ class OneHarmonicGuide:
                         return False
                     a1 = a
             # the next step: the secant predictor's error grows as the square of the step
-            grow = math.sqrt(GUIDE_PREDICTION / max(err, 1e-300)) if len(self._a) > 1 else 2.0
-            self._ratio = min(GUIDE_STEP_MAX, max(GUIDE_STEP_MIN, 1 + (self._ratio - 1) * min(2.0, grow)))
+            grow = math.sqrt(s.guide_prediction / max(err, 1e-300)) if len(self._a) > 1 else 2.0
+            self._ratio = min(s.guide_step_max, max(s.guide_step_min, 1 + (self._ratio - 1) * min(2.0, grow)))
             self._a.append(a1)
             self._u.append(u)
         return True
 
     def at(self, a):
         """The guide's orbit (u of its one-harmonic problem) at modal amplitude a, or None beyond its end: solved at
-        amplitudes GUIDE_STEP_MIN..GUIDE_STEP_MAX apart and interpolated between them (degree GUIDE_ORDER in ln a;
+        amplitudes s.guide_step_min..GUIDE_STEP_MAX apart and interpolated between them (degree s.guide_order in ln a;
         the skeleton asks at every step, for a frequency to compare and a first guess, which need no Newton solve of
         their own)."""
         if not self._cover(a):
@@ -140,7 +117,7 @@ class OneHarmonicGuide:
 
     def _weights(self, j, a):
         """The stored points around a (a between points j - 1 and j) and their Lagrange weights in ln a."""
-        n = min(len(self._a), GUIDE_ORDER + 1)  # the nearest n points around a
+        n = min(len(self._a), self.s.guide_order + 1)  # the nearest n points around a
         i = min(max(j - n // 2, 0), len(self._a) - n)
         x = range(i, i + n)
         t = [math.log(self._a[k]) for k in x]
@@ -180,18 +157,19 @@ def nearer_sheet(guide, a, v):
 
 
 def better_of(guide, a, c, v):
-    """Is the skeleton's orbit c at modal amplitude a another orbit than v, within SHEET_FREQUENCY of its frequency,
-    nearer the guide's (where the guide is trusted, GUIDE_TRUST), with less of its orbit in partner harmonics and no
-    more energy, to ENERGY_SLACK (a tongue's sheet holds the partner's energy besides the followed mode's; an orbit
+    """Is the skeleton's orbit c at modal amplitude a another orbit than v, within s.sheet_frequency of its frequency,
+    nearer the guide's (where the guide is trusted, s.guide_trust), with less of its orbit in partner harmonics and no
+    more energy, to s.energy_slack (a tongue's sheet holds the partner's energy besides the followed mode's; an orbit
     at the same amplitude with more is another mode's motion at the fundamental, which family_share does not
     count)?"""
+    s = guide.s
     g = guide.at(a)
     prob = guide.skeleton_problem
     return (g is not None and np.linalg.norm(c - v) > 1e-6 * np.linalg.norm(v)
-            and abs(math.log(c[-1] / v[-1])) <= SHEET_FREQUENCY
-            and abs(c[-1] / g[-1] - 1.0) < min(abs(v[-1] / g[-1] - 1.0), GUIDE_TRUST)
+            and abs(math.log(c[-1] / v[-1])) <= s.sheet_frequency
+            and abs(c[-1] / g[-1] - 1.0) < min(abs(v[-1] / g[-1] - 1.0), s.guide_trust)
             and family_share(prob, c) > family_share(prob, v)
-            and prob.energy(c) <= prob.energy(v) * (1 + ENERGY_SLACK))
+            and prob.energy(c) <= prob.energy(v) * (1 + s.energy_slack))
 
 
 def _stepping_orbit(prob, pts, a):
@@ -209,19 +187,20 @@ def _stepping_orbit(prob, pts, a):
 
 def sheet_start(prob, guide, pts, a, found):
     """Where the backbone's sheet found at amplitude a (found: (orbit, share) from nearer_sheet or guided_jump)
-    begins along the stepping's points pts: that sheet followed down in amplitude (steps of SHEET_RESOLUTION,
+    begins along the stepping's points pts: that sheet followed down in amplitude (steps of s.sheet_resolution,
     secant predictor) while it is still better_of the stepping's sheet at the same amplitude (above the stepping's
     last point: while it converges).  (a, u, share) of its lowest such orbit."""
+    s = guide.s
     nD = prob.nb * prob.ns
     (v, share), last = found, None
-    while a / SHEET_RESOLUTION > pts[0][0]:
-        a_t = a / SHEET_RESOLUTION
+    while a / s.sheet_resolution > pts[0][0]:
+        a_t = a / s.sheet_resolution
         guess = v.copy()
         if last is not None:
             guess = v + (v - last) * (math.log(a_t / a) / math.log(a / (last[nD] / prob.beta)))
         guess[nD] = a_t * prob.beta
         c = solve_at_amplitude(prob, guess)
-        if c is None or abs(math.log(c[-1] / v[-1])) > SHEET_FREQUENCY / 3:    # no solution, or another family
+        if c is None or abs(math.log(c[-1] / v[-1])) > s.sheet_frequency / 3:    # no solution, or another family
             break
         if a_t <= pts[-1][0]:
             w = _stepping_orbit(prob, pts, a_t)
@@ -234,12 +213,13 @@ def sheet_start(prob, guide, pts, a, found):
 def guided_jump(prob, guide, pts, share0, jumps):
     """Past the stepping's last point (a0, E0, f0, u0) = pts[-1], where its family folds or jumps: the skeleton's
     orbits at a0 (1 + delta), delta in ``jumps``, solved from the guide's orbits there (where the guide is trusted,
-    GUIDE_TRUST); the first that lies within SHEET_FREQUENCY of the last point's frequency, nearer the guide's than
-    the last point (or within DEV_CHECK of it), holds no more of its orbit in partner harmonics (family_share, share0
-    the last point's) and no more energy than JUMP_ENERGY_POWER allows: (a, (u, share)); else None."""
+    s.guide_trust); the first that lies within s.sheet_frequency of the last point's frequency, nearer the guide's than
+    the last point (or within s.dev_check of it), holds no more of its orbit in partner harmonics (family_share, share0
+    the last point's) and no more energy than s.jump_energy_power allows: (a, (u, share)); else None."""
+    s = guide.s
     a0, E0, _, u0 = pts[-1]
     dev0 = guide.deviation(a0, u0)
-    if dev0 is None or not abs(dev0) <= GUIDE_TRUST:
+    if dev0 is None or not abs(dev0) <= s.guide_trust:
         return None
     for delta in jumps:
         a = a0 * (1 + delta)
@@ -250,8 +230,8 @@ def guided_jump(prob, guide, pts, share0, jumps):
         if c is None:
             continue
         share = family_share(prob, c)
-        if (abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), DEV_CHECK) and share >= share0
-                and abs(math.log(c[-1] / u0[-1])) <= SHEET_FREQUENCY
-                and prob.energy(c) <= E0 * (1 + delta) ** JUMP_ENERGY_POWER):
+        if (abs(c[-1] / g[-1] - 1.0) < max(abs(dev0), s.dev_check) and share >= share0
+                and abs(math.log(c[-1] / u0[-1])) <= s.sheet_frequency
+                and prob.energy(c) <= E0 * (1 + delta) ** s.jump_energy_power):
             return a, (c, share)
     return None

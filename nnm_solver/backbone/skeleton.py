@@ -3,7 +3,7 @@ the followed mode's modal amplitude (the stepping: amplitude_family.py).
 
 The skeleton is the family of orbits whose fundamental component in the followed mode r is a cos(w t)
 (a in sqrt(kg) m, mass-normalised modal coordinates), for a rising geometrically: at each a the
-condensed harmonic-balance equations (orbits/condensed_hb.py, SKELETON_HARMONICS odd harmonics, n_s N_b + 1
+condensed harmonic-balance equations (orbits/condensed_hb.py, s.harmonics odd harmonics, n_s N_b + 1
 unknowns whatever the model size) are solved by Newton's method from the secant predictor.  Fixing the
 modal amplitude, not the arclength, is what makes it a skeleton: a narrow k:1 tongue (where k w crosses
 a partner's w_p) is a thin band in a, so the steps land on both sides of it on the family, and the few
@@ -11,26 +11,26 @@ points that land inside (their energy raised by the partner's share) are recogni
 lies above the family's later points and are left out.  Stepping in a ends where
 
 * the energy reaches the reach asked for (``end = "reach"``);
-* the energy turns back for PEAK_RUN steps while a grows and no partner grows, or the family folds back
+* the energy turns back for s.peak_run steps while a grows and no partner grows, or the family folds back
   in a with no partner in the orbit and its energy growing at a finite rate with a up to the fold (so the
   energy folds there too): the family's energy maximum (a softening family approaching a saddle),
   ``energy_peak``: no backbone at higher energy (``end = "peak"``);
 * the frequency jumps (a step of the smallest size still moves it much more than the trend) or Newton
   fails at the smallest step: the family met an internal resonance it does not pass smoothly; jumps of
-  1-20 % in amplitude are tried (from the one-harmonic guide's orbits first, family_guide.py; then ``JUMPS``:
+  1-20 % in amplitude are tried (from the one-harmonic guide's orbits first, family_guide.py; then ``s.jumps``:
   accepted on the family's frequency trend with its fundamental share kept; ``gaps`` records them, with the
   moves onto the backbone's sheet where the stepping had slid onto a tongue's), and where none lands the family
   ends there (``end = "locked"`` or ``"stuck"``; ``message`` names the resonance and the partner); so too
-  where other modes' higher harmonics take more than 1 - SHARE_MIN of the orbit (velocity-weighted: a partner
+  where other modes' higher harmonics take more than 1 - s.share_min of the orbit (velocity-weighted: a partner
   takes the orbit over) or where the energy turns back while a partner grows.
 
 Where the full branch (any method, any number of harmonics) enters a k:1 tongue with a partner mode of
 frequency f_p, the resonance band is where k f(E) crosses f_p; the skeleton says at which energies the
 family has left that band (``targets``), and its orbit there (``family_orbit``) is the first guess from
-which the branch's own method finds the backbone beyond the tongue (tongue_skip.py).  Its frequency at
+which the branch's own method finds the backbone beyond the tongue (jumps.py).  Its frequency at
 each energy (``frequency_at``) is what labels a branch's points (labels.py).
 
-The skeleton's frequencies differ from the branch's by the truncation to SKELETON_HARMONICS harmonics
+The skeleton's frequencies differ from the branch's by the truncation to s.harmonics harmonics
 (the Paris-like aircraft's mode 20: below 1e-6 at 1 J) and by the branch's own discretisation.
 """
 from __future__ import annotations
@@ -41,25 +41,15 @@ import weakref
 
 import numpy as np
 
-from .amplitude_family import PEAK_SHARE, solve_at_amplitude, family_share, amplitude_family
+from ..errors import NNMInputError
+from .amplitude_family import solve_at_amplitude, family_share, amplitude_family
+from .settings import SkeletonSettings
 
-__all__ = ["Skeleton", "skeleton", "amplitude_family", "REACH", "FOLLOW_REACH"]
+__all__ = ["Skeleton", "skeleton", "skeleton_of", "compute_skeleton", "amplitude_family"]
 
-#: the skeleton is computed up to this multiple of the branch's energy_max (tongues="skip": its jumps' targets lie
-#: beyond the tongues) ...
-REACH = 10.0
-#: ... or this one for a branch that follows its tongues (tongues="follow": the labels, up to energy_max; the same
-#: points as a REACH one, stepped from the same start)
-FOLLOW_REACH = 2.0
 
-#: the skeleton starts where its frequency has moved from the linear mode's by about this much
-START_SHIFT = 1e-6
 
-#: the skeleton is at a k:1 band where k f is within this relative distance of the partner's frequency
-ENTRY_BAND = 0.01
 
-#: harmonics of the skeleton (odd ones for odd elements)
-SKELETON_HARMONICS = 9
 
 _cache = weakref.WeakKeyDictionary()
 _lock = threading.Lock()
@@ -72,7 +62,8 @@ class Skeleton:
     maximum (J) when it turned back (no backbone above it), else None; partner : (k, 1-based mode) of the
     k:1 internal resonance that ended it ((1, 0) when none did)."""
 
-    def __init__(self, prob, a, E, f, us, end, message, gaps, partner, mode):
+    def __init__(self, prob, a, E, f, us, end, message, gaps, partner, mode, settings=SkeletonSettings()):
+        s = self.settings = settings
         self.problem, self.mode = prob, int(mode)
         self.partner = (int(partner[0]), int(partner[1]))
         self.gaps = gaps
@@ -81,7 +72,7 @@ class Skeleton:
         n = len(E)
         if end == "peak" and n:               # a turned-back family: up to its peak (among the points on the family)
             shares = np.array([family_share(prob, u) for u in us])
-            n = int(np.argmax(np.where(shares >= PEAK_SHARE, E, -np.inf))) + 1
+            n = int(np.argmax(np.where(shares >= s.peak_share, E, -np.inf))) + 1
         keep, lowest = [], math.inf
         for i in range(n - 1, -1, -1):           # a point inside a tongue lies above the family's later points
             if E[i] < lowest:
@@ -192,10 +183,10 @@ class Skeleton:
         return out
 
     def share_at(self, E):
-        """Fundamental share (tongue_skip.fundamental_share: the fraction of the modal orbit's harmonic
+        """Fundamental share (content.fundamental_share: the fraction of the modal orbit's harmonic
         amplitudes in its fundamental) of the family's orbit at energy E (J), interpolated between its two
         neighbouring points in log E; NaN outside its range."""
-        from .tongue_skip import fundamental_share, harmonic_label
+        from .content import fundamental_share, harmonic_label
         if not self.covers(E):
             return float("nan")
         if self._shares is None:
@@ -222,9 +213,9 @@ class Skeleton:
 
     def family_orbit(self, system, E, settings, tol):
         """(problem, u): the skeleton's orbit at energy E (J), corrected on the energy level set (condensed
-        HB with SKELETON_HARMONICS on the skeleton's modal system); None outside its range or where that
+        HB with s.harmonics on the skeleton's modal system); None outside its range or where that
         does not converge.  A first guess for the branch's own method."""
-        from .tongue_skip import level_set
+        from .jumps import level_set
         if not self.covers(E):
             return None
         u, _ = level_set(self.problem, self._interpolated(E), settings, min(tol, 1e-9))
@@ -241,7 +232,7 @@ class Skeleton:
         kf = k * f[above] / f_partner - 1.0                 # relative distance of k f from the partner
         side = np.sign(kf[-1])
         at_entry = k * self.frequency_at(E_entry) / f_partner - 1.0
-        if np.all(np.sign(kf) == side) and not abs(at_entry) < ENTRY_BAND:
+        if np.all(np.sign(kf) == side) and not abs(at_entry) < self.settings.entry_band:
             # the skeleton neither crosses the band nor enters it where the branch did: the partner's frequency
             # has moved with the amplitude (a strongly nonlinear partner, e.g. the 2-DOF benchmark's) and the
             # linear one says nothing; the tongue is traversed or jumped by rescaled backbone orbits
@@ -256,13 +247,14 @@ class Skeleton:
         return out
 
 
-def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS, E_start=None):
-    """The Skeleton of linear mode ``mode`` (1-based) of the ModalSystem ``system`` up to E_reach (J).  E_start (J,
-    default E_reach): the reach its first amplitude is chosen for (below)."""
+def compute_skeleton(system, mode, E_reach, settings=SkeletonSettings(), E_start=None):
+    """The Skeleton of linear mode ``mode`` (1-based) of the ModalSystem ``system`` up to E_reach (J), with
+    settings.harmonics.  E_start (J, default E_reach): the reach its first amplitude is chosen for (below)."""
     from ..orbits.condensed_hb import CondensedHBProblem
     from ..orbits.hb_basis import HBBasis
+    s = settings
     r = int(mode) - 1
-    prob = CondensedHBProblem(system, r, HBBasis(harmonics, "odd" if system.elements.odd else "full"))
+    prob = CondensedHBProblem(system, r, HBBasis(s.harmonics, "odd" if system.elements.odd else "full"))
     # start in the linear regime: at most 1e-6 of the reach (E = w^2 a^2 / 2 for the linear mode), lower until
     # the frequency is the linear one to 1e-8 (also where Newton finds no orbit there: a reach far above the
     # family's end, e.g. 1e6 x a tongue's entry energy on the 2-DOF benchmark, puts 1e-6 of it beyond the family)
@@ -272,31 +264,43 @@ def compute_skeleton(system, mode, E_reach, harmonics=SKELETON_HARMONICS, E_star
         if u is not None and abs(u[-1] - 1.0) < 1e-8:
             break
         a0 /= 4
-    # then raise it to where the frequency has moved by about START_SHIFT (below, the stepping would only retrace
+    # then raise it to where the frequency has moved by about start_shift (below, the stepping would only retrace
     # the linear mode, a third of its points on NLvib's examples; the labels ask the skeleton only beyond a shift of
     # 1e-3): the shift grows as a^2 (or faster) from the linear mode
     shift = abs(u[-1] - 1.0) if u is not None else 0.0
-    if 0.0 < shift < START_SHIFT / 10:
-        a1 = a0 * min(math.sqrt(START_SHIFT / shift), 1e3)
+    if 0.0 < shift < s.start_shift / 10:
+        a1 = a0 * min(math.sqrt(s.start_shift / shift), 1e3)
         v = solve_at_amplitude(prob, prob.start(a1)[0])
-        if v is not None and abs(v[-1] - 1.0) <= 2 * START_SHIFT:
+        if v is not None and abs(v[-1] - 1.0) <= 2 * s.start_shift:
             a0 = a1
-    return Skeleton(prob, *amplitude_family(prob, E_reach, a0), mode)
+    return Skeleton(prob, *amplitude_family(prob, E_reach, a0, s), mode, s)
 
 
-def skeleton(model, mode, energy_max, system_of, harmonics=SKELETON_HARMONICS, reach=REACH):
-    """The Skeleton of linear mode ``mode`` (1-based) of ``model`` up to reach x energy_max (J) with ``harmonics``,
-    cached per model, mode and harmonics (a cached one that reaches far enough, or that ended, is reused).
-    system_of(model, mode, harmonics) gives the ModalSystem (every mode, or the Ritz basis for those harmonics for a
-    large model; driver/api.py).  Whatever the reach, the stepping starts where a REACH x energy_max one starts, so
-    a shorter reach (FOLLOW_REACH: a branch that follows its tongues needs the skeleton only for its labels, up to
-    its energy_max) gives the first points of the longer one, the same numbers."""
-    E_reach = reach * energy_max
+def skeleton(model, mode, energy_max, system_of, settings=SkeletonSettings(), reach=None):
+    """The Skeleton of linear mode ``mode`` (1-based) of ``model`` up to reach x energy_max (J; reach: default
+    settings.reach), cached per model, mode and settings (a cached one that reaches far enough, or that ended, is
+    reused).  system_of(model, mode, harmonics) gives the ModalSystem (every mode, or the Ritz basis for those
+    harmonics for a large model; driver/api.py).  Whatever the reach, the stepping starts where a settings.reach x
+    energy_max one starts, so a shorter reach (follow_reach: a branch that follows its tongues needs the skeleton
+    only for its labels, up to its energy_max) gives the first points of the longer one, the same numbers."""
+    if isinstance(settings, int):              # skeleton(..., harmonics) of earlier releases
+        settings = SkeletonSettings(harmonics=settings)
+    E_reach = (settings.reach if reach is None else reach) * energy_max
     with _lock:
-        for (m, h, r), sk in _cache.get(model, {}).items():
-            if m == mode and h == harmonics and (r >= E_reach or sk.end != "reach"):
+        for (m, st, r), sk in _cache.get(model, {}).items():
+            if m == mode and st == settings and (r >= E_reach or sk.end != "reach"):
                 return sk
-    sk = compute_skeleton(system_of(model, mode, harmonics), mode, E_reach, harmonics, E_start=REACH * energy_max)
+    sk = compute_skeleton(system_of(model, mode, settings.harmonics), mode, E_reach, settings,
+                          E_start=settings.reach * energy_max)
     with _lock:
-        _cache.setdefault(model, {})[(mode, harmonics, E_reach)] = sk
+        _cache.setdefault(model, {})[(mode, settings, E_reach)] = sk
     return sk
+
+
+def skeleton_of(model, mode, energy_max, system_of, settings=SkeletonSettings(), reach=None):
+    """(Skeleton, "") of ``skeleton``, or (None, why) when it cannot be computed: the failure is reported (the
+    branch's policy says it in its messages), not swallowed."""
+    try:
+        return skeleton(model, mode, energy_max, system_of, settings, reach), ""
+    except (NNMInputError, np.linalg.LinAlgError, ValueError, RuntimeError) as exc:
+        return None, f"the skeleton could not be computed: {exc}"

@@ -1,17 +1,17 @@
 r"""The backbone family stepped in the followed mode's modal amplitude (the skeleton's points, skeleton.py).
 
 The family is the set of orbits whose fundamental component in the followed mode r is a cos(w t) (a in
-sqrt(kg) m, mass-normalised modal coordinates).  For a rising geometrically (STEP_MIN..STEP_MAX a step, up to
-STEP_MAX_LINEAR in the linear regime, the step halved where ln f moves more than the trend allows) the condensed
+sqrt(kg) m, mass-normalised modal coordinates).  For a rising geometrically (s.step_min..STEP_MAX a step, up to
+s.step_max_linear in the linear regime, the step halved where ln f moves more than the trend allows) the condensed
 harmonic-balance equations (orbits/condensed_hb.py) are solved at fixed a by Newton's method
 (``solve_at_amplitude``) from the secant predictor.
-Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (JUMPS, with frequency shifts
-JUMP_SHIFTS) are tried and kept when they land on the family's frequency trend with SHARE_KEPT of its
-fundamental share (``family_share``); the family ends at the reach, at its energy maximum (PEAK_RUN steps of falling
-energy with PEAK_SHARE kept, or a fold in amplitude where the family, followed past it by arclength with no
+Where the frequency jumps or Newton fails at the smallest step, amplitude jumps (s.jumps, with frequency shifts
+s.jump_shifts) are tried and kept when they land on the family's frequency trend with s.share_kept of its
+fundamental share (``family_share``); the family ends at the reach, at its energy maximum (s.peak_run steps of falling
+energy with s.peak_share kept, or a fold in amplitude where the family, followed past it by arclength with no
 partner growing, turns back in energy too: _past_fold; when that cannot tell, the slope test _folds_at_peak after
 the jumps fail),
-where a partner takes the orbit over (SHARE_MIN) or where no jump lands.  With more than one harmonic the
+where a partner takes the orbit over (s.share_min) or where no jump lands.  With more than one harmonic the
 stepping is guided by the one-harmonic family (family_guide.py): it moves onto the backbone's sheet where it had
 slid onto a tongue's, halves the steps that jump away from the guide, and jumps from the guide's orbits first.
 ``amplitude_family`` returns the raw points and how the family ended; skeleton.Skeleton reads them.
@@ -23,50 +23,18 @@ import math
 import numpy as np
 
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
-from .family_guide import (OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump, DEV_CHECK, DEV_CHECK_REL,
-                           DEV_JUMP,
-                           JUMP_ENERGY_POWER, GUIDE_TRUST)
+from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump
+from .settings import SkeletonSettings
 
-__all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares", "PEAK_SHARE"]
+__all__ = ["amplitude_family", "solve_at_amplitude", "family_share", "fundamental_shares"]
 
-#: modal amplitude steps: largest and smallest ratio a_{i+1} / a_i, and the largest move of ln f in a step
-STEP_MAX, STEP_MIN = 1.05, 1.0005
-DLNF_MAX = 0.005
-#: while the frequency is within LINEAR_SHIFT of the first point's (the linear regime), steps up to STEP_MAX_LINEAR
-STEP_MAX_LINEAR, LINEAR_SHIFT = 1.2, 1e-4
 
-#: energy falling over this many steps in a row with at least PEAK_SHARE kept (family_share): the family's energy
-#: maximum (with less, a resonance)
-PEAK_RUN, PEAK_SHARE = 3, 0.98
 
-#: relative amplitude jumps tried where the family meets a resonance it does not pass smoothly
-JUMPS = (0.01, 0.02, 0.05, 0.1, 0.2)
-#: relative frequency shifts of the jumps' guesses (besides the trend's), the largest move accepted beyond the
-#: trend's, and the fraction of the fundamental share a landing orbit keeps
-JUMP_SHIFTS = (0.0, -0.005, 0.005, -0.01, -0.02)
-JUMP_LIMIT, SHARE_KEPT = 0.02, 0.85
 
-#: the family ends where other modes' higher harmonics take more than 1 - SHARE_MIN of the orbit (family_share)
-SHARE_MIN = 0.5
 
-#: at a fold of the family (no solution at a larger amplitude, no partner), d ln E / d ln a below this (2 in the
-#: linear regime) means the energy turns back with the amplitude: the family's energy maximum (_folds_at_peak)
-FOLD_SLOPE = 4.0
 
-#: past the end of the stepping, the family is followed by pseudo-arclength in (orbit, a) for at most
-#: FOLD_PROBE_STEPS steps (_past_fold): its energy maximum when the energy falls FOLD_PROBE_DROP below the
-#: largest on the way with the followed mode keeping FUND_SHARE of the fundamental; a 1:1 resonance when the energy
-#: comes back above it (by FOLD_ENERGY_RTOL) or another mode takes the fundamental first
-FOLD_PROBE_STEPS, FOLD_PROBE_DROP, FUND_SHARE, FOLD_ENERGY_RTOL = 300, 0.1, 0.9, 1e-9
 
-#: the stepping moves to the backbone's sheet (family_guide.py) at most this many times
-MAX_SWITCHES = 40
-#: ... and steps on from where that sheet begins by this amplitude ratio, growing (the backbone just past a tongue
-#: bends: the partner's harmonic decays there; with full steps its frequency between points is off by 1e-6)
-SHEET_RATIO = 1.005
 
-#: a step moving ln f by more than JUMP_FACTOR x the previous step's + JUMP_FLOOR is halved
-JUMP_FACTOR, JUMP_FLOOR = 5.0, 2e-3
 
 
 def _partner(prob, u):
@@ -81,18 +49,18 @@ def _partner(prob, u):
     return int(prob.basis.h[j]), int(m) + 1
 
 
-def _folds_at_peak(prob, pts):
+def _folds_at_peak(prob, pts, s):
     """Is the end of the stepping (no solution at a larger amplitude, no jump past it) a fold of the family
-    itself, with its energy maximum there?  True when the followed mode keeps PEAK_SHARE of the orbit (no
-    partner mode takes it over) and d ln E / d ln a stays between 0 and FOLD_SLOPE over the last step: the
+    itself, with its energy maximum there?  True when the followed mode keeps s.peak_share of the orbit (no
+    partner mode takes it over) and d ln E / d ln a stays between 0 and s.fold_slope over the last step: the
     amplitude a reaches its maximum along the family while E grows at a finite rate with a, so E reaches its
     maximum at the same fold (dE/ds = dE/da da/ds = 0).  An energy growing ever faster as a stalls is
     another mode taking the energy (a resonance), not a fold of the family."""
-    if len(pts) < 3 or family_share(prob, pts[-1][3]) < PEAK_SHARE:
+    if len(pts) < 3 or family_share(prob, pts[-1][3]) < s.peak_share:
         return False
     (a1, E1, _, _), (a0, E0, _, _) = pts[-2], pts[-1]
     slope = math.log(E0 / E1) / math.log(a0 / a1) if a0 > a1 and E0 > 0 and E1 > 0 else math.inf
-    return 0.0 < slope < FOLD_SLOPE
+    return 0.0 < slope < s.fold_slope
 
 
 def _null_direction(J, along):
@@ -101,18 +69,18 @@ def _null_direction(J, along):
     return t if t @ along >= 0 else -t
 
 
-def _past_fold(prob, pts, tol=1e-10):
+def _past_fold(prob, pts, s, tol=1e-10):
     """Where the stepping in a found no solution at a larger amplitude: read what the family does past that
     fold in a by following it by pseudo-arclength in (orbit, a) from the last point (steps of the last
     step's size, tangent from the Jacobian's null vector), with no partner harmonic growing (family_share
-    above PEAK_SHARE, else None: a k:1 resonance, the caller's jumps).  The verdict is
+    above s.peak_share, else None: a k:1 resonance, the caller's jumps).  The verdict is
 
-    * ``("peak", points)``: the energy falls FOLD_PROBE_DROP below the largest on the way while the followed
-      mode keeps FUND_SHARE of the fundamental: the family's energy maximum (points: from the last one up to it);
+    * ``("peak", points)``: the energy falls s.fold_probe_drop below the largest on the way while the followed
+      mode keeps s.fund_share of the fundamental: the family's energy maximum (points: from the last one up to it);
     * ``("locked", (1, mode))``: the energy comes back above that maximum, or another mode takes more than
-      1 - FUND_SHARE of the fundamental first (its energy folds and recovers as that mode's motion grows): a 1:1
+      1 - s.fund_share of the fundamental first (its energy folds and recovers as that mode's motion grows): a 1:1
       internal resonance with that mode (1-based), which ends the followed mode's family;
-    * None when the path cannot tell within FOLD_PROBE_STEPS steps or Newton fails."""
+    * None when the path cannot tell within s.fold_probe_steps steps or Newton fails."""
     nD = prob.nb * prob.ns
     (_, _, _, u1), (_, E0, _, u0) = pts[-2], pts[-1]
     h = h0 = float(np.linalg.norm(u0 - u1))
@@ -121,7 +89,7 @@ def _past_fold(prob, pts, tol=1e-10):
     share0 = fundamental_shares(prob, u0)
     u, t = u0, _null_direction(prob.jacobian(u0)[1], u0 - u1)
     path, E_top, fell = [], E0, False
-    for _ in range(FOLD_PROBE_STEPS):
+    for _ in range(s.fold_probe_steps):
         v = u + h * t
         for _ in range(20):                      # Newton on the equations + the arclength plane t . (v - pred) = 0
             r, J = prob.jacobian(v)
@@ -142,12 +110,12 @@ def _past_fold(prob, pts, tol=1e-10):
             if h < 1e-3 * h0:
                 return None
             continue
-        if family_share(prob, v) < PEAK_SHARE:
+        if family_share(prob, v) < s.peak_share:
             return None                          # a partner harmonic grows: a k:1 resonance, not this fold
         E = prob.energy(v)
         path.append((v[nD] / prob.beta, E, v[-1] * prob.w_r / (2 * math.pi), v))
         shares = fundamental_shares(prob, v)
-        if (fell and E > E_top * (1 + FOLD_ENERGY_RTOL)) or shares[prob.r] < FUND_SHARE:
+        if (fell and E > E_top * (1 + s.fold_energy_rtol)) or shares[prob.r] < s.fund_share:
             grown = shares - share0
             grown[prob.r] = -np.inf
             return "locked", (1, int(np.argmax(grown)) + 1)
@@ -155,7 +123,7 @@ def _past_fold(prob, pts, tol=1e-10):
             E_top = E
         elif E < E_top:
             fell = True
-            if E < E_top * (1 - FOLD_PROBE_DROP):
+            if E < E_top * (1 - s.fold_probe_drop):
                 top = int(np.argmax([p[1] for p in path]))
                 return "peak", (path[:top + 1] if path[top][1] > E0 else [])
         t = _null_direction(J, v - u)
@@ -163,18 +131,18 @@ def _past_fold(prob, pts, tol=1e-10):
     return None
 
 
-def _jump(prob, pts, slope):
+def _jump(prob, pts, slope, s):
     """Past a resonance the family does not pass smoothly: from the last point, the amplitudes a (1 + delta),
-    delta in JUMPS, the orbit scaled and its frequency moved along the trend ``slope`` = d ln f / d ln a
-    (or by JUMP_SHIFTS); accepted when Newton converges onto an orbit whose frequency keeps the trend (within
-    3 times the move expected + JUMP_LIMIT) and whose fundamental share is at least SHARE_KEPT of the last
+    delta in s.jumps, the orbit scaled and its frequency moved along the trend ``slope`` = d ln f / d ln a
+    (or by s.jump_shifts); accepted when Newton converges onto an orbit whose frequency keeps the trend (within
+    3 times the move expected + s.jump_limit) and whose fundamental share is at least s.share_kept of the last
     point's.  (a, E, f, u) or None."""
     a0, E0, f0, u0 = pts[-1]
     nD = prob.nb * prob.ns
     share0 = family_share(prob, u0)
-    for delta in JUMPS:
+    for delta in s.jumps:
         expected = slope * math.log(1 + delta)
-        for shift in (expected,) + JUMP_SHIFTS:
+        for shift in (expected,) + s.jump_shifts:
             guess = u0.copy()
             guess[:nD] *= 1 + delta
             guess[-1] *= math.exp(shift)
@@ -184,13 +152,13 @@ def _jump(prob, pts, slope):
                 continue
             f = v[-1] * prob.w_r / (2 * math.pi)
             E = prob.energy(v)
-            if (abs(math.log(f / f0) - expected) <= 3 * abs(expected) + JUMP_LIMIT
-                    and family_share(prob, v) >= SHARE_KEPT * share0 and E <= E0 * (1 + delta) ** JUMP_ENERGY_POWER):
+            if (abs(math.log(f / f0) - expected) <= 3 * abs(expected) + s.jump_limit
+                    and family_share(prob, v) >= s.share_kept * share0 and E <= E0 * (1 + delta) ** s.jump_energy_power):
                 return a0 * (1 + delta), E, f, v
     return None
 
 
-def amplitude_family(prob, E_reach, a_start, max_jumps=20):
+def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
     """Step the condensed problem ``prob`` in its modal amplitude from a_start (sqrt(kg) m, linear regime)
     until the energy exceeds E_reach (J) or the family ends (module docstring).  Returns (a, E, f (Hz), u,
     end, message, gaps, partner) with the raw points (blips inside tongues included) as lists; gaps: the
@@ -201,13 +169,13 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
     if u is None:
         return [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0)
     pts = [(a_start, prob.energy(u), u[-1] * prob.w_r / (2 * math.pi), u)]
-    ratio, dlnf_prev, falls = STEP_MAX, 0.0, 0
+    ratio, dlnf_prev, falls = s.step_max, 0.0, 0
     end, message, gaps = "reach", "", []
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
     shares = {}                        # id of a point's orbit -> (the orbit, its family_share): the orbit is kept
                                        # with it (points are dropped at a sheet switch: a freed id is reused)
-    guide = OneHarmonicGuide(prob) if prob.basis.harmonics > 1 else None
+    guide = OneHarmonicGuide(prob, s) if prob.basis.harmonics > 1 else None
     dev_checked, ddev_prev, switches, fresh = 0.0, 0.0, 0, False
 
     def share_of(u):
@@ -226,7 +194,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         E = prob.energy(v)
         gaps.append((pts[-1][1], E, a, "sheet"))
         pts.append((a, E, v[-1] * prob.w_r / (2 * math.pi), v))
-        ratio, falls, ddev_prev, dlnf_prev, switches = SHEET_RATIO, 0, 0.0, 0.0, switches + 1
+        ratio, falls, ddev_prev, dlnf_prev, switches = s.sheet_ratio, 0, 0.0, 0.0, switches + 1
         dev_checked, fresh = guide.deviation(a, v) or 0.0, True
 
     def resonance(v, what, off_trend=False):
@@ -234,12 +202,12 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         step found v but only left the one-harmonic family's trend (the partner is then read from the last point)."""
         nonlocal end, message, ratio, falls, partner, ddev_prev
         a0, E0, f0, u0 = pts[-1]
-        if guide is not None and switches < MAX_SWITCHES:
-            landed = guided_jump(prob, guide, pts, share_of(u0), JUMPS)
+        if guide is not None and switches < s.max_switches:
+            landed = guided_jump(prob, guide, pts, share_of(u0), s.jumps)
             if landed is not None:             # the backbone's sheet beyond: where it begins, from there on
                 to_sheet(*landed)
                 return True
-        beyond = _past_fold(prob, pts) if v is None and len(pts) >= 2 else None
+        beyond = _past_fold(prob, pts, s) if v is None and len(pts) >= 2 else None
         if beyond is not None and beyond[0] == "peak":    # the family's own fold, its energy folding with a
             pts.extend(beyond[1])
             end = "peak"
@@ -256,13 +224,13 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             return False
         base = [p for p in pts if math.log(a0 / p[0]) <= 0.3]     # the trend over the last 30 % in amplitude
         slope = math.log(f0 / base[0][2]) / math.log(a0 / base[0][0]) if base[0] is not pts[-1] else 0.0
-        jumped = _jump(prob, pts, slope) if sum(g[3] == "jump" for g in gaps) < max_jumps else None
+        jumped = _jump(prob, pts, slope, s) if sum(g[3] == "jump" for g in gaps) < s.max_jumps else None
         if jumped is not None:
             gaps.append((E0, jumped[1], jumped[0], "jump"))
             pts.append(jumped)
-            ratio, falls, ddev_prev = STEP_MAX, 0, 0.0
+            ratio, falls, ddev_prev = s.step_max, 0, 0.0
             return True
-        if v is None and _folds_at_peak(prob, pts):
+        if v is None and _folds_at_peak(prob, pts, s):
             end = "peak"
             message = (f"the family folds back at E = {E0:.4g} J, f = {f0:.5g} Hz: no solution at a larger amplitude, "
                        f"with no partner mode in the orbit and its energy still growing with the amplitude there, so "
@@ -273,7 +241,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         k, p = partner = _partner(prob, u0 if v is None or off_trend else v)
         end = "stuck" if v is None else "locked"
         message = (f"the family ends at E = {E0:.4g} J, f = {f0:.5g} Hz: {what} (a {k}:1 internal resonance with "
-                   f"mode {p}) and no jump of up to {100 * JUMPS[-1]:g} % in amplitude passes it")
+                   f"mode {p}) and no jump of up to {100 * s.jumps[-1]:g} % in amplitude passes it")
         return False
 
     while len(pts) < 3000:
@@ -288,15 +256,15 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         v = solve_at_amplitude(prob, guess)
         dlnf = math.log(v[-1] * prob.w_r / (2 * math.pi) / f0) if v is not None else math.inf
         dev = guide.deviation(a, v) if guide is not None and v is not None else None
-        dev = dev if dev is not None and abs(dev) <= GUIDE_TRUST else None          # the guide trusted there only
+        dev = dev if dev is not None and abs(dev) <= s.guide_trust else None          # the guide trusted there only
         dev_last = guide.deviation(a0, u0) if dev is not None else None
-        ddev = dev - dev_last if dev_last is not None and abs(dev_last) <= GUIDE_TRUST else 0.0
-        if (v is None or abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR
-                or abs(ddev) > JUMP_FACTOR * abs(ddev_prev) + DEV_JUMP):
-            if ratio > STEP_MIN:
+        ddev = dev - dev_last if dev_last is not None and abs(dev_last) <= s.guide_trust else 0.0
+        if (v is None or abs(dlnf) > s.jump_factor * abs(dlnf_prev) + s.jump_floor
+                or abs(ddev) > s.jump_factor * abs(ddev_prev) + s.dev_jump):
+            if ratio > s.step_min:
                 ratio = 1 + (ratio - 1) / 2
                 continue
-            jumps = abs(dlnf) > JUMP_FACTOR * abs(dlnf_prev) + JUMP_FLOOR
+            jumps = abs(dlnf) > s.jump_factor * abs(dlnf_prev) + s.jump_floor
             what = ("no solution at a larger amplitude" if v is None else
                     f"its frequency jumps by {100 * dlnf:.2g} %" if jumps else
                     f"its frequency moves by {100 * ddev:.2g} % from the one-harmonic family's in one step")
@@ -306,15 +274,15 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
         dlnf_prev, ddev_prev, fresh = dlnf, ddev, False
-        # the next step: grown by half, at most STEP_MAX (STEP_MAX_LINEAR while the frequency is within LINEAR_SHIFT
-        # of the first point's), and moving the frequency by about DLNF_MAX at most (the skeleton's interpolation
+        # the next step: grown by half, at most s.step_max (s.step_max_linear while the frequency is within s.linear_shift
+        # of the first point's), and moving the frequency by about s.dlnf_max at most (the skeleton's interpolation
         # between points stays at ~1e-7, Skeleton.frequency_at)
-        cap = STEP_MAX_LINEAR if abs(v[-1] / pts[0][3][-1] - 1.0) < LINEAR_SHIFT else STEP_MAX
-        ratio = min(cap, 1 + (ratio - 1) * min(1.5, DLNF_MAX / max(abs(dlnf), 1e-300)))
-        ratio = max(ratio, STEP_MIN)
+        cap = s.step_max_linear if abs(v[-1] / pts[0][3][-1] - 1.0) < s.linear_shift else s.step_max
+        ratio = min(cap, 1 + (ratio - 1) * min(1.5, s.dlnf_max / max(abs(dlnf), 1e-300)))
+        ratio = max(ratio, s.step_min)
         share = share_of(v)
-        if (dev is not None and switches < MAX_SWITCHES
-                and abs(dev - dev_checked) > max(DEV_CHECK, DEV_CHECK_REL * abs(dev_checked))):
+        if (dev is not None and switches < s.max_switches
+                and abs(dev - dev_checked) > max(s.dev_check, s.dev_check_rel * abs(dev_checked))):
             other = nearer_sheet(guide, a, v)
             if other is not None:      # the backbone's sheet beyond a tongue the stepping slid onto
                 to_sheet(a, other)
@@ -322,14 +290,14 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
             dev_checked = dev
         # the energy falling while no partner grows (the points inside a narrow tongue are not the family's: their
         # energy rises above it and falls back, with the partner's share)
-        kept = share >= PEAK_SHARE and share_of(pts[-2][3]) >= PEAK_SHARE
+        kept = share >= s.peak_share and share_of(pts[-2][3]) >= s.peak_share
         falls = falls + 1 if E < pts[-2][1] and kept else 0
-        if falls >= PEAK_RUN:
+        if falls >= s.peak_run:
             end, message = "peak", "the family's energy turns back: its maximum"
             break
         if E > E_reach and falls == 0:
             break
-        if share < SHARE_MIN:
+        if share < s.share_min:
             pts.pop()                  # a partner takes the orbit over: jump from the last point before
             landed = gaps[-1][2] if gaps else 0.0
             if pts[-1][0] > landed and resonance(v, "a partner mode takes the orbit over"):
@@ -338,7 +306,7 @@ def amplitude_family(prob, E_reach, a_start, max_jumps=20):
                 k, p = partner = _partner(prob, v)
                 end, message = "locked", (f"the family passes into a {k}:1 internal resonance with mode {p} at E = "
                                           f"{pts[-1][1]:.4g} J, f = {pts[-1][2]:.5g} Hz: that mode takes over "
-                                          f"more than {1 - SHARE_MIN:.0%} of the orbit")
+                                          f"more than {1 - s.share_min:.0%} of the orbit")
             break
     a, E, f, us = (list(c) for c in zip(*pts))
     return a, E, f, us, end, message, gaps, partner

@@ -1,0 +1,103 @@
+r"""Point labels from the dynamics: on the backbone family, or in a k:1 internal-resonance tongue.
+
+A fixed share of a higher harmonic cannot tell the two apart: a family whose third harmonic grows gradually (a
+smooth 3:1 mixing) is still the backbone, and a tongue locked in frequency can hold a small share.  What tells them
+apart is the frequency: inside a tongue the orbit's frequency locks to the partner's (f ~ f_p / k) while the
+backbone family's goes on moving with the energy.  The family's frequency at each energy is the skeleton's
+(skeleton.py: harmonic balance condensed onto the elements, stepped in modal amplitude, which steps over narrow
+tongues).  A point at energy E (J) with frequency f (Hz) is measured by
+
+    dev = | f / f_skeleton(E) - 1 - bias |,
+
+bias being the branch's own offset from the exact linear frequency at the linear mode (the skeleton is exact there;
+Newmark's period error grows for the orbit's harmonic k as k^p for an integrator of order p: bias = b0 sum_k w_k
+k^p, w_k the harmonics' shares of the orbit's kinetic energy), and it is on the family when
+
+    dev <= on_family + 2 (its own estimated frequency error) + 2 (the skeleton's truncation estimate at E),
+
+so that a label is a claim within the accuracy the two computations say they have.  Otherwise it is labelled
+``"tongue k:1"`` (k: the harmonic the partner modes carry, content.py).  Above the family's energy maximum (a
+softening family's saddle) or above where the family ends in a k:1 resonance (the skeleton ended ``locked`` or
+``stuck``) every point is off the family (dev = inf).  Where no skeleton covers the energy (no nonlinear elements,
+below the skeleton's first point) the harmonic content alone decides (dev None).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .settings import LabelSettings
+
+__all__ = ["Verdict", "FamilyLabels"]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A point's label: text ('backbone' or 'tongue k:1'), dev (relative frequency distance from the family; None
+    where not measured, inf beyond the family's end), tolerance (the dev below which it is on the family) and
+    on_family."""
+
+    text: str
+    dev: float | None = None
+    tolerance: float = 0.0
+    beyond_end: bool = False
+
+    @property
+    def on_family(self):
+        return self.text == "backbone"
+
+
+class FamilyLabels:
+    """Labels a branch's points against its skeleton (module docstring).  skeleton : the Skeleton or None;
+    f_linear : the followed linear mode's frequency (Hz); f_method : the same as the branch's method computes it
+    (Newmark's, at its time step); order : the integrator's order (0: no time step)."""
+
+    def __init__(self, skeleton, f_linear, f_method=None, order=0, settings=LabelSettings()):
+        self.skeleton = skeleton
+        self.settings = settings
+        self.f_linear = float(f_linear)
+        self._bias = 0.0 if f_method is None else float(f_method) / self.f_linear - 1.0
+        self.order = int(order)
+
+    def bias(self, amps=None):
+        """The method's relative frequency offset for an orbit of harmonic amplitudes ``amps``."""
+        if amps is None or not self._bias or len(amps) < 2:
+            return self._bias
+        k = np.arange(len(amps), dtype=float)
+        w = (k * np.asarray(amps)) ** 2
+        return self._bias * float(np.sum(w * k ** self.order) / max(np.sum(w), 1e-300))
+
+    def deviation(self, energy, frequency_hz, amps=None):
+        """dev of a point, or None when no skeleton covers its energy."""
+        sk = self.skeleton
+        if sk is None or not sk.covers(energy):
+            return None
+        return abs(frequency_hz / sk.frequency_at(energy) - 1.0 - self.bias(amps))
+
+    def verdict(self, energy, frequency_hz, content, error=0.0):
+        """The Verdict of a point of energy (J), frequency (Hz), Content (content.py) and estimated relative
+        frequency error (NaN or inf: unknown, taken as 0 / not resolved)."""
+        s, sk = self.settings, self.skeleton
+        tongue = f"tongue {content.order}:1"
+        shift = frequency_hz / self.f_linear - 1.0
+        if content.fraction < s.linear_regime and abs(shift - self._bias) < s.linear_regime and (
+                sk is None or not len(sk.energy) or energy <= sk.energy[-1]):
+            return Verdict(content.label)
+        if sk is None:
+            return Verdict(content.label)
+        if sk.energy_peak is not None and energy > sk.energy_peak:
+            return Verdict(tongue, math.inf, beyond_end=True)        # above the family's energy maximum
+        if sk.end in ("stuck", "locked") and len(sk.energy) and energy > sk.energy[-1]:
+            # beyond where the family passes into (or stops at) a k:1 resonance: its orbits there are that
+            # resonance's, not the backbone family's
+            k_end = sk.partner[0] if sk.partner[1] else content.order
+            return Verdict(f"tongue {k_end}:1", math.inf, beyond_end=True)
+        dev = self.deviation(energy, frequency_hz, content.amplitudes)
+        if dev is None or not math.isfinite(dev):
+            return Verdict(content.label)
+        err = error if math.isfinite(error) else 0.0
+        trunc = sk.truncation_at(energy) if dev > s.on_family else 0.0   # a solve per skeleton point: asked here only
+        tol = s.on_family + 2 * err + 2 * (trunc if math.isfinite(trunc) else 0.0)
+        return Verdict("backbone" if dev <= tol else tongue, dev, tol)

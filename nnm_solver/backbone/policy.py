@@ -1,0 +1,211 @@
+r"""The backbone's decision at each converged point: keep it, jump over the tongue it entered, or finish.
+
+The algorithm (``tongues=Skip()``), for each point the continuation gives, in energy order along the family:
+
+1. Label it against the skeleton (labels.py): on the backbone family within the accuracy both computations
+   estimate, or off it.
+2. On the family and above the last kept point in energy: **Keep** it.
+3. Off the family (or turned back in energy: the backbone continued in energy has no fold): it entered a tongue.
+   Beyond the family's end (above its energy maximum, or past the resonance that ends it, as the skeleton says):
+   **Finish** with the family's end (``escape`` at a softening family's energy maximum, ``tongue`` where a k:1
+   resonance ends it).  Otherwise **Jump**: the skeleton's points above the departure (jumps.candidates) are the
+   targets, tried nearest first; the first whose corrected orbit is on the family (``landed``) is where the
+   continuation restarts.  The tongue is recorded (results/tongues.py: order, partner mode, entry and inside
+   orbits, how it was passed); a departure into the tongue just passed adds a re-entry to its record.
+4. No target lands (``no_landing``), or the continuation cannot go on (``stopped``): where the skeleton ends within
+   reach, that is the family's end (its status, its message); else ``tongue``, saying that no landing was found.
+
+``tongues=Follow()`` keeps every point with its label.  A policy only reads values and returns decisions; the
+iterator (driver/iterator.py) does what they say.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..results.tongues import TongueRecord
+from .content import partner_mode
+from .jumps import candidates
+from .settings import Follow, Skip
+
+__all__ = ["Keep", "Jump", "Finish", "FollowPolicy", "SkipPolicy", "policy_for", "family_end_status"]
+
+
+@dataclass(frozen=True)
+class Keep:
+    """Keep the point (a backbone point, or any point in follow mode)."""
+
+
+@dataclass(frozen=True)
+class Jump:
+    """Leave the point out and jump: try the skeleton's energies ``targets`` (J) in turn; ``record`` is the
+    tongue's record (new, or the re-entered one with ``index`` its place in branch.tongues), ``base`` the energy
+    the landing must exceed (J)."""
+
+    record: TongueRecord
+    targets: tuple
+    base: float
+    index: int = -1
+
+
+@dataclass(frozen=True)
+class Finish:
+    """End the branch with ``status`` and ``message``; ``record`` (or None) is added to (index -1) or replaces
+    (index >= 0) branch.tongues."""
+
+    status: str
+    message: str
+    record: TongueRecord | None = None
+    index: int = -1
+
+
+def family_end_status(skeleton):
+    """The status of a branch that ends where its family ends: 'escape' at a softening family's energy maximum,
+    'tongue' where a k:1 resonance ends it; None when the skeleton reached its reach (the family goes on)."""
+    if skeleton is None or skeleton.end == "reach":
+        return None
+    return "escape" if skeleton.end == "peak" else "tongue"
+
+
+def _at(p):
+    return f"E = {p.energy:.4g} J, f = {p.frequency_hz:.5g} Hz"
+
+
+def _resonance(record):
+    if record.label == "fold":
+        return "a fold of its family (its energy turns back with no harmonic k >= 2: no internal resonance)"
+    partner = f" with mode {record.partner_mode}" if record.partner_mode else ""
+    return f"the {record.order}:1 internal-resonance tongue{partner}"
+
+
+class FollowPolicy:
+    """tongues=Follow(): every point is kept (its label says where it is)."""
+
+    def __init__(self, settings=Follow(), skeleton=None):
+        self.settings, self.skeleton = settings, skeleton
+
+    def decide(self, point, verdict, content, Q, last, index, tongues):
+        return Keep()
+
+    def stopped(self, last, reason, index):
+        return None
+
+    @staticmethod
+    def note(points):
+        """The 'done' message's note for a branch whose last points are off the backbone family."""
+        if not points or points[-1].label == "backbone":
+            return ""
+        i = len(points) - 1
+        while i > 0 and points[i - 1].label != "backbone":
+            i -= 1
+        p = points[i]
+        return (f", inside a {points[-1].label.split()[-1]} tongue: the points from {_at(p)} on are off the backbone "
+                f"family (tongues='skip' follows the backbone)")
+
+
+class SkipPolicy:
+    """tongues=Skip() (module docstring).  settings : Skip; skeleton : the branch's Skeleton (or None: then no
+    tongue can be jumped, and a departure ends the branch 'tongue', saying why)."""
+
+    def __init__(self, settings=Skip(), skeleton=None, skeleton_failure=""):
+        self.settings, self.skeleton = settings, skeleton
+        self.skeleton_failure = skeleton_failure
+        self.jumps = 0
+
+    @staticmethod
+    def note(points):
+        return ""
+
+    def decide(self, point, verdict, content, Q, last, index, tongues):
+        """Keep, Jump or Finish for ``point`` (its Verdict, Content, modal orbit Q), ``last`` the last kept point
+        (or None), index its would-be index, tongues the records so far."""
+        if last is None or (verdict.on_family and point.energy >= last.energy * (1 - 1e-12)):
+            return Keep()
+        record = self._record(point, content, Q, last, index)
+        sk = self.skeleton
+        if verdict.beyond_end:
+            return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}")
+        previous = tongues[-1] if tongues else None
+        again = (previous is not None and previous.order == record.order
+                 and previous.partner_mode == record.partner_mode and previous.exit_energy is not None
+                 and last.energy <= previous.exit_energy * (1 + 1e-6) + 0.0)
+        base = last.energy
+        if self.jumps >= self.settings.max_jumps:
+            return Finish("tongue", f"the backbone left its family {self.jumps} times (Skip.max_jumps); the last "
+                                    f"departure into {_resonance(record)} at {_at(last)}; the points on the backbone "
+                                    f"below are kept", record)
+        targets = tuple(candidates(sk, base, self.settings.jumps))
+        if not targets:
+            return self.no_landing(last, record, ())
+        self.jumps += 1
+        if again:
+            return Jump(previous.replace(reentries=previous.reentries + 1, skipped=False, exit_energy=None,
+                                         exit_frequency_hz=None), targets, base, len(tongues) - 1)
+        return Jump(record, targets, base)
+
+    def landed(self, verdict, energy, base):
+        """Is a jump's corrected orbit (its Verdict, energy J) on the family above ``base`` (J)?"""
+        return verdict.on_family and verdict.dev is not None and energy > base
+
+    def no_landing(self, last, record, tried, index=-1):
+        """No target landed on the family (tried: the energies tried, J): the family's end where the skeleton ends
+        within reach, else 'tongue' saying so."""
+        sk = self.skeleton
+        status = family_end_status(sk)
+        if status is not None and len(sk.energy) and last.energy * (1 + self.settings.jumps[-1]) >= sk.energy[-1]:
+            return self._family_end(last, record, f"the branch entered {_resonance(record)} at {_at(last)}",
+                                    index)
+        if sk is None:
+            why = f"no skeleton to jump from ({self.skeleton_failure or 'the model has no nonlinear element'})"
+        elif tried:
+            why = (f"none of the skeleton's {len(tried)} orbits from {tried[0]:.4g} to {tried[-1]:.4g} J landed on "
+                   f"the family")
+        else:
+            why = f"the skeleton has no orbit of the family up to {1 + self.settings.jumps[-1]:g} x that energy"
+        return Finish("tongue", f"the backbone entered {_resonance(record)} at {_at(last)} and could not be jumped "
+                                f"over ({why}); the points on the backbone below it are kept",
+                      record.replace(note=why), index)
+
+    def stopped(self, last, reason, index):
+        """The continuation could not go on after ``last`` (reason: the engine's): Finish at the family's end when
+        the skeleton ends within reach of it, else None (the iterator reports 'failed')."""
+        sk = self.skeleton
+        status = family_end_status(sk)
+        if status is None or not len(sk.energy) or last.energy * (1 + self.settings.jumps[-1]) < sk.energy[-1]:
+            return None
+        record = TongueRecord(order=sk.partner[0], partner_mode=sk.partner[1], entry_index=index,
+                              entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz))
+        return self._family_end(last, record, f"the continuation could not go beyond {_at(last)} ({reason})")
+
+    def _family_end(self, last, record, what, index=-1):
+        sk = self.skeleton
+        status = family_end_status(sk)
+        if status == "escape":
+            return Finish("escape", f"{what}, at its family's energy maximum {sk.energy_peak:.4g} J (its skeleton: "
+                                    f"{sk.message}): no backbone exists above it, the structure escapes; the "
+                                    f"points on the backbone below are kept",
+                          record.replace(family_end=True, note=sk.message), index)
+        if status == "tongue":
+            k, partner = sk.partner
+            named = f"the {k}:1 internal resonance with mode {partner}" if partner else "a resonance"
+            return Finish("tongue", f"{what}, where the backbone family itself ends in {named} (its skeleton: "
+                                    f"{sk.message}): no backbone beyond it; the points on the backbone below are kept",
+                          record.replace(family_end=True, note=sk.message), index)
+        return Finish("tongue", f"{what}; the points on the backbone below are kept", record, index)
+
+    def _record(self, point, content, Q, last, index):
+        """The TongueRecord of a departure from ``last`` (index - 1) into ``point``."""
+        k = content.order
+        mode, mac = partner_mode(Q, k) if Q is not None and k >= 2 else (0, math.nan)
+        return TongueRecord(order=k, partner_mode=mode, partner_mac=mac, entry_index=index - 1,
+                            entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz),
+                            entry_period=float(last.period), entry_x0=tuple(map(float, last.x0)),
+                            entry_v0=tuple(map(float, last.v0)), inside_x0=tuple(map(float, point.x0)),
+                            inside_v0=tuple(map(float, point.v0)), inside_period=float(point.period))
+
+
+def policy_for(settings, skeleton, skeleton_failure=""):
+    """The policy object of a tongues setting (Follow or Skip)."""
+    if isinstance(settings, Skip):
+        return SkipPolicy(settings, skeleton, skeleton_failure)
+    return FollowPolicy(settings, skeleton)

@@ -1,0 +1,170 @@
+r"""The backbone's settings: every threshold of the tongue passage and of the skeleton, written once, with the
+measurement behind it.
+
+``Follow()`` and ``Skip()`` are what a user passes as ``continue_nnm(..., tongues=...)``; both carry a
+``SkeletonSettings`` (how the skeleton is stepped) and the labelling thresholds; ``Skip`` adds how tongues are jumped.
+The objects are frozen: change one value with ``dataclasses.replace`` (or ``Skip(max_jumps=...)``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+__all__ = ["SkeletonSettings", "LabelSettings", "Follow", "Skip", "TONGUE_MODES"]
+
+
+@dataclass(frozen=True)
+class SkeletonSettings:
+    """How the skeleton (condensed HB stepped in the followed mode's modal amplitude a, skeleton.py) is computed.
+
+    harmonics : odd harmonics of the skeleton's harmonic balance (9: the aircraft's mode 20 below 1e-6 of the
+        exact frequency at 1 J; its truncation error is estimated per point, Skeleton.truncation_at).
+    reach, follow_reach : the skeleton is stepped up to this multiple of the branch's energy_max with tongues
+        skipped (the jumps' targets lie beyond the tongues) or followed (only labels are asked, up to energy_max).
+    start_shift : it starts where its frequency has moved from the linear mode's by about this much.
+    entry_band : it is at a k:1 band where k f is within this relative distance of the partner's frequency.
+    step_max, step_min : largest and smallest ratio a_{i+1} / a_i of its modal amplitude steps;
+    dlnf_max : the largest move of ln f in a step (its spline interpolation between points then stays at 3e-7 on
+        the 2-DOF benchmark, 7e-9 on NLvib's example 04; Skeleton.frequency_at);
+    step_max_linear, linear_shift : steps up to step_max_linear while f is within linear_shift of the first point's.
+    peak_run, peak_share : the energy falling over peak_run steps in a row with peak_share of the orbit kept by the
+        followed mode (family_share) is the family's energy maximum (with less, a resonance).
+    jumps : relative amplitude jumps tried where the family meets a resonance it does not pass smoothly;
+    jump_shifts : relative frequency shifts of their guesses besides the trend's; jump_limit : the largest move
+        accepted beyond the trend's; share_kept : the fraction of the fundamental share a landing orbit keeps.
+    share_min : the family ends where other modes' higher harmonics take more than 1 - share_min of the orbit.
+    fold_slope : at a fold in a with no partner, d ln E / d ln a below this (2 in the linear regime) means the
+        energy turns back with the amplitude: the family's energy maximum.
+    fold_probe_steps, fold_probe_drop, fund_share, fold_energy_rtol : past the end of the stepping the family is
+        followed by pseudo-arclength for at most fold_probe_steps steps: its energy maximum when the energy falls
+        fold_probe_drop below the largest on the way with the followed mode keeping fund_share of the fundamental; a
+        1:1 resonance when the energy comes back above it (by fold_energy_rtol) or another mode takes the
+        fundamental first.
+    max_switches, sheet_ratio : the stepping moves to the backbone's sheet (family_guide.py) at most max_switches
+        times, and steps on from where that sheet begins by sheet_ratio (the backbone just past a tongue bends;
+        with full steps its frequency between points is off by 1e-6).
+    jump_factor, jump_floor : a step moving ln f by more than jump_factor x the previous step's + jump_floor is halved.
+    max_points : the stepping's largest number of points.
+    The one-harmonic guide (family_guide.py):
+    dev_check, dev_check_rel : the guide is asked again when the distance from the one-harmonic family moved by
+        dev_check, or dev_check_rel of it where larger (NLvib's beam, example 09, moves 3e-2 away by its own
+        harmonics); dev_jump : a step moving that distance by more than jump_factor x the previous + dev_jump is
+        halved; sheet_resolution : a switch is placed where the backbone's sheet begins to this ratio in a;
+        energy_slack : an orbit of the backbone's sheet holds at most this much more energy than the tongue's at the
+        same amplitude; jump_energy_power : a jump of 1 + delta in a raises the energy at most
+        (1 + delta) ** jump_energy_power (a hardening cubic family: E ~ a^4);
+        guide_trust, sheet_frequency : the guide arbitrates only within guide_trust of the skeleton's frequency (the
+        soft 3-DOF chain's mode 1 moves 18 % away near the one-harmonic fold), between sheets within
+        sheet_frequency of each other in ln f (the 2-DOF benchmark's tongue sheets 0.3-0.8 % from its backbone);
+        guide_step_min, guide_step_max, guide_prediction : the guide's own steps (ratios of a), where its secant
+        predictor's frequency is within guide_prediction; guide_order : its orbits are interpolated by a polynomial
+        of this degree in ln a (frequency to 5e-5 on the 2-DOF benchmark and NLvib's beam).
+    """
+
+    harmonics: int = 9
+    reach: float = 10.0
+    follow_reach: float = 2.0
+    start_shift: float = 1e-6
+    entry_band: float = 0.01
+    step_max: float = 1.05
+    step_min: float = 1.0005
+    dlnf_max: float = 0.005
+    step_max_linear: float = 1.2
+    linear_shift: float = 1e-4
+    peak_run: int = 3
+    peak_share: float = 0.98
+    jumps: tuple = (0.01, 0.02, 0.05, 0.1, 0.2)
+    jump_shifts: tuple = (0.0, -0.005, 0.005, -0.01, -0.02)
+    jump_limit: float = 0.02
+    share_kept: float = 0.85
+    share_min: float = 0.5
+    fold_slope: float = 4.0
+    fold_probe_steps: int = 300
+    fold_probe_drop: float = 0.1
+    fund_share: float = 0.9
+    fold_energy_rtol: float = 1e-9
+    max_switches: int = 40
+    sheet_ratio: float = 1.005
+    jump_factor: float = 5.0
+    jump_floor: float = 2e-3
+    max_points: int = 3000
+    max_jumps: int = 20
+    dev_check: float = 2e-4
+    dev_check_rel: float = 0.1
+    dev_jump: float = 5e-4
+    sheet_resolution: float = 1.01
+    energy_slack: float = 0.01
+    jump_energy_power: float = 6.0
+    guide_trust: float = 0.02
+    sheet_frequency: float = 0.03
+    guide_step_min: float = 1.01
+    guide_step_max: float = 2.0
+    guide_prediction: float = 1e-3
+    guide_order: int = 3
+
+
+@dataclass(frozen=True)
+class LabelSettings:
+    """How a point is labelled against the skeleton (labels.py).
+
+    on_family : a point whose frequency lies within this relative distance of the skeleton's at its energy (plus
+        twice its own estimated error and twice the skeleton's truncation estimate there) is on the backbone
+        family; beyond, it is in a tongue.  1e-4 is the accuracy asked of the default branch (the guide's "about
+        1e-4 in frequency"): on the aircraft's mode 20 the points of three methods on the family lie within 3e-5
+        of the skeleton, those on a 3:1 tongue's sheet 1.4e-4 to 5e-3 away.
+    linear_regime : below this harmonic fraction and relative frequency shift from the linear mode a point is on
+        the backbone without asking the skeleton (the skeleton starts where the shift is start_shift).
+    label_harmonics : highest harmonic looked at for a point's harmonic content.
+    fold_content : a harmonic below this fraction of the fundamental is absent (a departure with no harmonic
+        k >= 2 is a fold of the family, not a k:1 tongue).
+    peak_content : a departure near the family's energy maximum with less than this fraction in any harmonic
+        k >= 2 has no partner harmonic: the fold of the family itself.
+    """
+
+    on_family: float = 1e-4
+    linear_regime: float = 1e-3
+    label_harmonics: int = 25
+    fold_content: float = 1e-6
+    peak_content: float = 1e-3
+
+
+@dataclass(frozen=True)
+class Follow:
+    """``tongues=Follow()``: the continuation follows the internal-resonance tongues it meets; points are
+    labelled ``backbone`` or ``tongue k:1`` against the skeleton (labels.py)."""
+
+    skeleton: SkeletonSettings = field(default_factory=SkeletonSettings)
+    labels: LabelSettings = field(default_factory=LabelSettings)
+    name = "follow"
+
+    @property
+    def reach(self):
+        return self.skeleton.follow_reach
+
+
+@dataclass(frozen=True)
+class Skip:
+    """``tongues=Skip()``: the branch is the backbone family.  Where a point leaves the family (labels.py) the
+    continuation jumps to the family beyond the tongue, from the skeleton's orbits above the departure, corrected
+    by the branch's own method on the energy level set (jumps.py); the branch ends where the skeleton ends
+    (policy.py).
+
+    jumps : the relative energy jumps tried from a departure at E_0 (J): the skeleton's orbits at E_0 (1 + delta),
+        nearest first, each corrected by the branch's own method (one corrector run: a failed jump costs at most
+        len(jumps) + a few orbits).  A tongue wider than the largest is the end of the family, not a tongue to jump
+        (the 2-DOF benchmark's 5:1 with its hardening partner spans 2.7e4..5e4 J of its backbone);
+    max_jumps : jumps per branch (a branch re-entering tongues more often than this ends 'tongue', saying so).
+    """
+
+    skeleton: SkeletonSettings = field(default_factory=SkeletonSettings)
+    labels: LabelSettings = field(default_factory=LabelSettings)
+    jumps: tuple = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
+    max_jumps: int = 60
+    name = "skip"
+
+    @property
+    def reach(self):
+        return self.skeleton.reach
+
+
+#: the names accepted by continue_nnm(..., tongues=<name>)
+TONGUE_MODES = {"follow": Follow, "skip": Skip}

@@ -1,0 +1,112 @@
+r"""What a user asks for, as typed frozen objects: the method and the continuation.
+
+    continue_nnm(model, mode, energy_max, method=Shooting(integrator="gauss6") | HarmonicBalance(harmonics=9),
+                 continuation=Continuation(max_points=200), tongues=Follow() | Skip())
+
+Every default is written here once (the tongues' settings: backbone/settings.py).  The keywords of earlier releases
+(``integrator=``, ``steps_per_period=``, ``harmonics=``, ``max_points=``, ...) are mapped onto these objects by
+``from_keywords`` (api.py), so old calls give the same objects.
+
+The default method is shooting with the 6th-order Gauss-Legendre integrator at 100 steps a period, chosen by
+measurement (docs/integrators.md): on the 2-DOF benchmark its backbone is within 1e-8 of the exact one (Newmark at
+200 steps: 1.3e-4), and on the aircraft's mode 20 its points lie within 3e-5 of the harmonic-balance skeleton up to
+the family's end, where Newmark's estimated errors reach 1e-2 near the 3:1 tongue and its backbone ended 35 % lower
+in energy.  It costs about 3x Newmark's time a step at half the steps.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import NNMInputError
+
+__all__ = ["Shooting", "HarmonicBalance", "Continuation", "method_of"]
+
+
+@dataclass(frozen=True)
+class Shooting:
+    """Shooting (orbits/shooting.py) with the exact monodromy.
+
+    integrator : one of nnm.INTEGRATORS ("gauss6": order 6; "newmark": the seed paper's, order 2; "gauss4");
+    steps_per_period : time steps a period (None: the integrator's default, integrators/registry.py: gauss6 100,
+        Newmark 200); rounded up to a multiple of 4 for quarter-period shooting of symmetric orbits;
+    symmetric : half-period shooting (None: when every element's force is odd); reversible : orbits starting at
+        rest (None: with symmetric, or for even forces);
+    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11);
+    freq_tol : raise the steps where a point's estimated frequency error exceeds it (None: never);
+    error_estimate : estimate each point's relative frequency error (branch.freq_error; step doubling).
+    """
+
+    integrator: str = "gauss6"
+    steps_per_period: int | None = None
+    symmetric: bool | None = None
+    reversible: bool | None = None
+    tol: float = 1e-6
+    freq_tol: float | None = None
+    error_estimate: bool = True
+    name = "shooting"
+
+    def options(self):
+        """The orbit problem's options (driver/problems.py)."""
+        return dict(steps_per_period=self.steps_per_period, symmetric=self.symmetric, reversible=self.reversible,
+                    integrator=self.integrator)
+
+
+@dataclass(frozen=True)
+class HarmonicBalance:
+    """Harmonic balance (orbits/harmonic_balance.py; condensed onto the nonlinear elements: condensed_hb.py).
+
+    harmonics : highest harmonic; samples : AFT time samples (None: enough for a cubic without aliasing);
+    basis : "odd" / "full" (None: "odd" for odd forces); condensed : solve the equations condensed onto the
+    elements' deformations (n_s (H + 1) / 2 + 2 unknowns whatever the model size); modal_basis : "full" or "ritz"
+    (None: Ritz above driver.problems.RITZ_MIN_DOF DOFs); tol : relative residual; error_estimate : each point's
+    truncation error (orbits/hb_error.py).
+    """
+
+    harmonics: int = 7
+    samples: int | None = None
+    basis: str | None = None
+    condensed: bool = False
+    modal_basis: str | None = None
+    tol: float = 1e-8
+    error_estimate: bool = True
+    name = "hb"
+
+    def options(self):
+        return dict(harmonics=self.harmonics, samples=self.samples, basis=self.basis, condensed=self.condensed,
+                    modal_basis=self.modal_basis)
+
+
+@dataclass(frozen=True)
+class Continuation:
+    """Pseudo-arclength step control (continuation/engine.py).
+
+    step : first step, relative to the orbit (0.5: half the starting amplitude); step_min : smallest step;
+    max_angle : largest turn (rad) of the tangent between two points; max_correction : largest corrector
+    displacement, relative to the step; max_rel_step : largest relative change of the orbit's state in one step;
+    max_period_step : largest relative change of the period between two points: 0.005 for every method.  Shooting's
+    orbits meet tongues of every order, whose entrances are narrow in period.  For harmonic balance a 2 % cap takes
+    about NLvib's points (issue 30: 23 instead of 70 on its example 04, 87 instead of 190 on 09, the same folds) but
+    straight lines between its points then miss the curve by up to 2.4e-3 across a piecewise-linear kink and the
+    energy-balance peak prediction by 1.3e-3, and at 5 % a step of the 3-DOF combination-resonance branch stepped
+    over its whole unstable interval between two Krein collisions; max_points : largest number of points kept.
+    """
+
+    step: float = 0.5
+    step_min: float = 1e-8
+    max_angle: float = 0.35
+    max_correction: float = 0.5
+    max_rel_step: float = 0.4
+    max_period_step: float = 0.005
+    max_points: int = 500
+
+
+def method_of(method):
+    """The method settings object of ``method`` (a Shooting / HarmonicBalance, or a name: "shooting", "hb",
+    "harmonic_balance"); NNMInputError otherwise."""
+    if isinstance(method, (Shooting, HarmonicBalance)):
+        return method
+    if method in ("shooting", None):
+        return Shooting()
+    if method in ("hb", "harmonic_balance"):
+        return HarmonicBalance()
+    raise NNMInputError(f"method must be Shooting(), HarmonicBalance(), 'shooting' or 'hb', got {method!r}")
