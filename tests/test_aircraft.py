@@ -296,7 +296,7 @@ def test_single_harmonic_skeleton_of_the_full_fe_model_ends_in_a_one_to_one_reso
     energy reaches the skeleton's end, turns back, then rises above it, and its points past the fold are labelled
     'tongue 1:1' (no harmonic k >= 2 exists at H = 1: never a 3:1)."""
     from nnm_solver.driver.api import _skeleton_system
-    from nnm_solver.driver.skeleton import skeleton
+    from nnm_solver.backbone.skeleton import skeleton
     from paris_aircraft.builder import build_paris
     ac = build_paris(ParisParams(mesh=0.4))
     r = ac.retained_dofs

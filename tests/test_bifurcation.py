@@ -132,7 +132,7 @@ def test_events_labels_and_tongues_survive_the_file(tmp_path):
 
 
 def test_a_tongue_re_entered_while_skipping_is_one_record():
-    from nnm_solver.driver.tongue_skip import same_tongue
+    from nnm_solver.backbone.content import same_tongue
     a = dict(order=9, partner_mode=263, entry_energy=12.20, entry_frequency_hz=33.9984, exit_energy=12.45)
     again = dict(order=9, partner_mode=263, entry_energy=12.51, entry_frequency_hz=33.9981)
     assert same_tongue(a, again)

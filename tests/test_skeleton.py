@@ -5,7 +5,7 @@ import pytest
 
 import nnm_solver as nnm
 from nnm_solver.driver.api import _skeleton_system
-from nnm_solver.driver.skeleton import skeleton
+from nnm_solver.backbone.skeleton import skeleton
 
 
 def two_dof():
@@ -184,7 +184,7 @@ def test_two_dof_hb_skip_jumps_the_three_to_one_onto_the_backbone_the_default_br
 def test_is_fold_tells_a_missing_harmonic_from_a_partner_harmonic():
     """tongue_skip.is_fold: an orbit with no third harmonic (a single-harmonic balance) has no 3:1 partner to
     name; a third harmonic of 1e-3 of the fundamental is one."""
-    from nnm_solver.driver.tongue_skip import is_fold
+    from nnm_solver.backbone.content import is_fold
     t = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
     Q = np.column_stack([np.cos(t), 0.1 * np.cos(t)])
     assert is_fold(Q, 3)
@@ -228,7 +228,9 @@ def test_skeleton_starts_at_the_linear_mode_whatever_its_reach(reach):
     (a tongue's continuation asks for 100x its entry energy, 10x that for the skeleton) that first amplitude has no
     solution from the linear guess: the start must go on lowering it (it stopped there, 'no harmonic-balance
     solution at the linear mode', leaving no skeleton).  The start is then the same whatever the reach."""
-    from nnm_solver.driver.skeleton import compute_skeleton, START_SHIFT
+    from nnm_solver.backbone.skeleton import compute_skeleton
+    from nnm_solver.backbone.settings import SkeletonSettings
+    START_SHIFT = SkeletonSettings().start_shift
     from nnm_solver.model.modal import modal_system
     sk = compute_skeleton(modal_system(two_dof()), 1, reach)
     assert len(sk.energy) > 100 and "linear mode" not in sk.message
@@ -242,7 +244,8 @@ def test_a_follow_branch_skeleton_is_the_first_points_of_the_skip_one():
     """tongues='follow' steps the skeleton only to FOLLOW_REACH x energy_max (its labels), from the start of the
     REACH one (tongues='skip'): its points below energy_max are the longer one's, the same numbers, so the labels of
     a branch do not depend on the tongue mode it was computed in."""
-    from nnm_solver.driver.skeleton import FOLLOW_REACH, REACH
+    from nnm_solver.backbone.settings import SkeletonSettings
+    FOLLOW_REACH, REACH = SkeletonSettings().follow_reach, SkeletonSettings().reach
     E_max = 3e5
     short = skeleton(two_dof(), 1, E_max, _skeleton_system, reach=FOLLOW_REACH)     # new models: no cache shared
     long_ = skeleton(two_dof(), 1, E_max, _skeleton_system, reach=REACH)
@@ -279,12 +282,13 @@ def test_two_dof_skeleton_past_its_tongues_is_the_same_backbone_whatever_its_rea
     backbone past the 5:1 tongue (the follow branch's 0.223604 Hz at 1.47e5 J; HB H = 9 of the guide's scan,
     0.224278 Hz at 1e6 J) to 1e-4.  Before the guide the skeleton jumped onto orbits at 0.2249 Hz with 10 % of a
     partner harmonic past 1.3e5 J (reaches 3e6, 1e8, 1e9 J) or ended 'locked' there (1e7 J)."""
-    from nnm_solver.driver.amplitude_family import family_share
-    from nnm_solver.driver.skeleton import compute_skeleton
+    from nnm_solver.backbone.amplitude_family import family_share
+    from nnm_solver.backbone.settings import SkeletonSettings
+    from nnm_solver.backbone.skeleton import compute_skeleton
     from nnm_solver.model.modal import modal_system
     sk = compute_skeleton(modal_system(two_dof()), 1, reach)
     assert sk.end == "reach", sk.message
-    h1 = compute_skeleton(modal_system(two_dof()), 1, 3e7, harmonics=1)
+    h1 = compute_skeleton(modal_system(two_dof()), 1, 3e7, SkeletonSettings(harmonics=1))
     for E in (1e4, 1.5e5, 2.5e5, 1e6, 3e6):
         assert abs(sk.frequency_at(E) / h1.frequency_at(E) - 1) < 1e-3, E
         i = int(np.searchsorted(sk.energy, E))
@@ -323,7 +327,7 @@ def test_soft_three_dof_chain_skeleton_keeps_its_family_where_the_one_harmonic_g
     The skeleton goes on along its family, continuous in frequency (steps < 3 %), into the 3:1 internal resonance
     with mode 3 that takes it over (locked above 1.5 J; the follow branch's points up to 1.3 J lie on it).  Trusting
     the guide there, it had moved onto orbits at 0.045 Hz (half the family's frequency) at 1.05 J."""
-    from nnm_solver.driver.skeleton import compute_skeleton
+    from nnm_solver.backbone.skeleton import compute_skeleton
     from nnm_solver.model.modal import modal_system
     model = _chain3(nnm.CubicSpring(dof=0, k3=-0.5))
     sk = compute_skeleton(modal_system(model), 1, 5.0)

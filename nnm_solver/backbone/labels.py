@@ -15,7 +15,14 @@ k^p, w_k the harmonics' shares of the orbit's kinetic energy), and it is on the 
 
     dev <= on_family + 2 (its own estimated frequency error) + 2 (the skeleton's truncation estimate at E),
 
-so that a label is a claim within the accuracy the two computations say they have.  Otherwise it is labelled
+so that a label is a claim within the accuracy the two computations say they have (beyond on_family + 2 (its own
+error), where only the skeleton's truncation widens it, its fundamental share must also lie within share_drop of
+the skeleton's: a partner taking a share the family does not have is a tongue's entrance), and its frequency is not
+locked: since the kept points of its run (no jump between) where the family's frequency moved by at least
+lock_window (the skeleton's secant slope, labels.Verdict), its own moved by at least lock_ratio of that.  Inside a
+tongue the frequency locks to the partner's (k f = f_p) while the energy grows: on the aircraft's mode 20 between
+3 and 5 J such plateaus (f constant to 1e-5 over 10-15 % in energy, where the family moves 0.3-0.5 %) lie within the
+skeleton's own truncation estimate there (4e-3), so the distance alone cannot tell them.  Otherwise it is labelled
 ``"tongue k:1"`` (k: the harmonic the partner modes carry, content.py).  Above the family's energy maximum (a
 softening family's saddle) or above where the family ends in a k:1 resonance (the skeleton ended ``locked`` or
 ``stuck``) every point is off the family (dev = inf).  Where no skeleton covers the energy (no nonlinear elements,
@@ -76,9 +83,23 @@ class FamilyLabels:
             return None
         return abs(frequency_hz / sk.frequency_at(energy) - 1.0 - self.bias(amps))
 
-    def verdict(self, energy, frequency_hz, content, error=0.0):
+    def locked(self, energy, frequency_hz, run):
+        """Is the frequency locked (module docstring)?  run : (energy J, frequency Hz) of the kept points since the
+        last jump, oldest first."""
+        s, sk = self.settings, self.skeleton
+        for E0, f0 in reversed(run):
+            slope = sk.slope(E0, energy)
+            if not math.isfinite(slope):
+                return False
+            expected = slope * math.log(energy / E0)
+            if abs(expected) >= s.lock_window:
+                return abs(math.log(frequency_hz / f0)) < s.lock_ratio * abs(expected)
+        return False
+
+    def verdict(self, energy, frequency_hz, content, error=0.0, run=()):
         """The Verdict of a point of energy (J), frequency (Hz), Content (content.py) and estimated relative
-        frequency error (NaN or inf: unknown, taken as 0 / not resolved)."""
+        frequency error (NaN or inf: unknown, taken as 0 / not resolved); run : the kept points of its run
+        (``locked``)."""
         s, sk = self.settings, self.skeleton
         tongue = f"tongue {content.order}:1"
         shift = frequency_hz / self.f_linear - 1.0
@@ -100,4 +121,8 @@ class FamilyLabels:
         err = error if math.isfinite(error) else 0.0
         trunc = sk.truncation_at(energy) if dev > s.on_family else 0.0   # a solve per skeleton point: asked here only
         tol = s.on_family + 2 * err + 2 * (trunc if math.isfinite(trunc) else 0.0)
-        return Verdict("backbone" if dev <= tol else tongue, dev, tol)
+        strict = s.on_family + 2 * err
+        drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0
+        on = (dev <= strict or (dev <= tol and not drop > s.share_drop)) and not (
+            run and self.locked(energy, frequency_hz, run))
+        return Verdict("backbone" if on else tongue, dev, tol)

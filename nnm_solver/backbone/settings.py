@@ -113,6 +113,13 @@ class LabelSettings:
         of the skeleton, those on a 3:1 tongue's sheet 1.4e-4 to 5e-3 away.
     linear_regime : below this harmonic fraction and relative frequency shift from the linear mode a point is on
         the backbone without asking the skeleton (the skeleton starts where the shift is start_shift).
+    lock_window, lock_ratio : a point whose frequency moved by less than lock_ratio of the family's move since the
+        kept points of its run where the family moved by lock_window is locked in a tongue (labels.py; measured on
+        the aircraft's mode 20: plateaus move < 1e-5 where the family moves 3e-3, its points on the family 0.8-1.2x
+        the family's secant slope);
+    share_drop : where only the skeleton's truncation estimate admits a point (dev beyond on_family + 2 errors),
+        its fundamental share must lie within share_drop of the skeleton's (aircraft mode 20: 0.002-0.003 on the
+        family, 0.005 at dev 5e-5 into its 3:1 tongue, 0.014 on the tongue's plateau at 3.4 J);
     label_harmonics : highest harmonic looked at for a point's harmonic content.
     fold_content : a harmonic below this fraction of the fundamental is absent (a departure with no harmonic
         k >= 2 is a fold of the family, not a k:1 tongue).
@@ -122,6 +129,9 @@ class LabelSettings:
 
     on_family: float = 1e-4
     linear_regime: float = 1e-3
+    lock_window: float = 3e-4
+    lock_ratio: float = 0.3
+    share_drop: float = 0.005
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3

@@ -29,6 +29,8 @@ from ..threads import blas_limited
 
 #: steps refused in a row when an event inside them cannot be located (the step is halved each time)
 MAX_REFUSALS = 3
+#: the kept points remembered for the lock test of the labels (backbone/labels.py)
+RUN_LENGTH = 40
 
 __all__ = ["NNMIterator"]
 
@@ -73,6 +75,7 @@ class NNMIterator(StepRefinement):
         self.tongues = []              # TongueRecords (results/tongues.py)
         self._start_is_low = bool(start_is_low)   # the branch starts at low energy (not a tongue from its entry)
         self._last_kept = None         # (ContinuationPoint, Point) of the last point kept
+        self._run = []                 # (E, f) of the points kept on the family since the last jump
         self._refusals = 0             # steps refused in a row because an event in them was not located
         # the engine's next point, computed while the last point's multipliers are (in the worker thread)
         self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
@@ -116,6 +119,10 @@ class NNMIterator(StepRefinement):
                     break
                 command = REFUSE                # an event could not be located: a shorter step
             self._last_kept = (cp, point)
+            if point.label == "backbone":       # the run of points on the family since the last jump (labels.py)
+                self._run = self._run[-RUN_LENGTH:] + [(point.energy, point.frequency_hz)]
+            else:
+                self._run = []
             self._estimate_error(point)
             self._release(point)
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
@@ -183,7 +190,7 @@ class NNMIterator(StepRefinement):
         obs = point._observed
         if self._labels is not None:
             self._estimate_error(point)
-            verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error)
+            verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run)
             point.label = verdict.text
         else:
             verdict = None
@@ -205,7 +212,7 @@ class NNMIterator(StepRefinement):
             if u is None:
                 continue
             E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
-            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1))
+            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run)
             if self._policy.landed(verdict, E, jump.base):
                 record = jump.record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f,
                                              jump=f"the skeleton's orbit at {E_t:.4g} J",
@@ -215,6 +222,7 @@ class NNMIterator(StepRefinement):
                                                       self._tol))
                 self._prev = None          # no events are located across the jump
                 self._refusals = 0
+                self._run = []
                 return None
         record = jump.record.replace(attempts=jump.record.attempts + len(tried))
         return self._policy.no_landing(bpoint, record, tuple(tried), jump.index)

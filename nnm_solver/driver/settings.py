@@ -109,4 +109,4 @@ def method_of(method):
         return Shooting()
     if method in ("hb", "harmonic_balance"):
         return HarmonicBalance()
-    raise NNMInputError(f"method must be Shooting(), HarmonicBalance(), 'shooting' or 'hb', got {method!r}")
+    raise NNMInputError(f"method must be one of Shooting(), HarmonicBalance(), 'shooting' or 'hb', got {method!r}")

@@ -66,7 +66,19 @@ class TongueRecord:
 
     # mapping-style access (the records of earlier releases were dicts)
     def keys(self):
-        return [k for k, v in self.as_dict().items()]
+        return list(self.as_dict())
+
+    def items(self):
+        return self.as_dict().items()
+
+    def values(self):
+        return self.as_dict().values()
+
+    def __iter__(self):
+        return iter(self.as_dict())
+
+    def __len__(self):
+        return len(self.as_dict())
 
     def __getitem__(self, key):
         d = self.as_dict()
