@@ -93,10 +93,13 @@ def fundamental_share(amps):
     return float(amps[1] / tot) if tot > 0 else 1.0
 
 
-def partner_mode(Q, k):
+def partner_mode(Q, k, r=None):
     """1-based linear mode whose shape is closest (MAC, modal coordinates are mass-normalised) to the
-    k-th harmonic of the modal orbit Q, and that MAC."""
+    k-th harmonic of the modal orbit Q, and that MAC; with r (0-based, the followed mode) the followed mode's own
+    k-th harmonic is left out (the partner is another mode)."""
     a = fourier_coefficients(Q, k)[k]
+    if r is not None and Q.shape[1] > 1:
+        a[r] = 0.0
     A = np.column_stack([a.real, a.imag])
     U, S, _ = np.linalg.svd(A, full_matrices=False)
     shape = U[:, 0]

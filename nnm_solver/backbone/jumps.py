@@ -43,12 +43,14 @@ def level_set(prob, guess, settings, tol, w=None):
 
 
 def land(prob, system, skeleton, E_t, settings, tol):
-    """(u, J): the branch problem ``prob``'s orbit on the energy level set E_t (J), from the skeleton's orbit there;
-    (None, None) where the skeleton has none or the corrector fails.  system : the branch's ModalSystem."""
+    """(u, J, (E, f)): the branch problem ``prob``'s orbit on the energy level set E_t (J), from the skeleton's orbit
+    there, and that skeleton orbit's energy (J) and frequency (Hz); (None, None, None) where the skeleton has none or the corrector
+    fails.  system : the branch's ModalSystem."""
     refined = skeleton.family_orbit(system, E_t, settings, tol)
     if refined is None:
-        return None, None
+        return None, None, None
     fam, u = refined
+    family = (float(fam.energy(u)), 1.0 / fam.state(u)[2])
     if hasattr(prob, "from_family") and getattr(prob, "sys", None) is fam.sys:
         guess = prob.from_family(fam, u)       # harmonic balance: the family's harmonics as they are
     elif hasattr(prob, "from_state"):
@@ -57,8 +59,8 @@ def land(prob, system, skeleton, E_t, settings, tol):
             q0, v0 = (system.to_modal(fam.sys.to_physical(x)) for x in (q0, v0))
         guess = prob.from_state(q0, v0, T)
     else:
-        return None, None
-    return level_set(prob, guess, settings, tol)
+        return None, None, None
+    return (*level_set(prob, guess, settings, tol), family)
 
 
 def upward_tangent(prob, u, J, previous):

@@ -13,10 +13,11 @@ bias being the branch's own offset from the exact linear frequency at the linear
 Newmark's period error grows for the orbit's harmonic k as k^p for an integrator of order p: bias = b0 sum_k w_k
 k^p, w_k the harmonics' shares of the orbit's kinetic energy), and it is on the family when
 
-    dev <= on_family + 2 (its own estimated frequency error) + 2 (the skeleton's truncation estimate at E),
+    dev <= on_family + 2 (its own estimated error) + 2 (the skeleton's interpolation error estimate at E)
+                     + 2 (the skeleton's truncation estimate at E),
 
-so that a label is a claim within the accuracy the two computations say they have (beyond on_family + 2 (its own
-error), where only the skeleton's truncation widens it, its fundamental share must also lie within share_drop of
+so that a label is a claim within the accuracy the two computations say they have (beyond the first three terms, where
+only the skeleton's truncation widens it, its fundamental share must also lie within share_drop of
 the skeleton's: a partner taking a share the family does not have is a tongue's entrance), and its frequency is not
 locked: since the kept points of its run (no jump between) where the family's frequency moved by at least
 lock_window (the skeleton's secant slope, labels.Verdict), its own moved by at least lock_ratio of that.  Inside a
@@ -96,10 +97,11 @@ class FamilyLabels:
                 return abs(math.log(frequency_hz / f0)) < s.lock_ratio * abs(expected)
         return False
 
-    def verdict(self, energy, frequency_hz, content, error=0.0, run=()):
+    def verdict(self, energy, frequency_hz, content, error=0.0, run=(), reference_hz=None):
         """The Verdict of a point of energy (J), frequency (Hz), Content (content.py) and estimated relative
         frequency error (NaN or inf: unknown, taken as 0 / not resolved); run : the kept points of its run
-        (``locked``)."""
+        (``locked``); reference_hz : the frequency of the skeleton's own orbit at that energy (a jump's landing),
+        instead of its interpolated one."""
         s, sk = self.settings, self.skeleton
         tongue = f"tongue {content.order}:1"
         shift = frequency_hz / self.f_linear - 1.0
@@ -119,9 +121,14 @@ class FamilyLabels:
         if dev is None or not math.isfinite(dev):
             return Verdict(content.label)
         err = error if math.isfinite(error) else 0.0
-        trunc = sk.truncation_at(energy) if dev > s.on_family else 0.0   # a solve per skeleton point: asked here only
-        tol = s.on_family + 2 * err + 2 * (trunc if math.isfinite(trunc) else 0.0)
-        strict = s.on_family + 2 * err
+        if reference_hz is not None:           # a jump's landing: against the skeleton's own orbit at that energy
+            dev = abs(frequency_hz / reference_hz - 1.0 - self.bias(content.amplitudes))
+            interp = 0.0
+        else:
+            interp = sk.interpolation_error(energy)
+        strict = s.on_family + 2 * err + 2 * (interp if math.isfinite(interp) else 0.0)
+        trunc = sk.truncation_at(energy) if dev > strict else 0.0   # a solve per skeleton point: asked here only
+        tol = strict + 2 * (trunc if math.isfinite(trunc) else 0.0)
         drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0
         on = (dev <= strict or (dev <= tol and not drop > s.share_drop)) and not (
             run and self.locked(energy, frequency_hz, run))

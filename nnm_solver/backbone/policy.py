@@ -6,12 +6,12 @@ The algorithm (``tongues=Skip()``), for each point the continuation gives, in en
    estimate, or off it.
 2. On the family and above the last kept point in energy: **Keep** it.
 3. Off the family (or turned back in energy: the backbone continued in energy has no fold): it entered a tongue.
-   Beyond the family's end (above its energy maximum, or past the resonance that ends it, as the skeleton says):
-   **Finish** with the family's end (``escape`` at a softening family's energy maximum, ``tongue`` where a k:1
-   resonance ends it).  Otherwise **Jump**: the skeleton's points above the departure (jumps.candidates) are the
-   targets, tried nearest first; the first whose corrected orbit is on the family (``landed``) is where the
+   **Jump**: the skeleton's orbits above the departure (jumps.candidates) are the targets, tried nearest first; the first whose corrected orbit is on the family (``landed``) is where the
    continuation restarts.  The tongue is recorded (results/tongues.py: order, partner mode, entry and inside
    orbits, how it was passed); a departure into the tongue just passed adds a re-entry to its record.
+   With no target left below the family's end (above its energy maximum, or past the resonance that ends it, as the
+   skeleton says): **Finish** with the family's end (``escape`` at a softening family's energy maximum, ``tongue``
+   where a k:1 resonance ends it).
 4. No target lands (``no_landing``), or the continuation cannot go on (``stopped``): where the skeleton ends within
    reach, that is the family's end (its status, its message); else ``tongue``, saying that no landing was found.
 
@@ -107,8 +107,9 @@ class SkipPolicy:
     """tongues=Skip() (module docstring).  settings : Skip; skeleton : the branch's Skeleton (or None: then no
     tongue can be jumped, and a departure ends the branch 'tongue', saying why)."""
 
-    def __init__(self, settings=Skip(), skeleton=None, skeleton_failure=""):
+    def __init__(self, settings=Skip(), skeleton=None, skeleton_failure="", mode=1):
         self.settings, self.skeleton = settings, skeleton
+        self.mode = int(mode)                  # the followed mode (1-based)
         self.skeleton_failure = skeleton_failure
         self.jumps = 0
 
@@ -123,18 +124,22 @@ class SkipPolicy:
             return Keep()
         record = self._record(point, content, Q, last, index)
         sk = self.skeleton
-        if verdict.beyond_end:
-            return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}")
         previous = tongues[-1] if tongues else None
         again = (previous is not None and previous.order == record.order
                  and previous.partner_mode == record.partner_mode and previous.exit_energy is not None
-                 and last.energy <= previous.exit_energy * (1 + 1e-6) + 0.0)
+                 and last.energy <= previous.exit_energy * (1 + self.settings.same_tongue))
+
         base = last.energy
         if self.jumps >= self.settings.max_jumps:
             return Finish("tongue", f"the backbone left its family {self.jumps} times (Skip.max_jumps); the last "
                                     f"departure into {_resonance(record)} at {_at(last)}; the points on the backbone "
                                     f"below are kept", record)
-        targets = tuple(candidates(sk, base, self.settings.jumps))
+        # a re-entry of the tongue just passed tries longer jumps each time (no crawl along its edge)
+        jumps = self.settings.jumps[min(previous.reentries + 1, len(self.settings.jumps) - 1):] if again else (
+            self.settings.jumps)
+        targets = tuple(candidates(sk, base, jumps))
+        if not targets and verdict.beyond_end:
+            return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}")
         if not targets:
             return self.no_landing(last, record, ())
         self.jumps += 1
@@ -142,6 +147,12 @@ class SkipPolicy:
             return Jump(previous.replace(reentries=previous.reentries + 1, skipped=False, exit_energy=None,
                                          exit_frequency_hz=None), targets, base, len(tongues) - 1)
         return Jump(record, targets, base)
+
+    @staticmethod
+    def recorded(record):
+        """Is a passed departure a tongue to list in branch.tongues?  Not a step that left a steep part of the
+        family with no partner harmonic (order 1, no partner: nothing resonates), only jumped back onto it."""
+        return record.order >= 2 or record.partner_mode > 0
 
     def landed(self, verdict, energy, base):
         """Is a jump's corrected orbit (its Verdict, energy J) on the family above ``base`` (J)?"""
@@ -180,11 +191,11 @@ class SkipPolicy:
     def _family_end(self, last, record, what, index=-1):
         sk = self.skeleton
         status = family_end_status(sk)
-        if status == "escape":
+        if status == "escape":            # a tongue met at the peak is recorded; the family's own fold is not one
             return Finish("escape", f"{what}, at its family's energy maximum {sk.energy_peak:.4g} J (its skeleton: "
                                     f"{sk.message}): no backbone exists above it, the structure escapes; the "
                                     f"points on the backbone below are kept",
-                          record.replace(family_end=True, note=sk.message), index)
+                          record.replace(family_end=True, note=sk.message) if record.order >= 2 else None, index)
         if status == "tongue":
             k, partner = sk.partner
             named = f"the {k}:1 internal resonance with mode {partner}" if partner else "a resonance"
@@ -196,7 +207,7 @@ class SkipPolicy:
     def _record(self, point, content, Q, last, index):
         """The TongueRecord of a departure from ``last`` (index - 1) into ``point``."""
         k = content.order
-        mode, mac = partner_mode(Q, k) if Q is not None and k >= 2 else (0, math.nan)
+        mode, mac = partner_mode(Q, k, self.mode - 1) if Q is not None and k >= 2 else (0, math.nan)
         return TongueRecord(order=k, partner_mode=mode, partner_mac=mac, entry_index=index - 1,
                             entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz),
                             entry_period=float(last.period), entry_x0=tuple(map(float, last.x0)),
@@ -204,8 +215,8 @@ class SkipPolicy:
                             inside_v0=tuple(map(float, point.v0)), inside_period=float(point.period))
 
 
-def policy_for(settings, skeleton, skeleton_failure=""):
-    """The policy object of a tongues setting (Follow or Skip)."""
+def policy_for(settings, skeleton, skeleton_failure="", mode=1):
+    """The policy object of a tongues setting (Follow or Skip) for the followed mode (1-based)."""
     if isinstance(settings, Skip):
-        return SkipPolicy(settings, skeleton, skeleton_failure)
+        return SkipPolicy(settings, skeleton, skeleton_failure, mode)
     return FollowPolicy(settings, skeleton)

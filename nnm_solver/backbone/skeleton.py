@@ -79,6 +79,8 @@ class Skeleton:
                 keep.append(i)
                 lowest = E[i]
         keep = keep[::-1]
+        #: the intervals between kept points with points left out between them (interpolated linearly)
+        self._gaps = np.diff(keep) > 1 if len(keep) > 1 else np.zeros(0, dtype=bool)
         self.energy_peak = float(E[n - 1]) if end == "peak" and n else None
         self.energy = E[keep]
         self.frequency_hz = np.asarray(f, dtype=float)[keep]
@@ -150,10 +152,9 @@ class Skeleton:
             self._interp = self._sheets()
         j, t = self._pair(E)
         sheet = self._interp.get(j)
-        # linear in ln E between points further apart in ln f than the stepping's resolution (2 dlnf_max): the gap
-        # left by the points dropped inside a tongue, where a spline swings (by 3e-3 on the aircraft's mode 20
-        # between 4.07 and 4.96 J, against 3e-4 for the line)
-        gap = abs(math.log(self.frequency_hz[j + 1] / self.frequency_hz[j])) > 2 * self.settings.dlnf_max
+        # linear in ln E across a gap left by the points dropped inside a tongue (blips), where a spline swings (by
+        # 3e-3 on the aircraft's mode 20 between 4.07 and 4.96 J, against 3e-4 for the line)
+        gap = bool(self._gaps[j])
         if sheet is None or self._interp.get(j + 1) is not sheet or gap:
             return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
         lo, c, lnE, f = sheet
@@ -200,6 +201,22 @@ class Skeleton:
             if not np.isfinite(self._shares[i]):
                 self._shares[i] = fundamental_share(harmonic_label(self.problem.modal_orbit(self.orbits[i]))[3])
         return float((1 - t) * self._shares[j] + t * self._shares[j + 1])
+
+    def interpolation_error(self, E):
+        """Estimated relative error of ``frequency_at`` at energy E (J) from the spacing of the skeleton's points: the
+        change of the secant slope d ln f / d ln E between the interval holding E and its neighbours, times the
+        interval's length / 8 (the error of a line through two points of a curve of that curvature).  Measured on
+        the aircraft's mode 10 at one harmonic near its energy maximum (points 10 % apart in energy): estimated
+        2.3e-4 where the interpolated frequency was 2.1e-4 off the family's orbit at that energy."""
+        if not self.covers(E):
+            return float("nan")
+        x, y = np.log(self.energy), np.log(self.frequency_hz)
+        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
+        h = np.diff(x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slopes = np.where(h > 0, np.diff(y) / np.where(h > 0, h, 1.0), 0.0)
+        change = max([abs(slopes[i] - slopes[j]) for i in (j - 1, j + 1) if 0 <= i < len(slopes)], default=0.0)
+        return float(change * h[j] / 8)
 
     def slope(self, E1, E2):
         """d ln f / d ln E of the family between energies E1 and E2 (J): the secant of its points' frequencies

@@ -10,6 +10,8 @@ internal-resonance tongues are jumped over or traversed unseen.
 """
 from __future__ import annotations
 
+import math
+
 
 import numpy as np
 
@@ -208,16 +210,22 @@ class NNMIterator(StepRefinement):
         tried = []
         for E_t in jump.targets:
             tried.append(E_t)
-            u, J = land(prob, self._system, sk, E_t, self._cs, self._tol)
+            u, J, family = land(prob, self._system, sk, E_t, self._cs, self._tol)
             if u is None:
                 continue
             E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
-            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run)
+            # against the skeleton's own orbit there, moved along the family's slope to the landing's energy
+            E_fam, f_fam = family
+            slope = sk.slope(min(E, E_fam) * (1 - 1e-3), max(E, E_fam) * (1 + 1e-3))
+            reference = f_fam * math.exp(slope * math.log(E / E_fam)) if math.isfinite(slope) else None
+            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run,
+                                           reference_hz=reference)
             if self._policy.landed(verdict, E, jump.base):
                 record = jump.record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f,
                                              jump=f"the skeleton's orbit at {E_t:.4g} J",
                                              attempts=jump.record.attempts + len(tried))
-                self._store(record, jump.index)
+                if self._policy.recorded(record):
+                    self._store(record, jump.index)
                 self._engine.restart(pseudo_arclength(prob, u, upward_tangent(prob, u, J, bcp.tangent), self._cs,
                                                       self._tol))
                 self._prev = None          # no events are located across the jump

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 __all__ = ["TongueRecord"]
 
@@ -36,10 +36,10 @@ class TongueRecord:
     entry_energy: float = math.nan
     entry_frequency_hz: float = math.nan
     entry_period: float = math.nan
-    entry_x0: tuple = ()
-    entry_v0: tuple = ()
-    inside_x0: tuple = ()
-    inside_v0: tuple = ()
+    entry_x0: tuple = field(default=(), repr=False)
+    entry_v0: tuple = field(default=(), repr=False)
+    inside_x0: tuple = field(default=(), repr=False)
+    inside_v0: tuple = field(default=(), repr=False)
     inside_period: float = math.nan
     skipped: bool = False
     exit_energy: float | None = None
