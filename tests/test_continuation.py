@@ -42,7 +42,7 @@ def test_three_to_one_tongue_is_traversed(two_dof_nnm1):
     # at the tip the orbit is dominated by the third harmonic (NNM2 at three times the frequency)
     h = b.harmonics(tip["index"], 5)
     assert h[3, 0] > 5 * h[1, 0]
-    assert h[3].sum() > 0.8 * h[1:].sum()
+    assert h[3].sum() > 0.7 * h[1:].sum()          # 0.75 at gauss6's fold (Newmark-200's, moved by its period error: 0.8)
     # the tongue sits where 3 x (its frequency) meets NNM2's frequency at that energy
     nnm2 = nnm.continue_nnm(b.model, mode=2, energy_max=tip["energy"] * 1.5)
     f2 = np.interp(tip["energy"], nnm2.energy, nnm2.frequency_hz)
@@ -74,7 +74,8 @@ def test_scaled_branch_equals_recomputation():
     assert np.allclose(r.frequency_hz[inside], f_interp[inside], rtol=1e-3)
     # every scaled orbit is a periodic orbit of the scaled model, to the continuation tolerance
     ms = modal_system(s.model)
-    prob = ShootingProblem(ms, 0, s.settings["steps_per_period"])
+    from nnm_solver.integrators.registry import get_integrator
+    prob = ShootingProblem(ms, 0, s.settings["steps_per_period"], integrator=get_integrator(s.settings["integrator"]))
     for i in range(0, len(s), 5):
         u = prob.pack(ms.to_modal(s.x0[i]), ms.to_modal(s.v0[i]), s.period[i])
         assert prob.error(u, prob.residual(u)) < 1e-6

@@ -81,7 +81,7 @@ def test_running_snapshot_orbit_equals_final_orbit():
     assert got.wait(120)
     snap = job.points()
     assert snap.status == "running" and len(snap) >= 6
-    assert snap.settings.symmetric and snap.settings.steps_per_period == 200
+    assert snap.settings.symmetric and snap.settings.steps_per_period == 100     # gauss6 default (integrators/registry.py)
     t_s, x_s = snap.motion(5, 64)
     gate.set()
     final = job.result(timeout=120)

@@ -134,19 +134,20 @@ class SkipPolicy:
             return Finish("tongue", f"the backbone left its family {self.jumps} times (Skip.max_jumps); the last "
                                     f"departure into {_resonance(record)} at {_at(last)}; the points on the backbone "
                                     f"below are kept", record)
-        # a re-entry of the tongue just passed tries longer jumps each time (no crawl along its edge)
-        jumps = self.settings.jumps[min(previous.reentries + 1, len(self.settings.jumps) - 1):] if again else (
-            self.settings.jumps)
+        # a re-entry of the tongue just passed: one record, longer jumps tried each time (no crawl along its edge)
+        jumps, index = self.settings.jumps, -1
+        if again:
+            jumps = jumps[min(previous.reentries + 1, len(jumps) - 1):]
+            record, index = previous.replace(reentries=previous.reentries + 1, skipped=False, exit_energy=None,
+                                             exit_frequency_hz=None), len(tongues) - 1
         targets = tuple(candidates(sk, base, jumps))
         if not targets and verdict.beyond_end:
-            return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}")
+            return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}",
+                                    index)
         if not targets:
-            return self.no_landing(last, record, ())
+            return self.no_landing(last, record, (), index)
         self.jumps += 1
-        if again:
-            return Jump(previous.replace(reentries=previous.reentries + 1, skipped=False, exit_energy=None,
-                                         exit_frequency_hz=None), targets, base, len(tongues) - 1)
-        return Jump(record, targets, base)
+        return Jump(record, targets, base, index)
 
     @staticmethod
     def recorded(record):

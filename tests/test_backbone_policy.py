@@ -1,0 +1,142 @@
+"""The backbone's decisions (nnm_solver/backbone/policy.py, labels.py) on canned skeletons and points: keep, jump,
+finish; one record per tongue re-entered; the family's end; the lock test.  No continuation runs here."""
+import math
+
+import numpy as np
+import pytest
+
+import nnm_solver as nnm
+from nnm_solver.backbone.content import Content
+from nnm_solver.backbone.labels import FamilyLabels, Verdict
+from nnm_solver.backbone.policy import Finish, FollowPolicy, Jump, Keep, SkipPolicy
+from nnm_solver.results.tongues import TongueRecord
+
+
+class CannedSkeleton:
+    """A skeleton f(E) = f0 (1 - c ln(E / E0)) on [E_lo, E_hi], ending as told (the attributes the policy and the
+    labels read)."""
+
+    def __init__(self, E_lo=0.1, E_hi=10.0, f0=10.0, c=0.01, end="reach", partner=(1, 0), energy_peak=None):
+        self.energy = np.geomspace(E_lo, E_hi, 60)
+        self.f0, self.c, self.E0 = f0, c, E_lo
+        self.frequency_hz = f0 * (1 - c * np.log(self.energy / E_lo))
+        self.end, self.partner, self.energy_peak = end, partner, energy_peak
+        self.sheet_starts, self.message, self.mode = [], f"canned family ending {end}", 1
+
+    def covers(self, E):
+        return self.energy[0] <= E <= self.energy[-1]
+
+    def frequency_at(self, E):
+        return self.f0 * (1 - self.c * math.log(E / self.E0)) if self.covers(E) else math.nan
+
+    def slope(self, E1, E2):
+        return (math.log(self.frequency_at(E2)) - math.log(self.frequency_at(E1))) / math.log(E2 / E1)
+
+    def interpolation_error(self, E):
+        return 0.0
+
+    def truncation_at(self, E):
+        return 0.0
+
+    def share_at(self, E):
+        return 1.0
+
+
+class P:
+    """A canned point (energy J, frequency Hz)."""
+
+    def __init__(self, E, f):
+        self.energy, self.frequency_hz, self.period = E, f, 1 / f
+        self.x0, self.v0 = np.zeros(2), np.zeros(2)
+
+
+ON = Content(k=3, fraction=1e-3, partner_k=3, share=0.999)
+
+
+def labels(sk):
+    return FamilyLabels(sk, sk.f0, sk.f0)
+
+
+def test_a_point_on_the_family_is_kept_one_off_it_jumps_to_the_skeleton_beyond():
+    sk = CannedSkeleton()
+    lab, pol = labels(sk), SkipPolicy(nnm.Skip(), sk, mode=1)
+    last = P(1.0, sk.frequency_at(1.0))
+    on = P(1.1, sk.frequency_at(1.1) * (1 + 5e-5))
+    v = lab.verdict(on.energy, on.frequency_hz, ON)
+    assert v.on_family and v.text == "backbone" and v.dev == pytest.approx(5e-5, rel=1e-6)
+    assert isinstance(pol.decide(on, v, ON, None, last, 5, []), Keep)
+    off = P(1.1, sk.frequency_at(1.1) * (1 + 3e-4))          # 3e-4 off: in a tongue
+    v = lab.verdict(off.energy, off.frequency_hz, ON)
+    assert not v.on_family and v.text == "tongue 3:1"
+    d = pol.decide(off, v, ON, None, last, 5, [])
+    assert isinstance(d, Jump) and d.index == -1 and d.base == 1.0
+    assert d.targets == tuple(1.0 * (1 + x) for x in nnm.Skip().jumps if sk.covers(1 + x))
+    assert d.record.order == 3 and d.record.entry_energy == 1.0 and d.record.entry_index == 4
+
+
+def test_the_tongue_just_passed_entered_again_is_one_record_with_longer_jumps():
+    sk = CannedSkeleton()
+    lab, pol = labels(sk), SkipPolicy(nnm.Skip(), sk, mode=1)
+    passed = TongueRecord(order=3, entry_energy=1.0, skipped=True, exit_energy=1.02, exit_frequency_hz=9.9)
+    last = P(1.02, sk.frequency_at(1.02))
+    off = P(1.03, sk.frequency_at(1.03) * 1.001)
+    d = pol.decide(off, lab.verdict(off.energy, off.frequency_hz, ON), ON, None, last, 9, [passed])
+    assert isinstance(d, Jump) and d.index == 0 and d.record.reentries == 1 and d.record.exit_energy is None
+    assert d.targets[0] == pytest.approx(1.02 * (1 + nnm.Skip().jumps[1]))        # the shortest jump is not tried
+    other = Content(k=5, fraction=1e-2, partner_k=5, share=0.99)                    # another order: a new record
+    d = pol.decide(off, lab.verdict(off.energy, off.frequency_hz, other), other, None, last, 9, [passed])
+    assert isinstance(d, Jump) and d.index == -1 and d.record.order == 5
+    far = P(5.0, sk.frequency_at(5.0) * 1.001)                                      # far above: the same order anew
+    d = pol.decide(far, lab.verdict(far.energy, far.frequency_hz, ON), ON, None, P(4.9, 9.0), 30, [passed])
+    assert d.index == -1
+
+
+@pytest.mark.parametrize("end, status", [("stuck", "tongue"), ("locked", "tongue"), ("peak", "escape")])
+def test_where_no_target_is_left_the_branch_ends_as_its_family_ends(end, status):
+    sk = CannedSkeleton(E_hi=2.0, end=end, partner=(3, 7), energy_peak=2.0 if end == "peak" else None)
+    lab, pol = labels(sk), SkipPolicy(nnm.Skip(), sk, mode=1)
+    last = P(1.999, sk.frequency_at(1.999))
+    beyond = P(2.5, 9.0)
+    v = lab.verdict(beyond.energy, beyond.frequency_hz, ON)
+    assert v.beyond_end and v.dev == math.inf
+    d = pol.decide(beyond, v, ON, None, last, 40, [])
+    assert isinstance(d, Finish) and d.status == status and "canned family ending" in d.message
+    if status == "tongue":
+        assert d.record.family_end and "mode 7" in d.message
+    # the continuation stopping there ends the same way; far below the end it is a failure ('failed': None)
+    assert pol.stopped(last, "no convergence", 40).status == status
+    assert pol.stopped(P(0.2, sk.frequency_at(0.2)), "no convergence", 3) is None
+
+
+def test_without_a_skeleton_a_departure_ends_the_branch_saying_why():
+    pol = SkipPolicy(nnm.Skip(), None, "the skeleton could not be computed: singular", mode=1)
+    d = pol.decide(P(1.1, 9.0), Verdict("tongue 3:1"), ON, None, P(1.0, 9.1), 3, [])
+    assert isinstance(d, Finish) and d.status == "tongue" and "singular" in d.message
+
+
+def test_follow_keeps_every_point_and_notes_where_the_last_ones_are():
+    pol = FollowPolicy()
+    assert isinstance(pol.decide(P(1, 1), Verdict("tongue 3:1"), ON, None, P(0.9, 1), 1, []), Keep)
+    a, b = P(1, 1), P(2, 1)
+    a.label, b.label = "backbone", "tongue 3:1"
+    assert "off the backbone family" in pol.note([a, b]) and pol.note([a]) == ""
+
+
+def test_a_frequency_locked_while_the_family_moves_is_a_tongue():
+    """Within the distance tolerance but locked (the frequency stays while the family's falls): off the family."""
+    sk = CannedSkeleton(c=0.05)
+    lab = labels(sk)
+    run = [(1.0, sk.frequency_at(1.0))]
+    moving = sk.frequency_at(1.1)
+    assert not lab.locked(1.1, moving, run)
+    assert lab.locked(1.1, run[0][1], run)                      # no move at all where the family moved 0.5 %
+    assert not lab.locked(1.0001, run[0][1], run)              # the family's move below lock_window: no verdict
+    assert lab.verdict(1.1, run[0][1], ON, run=run).text == "tongue 3:1"
+
+
+def test_records_read_as_mappings_and_round_trip():
+    t = TongueRecord(order=3, partner_mode=42, entry_energy=1.5, entry_x0=(1.0, 2.0))
+    assert t["label"] == "tongue 3:1" and t["ratio"] == [3, 1] and t.get("exit_energy") is None
+    assert dict(t)["entry_x0"] == [1.0, 2.0] and "exit_energy" not in t
+    assert TongueRecord.from_mapping(t.as_dict()) == t
+    assert TongueRecord(order=1).label == "fold" and TongueRecord(order=1, partner_mode=18).label == "tongue 1:1"
