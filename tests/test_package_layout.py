@@ -139,3 +139,81 @@ def test_old_module_paths_still_import_as_the_same_modules():
             "print('ok')\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0 and run.stdout.strip() == "ok", run.stderr
+
+
+def _loops(path, predicate):
+    """Line numbers of the for/while loops of a module whose body makes calls satisfying predicate(names)."""
+    import ast
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, (ast.For, ast.While)):
+            names = set()
+            for n in ast.walk(node):
+                if isinstance(n, ast.Call):
+                    f = n.func
+                    names.add(f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", ""))
+            if predicate(names):
+                out.append(node.lineno)
+    return out
+
+
+def _newton_loop(names):
+    """A Newton loop: a Jacobian evaluated and a linear system solved in the same loop."""
+    return bool({"jacobian", "jacobian_of"} & names) and bool({"solve", "lstsq", "lu_solve", "solve_triangular"} & names)
+
+
+#: the places a Newton loop may live: the engine's corrector and the fixed-parameter Newton (continuation/), and the
+#: events' bracketing root finder (stability/roots.py)
+NEWTON_PLACES = ("continuation/", "stability/roots.py")
+#: Newton loops not yet moved onto continuation/newton.py (issue 51 left them: each has its own stopping rule, and the
+#: forced responses' loops run on their own problems); no other module may gain one
+NEWTON_NOT_YET_MOVED = {"orbits/harmonic_balance.py", "orbits/hb_error.py", "orbits/forced_hb.py", "driver/forced.py",
+                        "driver/forced_points.py"}
+
+
+def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
+    root = _root("nnm_solver")
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        lines = _loops(path, _newton_loop)
+        if lines and not rel.startswith(NEWTON_PLACES):
+            found[rel] = lines
+    assert set(found) <= NEWTON_NOT_YET_MOVED, f"Newton loops outside continuation/: {found}"
+    assert not any(rel.startswith(("backbone/", "driver/iterator", "driver/api")) for rel in found)
+
+
+def test_the_check_finds_a_newton_loop(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text("def f(prob, u):\n    for _ in range(9):\n        r, J = prob.jacobian(u)\n"
+                 "        u = u - np.linalg.solve(J, r)\n    return u\n")
+    assert _loops(p, _newton_loop) == [2]
+    p.write_text("def f(prob, u):\n    for _ in range(9):\n        u = newton(prob, u)\n    return u\n")
+    assert _loops(p, _newton_loop) == []
+
+
+def _module_thresholds(path):
+    """Module-level NAME = <number or tuple of numbers> assignments of a module (thresholds)."""
+    import ast
+    out = []
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Assign):
+            value = node.value
+            elts = value.elts if isinstance(value, ast.Tuple) else [value]
+            numeric = all(isinstance(e, ast.Constant) and isinstance(e.value, (int, float))
+                          and not isinstance(e.value, bool) for e in elts)
+            if numeric:
+                out += [t.id for t in node.targets if isinstance(t, ast.Name)]
+                out += [e.id for t in node.targets if isinstance(t, ast.Tuple) for e in t.elts]
+    return out
+
+
+def test_the_backbone_and_the_branch_iterator_keep_their_thresholds_in_settings_objects():
+    """Every threshold of the backbone (nnm_solver/backbone/) and of the branch's driver path is a field of a frozen
+    settings object (backbone/settings.py, driver/settings.py), written once."""
+    root = _root("nnm_solver")
+    places = sorted(root.glob("backbone/*.py")) + [root / "driver" / n for n in ("api.py", "iterator.py",
+                                                                                   "refinement.py", "settings.py")]
+    found = {p.relative_to(root).as_posix(): _module_thresholds(p) for p in places}
+    found = {k: v for k, v in found.items() if v}
+    assert not found, f"module-level thresholds: {found}"

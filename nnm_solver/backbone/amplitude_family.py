@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from ..continuation.engine import ContinuationSettings, CorrectorFailure, correct
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
 from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump
 from .settings import SkeletonSettings
@@ -87,23 +88,14 @@ def _past_fold(prob, pts, s, tol=1e-10):
     if not h > 0:
         return None
     share0 = fundamental_shares(prob, u0)
+    corrector = ContinuationSettings(step=h, step_min=0.0, step_max=np.inf, max_iter=s.fold_probe_iterations)
     u, t = u0, _null_direction(prob.jacobian(u0)[1], u0 - u1)
     path, E_top, fell = [], E0, False
     for _ in range(s.fold_probe_steps):
-        v = u + h * t
-        for _ in range(20):                      # Newton on the equations + the arclength plane t . (v - pred) = 0
-            r, J = prob.jacobian(v)
-            if prob.error(v, r) < tol:
-                break
-            try:
-                v = v + np.linalg.solve(np.vstack([J, t]), -np.r_[r, 0.0])
-            except np.linalg.LinAlgError:
-                v = None
-                break
-            if not np.all(np.isfinite(v)) or v[-1] <= 0:
-                v = None
-                break
-        else:
+        try:                                     # the engine's corrector: on the arclength plane t . (v - pred) = 0
+            v, J, _, _ = correct(prob, u + h * t, t, corrector, tol)
+            v = v if v[-1] > 0 else None
+        except (CorrectorFailure, np.linalg.LinAlgError):
             v = None
         if v is None:
             h /= 2

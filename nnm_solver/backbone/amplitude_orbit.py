@@ -5,28 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..continuation.newton import newton
+
 __all__ = ["solve_at_amplitude", "family_share", "fundamental_shares"]
 
 
 def solve_at_amplitude(prob, u, tol=1e-10, iterations=30):
     """Solve the condensed HB equations at the fixed modal amplitude held in u (Newton on all the other
-    unknowns); the solution or None."""
+    unknowns, continuation/newton.py); the solution or None."""
     nD = prob.nb * prob.ns
-    free = np.r_[0:nD, nD + 1]
-    u = u.copy()
-    for _ in range(iterations):
-        parts = prob.residual_parts(u)          # the residual first: no Jacobian at the converged point
-        if prob.error(u, parts[-1]) < tol:
-            return u
-        r, J = prob.jacobian_of(parts)
-        try:
-            du = np.linalg.solve(J[:, free], -r)
-        except np.linalg.LinAlgError:
-            return None
-        u[free] += du
-        if not np.all(np.isfinite(u)) or u[-1] <= 0:
-            return None
-    return None
+    return newton(prob, u, np.r_[0:nD, nD + 1], tol, iterations)
 
 
 def fundamental_shares(prob, u):

@@ -38,7 +38,7 @@ class SkeletonSettings:
         followed by pseudo-arclength for at most fold_probe_steps steps: its energy maximum when the energy falls
         fold_probe_drop below the largest on the way with the followed mode keeping fund_share of the fundamental; a
         1:1 resonance when the energy comes back above it (by fold_energy_rtol) or another mode takes the
-        fundamental first.
+        fundamental first; fold_probe_iterations : its corrector's iterations (the engine's, continuation/engine.py).
     max_switches, sheet_ratio : the stepping moves to the backbone's sheet (family_guide.py) at most max_switches
         times, and steps on from where that sheet begins by sheet_ratio (the backbone just past a tongue bends;
         with full steps its frequency between points is off by 1e-6).
@@ -82,6 +82,7 @@ class SkeletonSettings:
     fold_probe_drop: float = 0.1
     fund_share: float = 0.9
     fold_energy_rtol: float = 1e-9
+    fold_probe_iterations: int = 20
     max_switches: int = 40
     sheet_ratio: float = 1.005
     jump_factor: float = 5.0
@@ -120,6 +121,7 @@ class LabelSettings:
     share_drop : where only the skeleton's truncation estimate admits a point (dev beyond on_family + 2 errors),
         its fundamental share must lie within share_drop of the skeleton's (aircraft mode 20: 0.002-0.003 on the
         family, 0.005 at dev 5e-5 into its 3:1 tongue, 0.014 on the tongue's plateau at 3.4 J);
+    run_length : the kept points remembered for the lock test;
     label_harmonics : highest harmonic looked at for a point's harmonic content.
     fold_content : a harmonic below this fraction of the fundamental is absent (a departure with no harmonic
         k >= 2 is a fold of the family, not a k:1 tongue).
@@ -132,6 +134,7 @@ class LabelSettings:
     lock_window: float = 3e-4
     lock_ratio: float = 0.3
     share_drop: float = 0.005
+    run_length: int = 40
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3

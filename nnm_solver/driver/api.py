@@ -147,7 +147,9 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
                           getattr(getattr(problem, "integrator", None), "order", 0), tongues.labels)
     return NNMIterator(model, mode, problem, system, engine, settings, energy_max, cont.max_points, cs, tol,
                        locate=locate_events, error_estimate=method.error_estimate, freq_tol=freq_tol, labels=labels,
-                       policy=policy_for(tongues, sk, failure, mode), start_is_low=_start is None)
+                       policy=policy_for(tongues, sk, failure, mode), start_is_low=_start is None,
+                       max_refusals=cont.max_refusals,
+                       max_steps_per_period=getattr(method, "max_steps_per_period", 0) or 1)
 
 
 def _skeleton_system(model, mode, harmonics):

@@ -29,10 +29,6 @@ from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
 
-#: steps refused in a row when an event inside them cannot be located (the step is halved each time)
-MAX_REFUSALS = 3
-#: the kept points remembered for the lock test of the labels (backbone/labels.py)
-RUN_LENGTH = 40
 
 __all__ = ["NNMIterator"]
 
@@ -49,9 +45,11 @@ class NNMIterator(StepRefinement):
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
                  tol=None, locate=True, error_estimate=True, freq_tol=None, labels=None, policy=None,
-                 start_is_low=True):
+                 start_is_low=True, max_refusals=3, max_steps_per_period=20000):
         self.model = model
         self.freq_tol = None if not freq_tol else float(freq_tol)
+        self.max_refusals = int(max_refusals)            # driver/settings.py: Continuation.max_refusals
+        self.max_steps_per_period = int(max_steps_per_period)    # Shooting.max_steps_per_period (freq_tol)
         self._refine_pause = 0
         self.refine_failures = 0
         self.error_estimate = bool(error_estimate) or self.freq_tol is not None
@@ -122,7 +120,7 @@ class NNMIterator(StepRefinement):
                 command = REFUSE                # an event could not be located: a shorter step
             self._last_kept = (cp, point)
             if point.label == "backbone":       # the run of points on the family since the last jump (labels.py)
-                self._run = self._run[-RUN_LENGTH:] + [(point.energy, point.frequency_hz)]
+                self._run = self._run[-self._labels.settings.run_length:] + [(point.energy, point.frequency_hz)]
             else:
                 self._run = []
             self._estimate_error(point)
@@ -251,7 +249,7 @@ class NNMIterator(StepRefinement):
     def _locate(self, cp, point, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at
         energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
-        could not be located and the step should be refused (at most MAX_REFUSALS times in a row)."""
+        could not be located and the step should be refused (at most Continuation.max_refusals times in a row)."""
         slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
         prev, self._prev = self._prev, (cp, point, slope)
         if prev is None:
@@ -267,7 +265,7 @@ class NNMIterator(StepRefinement):
         for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
             if not np.isnan(pt.floquet).any():
                 loc.spectra[float(sigma)] = (pt.floquet, getattr(pt, "_collision", None))
-        if self._refusals < MAX_REFUSALS and cp.step > 4 * self._cs.step_min and loc.jumped():
+        if self._refusals < self.max_refusals and cp.step > 4 * self._cs.step_min and loc.jumped():
             # the step's corrector landed on another branch alongside (near a tongue): half the step
             self._refusals += 1
             self._prev = prev
@@ -285,7 +283,7 @@ class NNMIterator(StepRefinement):
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
-        if (any(not e["located"] for e in events) and self._refusals < MAX_REFUSALS
+        if (any(not e["located"] for e in events) and self._refusals < self.max_refusals
                 and cp.step > 4 * self._cs.step_min):
             # the corrector failed inside the step: it jumped over a feature of the branch (e.g. a fold and a
             # branch point, or three folds, next to each other); the engine retries with half the step

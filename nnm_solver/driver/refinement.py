@@ -1,7 +1,7 @@
 """Finer time steps where the frequency error demands it, and the error estimate of the kept points.
 
 A mixin of the branch iterator (iterator.NNMIterator; attributes used: freq_tol, error_estimate, _problem, _engine,
-_cs, _tol, _prev, _refusals, _refine_pause, refine_failures).  With ``freq_tol`` a point whose estimated
+_cs, _tol, _prev, _refusals, _refine_pause, refine_failures, max_steps_per_period).  With ``freq_tol`` a point whose estimated
 frequency error (the time discretisation's part, step doubling: ShootingProblem.frequency_error) exceeds it
 raises the steps per period, by the scheme's order, and the continuation starts again from that orbit.
 """
@@ -11,10 +11,7 @@ import numpy as np
 
 from ..continuation.engine import CorrectorFailure, correct, pseudo_arclength
 
-#: the most steps per period the freq_tol refinement goes to
-MAX_STEPS_PER_PERIOD = 20000
-
-__all__ = ["StepRefinement", "MAX_STEPS_PER_PERIOD"]
+__all__ = ["StepRefinement"]
 
 
 class StepRefinement:
@@ -29,14 +26,14 @@ class StepRefinement:
             return False
         self._estimate_error(point)
         est = getattr(point, "_disc_error", point.freq_error)   # what finer steps can reduce
-        if not est > self.freq_tol or prob.spp >= MAX_STEPS_PER_PERIOD:
+        if not est > self.freq_tol or prob.spp >= self.max_steps_per_period:
             return False
         if self._refine_pause > 0:
             self._refine_pause -= 1
             return False
         factor = min(max((est / (0.25 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
         old = prob.spp
-        prob.set_steps(min(int(np.ceil(prob.spp * factor)), MAX_STEPS_PER_PERIOD))
+        prob.set_steps(min(int(np.ceil(prob.spp * factor)), self.max_steps_per_period))
         try:                                    # the orbit with the finer step, near this one
             correct(prob, cp.u, cp.tangent, self._cs, self._tol, prob.scale(cp.u))
         except CorrectorFailure:                # e.g. next to a fold that the finer step moves: keep the

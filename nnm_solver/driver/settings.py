@@ -33,7 +33,8 @@ class Shooting:
         rest (None: with symmetric, or for even forces);
     tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11);
     freq_tol : raise the steps where a point's estimated frequency error exceeds it (None: never);
-    error_estimate : estimate each point's relative frequency error (branch.freq_error; step doubling).
+    error_estimate : estimate each point's relative frequency error (branch.freq_error; step doubling);
+    max_steps_per_period : the most steps per period the freq_tol refinement goes to.
     """
 
     integrator: str = "gauss6"
@@ -43,6 +44,7 @@ class Shooting:
     tol: float = 1e-6
     freq_tol: float | None = None
     error_estimate: bool = True
+    max_steps_per_period: int = 20000
     name = "shooting"
 
     def options(self):
@@ -88,7 +90,8 @@ class Continuation:
     about NLvib's points (issue 30: 23 instead of 70 on its example 04, 87 instead of 190 on 09, the same folds) but
     straight lines between its points then miss the curve by up to 2.4e-3 across a piecewise-linear kink and the
     energy-balance peak prediction by 1.3e-3, and at 5 % a step of the 3-DOF combination-resonance branch stepped
-    over its whole unstable interval between two Krein collisions; max_points : largest number of points kept.
+    over its whole unstable interval between two Krein collisions; max_points : largest number of points kept;
+    max_refusals : steps refused in a row when an event inside them cannot be located (the step is halved each time).
     """
 
     step: float = 0.5
@@ -98,6 +101,7 @@ class Continuation:
     max_rel_step: float = 0.4
     max_period_step: float = 0.005
     max_points: int = 500
+    max_refusals: int = 3
 
 
 def method_of(method):
