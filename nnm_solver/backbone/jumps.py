@@ -18,16 +18,23 @@ __all__ = ["candidates", "land", "level_set", "upward_tangent"]
 
 
 def candidates(skeleton, E_0, jumps):
-    """Energies (J) to jump to from a departure at E_0: E_0 (1 + delta) for delta in ``jumps`` (relative, rising)
-    where the skeleton covers them, after the skeleton's sheet starts within that range (where its stepping moved
-    onto the backbone's sheet beyond a tongue it had slid onto: the family's first orbit beyond it)."""
+    """Energies (J) to jump to from a departure at E_0, rising: E_0 (1 + delta) for delta in ``jumps`` (relative) where
+    the skeleton covers them, each followed by the skeleton's first point above it (its own orbit, no interpolation:
+    the better guess next to the gaps the skeleton leaves at tongues), after the skeleton's sheet starts within that
+    range (where its stepping moved onto the backbone's sheet beyond a tongue it had slid onto)."""
     if skeleton is None or len(skeleton.energy) < 2:
         return []
-    E = [E_0 * (1 + d) for d in jumps if skeleton.covers(E_0 * (1 + d))]
-    if not E:
+    grid = [E_0 * (1 + d) for d in jumps if skeleton.covers(E_0 * (1 + d))]
+    if not grid:
         return []
-    starts = [float(e) for e in skeleton.sheet_starts if E_0 * (1 + 1e-9) < e <= E[-1]]
-    return starts + E
+    nodes = np.asarray(skeleton.energy, dtype=float)
+    out = [float(e) for e in skeleton.sheet_starts if E_0 * (1 + 1e-9) < e <= grid[-1]]
+    for E in grid:
+        above = nodes[nodes > E * (1 + 1e-9)]
+        for e in (E, float(above[0]) if len(above) and above[0] <= grid[-1] else None):
+            if e is not None and all(abs(e / x - 1) > 1e-6 for x in out):
+                out.append(e)
+    return out
 
 
 def level_set(prob, guess, settings, tol, w=None):

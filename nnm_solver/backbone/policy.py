@@ -164,7 +164,7 @@ class SkipPolicy:
         within reach, else 'tongue' saying so."""
         sk = self.skeleton
         status = family_end_status(sk)
-        if status is not None and len(sk.energy) and last.energy * (1 + self.settings.jumps[-1]) >= sk.energy[-1]:
+        if status is not None and len(sk.energy) and last.energy >= (1 - self.settings.near_end) * sk.energy[-1]:
             return self._family_end(last, record, f"the branch entered {_resonance(record)} at {_at(last)}",
                                     index)
         if sk is None:
@@ -183,7 +183,7 @@ class SkipPolicy:
         the skeleton ends within reach of it, else None (the iterator reports 'failed')."""
         sk = self.skeleton
         status = family_end_status(sk)
-        if status is None or not len(sk.energy) or last.energy * (1 + self.settings.jumps[-1]) < sk.energy[-1]:
+        if status is None or not len(sk.energy) or last.energy < (1 - self.settings.near_end) * sk.energy[-1]:
             return None
         record = TongueRecord(order=sk.partner[0], partner_mode=sk.partner[1], entry_index=index,
                               entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz))

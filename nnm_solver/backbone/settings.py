@@ -162,9 +162,12 @@ class Skip:
     (policy.py).
 
     jumps : the relative energy jumps tried from a departure at E_0 (J): the skeleton's orbits at E_0 (1 + delta),
-        nearest first, each corrected by the branch's own method (one corrector run: a failed jump costs at most
-        len(jumps) + a few orbits).  A tongue wider than the largest is the end of the family, not a tongue to jump
+        nearest first, each with the skeleton's next own point above it (jumps.candidates), corrected by the
+        branch's own method (one corrector run each: a failed jump costs at most 2 len(jumps) corrector runs).  A tongue wider than the largest is the end of the family, not a tongue to jump
         (the 2-DOF benchmark's 5:1 with its hardening partner spans 2.7e4..5e4 J of its backbone);
+    near_end : a branch whose jumps find no landing, or whose continuation cannot go on, within this fraction below
+        the skeleton's last energy ends as its family ends there (escape or tongue); further below it ends 'tongue'
+        saying that no landing was found;
     same_tongue : a departure into a tongue of the same order and partner at most this fraction above the last
         landing beyond it is that tongue again (one record, its re-entries counted, longer jumps tried each time);
     max_jumps : jumps per branch (a branch re-entering tongues more often than this ends 'tongue', saying so).
@@ -174,6 +177,7 @@ class Skip:
     labels: LabelSettings = field(default_factory=LabelSettings)
     jumps: tuple = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
     same_tongue: float = 0.1
+    near_end: float = 0.1
     max_jumps: int = 60
     name = "skip"
 
