@@ -18,7 +18,7 @@ __all__ = ["candidates", "land", "level_set", "upward_tangent"]
 
 
 def candidates(skeleton, E_0, jumps):
-    """Energies (J) to jump to from a departure at E_0, rising: E_0 (1 + delta) for delta in ``jumps`` (relative) where
+    """Energies (J) to jump to from a departure at E_0, nearest first: E_0 (1 + delta) for delta in ``jumps`` (relative) where
     the skeleton covers them, each followed by the skeleton's first point above it (its own orbit, no interpolation:
     the better guess next to the gaps the skeleton leaves at tongues), after the skeleton's sheet starts within that
     range (where its stepping moved onto the backbone's sheet beyond a tongue it had slid onto)."""
@@ -28,13 +28,14 @@ def candidates(skeleton, E_0, jumps):
     if not grid:
         return []
     nodes = np.asarray(skeleton.energy, dtype=float)
-    out = [float(e) for e in skeleton.sheet_starts if E_0 * (1 + 1e-9) < e <= grid[-1]]
+    starts = [float(e) for e in skeleton.sheet_starts if E_0 * (1 + 1e-9) < e <= grid[-1]]
+    out = []
     for E in grid:
         above = nodes[nodes > E * (1 + 1e-9)]
         for e in (E, float(above[0]) if len(above) and above[0] <= grid[-1] else None):
-            if e is not None and all(abs(e / x - 1) > 1e-6 for x in out):
+            if e is not None and all(abs(e / x - 1) > 1e-6 for x in out + starts):
                 out.append(e)
-    return out
+    return starts + sorted(out)
 
 
 def level_set(prob, guess, settings, tol, w=None):
