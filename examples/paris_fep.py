@@ -19,7 +19,7 @@ docs/paris_results.md are only written with ``--update-shipped`` (maintainers, r
     nnm-view paris_fep.h5                         # the model with the branches just computed
     python examples/paris_fep.py                  # modes 10, 13, 19, 20 -> ./paris_fep.h5, ./paris_fep_figures/
     python examples/paris_fep.py --from-file      # no computation: tables and figures from the shipped branches
-    python examples/paris_fep.py --integrator gauss6 --steps 200 --update-shipped
+    python examples/paris_fep.py --update-shipped
         # maintainers: the shipped results (converged tongues) -> assets/paris.h5, docs/img, docs/paris_results.md
 
 Paper mode numbers (Table 2) are mapped to this model's modes by their labels (first wing bending,
@@ -50,6 +50,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import nnm_solver as nnm  # noqa: E402
+from nnm_solver.integrators.registry import get_integrator  # noqa: E402
 from nnm_solver import analysis  # noqa: E402
 from nnm_solver.files.h5file import atomic_file  # noqa: E402
 from nnm_solver.files.branch_io import check_branch_file  # noqa: E402
@@ -651,9 +652,11 @@ def build_parser():
     p.add_argument("--fast", action="store_true", help="modes 13 and 20 only, coarse time steps, no tongue branches")
     p.add_argument("--modes", default=None, help="paper modes to compute, e.g. 10,13,19,20")
     p.add_argument("--map", nargs="*", help="paper=model mode overrides, e.g. 13=14")
-    p.add_argument("--steps", type=int, default=None, help="time steps per period (default 200, fast 40)")
-    p.add_argument("--integrator", default="newmark", choices=sorted(nnm.INTEGRATORS),
-                   help="time integrator of the shooting (default newmark; gauss6: 6th order, see docs/integrators.md)")
+    p.add_argument("--steps", type=int, default=None, help="time steps per period (default: the solver's, gauss6 100; "
+                                                          "fast 40)")
+    p.add_argument("--integrator", default=None, choices=sorted(nnm.INTEGRATORS),
+                   help="time integrator of the shooting (default: the solver's, gauss6; newmark: the seed paper's, "
+                        "see docs/integrators.md)")
     p.add_argument("--energy-max", type=float, default=None, help="energy_max (J) of every backbone")
     p.add_argument("--max-points", type=int, default=None, help="points per backbone (default 120, fast 30)")
     p.add_argument("--tongue-points", type=int, default=80, help="points per tongue branch (default 80)")
@@ -697,12 +700,12 @@ def main(argv=None):
     model = nnm.load_model(model_path)
     wanted = [int(m) for m in args.modes.split(",")] if args.modes else ([13, 20] if args.fast else [10, 13, 19, 20])
     mapping = map_modes(model, wanted, parse_map(args.map))
-    spp = args.steps or (40 if args.fast else 200)
-    tol = 1e-5 if args.fast else 1e-6
+    integrator = args.integrator or nnm.Shooting().integrator          # the solver's defaults (driver/settings.py)
+    spp = args.steps or (40 if args.fast else get_integrator(integrator).steps)
+    tol = 1e-5 if args.fast else nnm.Shooting().tol
     floquet = not args.fast
     max_points = args.max_points or (30 if args.fast else 120)
     do_tongues = not (args.fast or args.no_tongues)
-    integrator = args.integrator
     opts = dict(steps_per_period=spp, tol=tol, floquet=floquet, integrator=integrator)
     out_dir = Path(args.out_dir or (ROOT / "docs" / "img" if args.update_shipped else DEFAULT_FIGURES))
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -108,14 +108,15 @@ def main(argv=None):
     parser.add_argument("--condensed", action="store_true", help="hb: solve the harmonic balance condensed onto "
                         "the nonlinear elements (unknowns: their deformations per harmonic; for models of any size "
                         "whose nonlinearity is localized)")
-    parser.add_argument("--steps-per-period", type=int, default=200)
-    parser.add_argument("--integrator", default="newmark", help="time integrator of the shooting: newmark "
-                        "(default, order 2), gauss4 or gauss6 (Gauss-Legendre, orders 4 and 6)")
+    parser.add_argument("--steps-per-period", type=int, default=None, help="shooting: time steps a period (default: "
+                        "the integrator's, gauss6 100, newmark 200)")
+    parser.add_argument("--integrator", default=None, help="time integrator of the shooting: gauss6 (default, "
+                        "Gauss-Legendre order 6), gauss4, or newmark (the seed paper's, order 2)")
     parser.add_argument("--freq-tol", type=float, default=None, help="raise the steps per period where a "
                         "point's estimated relative frequency error exceeds this (e.g. 1e-6)")
     parser.add_argument("--tol", type=float, default=None, help="relative periodicity tolerance (default 1e-6; "
                         "hb: relative residual, default 1e-8)")
-    parser.add_argument("--max-points", type=int, default=500)
+    parser.add_argument("--max-points", type=int, default=500, help="largest number of points kept (default 500)")
     parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat; "
                         "./STEM_branches.h5 if that is a shipped example or not writable)")
     parser.add_argument("--plot", help="save the frequency-energy plot to this image file")
@@ -149,9 +150,10 @@ def _method_arguments(args):
     if args.method == "shooting":
         if args.condensed:
             raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
-        return dict(steps_per_period=args.steps_per_period, integrator=args.integrator, freq_tol=args.freq_tol)
-    given = [flag for flag, value, default in (("--steps-per-period", args.steps_per_period, 200),
-                                               ("--integrator", args.integrator, "newmark"),
+        return {k: v for k, v in dict(steps_per_period=args.steps_per_period, integrator=args.integrator,
+                                      freq_tol=args.freq_tol).items() if v is not None}
+    given = [flag for flag, value, default in (("--steps-per-period", args.steps_per_period, None),
+                                               ("--integrator", args.integrator, None),
                                                ("--freq-tol", args.freq_tol, None)) if value != default]
     if given:
         raise NNMInputError(f"{', '.join(given)} belong(s) to --method shooting; harmonic balance has no time steps "
