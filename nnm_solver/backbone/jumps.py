@@ -59,6 +59,8 @@ def land(prob, system, skeleton, E_t, settings, tol):
         return None, None, None
     fam, u = refined
     family = (float(fam.energy(u)), 1.0 / fam.state(u)[2])
+    if not skeleton.is_family(*family):        # the skeleton's own correction slid onto a tongue's sheet
+        return None, None, None
     if hasattr(prob, "from_family") and getattr(prob, "sys", None) is fam.sys:
         guess = prob.from_family(fam, u)       # harmonic balance: the family's harmonics as they are
     elif hasattr(prob, "from_state"):

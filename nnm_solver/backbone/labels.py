@@ -13,8 +13,11 @@ bias being the branch's own offset from the exact linear frequency at the linear
 Newmark's period error grows for the orbit's harmonic k as k^p for an integrator of order p: bias = b0 sum_k w_k
 k^p, w_k the harmonics' shares of the orbit's kinetic energy), and it is on the family when
 
-    dev <= on_family + 2 (its own estimated error) + 2 (the skeleton's interpolation error estimate at E)
-                     + 2 (the skeleton's truncation estimate at E),
+    dev <= on_family + 2 (its own estimated error) + 2 (the skeleton's truncation estimate at E),
+
+where a point in doubt (dev above the first two terms) is measured against the skeleton's own orbit at its energy
+(its interpolated orbit corrected on the energy level set: no interpolation error; where that does not converge
+onto the family, the interpolated frequency, with no widening),
 
 so that a label is a claim within the accuracy the two computations say they have (beyond the first three terms, where
 only the skeleton's truncation widens it, its fundamental share must also lie within share_drop of
@@ -121,12 +124,14 @@ class FamilyLabels:
         if dev is None or not math.isfinite(dev):
             return Verdict(content.label)
         err = error if math.isfinite(error) else 0.0
-        if reference_hz is not None:           # a jump's landing: against the skeleton's own orbit at that energy
+        strict = s.on_family + 2 * err
+        if reference_hz is None and dev > strict:
+            # in doubt: against the skeleton's own orbit at that energy (no interpolation error)
+            reference_hz = sk.frequency_of_orbit(energy)
+            if not math.isfinite(reference_hz):
+                reference_hz = None            # no own orbit of the family there: the interpolated frequency, strictly
+        if reference_hz is not None:           # the skeleton's own orbit at that energy (a jump's landing, or above)
             dev = abs(frequency_hz / reference_hz - 1.0 - self.bias(content.amplitudes))
-            interp = 0.0
-        else:
-            interp = sk.interpolation_error(energy)
-        strict = s.on_family + 2 * err + 2 * (interp if math.isfinite(interp) else 0.0)
         trunc = sk.truncation_at(energy) if dev > strict else 0.0   # a solve per skeleton point: asked here only
         tol = strict + 2 * (trunc if math.isfinite(trunc) else 0.0)
         drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0

@@ -134,12 +134,12 @@ class SkipPolicy:
             return Finish("tongue", f"the backbone left its family {self.jumps} times (Skip.max_jumps); the last "
                                     f"departure into {_resonance(record)} at {_at(last)}; the points on the backbone "
                                     f"below are kept", record)
-        # a re-entry of the tongue just passed: one record, longer jumps tried each time (no crawl along its edge)
+        # a re-entry of the tongue just passed: one record, the shortest jumps no more tried (no crawl along its edge)
         jumps, index = self.settings.jumps, -1
         if again:
-            jumps = jumps[min(previous.reentries + 1, len(jumps) - 1):]
-            record, index = previous.replace(reentries=previous.reentries + 1, skipped=False, exit_energy=None,
-                                             exit_frequency_hz=None), len(tongues) - 1
+            jumps = jumps[min(previous.reentries + 1, 2):]
+            record, index = previous.replace(reentries=previous.reentries + 1), len(tongues) - 1
+            base = max(base, previous.exit_energy)          # beyond the last landing: progress
         targets = tuple(candidates(sk, base, jumps))
         if not targets and verdict.beyond_end:
             return self._family_end(last, record, f"the branch left its family past the family's end at {_at(point)}",

@@ -208,20 +208,17 @@ class NNMIterator(StepRefinement):
         tried = []
         for E_t in jump.targets:
             tried.append(E_t)
-            u, J, family = land(prob, self._system, sk, E_t, self._cs, self._tol)
+            u, J, _ = land(prob, self._system, sk, E_t, self._cs, self._tol)
             if u is None:
                 continue
             E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
-            # against the skeleton's own orbit there, moved along the family's slope to the landing's energy
-            E_fam, f_fam = family
-            slope = sk.slope(min(E, E_fam) * (1 - 1e-3), max(E, E_fam) * (1 + 1e-3))
-            reference = f_fam * math.exp(slope * math.log(E / E_fam)) if math.isfinite(slope) else None
-            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run,
-                                           reference_hz=reference)
+            # the same verdict as the points' (the landing is the restarted continuation's first point)
+            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run)
             if self._policy.landed(verdict, E, jump.base):
                 record = jump.record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f,
                                              jump=f"the skeleton's orbit at {E_t:.4g} J",
-                                             attempts=jump.record.attempts + len(tried))
+                                             attempts=jump.record.attempts + len(tried),
+                                             landings=jump.record.landings + (len(self.points),))
                 if self._policy.recorded(record):
                     self._store(record, jump.index)
                 self._engine.restart(pseudo_arclength(prob, u, upward_tangent(prob, u, J, bcp.tangent), self._cs,
@@ -297,6 +294,7 @@ class NNMIterator(StepRefinement):
             if J is None:                  # (not kept by the locator) the last point's error estimate needs it
                 J = loc.problem.jacobian(u)[1]
                 end[1]._solution = (loc.problem, u, J, p, None)
+            end[1].label = point.label          # the cut at energy_max is the decided point's orbit, moved back
             self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
             self._landed = True
             return end[1], self._problem.state(u)

@@ -26,7 +26,8 @@ class TongueRecord:
     period s, x0 m, v0 m/s), inside_* : the first orbit off the family;
     skipped : the branch goes on beyond it (exit_energy J, exit_frequency_hz Hz: where it lands), ``jump`` says how;
     attempts : orbits corrected to find the landing; reentries : times the family was left again into the same
-    tongue (one record); family_end : the backbone family itself ends here (no landing exists); note : why.
+    tongue (one record); landings : the branch indices (0-based) of the points where the continuation restarted
+    beyond it (no line of the branch joins a landing to the point before it); family_end : the backbone family itself ends here (no landing exists); note : why.
     """
 
     order: int
@@ -47,6 +48,7 @@ class TongueRecord:
     jump: str = ""
     attempts: int = 0
     reentries: int = 0
+    landings: tuple = ()
     family_end: bool = False
     note: str = ""
 
@@ -109,6 +111,8 @@ class TongueRecord:
             ratio = d.get("ratio") or [1, 1]
             kw["order"] = int(ratio[0])
         kw["order"] = int(kw["order"])
+        if "landings" in kw:
+            kw["landings"] = tuple(int(i) for i in kw["landings"])
         for key in ("partner_mode", "entry_index", "attempts", "reentries"):
             if key in kw and kw[key] is not None:
                 kw[key] = int(kw[key])
