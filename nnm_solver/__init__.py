@@ -36,6 +36,7 @@ from .results.forced import ForcedResponse
 from .analysis.energy_balance import energy_balance
 from .driver.forced import forced_response
 from .files.forced_io import load_forced_responses, save_forced_response
+from .identification import BackboneFit, FittedLaw, RestoringForceSurface, fit_backbone, rfs
 
 _install_moved()
 
@@ -71,6 +72,8 @@ __all__ = [
     "NNMInputError", "NNMFileError",
     # forced responses (docs/forced.md)
     "forced_response", "energy_balance", "ForcedResponse", "save_forced_response", "load_forced_responses",
+    # identification from test data (docs/testlab.md)
+    "rfs", "RestoringForceSurface", "FittedLaw", "fit_backbone", "BackboneFit",
 ]
 
 __version__ = "0.1.0"

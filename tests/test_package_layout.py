@@ -19,7 +19,8 @@ def test_import_nnm_solver_does_not_import_fem_aircraft_or_viewer():
 #: the solver's layers, lowest first: a module may import its own layer and the layers before it.  The base
 #: modules (errors, jit, threads, fourier) sit below everything; hb and matio are facades at the top.
 LAYERS = ["errors", "jit", "threads", "fourier", "_moved", "model", "integrators", "continuation", "stability",
-          "orbits", "results", "analysis", "backbone", "driver", "files", "sweeps", "cli", "hb", "matio"]
+          "orbits", "results", "analysis", "backbone", "driver", "files", "identification", "sweeps", "cli", "hb",
+          "matio"]
 #: at most this many modules at the top level of nnm_solver (besides __init__.py): the folders say the layers
 TOP_LEVEL_MAX = 10
 

@@ -1,7 +1,8 @@
 """Importers: FE models from other codes' files into an ordinary ``nnm_solver.Model`` (docs/import.md).
 
 One module per format: ``matlab`` (.mat v5 and v7.3), ``matrixmarket`` (.mtx pairs), ``abaqus``
-(``*MATRIX OUTPUT`` files), ``ansys`` (.full, optional ``ansys-mapdl-reader``), ``toml`` (the model
+(``*MATRIX OUTPUT`` files), ``ansys`` (.full, optional ``ansys-mapdl-reader``), ``nastran`` (.op4,
+.op2, optional ``pyNastran``), ``toml`` (the model
 description naming matrix files, springs, units and a display mesh), ``meshfile`` (display meshes
 through the optional ``meshio``); ``common`` holds the DOF map and units.  ``import_model`` picks
 the importer by file suffix; ``nnm_solver.load_model`` uses it for every suffix but HDF5.
@@ -15,7 +16,8 @@ from .common import DIRECTIONS, DofMap, Units
 
 #: model file suffix -> (module, loader name)
 IMPORTERS = {".mat": ("matlab", "load_mat_model"), ".toml": ("toml", "load_toml_model"),
-             ".full": ("ansys", "load_full_model")}
+             ".full": ("ansys", "load_full_model"), ".op4": ("nastran", "load_nastran_model"),
+             ".op2": ("nastran", "load_nastran_model")}
 IMPORT_SUFFIXES = tuple(IMPORTERS)
 
 __all__ = ["IMPORTERS", "IMPORT_SUFFIXES", "DIRECTIONS", "DofMap", "Units", "import_model", "is_import_path"]
@@ -27,7 +29,8 @@ def is_import_path(path):
 
 
 def import_model(path, name=None):
-    """Model of an FE file chosen by suffix: .mat (MATLAB v5/v7.3), .toml (description), .full (ANSYS)."""
+    """Model of an FE file chosen by suffix: .mat (MATLAB v5/v7.3), .toml (description), .full (ANSYS),
+    .op4/.op2 (Nastran KAA, MAA)."""
     suffix = Path(path).suffix.lower()
     if suffix not in IMPORTERS:
         raise NNMInputError(f"{path}: no importer for '{suffix}' files; known: {', '.join(IMPORT_SUFFIXES)} "

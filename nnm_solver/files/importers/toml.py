@@ -6,11 +6,13 @@
     units = "mm-t-s"                     # SI (default), mm-t-s, mm-kg-ms, in-lbf-s, ft-lbf-s,
                                          # or a table: units = {length = "mm", mass = "t", time = "s"}
     [matrices]
-    format = "matrixmarket"              # matrixmarket | abaqus | ansys | matlab (default: from the files)
+    format = "matrixmarket"              # matrixmarket | abaqus | ansys | matlab | nastran (default: from the files)
     mass = "beam_M.mtx"                  # matrixmarket, abaqus: a pair of files
     stiffness = "beam_K.mtx"
     # file = "beam.full"                 # ansys, matlab: one file (matlab: variables M, K [, springs])
     # dof_map = "beam_dofs.txt"          # node and direction of each DOF, for formats without one
+    # nastran: file = "model.op4" (or .op2), stiffness = "KAA", mass = "MAA" (matrix names, these by default),
+    #          dof_map = "model.bdf" (its ASET/ASET1 cards) or a 'grid component' text file (nastran.py)
 
     [[springs]]                          # one table per nonlinear element
     type = "cubic"                       # default; the element type (see SPRING_TYPES); "polynomial" takes
@@ -50,7 +52,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-FORMATS = ("matrixmarket", "abaqus", "ansys", "matlab")
+FORMATS = ("matrixmarket", "abaqus", "ansys", "matlab", "nastran")
 TOP_KEYS = {"name", "description", "units", "matrices", "springs", "mesh"}
 MATRIX_KEYS = {"format", "mass", "stiffness", "file", "dof_map"}
 MESH_KEYS = {"file", "format", "nodes", "first_node", "dofs_per_node", "recovery"}
@@ -172,6 +174,9 @@ def read_matrices(mt, folder, where):
         raise NNMInputError(f"{where}: format {fmt!r} is not one of {', '.join(FORMATS)}")
     fmt = None if fmt is None else str(fmt).lower()
     single = mt.get("file")
+    if fmt == "nastran" or fmt is None and Path(str(single)).suffix.lower() in (".op4", ".op2"):
+        from .nastran import read_nastran_table
+        return read_nastran_table(mt, folder, where)
     if single is not None:
         if "mass" in mt or "stiffness" in mt:
             raise NNMInputError(f"{where}: give either file or the pair mass, stiffness, not both")

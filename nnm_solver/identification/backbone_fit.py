@@ -1,0 +1,218 @@
+r"""The factor on a model's nonlinear coefficients that best matches a measured backbone.
+
+A phase-resonance test (or a ridge of FRFs at growing force levels) gives the backbone of a mode as pairs
+(frequency f_i (Hz), peak amplitude a_i of one DOF (m)).  ``fit_backbone`` finds the factor s > 0 on every
+element's nonlinear coefficients (cubic and polynomial coefficients; a piecewise-linear spring's slope
+changes k_j - k0, its k0 kept) whose NNM backbone of that mode passes closest to the points.
+
+Distance: each point to the model's backbone curve, measured in (ln a / amplitude_rtol, ln f / frequency_rtol),
+i.e. in units of the stated relative measurement uncertainties (orthogonal distance: points on the flat,
+nearly linear part of the curve weigh little for the amplitude, as they should).  The factor minimises the
+sum of the squared distances; its standard error is the Gauss-Newton one with the variance estimated from
+the residuals (so it does not rely on the stated uncertainties), and ``confidence`` the 95 % interval.
+
+Cost: models whose elements are all cubic (``CubicSpring``, or ``PolynomialSpring`` with only x^3) obey the
+exact scaling law ``cubic_scaling``: with every k3 times s, frequencies are unchanged and amplitudes divided by
+sqrt(s), so the nominal branch, computed once, gives the backbone of every s.  Other models are recomputed
+for each trial factor (a bounded scalar search on ln s, about 15 branches).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import NNMInputError, finite_number
+
+__all__ = ["BackboneFit", "fit_backbone", "scale_nonlinear"]
+
+#: points the backbone curve is resampled to (shape-preserving interpolation between branch points)
+CURVE_SAMPLES = 4000
+#: search range of the factor
+FACTOR_RANGE = (1e-4, 1e4)
+
+
+@dataclass(frozen=True, eq=False)
+class BackboneFit:
+    """k3_factor : the factor s on every element's nonlinear coefficients.  residual : RMS distance of the
+    points to the fitted backbone in units of the stated uncertainties (about 1 when the misfit is the
+    measurement noise).  stderr : standard error of s; confidence : its 95 % interval (low, high).
+    exact_scaling : True when the cubic scaling law gave every trial backbone from one branch.
+    covered : True when the fitted backbone reaches past the largest measured amplitude (else the model's
+    branch ended first, e.g. at a fold, and the largest points were matched to its end).
+    model : the fitted model; frequency_hz, amplitude : its backbone (Hz, m) at DOF ``dof`` (0-based).
+    branches : number of NNM branches computed."""
+
+    k3_factor: float
+    residual: float
+    stderr: float
+    confidence: tuple
+    exact_scaling: bool
+    covered: bool
+    model: object
+    dof: int
+    mode: int
+    frequency_hz: np.ndarray
+    amplitude: np.ndarray
+    branches: int
+
+
+def scale_nonlinear(spring, factor):
+    """``spring`` with its nonlinear coefficients times ``factor``: a piecewise-linear spring keeps its slope
+    k0 at d = 0 (part of the linear model) and scales the slope changes; the others scale every coefficient."""
+    from ..model import PiecewiseLinearSpring
+
+    if not isinstance(spring, PiecewiseLinearSpring):
+        return spring.scaled(factor)
+    k0 = spring.stiffnesses[0]
+    neg = {} if spring.symmetric else dict(
+        stiffnesses_negative=[k0 + factor * (k - k0) for k in spring.stiffnesses_negative],
+        breakpoints_negative=spring.breakpoints_negative)
+    return PiecewiseLinearSpring(dof=spring.dof, other=spring.other, eps=spring.eps, breakpoints=spring.breakpoints,
+                                 stiffnesses=[k0 + factor * (k - k0) for k in spring.stiffnesses], **neg)
+
+
+def _pure_cubic(model):
+    return all(hasattr(s, "law") and not hasattr(s, "kinks") and set(s.law()) == {3} for s in model.springs)
+
+
+def _data(model, mode, dof, amplitude, frequency_hz):
+    from ..model import Model
+
+    if not isinstance(model, Model):
+        raise NNMInputError(f"fit_backbone: model must be an nnm_solver.Model, got {type(model).__name__}")
+    if not model.springs:
+        raise NNMInputError("fit_backbone: the model has no nonlinear element to scale")
+    model.check_mode(mode)
+    if isinstance(dof, bool) or not isinstance(dof, (int, np.integer)) or not 0 <= dof < model.n:
+        raise NNMInputError(f"fit_backbone: dof {dof!r} is not a DOF of this model (0-based: 0..{model.n - 1})")
+    try:
+        a = np.asarray(amplitude, dtype=float).ravel()
+        f = np.asarray(frequency_hz, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise NNMInputError("fit_backbone: amplitude and frequency_hz must be arrays of numbers") from None
+    if len(a) != len(f):
+        raise NNMInputError(f"fit_backbone: {len(a)} amplitudes for {len(f)} frequencies; give one of each per point")
+    if len(a) < 2:
+        raise NNMInputError(f"fit_backbone: {len(a)} measured point(s); give at least 2 (amplitude, frequency) pairs")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(f)) and np.all(a > 0) and np.all(f > 0)):
+        raise NNMInputError("fit_backbone: amplitudes (m) and frequencies (Hz) must be finite and positive")
+    return a, f
+
+
+def _curve(branch, dof):
+    """(ln amplitude, ln frequency) of the branch's backbone at ``dof``, resampled finely (PCHIP in the point index)."""
+    from scipy.interpolate import PchipInterpolator
+
+    from ..files import amplitude_backbone
+
+    bb = amplitude_backbone(branch, dof)
+    keep = (bb.amplitude > 0) & np.isfinite(bb.amplitude) & (bb.frequency_hz > 0)
+    la, lf = np.log(bb.amplitude[keep]), np.log(bb.frequency_hz[keep])
+    if len(la) < 2:
+        raise NNMInputError(f"fit_backbone: the model's backbone has {len(la)} usable point(s) (branch status "
+                            f"{branch.status!r}); check the mode and the energy range")
+    s = np.arange(len(la), dtype=float)
+    fine = np.linspace(0.0, s[-1], CURVE_SAMPLES)
+    return PchipInterpolator(s, la)(fine), PchipInterpolator(s, lf)(fine)
+
+
+def _distances(curve, shift, la, lf, wa, wf):
+    """Normalised distance of each point (la, lf) to the polyline curve shifted by ``shift`` in ln amplitude."""
+    cx, cy = (curve[0] + shift) / wa, curve[1] / wf
+    px, py = la / wa, lf / wf
+    x0, y0, dx, dy = cx[:-1], cy[:-1], np.diff(cx), np.diff(cy)
+    length2 = np.maximum(dx * dx + dy * dy, 1e-300)
+    out = np.empty(len(px))
+    for i, (x, y) in enumerate(zip(px, py)):
+        u = np.clip(((x - x0) * dx + (y - y0) * dy) / length2, 0.0, 1.0)
+        out[i] = np.sqrt(np.min((x0 + u * dx - x) ** 2 + (y0 + u * dy - y) ** 2))
+    return out
+
+
+def _minimise(cost, lo, hi, nodes=61):
+    """ln s in [lo, hi] minimising cost: a grid of ``nodes``, then a bounded search around its best node."""
+    from scipy.optimize import minimize_scalar
+
+    grid = np.linspace(lo, hi, nodes)
+    values = [cost(g) for g in grid]
+    j = int(np.argmin(values))
+    res = minimize_scalar(cost, bounds=(grid[max(j - 1, 0)], grid[min(j + 1, len(grid) - 1)]), method="bounded",
+                          options={"xatol": 1e-7})
+    return float(res.x)
+
+
+def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, method=None, amplitude_rtol=0.01,
+                 frequency_rtol=0.001, **continuation):
+    """The factor on every element's nonlinear coefficients whose NNM backbone best matches measured points.
+
+    model : nnm_solver.Model with its nominal nonlinear elements.  mode : 1-based mode number.  dof : 0-based
+    DOF index (as ``CubicSpring(dof=...)``) of the measured coordinate.  amplitude : (N,) peak amplitudes
+    max |x_dof(t)| (m; as ``amplitude_backbone(kind="peak")``); frequency_hz : (N,) their frequencies (Hz).
+    energy_max : energy (J) of the nominal branch; default from the largest amplitude on the linear mode.
+    method and further keywords go to ``continue_nnm`` (default: its defaults, Newmark shooting; ``method="hb"``
+    is faster on large models, its peak amplitudes differ from shooting's by the two methods' errors, ~1e-4).
+    amplitude_rtol, frequency_rtol : relative measurement uncertainties, the distance's units.
+    Returns a ``BackboneFit`` (module doc).
+    """
+    from ..driver import continue_nnm
+
+    a, f = _data(model, mode, dof, amplitude, frequency_hz)
+    wa = finite_number(amplitude_rtol, "fit_backbone: amplitude_rtol")
+    wf = finite_number(frequency_rtol, "fit_backbone: frequency_rtol")
+    if not (wa > 0 and wf > 0):
+        raise NNMInputError("fit_backbone: amplitude_rtol and frequency_rtol must be positive (relative uncertainties)")
+    la, lf = np.log(a), np.log(f)
+    lam, phi = model.eigensolution
+    shape = abs(phi[dof, mode - 1])
+    if shape < 1e-12 * np.max(np.abs(phi[:, mode - 1])):
+        raise NNMInputError(f"fit_backbone: DOF {dof} does not move in mode {mode} (node of the mode shape); "
+                            f"measure another DOF")
+    if energy_max is None:
+        energy_max = 2.0 * lam[mode - 1] * (np.max(a) / shape) ** 2       # 4x the linear mode's energy at max a
+    energy_max = finite_number(energy_max, "fit_backbone: energy_max")
+    kw = dict(continuation) if method is None else dict(continuation, method=method)
+    exact = _pure_cubic(model)
+    branches = 0
+    lo, hi = np.log(FACTOR_RANGE[0]), np.log(FACTOR_RANGE[1])
+    if exact:
+        for _ in range(4):                                  # extend the branch until it covers the points
+            curve = _curve(continue_nnm(model, mode, energy_max, **kw), dof)
+            branches += 1
+            ls = _minimise(lambda g: float(np.sum(_distances(curve, -0.5 * g, la, lf, wa, wf) ** 2)), lo, hi)
+            reach = curve[0].max() - 0.5 * ls - np.max(la)  # ln of the fitted curve's reach over the largest point
+            if reach > 0.05:
+                break
+            energy_max *= 4.0 * np.exp(-2.0 * reach)
+        shifted = (curve[0] - 0.5 * ls, curve[1])
+    else:
+        cache = {}
+
+        def backbone(g):
+            if g not in cache:
+                m = model.with_springs([scale_nonlinear(s, np.exp(g)) for s in model.springs])
+                cache[g] = _curve(continue_nnm(m, mode, energy_max, **kw), dof)
+            return cache[g]
+
+        ls = _minimise(lambda g: float(np.sum(_distances(backbone(g), 0.0, la, lf, wa, wf) ** 2)), -3.0, 3.0, 13)
+        shifted = backbone(ls)
+        branches = len(cache)
+    r = _distances(shifted, 0.0, la, lf, wa, wf)
+    h = 0.01                                               # Gauss-Newton on ln s by a central difference
+    if exact:
+        rp = _distances(curve, -0.5 * (ls + h), la, lf, wa, wf)
+        rm = _distances(curve, -0.5 * (ls - h), la, lf, wa, wf)
+    else:
+        rp = _distances(backbone(ls + h), 0.0, la, lf, wa, wf)
+        rm = _distances(backbone(ls - h), 0.0, la, lf, wa, wf)
+        branches = len(cache)
+    J = (rp - rm) / (2 * h)
+    sigma2 = float(r @ r) / max(len(r) - 1, 1)
+    se_log = float(np.sqrt(sigma2 / max(float(J @ J), 1e-300)))
+    s = float(np.exp(ls))
+    fitted = model.with_springs([scale_nonlinear(sp, s) for sp in model.springs])
+    return BackboneFit(k3_factor=s, residual=float(np.sqrt(np.mean(r * r))), stderr=s * se_log,
+                       confidence=(s * np.exp(-1.96 * se_log), s * np.exp(1.96 * se_log)), exact_scaling=exact,
+                       covered=bool(np.max(shifted[0]) >= np.max(la)),
+                       model=fitted, dof=int(dof), mode=int(mode), frequency_hz=np.exp(shifted[1]),
+                       amplitude=np.exp(shifted[0]), branches=branches)
