@@ -14,7 +14,7 @@ import numpy as np
 
 from ..continuation.engine import CorrectorFailure, _energy_slope, correct, tangent
 
-__all__ = ["candidates", "land", "level_set", "upward_tangent"]
+__all__ = ["candidates", "land", "find_landing", "level_set", "upward_tangent"]
 
 
 def candidates(skeleton, E_0, jumps):
@@ -71,6 +71,24 @@ def land(prob, system, skeleton, E_t, settings, tol):
     else:
         return None, None, None
     return (*level_set(prob, guess, settings, tol), family)
+
+
+def find_landing(prob, system, policy, labels, jump, run, settings, tol):
+    """((u, J, E J, f Hz) or None, energies tried): the first of the Jump's targets whose orbit, corrected by the
+    branch problem ``prob`` (``land``), the policy accepts as on the family (the labels' verdict, the same as the
+    points', with the lock test from ``run``, the kept points before the jump)."""
+    from .content import content_of
+    tried = []
+    for E_t in jump.targets:
+        tried.append(E_t)
+        u, J, _ = land(prob, system, policy.skeleton, E_t, settings, tol)
+        if u is None:
+            continue
+        E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
+        verdict = labels.verdict(E, f, content_of(prob.modal_orbit(u), policy.mode - 1), run=run)
+        if policy.landed(verdict, E, jump.base):
+            return (u, J, E, f), tried
+    return None, tried
 
 
 def upward_tangent(prob, u, J, previous):

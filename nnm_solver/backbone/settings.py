@@ -21,7 +21,6 @@ class SkeletonSettings:
     reach, follow_reach : the skeleton is stepped up to this multiple of the branch's energy_max with tongues
         skipped (the jumps' targets lie beyond the tongues) or followed (only labels are asked, up to energy_max).
     start_shift : it starts where its frequency has moved from the linear mode's by about this much.
-    entry_band : it is at a k:1 band where k f is within this relative distance of the partner's frequency.
     step_max, step_min : largest and smallest ratio a_{i+1} / a_i of its modal amplitude steps;
     dlnf_max : the largest move of ln f in a step (its spline interpolation between points then stays at 3e-7 on
         the 2-DOF benchmark, 7e-9 on NLvib's example 04; Skeleton.frequency_at);
@@ -64,7 +63,6 @@ class SkeletonSettings:
     reach: float = 10.0
     follow_reach: float = 2.0
     start_shift: float = 1e-6
-    entry_band: float = 0.01
     step_max: float = 1.05
     step_min: float = 1.0005
     dlnf_max: float = 0.005

@@ -24,10 +24,9 @@ lies above the family's later points and are left out.  Stepping in a ends where
   where other modes' higher harmonics take more than 1 - s.share_min of the orbit (velocity-weighted: a partner
   takes the orbit over) or where the energy turns back while a partner grows.
 
-Where the full branch (any method, any number of harmonics) enters a k:1 tongue with a partner mode of
-frequency f_p, the resonance band is where k f(E) crosses f_p; the skeleton says at which energies the
-family has left that band (``targets``), and its orbit there (``family_orbit``) is the first guess from
-which the branch's own method finds the backbone beyond the tongue (jumps.py).  Its frequency at
+Where the full branch (any method, any number of harmonics) leaves the family at a tongue, the skeleton's
+orbits above (``family_orbit``) are the first guesses from which the branch's own method finds the backbone
+beyond it (jumps.py).  Its frequency at
 each energy (``frequency_at``) is what labels a branch's points (labels.py).
 
 The skeleton's frequencies differ from the branch's by the truncation to s.harmonics harmonics
@@ -235,13 +234,6 @@ class Skeleton:
         j, t = self._pair(E)
         return (1 - t) * self.orbits[j] + t * self.orbits[j + 1]
 
-    def orbit_at(self, E):
-        """(x0 (m, at rest), T (s)) of the skeleton orbit at energy E, or None outside its range."""
-        if not self.covers(E):
-            return None
-        q0, _, T = self.problem.state(self._interpolated(E))
-        return self.problem.sys.to_physical(q0), T
-
     def family_orbit(self, system, E, settings, tol):
         """(problem, u): the skeleton's orbit at energy E (J), corrected on the energy level set (condensed
         HB with s.harmonics on the skeleton's modal system); None outside its range or where that
@@ -274,31 +266,6 @@ class Skeleton:
         tongue may converge onto the tongue's sheet: the soft 2-DOF chain's 3:1 at 0.075 J, 0.6 % off.)"""
         f_i, err = self.frequency_at(E), self.interpolation_error(E)
         return math.isfinite(f_i) and abs(f / f_i - 1.0) <= tol + 2 * (err if math.isfinite(err) else 0.0)
-
-    def targets(self, E_entry, k, f_partner, margins=(0.003, 0.01, 0.03, 0.1)):
-        """Energies (J) above E_entry where the skeleton's k f crosses and leaves the k:1 band around f_partner
-        (Hz, the partner's linear frequency) by the relative ``margins``, on the side the family moves to;
-        [] when the skeleton does not cross it above E_entry."""
-        E, f = self.energy, self.frequency_hz
-        above = E > E_entry
-        if k < 2 or not np.any(above) or not f_partner > 0:
-            return []
-        kf = k * f[above] / f_partner - 1.0                 # relative distance of k f from the partner
-        side = np.sign(kf[-1])
-        at_entry = k * self.frequency_at(E_entry) / f_partner - 1.0
-        if np.all(np.sign(kf) == side) and not abs(at_entry) < self.settings.entry_band:
-            # the skeleton neither crosses the band nor enters it where the branch did: the partner's frequency
-            # has moved with the amplitude (a strongly nonlinear partner, e.g. the 2-DOF benchmark's) and the
-            # linear one says nothing; the tongue is traversed or jumped by rescaled backbone orbits
-            return []
-        out = []
-        for m in margins:
-            past = np.flatnonzero((np.sign(kf) == side) & (np.abs(kf) >= m))
-            if len(past):
-                E_t = float(E[above][past[0]])
-                if not out or E_t > out[-1] * (1 + 1e-6):
-                    out.append(E_t)
-        return out
 
 
 def compute_skeleton(system, mode, E_reach, settings=SkeletonSettings(), E_start=None):

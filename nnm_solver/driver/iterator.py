@@ -10,21 +10,19 @@ internal-resonance tongues are jumped over or traversed unseen.
 """
 from __future__ import annotations
 
-import math
-
 
 import numpy as np
 
 from ..results.branch import Branch, Point
-from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope
+from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 from ..stability.locator import event_rtol
 from ..backbone.content import content_of
-from ..backbone.jumps import land, upward_tangent
+from ..backbone.jumps import find_landing, upward_tangent
+from ..backbone.labels import Verdict
 from ..backbone.policy import Finish, FollowPolicy, Jump
-from ..continuation.engine import pseudo_arclength
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
@@ -188,47 +186,33 @@ class NNMIterator(StepRefinement):
     def _decide(self, cp, point):
         """The point's label (against the skeleton, with its error estimated first) and the policy's decision."""
         obs = point._observed
+        verdict = Verdict(obs[0].label)
         if self._labels is not None:
             self._estimate_error(point)
             verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run)
             point.label = verdict.text
-        else:
-            verdict = None
-        if verdict is None:
-            from ..backbone.labels import Verdict
-            verdict = Verdict(obs[0].label)
         return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1] if self._last_kept else None,
                                    len(self.points), self.tongues)
 
     def _jump(self, cp, jump):
-        """Try the jump's targets (backbone/jumps.py) in turn; restart the continuation at the first that lands on
-        the family and record the tongue (None), or the policy's Finish when none lands."""
+        """Try the jump's targets (backbone/jumps.py: ``find_landing``); restart the continuation at the first that
+        lands on the family and record the tongue (None), or the policy's Finish when none lands."""
         prob, (bcp, bpoint) = self._problem, self._last_kept
-        sk = self._policy.skeleton
-        tried = []
-        for E_t in jump.targets:
-            tried.append(E_t)
-            u, J, _ = land(prob, self._system, sk, E_t, self._cs, self._tol)
-            if u is None:
-                continue
-            E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
-            # the same verdict as the points' (the landing is the restarted continuation's first point)
-            verdict = self._labels.verdict(E, f, content_of(prob.modal_orbit(u), self.mode - 1), run=self._run)
-            if self._policy.landed(verdict, E, jump.base):
-                record = jump.record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f,
-                                             jump=f"the skeleton's orbit at {E_t:.4g} J",
-                                             attempts=jump.record.attempts + len(tried),
-                                             landings=jump.record.landings + (len(self.points),))
-                if self._policy.recorded(record):
-                    self._store(record, jump.index)
-                self._engine.restart(pseudo_arclength(prob, u, upward_tangent(prob, u, J, bcp.tangent), self._cs,
-                                                      self._tol))
-                self._prev = None          # no events are located across the jump
-                self._refusals = 0
-                self._run = []
-                return None
+        landing, tried = find_landing(prob, self._system, self._policy, self._labels, jump, self._run, self._cs,
+                                      self._tol)
         record = jump.record.replace(attempts=jump.record.attempts + len(tried))
-        return self._policy.no_landing(bpoint, record, tuple(tried), jump.index)
+        if landing is None:
+            return self._policy.no_landing(bpoint, record, tuple(tried), jump.index)
+        u, J, E, f = landing
+        record = record.replace(skipped=True, exit_energy=E, exit_frequency_hz=f, landings=record.landings + (
+            len(self.points),), jump=f"the skeleton's orbit at {tried[-1]:.4g} J")
+        if self._policy.recorded(record):
+            self._store(record, jump.index)
+        self._engine.restart(pseudo_arclength(prob, u, upward_tangent(prob, u, J, bcp.tangent), self._cs, self._tol))
+        self._prev = None          # no events are located across the jump
+        self._refusals = 0
+        self._run = []
+        return None
 
     def _store(self, record, index):
         """Add a tongue record (index -1) or replace the one at ``index``."""
