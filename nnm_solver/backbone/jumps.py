@@ -18,10 +18,11 @@ __all__ = ["candidates", "land", "find_landing", "level_set", "upward_tangent"]
 
 
 def candidates(skeleton, E_0, jumps):
-    """Energies (J) to jump to from a departure at E_0, nearest first: E_0 (1 + delta) for delta in ``jumps`` (relative) where
-    the skeleton covers them, each followed by the skeleton's first point above it (its own orbit, no interpolation:
-    the better guess next to the gaps the skeleton leaves at tongues), after the skeleton's sheet starts within that
-    range (where its stepping moved onto the backbone's sheet beyond a tongue it had slid onto)."""
+    """Energies (J) to jump to from a departure at E_0, nearest first: E_0 (1 + delta) for delta in ``jumps``
+    (relative) where the skeleton covers them, and in each interval between them the skeleton's first and last own
+    points (its orbits there need no interpolation: the better guesses next to the gaps it leaves at tongues), after
+    its sheet starts within that range (where its stepping moved onto the backbone's sheet beyond a tongue it had
+    slid onto)."""
     if skeleton is None or len(skeleton.energy) < 2:
         return []
     grid = [E_0 * (1 + d) for d in jumps if skeleton.covers(E_0 * (1 + d))]
@@ -29,13 +30,12 @@ def candidates(skeleton, E_0, jumps):
         return []
     nodes = np.asarray(skeleton.energy, dtype=float)
     starts = [float(e) for e in skeleton.sheet_starts if E_0 * (1 + 1e-9) < e <= grid[-1]]
-    out = []
-    for E in grid:
-        above = nodes[nodes > E * (1 + 1e-9)]
-        for e in (E, float(above[0]) if len(above) and above[0] <= grid[-1] else None):
-            if e is not None and all(abs(e / x - 1) > 1e-6 for x in out + starts):
-                out.append(e)
-    return starts + sorted(out)
+    out = list(grid)
+    for lo, hi in zip([E_0] + grid[:-1], grid):
+        inside = nodes[(nodes > lo * (1 + 1e-9)) & (nodes < hi * (1 - 1e-9))]
+        out += [float(inside[0]), float(inside[-1])] if len(inside) else []
+    out = sorted({round(e, 12) for e in out if all(abs(e / x - 1) > 1e-6 for x in starts)})
+    return starts + out
 
 
 def level_set(prob, guess, settings, tol, w=None):
