@@ -104,14 +104,13 @@ def test_two_dof_skip_backbone_traverses_its_three_to_one_tongue():
 
 @pytest.mark.slow
 def test_aircraft_mode_20_skip_backbone_jumps_its_first_tongue_from_the_skeleton():
-    """The Paris-like aircraft's mode 20 (gauss6, builder 1.3): the first 3:1 tongue (mode 42, the second
-    anti-symmetric wing torsion, entered near 3.2 J) is jumped from the skeleton's orbit, not by a rescaled orbit;
-    the backbone softens beyond -4 % on points labelled backbone before its family ends in that 3:1 resonance
-    (status 'tongue', near 6.2 J)."""
+    """The Paris-like aircraft's mode 20 with the default settings (gauss6 at 100 steps): its 3:1 tongues with mode
+    42 are jumped from the skeleton's orbits; the backbone softens beyond -4 % on points labelled backbone before its
+    family ends in that 3:1 resonance (status 'tongue', the family's end near 5.2 J)."""
     from pathlib import Path
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     f20 = model.linear_modes()[0][19]
-    b = nnm.continue_nnm(model, 20, 12.0, integrator="gauss6", steps_per_period=200, tongues="skip", floquet=False)
+    b = nnm.continue_nnm(model, 20, 12.0, tongues=nnm.Skip(), floquet=False)
     # its family ends in a 3:1 with mode 42 or, past it, with mode 41 (0.937 x 3 f20): which of the two narrow
     # resonances takes the orbit over changes with round-off (the shipped run with multipliers: 42 at 6.2 J)
     assert b.status == "tongue" and ("mode 42" in b.message or "mode 41" in b.message), b.message
@@ -122,13 +121,13 @@ def test_aircraft_mode_20_skip_backbone_jumps_its_first_tongue_from_the_skeleton
 
 @pytest.mark.slow
 def test_aircraft_mode_10_ends_where_its_family_ends_not_failed():
-    """The aircraft's mode 10 (gauss6, 200 steps, to 200 J): its skeleton (H = 9) ends at an internal resonance
+    """The aircraft's mode 10 (default settings, to 200 J): its skeleton (H = 9) ends at an internal resonance
     (builder 1.3: a 3:1 with mode 14 near 12 J) and the shooting continuation cannot go beyond it.  The branch says
     so (status 'tongue', the family's end and the skeleton's partner named, the last record of branch.tongues not
     jumped) instead of 'failed', and its points below 80 % of its last energy lie on the skeleton to 1e-5."""
     from pathlib import Path
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
-    b = nnm.continue_nnm(model, 10, 200.0, integrator="gauss6", steps_per_period=200, tongues="skip", floquet=False)
+    b = nnm.continue_nnm(model, 10, 200.0, tongues=nnm.Skip(), floquet=False)
     sk = skeleton(model, 10, 200.0, _skeleton_system)
     # near 12 J the family meets the 3:1 with mode 14 just below its energy maximum: by round-off (numpy/scipy
     # builds) the skeleton ends there 'stuck'/'locked' with the partner named or at its 'peak' (the fold of the
