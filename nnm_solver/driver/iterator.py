@@ -22,6 +22,7 @@ from ..stability.locator import event_rtol
 from ..backbone.content import content_of
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
+from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
@@ -74,6 +75,7 @@ class NNMIterator(StepRefinement):
         self._start_is_low = bool(start_is_low)   # the branch starts at low energy (not a tongue from its entry)
         self._last_kept = None         # (ContinuationPoint, Point) of the last point kept
         self._run = []                 # (E, f) of the points kept on the family since the last jump
+        self._run_length = (labels.settings if labels is not None else LabelSettings()).run_length
         self._refusals = 0             # steps refused in a row because an event in them was not located
         # the engine's next point, computed while the last point's multipliers are (in the worker thread)
         self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
@@ -118,7 +120,7 @@ class NNMIterator(StepRefinement):
                 command = REFUSE                # an event could not be located: a shorter step
             self._last_kept = (cp, point)
             if point.label == "backbone":       # the run of points on the family since the last jump (labels.py)
-                self._run = self._run[-self._labels.settings.run_length:] + [(point.energy, point.frequency_hz)]
+                self._run = self._run[-self._run_length:] + [(point.energy, point.frequency_hz)]
             else:
                 self._run = []
             self._estimate_error(point)
