@@ -107,8 +107,9 @@ class Layout:
             self.h_branch = gui.add_dropdown("Branch", options=("(none)",), initial_value="(none)")
             self.h_energy = gui.add_slider("Energy log10(J)", min=-3.0, max=3.0, step=0.01, initial_value=0.0,
                                            hint="Moves the selection along the branch (nearest crossing)")
-            self.h_along = gui.add_slider("Along branch", min=0.0, max=1.0, step=0.01, initial_value=0.0,
-                                          hint="Fractional point index: follows folds and tongues")
+            self.h_along = gui.add_slider("Along branch (point)", min=1.0, max=2.0, step=0.01, initial_value=1.0,
+                                          hint="The point's number (1 = the first computed point; fractional "
+                                               "between two points): follows folds and tongues")
             self.h_sel = gui.add_markdown("no point selected")
             self.h_branch_info = gui.add_markdown("")
         with gui.add_folder("Animation"):
