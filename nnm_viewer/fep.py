@@ -67,10 +67,19 @@ def event_style(kind):
     return EVENT_MARKERS.get(kind, ("o", "k"))
 
 
+def off_backbone_style():
+    """(markers, colour) of the points off the backbone, as in the solver's plots (results/plotting.py)."""
+    from nnm_solver.results.plotting import OFF_BACKBONE_COLOR, OFF_BACKBONE_MARKERS
+    import matplotlib.colors as mcolors
+
+    return OFF_BACKBONE_MARKERS, mcolors.to_hex(OFF_BACKBONE_COLOR)
+
+
 @dataclass
 class FepSeries:
     """One branch as drawn: energy (N,) J, frequency (N,) Hz, stable (N,) bool, label; events
-    [(kind, energy J, frequency Hz)] and status (Branch.status) of the branch."""
+    [(kind, energy J, frequency Hz)] and status (Branch.status) of the branch; labels (N,) the points' labels
+    (Branch.labels: 'backbone', 'tongue 3:1', ...; empty: all on the backbone)."""
 
     energy: np.ndarray
     frequency: np.ndarray
@@ -78,9 +87,17 @@ class FepSeries:
     label: str
     events: list = field(default_factory=list)
     status: str = ""
+    labels: tuple = ()
 
     def __len__(self):
         return len(self.energy)
+
+    def off_backbone(self):
+        """[(label, boolean mask)] of the points off the backbone, by label in order of appearance."""
+        labels = np.asarray([str(x) for x in self.labels], dtype=object)
+        if len(labels) != len(self.energy):
+            return []
+        return [(lab, labels == lab) for lab in dict.fromkeys(labels) if lab != "backbone"]
 
     def relative(self, f_linear):
         """The same branch on the relative frequency axis: 100 (f / f_linear - 1) (%), events too."""
@@ -92,7 +109,8 @@ class FepSeries:
             return 100.0 * (np.asarray(f, dtype=float) / f_linear - 1.0)
 
         return FepSeries(self.energy, rel(self.frequency), self.stable, self.label,
-                         events=[(k, e, float(rel(f))) for k, e, f in self.events], status=self.status)
+                         events=[(k, e, float(rel(f))) for k, e, f in self.events], status=self.status,
+                         labels=self.labels)
 
 
 #: y-axis labels of the FEP: absolute (Hz) or relative to the branch's linear frequency (%)
@@ -118,9 +136,13 @@ def should_zoom(series, selected):
 def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5, event_ms=7.0, event_mew=1.5):
     """Draw the branches on a matplotlib Axes in log10(energy) vs frequency: a line per branch in its
     colour (branch_color of its position), its points (``points``: stable filled, unstable hollow),
-    its events by kind and the end of a branch that failed, escaped or closed a loop.  Returns the
-    legend (handles, labels): the branches, 'unstable', then the event and end kinds drawn."""
+    its events by kind and the end of a branch that failed, escaped or closed a loop; the points off the backbone
+    (a tongue's) in the solver's style (``off_backbone_style``: marked over the points; without ``points``, the
+    board's spheres take that colour and the legend says so).  Returns the legend (handles, labels): the branches,
+    'unstable', the labels off the backbone, then the event and end kinds drawn."""
     handles, labels, extra = [], [], {}
+    off_handles = {}
+    off_markers, off_color = off_backbone_style()
     any_unstable = False
     for k, s in enumerate(series):
         if not len(s):
@@ -137,6 +159,16 @@ def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5,
             ax.plot(le[st], f[st], "o", ms=ms, color=c, zorder=3)
             if (~st).any():
                 ax.plot(le[~st], f[~st], "o", ms=ms * 1.25, mfc="white", mec=c, mew=1.2, zorder=3)
+        for j, (lab, mask) in enumerate(s.off_backbone()):
+            marker = off_markers[j % len(off_markers)]
+            if points:
+                for part, fill in ((mask & st, off_color), (mask & ~st, "white")):
+                    if part.any():
+                        (h,) = ax.plot(le[part], f[part], marker, ms=ms * 2.2, color=off_color, mfc=fill,
+                                       mec="k" if fill != "white" else off_color, mew=0.6, zorder=3.5)
+                        off_handles.setdefault(lab, h)
+            elif lab not in off_handles:
+                (off_handles[lab],) = ax.plot([], [], "o", ms=ms * 1.6, color=off_color)
         for kind, energy, freq in s.events:
             marker, colour = event_style(kind)
             (h,) = ax.plot([np.log10(max(energy, 1e-300))], [freq], marker, ms=event_ms, mfc="none", mec=colour,
@@ -152,6 +184,9 @@ def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5,
             ax.plot([], [], "o", ms=ms * 1.6, color=pale("#555555"))
         handles.append(h)
         labels.append("unstable" if points else "pale: unstable")
+    for lab, h in off_handles.items():
+        handles.append(h)
+        labels.append(f"{lab} (off the backbone)" if points else f"orange: {lab} (off the backbone)")
     order = [("event", k) for k in EVENT_LABELS] + [("end", k) for k in END_MARKERS]
     order += sorted(k for k in extra if k not in order)
     for key in order:

@@ -10,7 +10,7 @@ import nnm_solver
 
 from .glb import build_glb
 from .board import BOARD_MARGINS, BoardLayout, board_layout
-from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, pale, rgb
+from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, off_backbone_style, pale, rgb
 
 #: vertical field of view of the initial camera, degrees
 CAMERA_FOV_DEG = 50.0
@@ -203,7 +203,7 @@ def cached_board(board, ranges, series, ylabel=None):
         h.update(np.asarray(ser.energy, dtype=float).tobytes())
         h.update(np.asarray(ser.frequency, dtype=float).tobytes())
         h.update(np.asarray(ser.stable, dtype=bool).tobytes())
-        h.update(repr((ser.label, ser.status, ser.events)).encode())
+        h.update(repr((ser.label, ser.status, ser.events, tuple(lab for lab, _ in ser.off_backbone()))).encode())
     key = h.hexdigest()
     img = _BOARD_CACHE.get(key)
     if img is None:
@@ -227,7 +227,8 @@ def draw_board_frame(scene, board, ranges, series=(), name="/fep", ylabel=None):
 
 def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep", color=None):
     """One batched-sphere object for a branch: instance i = point i, in the branch's ``color``
-    ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; returns
+    ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; the points off the
+    backbone (a tongue's) in the solver's colour for them (fep.off_backbone_style), paler when unstable; returns
     its handle."""
     if not len(series):
         scene.remove_by_name(f"{name}/b{uid}")
@@ -235,7 +236,12 @@ def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=Fa
     V, F = sphere_mesh()
     pos = board.to_world(series.energy, series.frequency, ranges)
     stable_rgb, unstable_rgb = (STABLE_RGB, UNSTABLE_RGB) if color is None else (rgb(color), rgb(pale(color)))
-    colors = np.where(np.asarray(series.stable, dtype=bool)[:, None], stable_rgb, unstable_rgb).astype(np.uint8)
+    stable = np.asarray(series.stable, dtype=bool)
+    colors = np.where(stable[:, None], stable_rgb, unstable_rgb).astype(np.uint8)
+    off_color = off_backbone_style()[1]                # points off the backbone (a tongue's): the solver's colour
+    for _, mask in series.off_backbone():
+        colors[mask & stable] = rgb(off_color)
+        colors[mask & ~stable] = rgb(pale(off_color))
     rad = board.point_radius() * (1.0 if emphasized else 0.7)
     if len(pos) > 2:   # dense branches: spheres no bigger than ~half the typical spacing
         gap = float(np.median(np.linalg.norm(np.diff(pos, axis=0), axis=1)))

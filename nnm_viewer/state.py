@@ -100,7 +100,14 @@ class BranchEntry:
             label += " (stability not computed)"          # its points are drawn filled, not known to be stable
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
                          np.asarray(b.stable, dtype=bool), label, events=events,
-                         status=str(getattr(b, "status", "") or ""))
+                         status=str(getattr(b, "status", "") or ""),
+                         labels=tuple(str(x) for x in _labels(b)))
+
+
+def _labels(branch):
+    """The branch's point labels (Branch.labels), or () when it has none."""
+    labels = getattr(branch, "labels", None)
+    return () if labels is None else labels
 
 
 #: linear modes shown for a model too large for the dense eigensolution (nnm_solver.model.MAX_DENSE_DOF)
