@@ -7,7 +7,7 @@ import threading
 
 import numpy as np
 
-from .layout import SEE_COMPUTE_TAB
+from .layout import METHODS, SEE_COMPUTE_TAB
 from .fep import energy_at, energy_to_s
 from .fep_view import sweep_key
 from .state import JobBusy, branch_label
@@ -161,22 +161,33 @@ class ComputeActions:
     def _start(self, mode, emax, factor, energy_min=None):
         """Start a job (one at a time for all tabs: the start is atomic, worker.JobRunner.start raises
         state.JobBusy if another tab's job runs) and select its branch."""
-        ui = self.layout
-        spp = int(round(float(ui.h_spp.value)))
-        if spp < 8:
-            raise ValueError(f"steps per period must be at least 8, got {spp}")
-        opts = {"max_points": int(ui.h_maxpts.value), "integrator": str(ui.h_integrator.value),
-                "steps_per_period": spp}
+        opts = self.job_options()
         if energy_min is not None:
             opts["energy_min"] = float(energy_min)
         runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
         runner.start()
         self.last_runner = runner
+        self.layout.set(self.layout.h_save_msg, content="")     # a new job: the last save's message is old
         # the new branch is selected: its points replace the old animation
         self.set_view(sel_uid=runner.entry.uid, s=0.0, current_point=None, current_anim=None, current_uid=None,
                       linear_mode=None)
         self.request("branches", "point", "progress")
         return runner
+
+    def job_options(self):
+        """continue_nnm's keywords from the Compute tab: max points, tongues, the method and its options
+        (shooting: integrator and steps per period; harmonic balance: harmonics, condensed)."""
+        ui = self.layout
+        method, condensed = METHODS[str(ui.h_method.value)]
+        opts = {"max_points": int(ui.h_maxpts.value), "tongues": str(ui.h_tongues.value)}
+        if method == "shooting":
+            spp = int(round(float(ui.h_spp.value)))
+            if spp < 8:
+                raise ValueError(f"steps per period must be at least 8, got {spp}")
+            opts.update(integrator=str(ui.h_integrator.value), steps_per_period=spp)
+        else:
+            opts.update(method=method, harmonics=int(round(float(ui.h_harmonics.value))), condensed=condensed)
+        return opts
 
     # ---- the Modes tab
     def _linear_mode_choice(self):
@@ -212,6 +223,17 @@ class ComputeActions:
             job.cancel()
 
     def _on_save(self, _):
+        """Save the selected branch; what happened (the file written, or why not) is said under the Save button,
+        where the user looks (finding 4), and in the status line."""
+        try:
+            msg = self._save_selected()
+        except Exception as exc:
+            self.layout.set(self.layout.h_save_msg, content=f"**Not saved:** {one_line(exc)}")
+            raise
+        self.layout.set(self.layout.h_save_msg, content=f"**Saved:** {msg}")
+        self.show_status(msg)
+
+    def _save_selected(self):
         e = self.selected_entry()
         if e is None:
             raise ValueError("select a branch to save")
@@ -221,6 +243,5 @@ class ComputeActions:
             raise ValueError("this branch is already in the file")
         name = branch_label(e.branch, e.k3_factor, source="file", model=self.model)
         target, reason = self.shared.save(e)
-        self.show_status(f"saved {name}, {len(e)} points, to {target}"
-                         + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
-                            if reason else ""))
+        return (f"saved {name}, {len(e)} points, to {target}"
+                + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})" if reason else ""))

@@ -80,7 +80,7 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
         first = next((e for e in shared.snapshot() if len(e)), None)
         if first is not None:
             self.set_view(sel_uid=first.uid)
-            self._modes_tab_on(first)
+            self._mode_lists_on(first)
         shared.subscribe(self._on_shared)
         self.drawing.start()
         self.request(*ALL_KINDS)
@@ -165,7 +165,7 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
                    h_reset=self._on_reset_camera, h_recompute=self._on_recompute, h_start=self._on_start,
                    h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
                    h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
-                   h_view=self._on_view, h_show_linear=self._on_show_linear,
+                   h_view=self._on_view, h_show_linear=self._on_show_linear, h_method=self._on_method,
                    h_compute_linear=self._on_compute_linear)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
@@ -181,6 +181,10 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
                 self.set_view(**{field: value})
             self.request(*redraws)
         return on_update
+
+    def _on_method(self, _):
+        """The Compute tab's method: its own options shown (time steps for shooting, harmonics for HB)."""
+        self.request("controls")
 
     def _on_zoom(self, _):
         """The user's zoom choice, kept from now on (no more automatic zoom)."""
@@ -206,15 +210,17 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
         if changed:
             idx = self.shared.index_of(uid)
             if idx is not None:
-                self._modes_tab_on(self.shared.snapshot()[idx])
+                self._mode_lists_on(self.shared.snapshot()[idx])
         self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
 
-    def _modes_tab_on(self, e):
-        """The Modes tab's list on the linear mode of the selected branch ``e`` (its NNM's mode)."""
+    def _mode_lists_on(self, e):
+        """The mode lists of the Modes tab and the Compute tab on the linear mode of the selected branch ``e``
+        (its NNM's mode): Start computes the selected NNM's mode unless another is chosen."""
         k = int(getattr(e.branch, "mode", 0) or 0)
         options = self.layout.mode_options
         if 1 <= k <= len(options):
             self.layout.set(self.layout.h_lin_mode, value=options[k - 1])
+            self.layout.set(self.layout.h_mode, value=options[k - 1])
 
     def pick(self, uid, instance_index):
         """A click on FEP point ``instance_index`` of the branch with ``uid``."""

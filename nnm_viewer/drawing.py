@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from .fep_view import FepView
-from .layout import k3_text
+from .layout import METHODS, k3_text
 from .point_view import PointView
 from .worker import one_line
 
@@ -144,6 +144,10 @@ class Drawing:
         ui.set(ui.h_phase, visible=not v.playing)
         ui.set(ui.h_amp, disabled=v.auto_amp)
         ui.set(ui.h_k3_text, content=k3_text(v.factor, s.scaling_law))
+        shooting = METHODS.get(str(ui.h_method.value), ("shooting", False))[0] == "shooting"
+        ui.set(ui.h_integrator, visible=shooting)
+        ui.set(ui.h_spp, visible=shooting)
+        ui.set(ui.h_harmonics, visible=not shooting)
 
     def draw_ghost(self):
         """The undeformed shape, translucent, when asked for."""

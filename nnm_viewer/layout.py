@@ -11,6 +11,7 @@ import threading
 import numpy as np
 import viser
 from nnm_solver import INTEGRATORS
+from nnm_solver.cli.defaults import TONGUE_CHOICES, solver_defaults
 
 from .help import HELP_MARKDOWN
 from .model_info import elements_summary, model_markdown
@@ -23,9 +24,16 @@ MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
 BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit",
            "h_gif", "h_view", "h_show_linear", "h_compute_linear")
-#: Compute tab: default time integrator and steps per period of the shooting
-DEFAULT_INTEGRATOR = "newmark"
-DEFAULT_STEPS_PER_PERIOD = 200
+#: Compute tab: the methods offered -> (continue_nnm's method, condensed); the defaults of every field are the
+#: solver's (nnm_solver.cli.defaults.solver_defaults), never copied here
+METHODS = {"shooting": ("shooting", False), "harmonic balance": ("hb", False),
+           "condensed harmonic balance": ("hb", True)}
+
+
+def method_choice(method, condensed=False):
+    """The Compute tab's method option of continue_nnm's ``method`` (and ``condensed``)."""
+    return next(k for k, v in METHODS.items() if v == (("hb" if method == "harmonic_balance" else method),
+                                                           bool(condensed)))
 #: Modes tab: what "Compute its branch" says (viser 1.1 cannot switch a tab from the server)
 SEE_COMPUTE_TAB = "the job's progress is in the **Compute** tab"
 #: view presets of the camera (scene.preset_camera)
@@ -178,22 +186,40 @@ class Layout:
         # every mode (a large model's: the lowest ones computed, nnm_viewer.state.view_linear_modes)
         options = tuple(mode_label(model, linear_freqs, k) for k in range(1, len(linear_freqs) + 1))
         self.mode_options = options
+        D = solver_defaults()
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
-            self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
+            self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0],
+                                           hint="The linear mode whose NNM branch is computed (the selected "
+                                                "branch's mode until you choose another)")
             self.h_emin = gui.add_number("Min energy (J), 0 = auto", initial_value=0.0, min=0.0, step=1e-6)
             self.h_emax = gui.add_number("Max energy (J)", initial_value=100.0, min=1e-12, step=1e-6)
-            self.h_maxpts = gui.add_number("Max points", initial_value=80, min=2, max=5000, step=1)
+            self.h_maxpts = gui.add_number("Max points", initial_value=int(D["max_points"]), min=2, max=5000, step=1,
+                                           hint="The branch ends at Max points or Max energy, whichever comes first")
+            self.h_method = gui.add_dropdown(
+                "Method", options=tuple(METHODS), initial_value=method_choice(D["method"], D["condensed"]),
+                hint="shooting (time integration, the seed paper's method), harmonic balance (Fourier series of "
+                     "the orbit), or harmonic balance condensed onto the nonlinear elements (models of any size "
+                     "whose nonlinearity is localized)")
+            self.h_tongues = gui.add_dropdown(
+                "Tongues", options=TONGUE_CHOICES, initial_value=str(D["tongues"]),
+                hint="At an internal-resonance tongue: follow the branch through it, or skip it and compute the "
+                     "backbone (the tongues jumped are listed with the branch; nnm-solve --tongue K continues one)")
             self.h_integrator = gui.add_dropdown(
-                "Integrator", options=tuple(INTEGRATORS), initial_value=DEFAULT_INTEGRATOR,
+                "Integrator", options=tuple(INTEGRATORS), initial_value=str(D["integrator"]),
                 hint="Time integrator of the shooting: newmark (2nd order, the seed paper's), gauss4 or gauss6 "
                      "(Gauss-Legendre, 4th / 6th order, 2 / 3 stages per step)")
             self.h_spp = gui.add_number(
-                "Steps per period", initial_value=DEFAULT_STEPS_PER_PERIOD, min=8, max=20000, step=1,
-                hint="Time steps per period of the shooting: 200 for newmark; about 100 are enough for gauss6 "
-                     "(a step costs ~3 Newmark steps); more for high-order tongues")
+                "Steps per period", initial_value=int(D["steps_per_period"]), min=8, max=20000, step=1,
+                hint=f"Time steps per period of the shooting: {D['steps_per_period']} by default (newmark); about "
+                     f"100 are enough for gauss6 (a step costs ~3 Newmark steps); more for high-order tongues")
+            self.h_harmonics = gui.add_number(
+                "Harmonics", initial_value=int(D["harmonics"]), min=1, max=99, step=1, visible=False,
+                hint="Harmonic balance: the highest harmonic of the Fourier series (more for strong higher "
+                     "harmonics, e.g. inside a tongue)")
             self.h_start = gui.add_button("Start", color="green")
             self.h_stop = gui.add_button("Stop (keep points)", disabled=True)
             self.h_save = gui.add_button("Save selected branch to file", disabled=True)
+            self.h_save_msg = gui.add_markdown("")          # what Save did, right under its button
             self.h_progress = gui.add_progress_bar(0.0, animated=False)
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):

@@ -9,9 +9,8 @@ import time
 from dataclasses import dataclass
 
 import nnm_solver
+from nnm_solver.cli.defaults import solver_defaults
 
-#: the solver's default max_points (nnm_solver.iter_nnm), used when a job is started without one
-DEFAULT_MAX_POINTS = 500
 
 
 def one_line(exc):
@@ -116,7 +115,7 @@ class JobRunner:
         self.entry = None
         self.job = None
         self.branch = None           # the rows received so far (extended in place)
-        self.max_points = int(options.get("max_points") or DEFAULT_MAX_POINTS)
+        self.max_points = int(options.get("max_points") or solver_defaults()["max_points"])
         self.t_start = None          # time.monotonic() at Start
         self.t_end = None            # ... when the job ended
         self._energy = 0.0           # the job's energy fraction, last read while it ran

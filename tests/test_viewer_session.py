@@ -1252,7 +1252,7 @@ def test_modes_tab_compute_its_branch_starts_the_job_as_start_does(server, demo_
     runner = shared.job
     runner.poll = 0.01
     assert s.h_mode.value == s.h_mode.options[1] and runner.mode == 2
-    assert calls == [(2, 5.0, {"max_points": 30, "integrator": "newmark", "steps_per_period": 200})]
+    assert calls == [(2, 5.0, {"max_points": 30, "integrator": "newmark", "steps_per_period": 200, "tongues": "follow"})]
     assert s.sel_uid == runner.entry.uid and s.linear_mode is None and s.current_point is None
     assert "Compute" in s.h_status.content and "NNM 2" in s.h_modes_job.content
     assert s.h_compute_linear.disabled and s.h_start.disabled
