@@ -60,13 +60,21 @@ def legend_label(label, width=42):
     return text if len(text) <= width else text[:width - 1].rstrip() + "\u2026"
 
 
-def branch_label(branch, k3_factor=1.0, source="file", model=None):
+def branch_label(branch, k3_factor=1.0, source="file", model=None, reference=None):
     """The branch's name in every list and legend: 'NNM <k> (<the model's label of mode k>)', then
     what its stored name adds (' · harmonic balance H15'), the k3 factor if not 1 and, for a branch
     of this session, its state: 'NNM 2 (out-of-phase mode) (k3 x 10) [running]'.  ``model``: whose
-    mode labels to use when the branch carries no model of its own."""
+    mode labels to use when the branch carries no model of its own; ``reference``: {mode: the file's reference
+    name of it} (cli.modes.reference_mode_names), said with the model's label: 'NNM 19 (wing torsion 2
+    (symmetric); paper: first (symmetric) wing torsion)'."""
+    from nnm_solver.cli.modes import label_with_reference
+
     mode = getattr(branch, "mode", "?")
     label = mode_name(getattr(branch, "model", None) or model, mode) or mode_name(model, mode)
+    try:
+        label = label_with_reference(label, (reference or {}).get(int(mode), ""))
+    except (TypeError, ValueError):
+        pass
     text = f"NNM {mode}" + (f" ({label})" if label else "")
     extra = name_remainder(getattr(branch, "name", ""), mode)
     if extra:

@@ -241,7 +241,8 @@ class ComputeActions:
             raise ValueError("the branch is still being computed: stop it or wait, then save")
         if e.saved:
             raise ValueError("this branch is already in the file")
-        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model)
+        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model,
+                            reference=self.shared.reference_names)
         target, reason = self.shared.save(e)
         return (f"saved {name}, {len(e)} points, to {target}"
                 + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})" if reason else ""))

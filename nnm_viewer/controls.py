@@ -74,7 +74,8 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
         self.slider_runner = None    # the last JobRunner the slider started
         self._slider_base = None     # (mode, energy_max, uid of the branch it started from)
         self._slider_uids = set()    # entries computed for the slider
-        self.layout = Layout(api.gui, self.model, shared.linear_freqs, scaling_law=self.scaling_law)
+        self.layout = Layout(api.gui, self.model, shared.linear_freqs, scaling_law=self.scaling_law,
+                             reference=shared.reference_names)
         self.drawing = Drawing(self, sync=sync)
         self.layout.connect(self._callbacks())
         first = next((e for e in shared.snapshot() if len(e)), None)

@@ -12,6 +12,7 @@ import numpy as np
 import viser
 from nnm_solver import INTEGRATORS
 from nnm_solver.cli.defaults import TONGUE_CHOICES, solver_defaults
+from nnm_solver.cli.modes import label_with_reference
 
 from .help import HELP_MARKDOWN
 from .model_info import elements_summary, model_markdown
@@ -80,19 +81,21 @@ def k3_text(factor, law=True):
     return ("forces x 1 (as in the file)" if same else f"forces x {factor:.3g} (recomputed)") + f"  \n{NO_SCALING_LAW}"
 
 
-def mode_label(model, linear_freqs, k):
-    """'k: f Hz label' of linear mode k (1-based)."""
+def mode_label(model, linear_freqs, k, reference=None):
+    """'k: f Hz label' of linear mode k (1-based), with the reference's name of it ({mode: name}) if any."""
     labels = model.mode_labels or []
-    lab = f" {labels[k - 1]}" if k - 1 < len(labels) else ""
-    return f"{k}: {linear_freqs[k - 1]:.4g} Hz{lab}"
+    lab = label_with_reference(labels[k - 1] if k - 1 < len(labels) else "", (reference or {}).get(k, ""))
+    return f"{k}: {linear_freqs[k - 1]:.4g} Hz" + (f" {lab}" if lab else "")
 
 
-def modes_markdown(model, linear_freqs):
-    """Markdown table of the linear modes (at most MAX_MODES_TABLE rows)."""
+def modes_markdown(model, linear_freqs, reference=None):
+    """Markdown table of the linear modes (at most MAX_MODES_TABLE rows); the reference's names ({mode: name},
+    e.g. the paper's) in the label column next to the model's."""
     labels = model.mode_labels or []
     rows = ["| mode | f (Hz) | label |", "|---|---|---|"]
     for k in range(min(len(linear_freqs), MAX_MODES_TABLE)):
-        rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {labels[k] if k < len(labels) else ''} |")
+        lab = label_with_reference(labels[k] if k < len(labels) else "", (reference or {}).get(k + 1, ""))
+        rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {lab} |")
     more = (f"\n\n({model.n - MAX_MODES_TABLE} more modes not listed)" if model.n > MAX_MODES_TABLE else "")
     if len(linear_freqs) < min(model.n, MAX_MODES_TABLE):            # a large model: only its lowest modes computed
         more = f"\n\n(the lowest {len(linear_freqs)} of the model's {model.n} modes)"
@@ -102,7 +105,7 @@ def modes_markdown(model, linear_freqs):
 class Layout:
     """The GUI handles of one tab, built on ``gui`` (a tab's or the server's ``.gui``)."""
 
-    def __init__(self, gui, model, linear_freqs, scaling_law=True):
+    def __init__(self, gui, model, linear_freqs, scaling_law=True, reference=None):
         self.gui = gui
         self._tl = threading.local()
         name = model.name or "model"
@@ -184,7 +187,7 @@ class Layout:
                                         hint="the deformed structure over one period, seen as in the 3D view, "
                                              "with its colour bar (a few seconds to draw)")
         # every mode (a large model's: the lowest ones computed, nnm_viewer.state.view_linear_modes)
-        options = tuple(mode_label(model, linear_freqs, k) for k in range(1, len(linear_freqs) + 1))
+        options = tuple(mode_label(model, linear_freqs, k, reference) for k in range(1, len(linear_freqs) + 1))
         self.mode_options = options
         D = solver_defaults()
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
@@ -234,7 +237,7 @@ class Layout:
                      "Compute tab's energies, points and integrator)")
             self.h_modes_job = gui.add_markdown("")
             self.h_model = gui.add_markdown(model_markdown(model))
-            gui.add_markdown(modes_markdown(model, linear_freqs))
+            gui.add_markdown(modes_markdown(model, linear_freqs, reference))
         with panel.add_tab("Help", viser.Icon.HELP):
             self.h_help = gui.add_markdown(HELP_MARKDOWN)
         panel.dock_right()

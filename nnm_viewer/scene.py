@@ -157,6 +157,23 @@ def render_board(board, ranges, series=(), width_px=900, ylabel=None):
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
 
+def fit_left_labels(fig, ax, smallest=10):
+    """Shrink the y tick labels and the y axis label until they fit in the figure's left margin (long tick labels,
+    '31.7825', pushed the axis label out of the picture)."""
+    for _ in range(6):
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        left = min([t.get_window_extent(renderer).x0 for t in ax.get_yticklabels() if t.get_text()]
+                   + [ax.yaxis.label.get_window_extent(renderer).x0])
+        if left >= 2:
+            return
+        size = ax.get_yticklabels()[0].get_fontsize() if ax.get_yticklabels() else smallest
+        if size <= smallest:
+            return
+        ax.tick_params(axis="y", labelsize=max(smallest, 0.85 * size))
+        ax.yaxis.label.set_fontsize(max(smallest, 0.85 * ax.yaxis.label.get_fontsize()))
+
+
 def board_figure(board, ranges, series=(), width_px=900, ylabel=None):
     """The drawn matplotlib Figure of ``render_board`` (its axes fill the board's rectangle; the
     legend is in the bottom margin, below the tick labels)."""
@@ -172,8 +189,10 @@ def board_figure(board, ranges, series=(), width_px=900, ylabel=None):
     ax = fig.add_axes([_ML / (1 + _ML + _MR), _MB / (1 + _MB + _MT), 1 / (1 + _ML + _MR), 1 / (1 + _MB + _MT)])
     ax.set_facecolor("#ffffff")
     # thin lines, and event markers large enough to ring the spheres drawn in front of the picture
-    handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0)
+    handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0,
+                                    ranges=ranges, legend_max=BOARD_LEGEND_MAX)
     set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3, ylabel=ylabel or Y_LABELS[False])
+    fit_left_labels(fig, ax)
     if handles:
         # below the plotting area, never over the curves (nor over the spheres drawn in front of them)
         ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="upper center",

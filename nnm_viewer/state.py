@@ -104,6 +104,16 @@ class BranchEntry:
                          labels=tuple(str(x) for x in _labels(b)))
 
 
+def reference_names(path):
+    """{mode: name} of the file's /extra/reference/mode_names ({} without a file or names)."""
+    from nnm_solver.cli.modes import reference_mode_names
+    from nnm_solver.files.importers import is_import_path
+
+    if path is None or is_import_path(path):            # an imported model file (.mat, .toml) has no /extra
+        return {}
+    return reference_mode_names(nnm_solver.load_extra(path, "reference"))
+
+
 def _labels(branch):
     """The branch's point labels (Branch.labels), or () when it has none."""
     labels = getattr(branch, "labels", None)
@@ -159,6 +169,9 @@ class SharedState:
         if solver_ready:
             self.solver_ready.set()
             self.orbits_ready.set()
+        #: {mode: the file's reference name of it} (/extra/reference/mode_names: the paper's names of the Paris
+        #: model's modes), said next to the model's labels
+        self.reference_names = reference_names(path)
         self.entries: list[BranchEntry] = []
         self.listeners: list = []
         self.job = None                 # worker.JobRunner or None
@@ -177,7 +190,8 @@ class SharedState:
 
     # ------------------------------------------------------------------ entries
     def add(self, branch, k3_factor=1.0, source="file", saved=True, notify=True):
-        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source, self.model),
+        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source, self.model,
+                                                              self.reference_names),
                             k3_factor=k3_factor, source=source, saved=saved)
         with self.lock:
             self.entries.append(entry)
@@ -200,7 +214,7 @@ class SharedState:
                 entry.source = source
             if status is not None:
                 entry.status = status
-            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source, self.model)
+            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source, self.model, self.reference_names)
         if notify:
             self.notify("branches")
 

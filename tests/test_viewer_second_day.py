@@ -153,3 +153,89 @@ def test_save_says_what_it_did_under_the_save_button(server, demo_file, tmp_path
     s._cb(s._on_stop)(None)
     s.last_runner.finished.wait(5)
     s.close()
+
+
+def _series(energy, freq, label, events=(), status="", stable=None):
+    from nnm_viewer.fep import FepSeries
+    energy, freq = np.asarray(energy, float), np.asarray(freq, float)
+    return FepSeries(energy, freq, np.ones(len(energy), bool) if stable is None else stable, label,
+                     events=list(events), status=status)
+
+
+def test_panel_fep_keeps_every_marker_inside_and_lists_what_it_shows():
+    """Finding 7: the panel FEP zoomed on a branch kept its lowest markers and a fold marker half outside the
+    axes (5 % padding, a 10.5-pt end marker); its legend listed every branch while one was drawn, and the
+    board's legend dropped the torus markers it drew (the legend was full of branches)."""
+    from nnm_viewer.fep import FepRenderer, axis_ranges
+
+    a = _series(np.logspace(-2, 1, 12), np.linspace(8.294, 8.2348, 12), "NNM 10",
+                events=[("fold", 11.27, 8.2348), ("torus", 10.9, 8.2433)], status="escape")
+    far = [_series(np.logspace(-1, 2, 5), 30 + np.arange(5.0), f"NNM {k}") for k in range(11, 19)]
+    r = FepRenderer(size=(480, 470))
+    zoom = axis_ranges([a])
+    r.set_series([a] + far, 0, ranges=zoom)
+    ax = r.ax
+    box = ax.get_window_extent()
+    xy = ax.transData.transform(np.c_[np.log10(np.r_[a.energy, 11.27, 10.9]), np.r_[a.frequency, 8.2348, 8.2433]])
+    radius = 10.5 / 2 * r.fig.dpi / 72                           # the end marker, the largest
+    margin = np.min(np.c_[xy[:, 0] - box.x0, box.x1 - xy[:, 0], xy[:, 1] - box.y0, box.y1 - xy[:, 1]])
+    assert margin >= radius, (margin, radius)
+    legend = [t.get_text() for t in r.legend.get_texts()]
+    assert "NNM 10" in legend and not any(t.startswith("NNM 1") and t != "NNM 10" for t in legend), legend
+    assert "torus (complex multipliers)" in legend and "end: escape" in legend and "fold (energy turns back)" in legend
+
+
+def test_board_legend_keeps_the_event_markers_and_its_labels_fit():
+    """The board's legend (14 entries at most) names the torus markers drawn even with many branches, and 6-digit
+    tick labels leave the y axis label inside the picture."""
+    from nnm_viewer.board import board_layout
+    from nnm_viewer.scene import board_figure
+
+    board = board_layout(np.zeros(3), np.ones(3), np.array([1.0, 1.0, -0.5]))
+    many = [_series(np.logspace(-1, 2, 6), 123.4561 + 1e-4 * np.arange(6) + 1e-5 * k, f"NNM {k}",
+                    events=[("torus", 10.0, 123.4563 + 1e-5 * k)]) for k in range(14)]
+    fig = board_figure(board, axis_ranges_of(many), many)
+    ax = fig.axes[0]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "torus (complex multipliers)" in legend
+    renderer = fig.canvas.get_renderer()
+    ticks = [t for t in ax.get_yticklabels() if t.get_text()]
+    assert max(len(t.get_text()) for t in ticks) >= 7, [t.get_text() for t in ticks]
+    assert min(t.get_window_extent(renderer).x0 for t in ticks) >= 0
+    assert ax.yaxis.label.get_window_extent(renderer).x0 >= 0
+
+
+def axis_ranges_of(series):
+    from nnm_viewer.fep import axis_ranges
+    return axis_ranges(series)
+
+
+def test_mode_names_say_the_models_label_and_the_papers(server, tmp_path):
+    """Finding 8: model mode 19 'wing torsion 2 (symmetric)' is the paper's first symmetric wing torsion, mode 20
+    'wing torsion 1 (anti-symmetric)' its second wing torsion: the shipped file carries the paper's names
+    (/extra/reference/mode_names) and the viewer's lists, branch names and Modes tab, and nnm-solve --list-modes,
+    say both."""
+    from pathlib import Path
+    from nnm_solver.cli.modes import list_modes
+
+    paris = Path(__file__).resolve().parents[1] / "assets" / "paris.h5"
+    model = nnm.load_model(paris)
+    shared = SharedState(model, path=paris, branches=nnm.load_branches(paris))
+    s = Session(server, shared, sync=True)
+    both19 = "wing torsion 2 (symmetric); paper: first (symmetric) wing torsion"
+    both20 = "wing torsion 1 (anti-symmetric); paper: second (anti-symmetric) wing torsion"
+    assert s.h_mode.options[18].endswith(both19) and s.h_lin_mode.options[19].endswith(both20)
+    labels = [e.label for e in shared.entries]
+    assert any(lab.startswith(f"NNM 19 ({both19})") for lab in labels), labels
+    assert any(lab.startswith(f"NNM 20 ({both20})") for lab in labels), labels
+    assert s.h_mode.options[10].endswith("wing bending 1 (anti-symmetric)")       # the paper names no other
+    s.close()
+    import io
+    buf = io.StringIO()
+    list_modes(model, nnm.load_extra(paris, "reference"), count=21, out=buf)
+    out = buf.getvalue()
+    assert both19 in out and both20 in out and "paper: first wing bending" in out
+    # a file without the names: the model's labels alone
+    plain = tmp_path / "plain.h5"
+    nnm.save_model(plain, nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]), mode_labels=["in", "out"]))
+    assert SharedState(nnm.load_model(plain), path=plain).reference_names == {}
