@@ -273,3 +273,55 @@ def test_five_clients_at_once(tmp_path):
         finally:
             browser.close()
     print(f"five tabs: {time.time() - t_start:.1f} s")
+
+
+#: JavaScript: click the button whose text is ``name`` at the wall-clock time ``at`` (ms since the epoch), so that
+#: two tabs of one browser press it within a few milliseconds of each other
+CLICK_AT_JS = ("([name, at]) => { const b = [...document.querySelectorAll('button')].find("
+               "x => x.innerText.trim() === name); if (!b) return false; "
+               "setTimeout(() => b.click(), Math.max(0, at - Date.now())); return true; }")
+
+
+def test_start_in_two_tabs_at_once_runs_one_job_that_either_tab_stops(tmp_path):
+    """Issue 53, finding 10: two tabs pressing Start together got two jobs (branches 3 and 4), the first no longer
+    stoppable.  Now one job runs: one new branch in every tab's list, the other tab is told a job is running, and
+    Stop in that other tab stops the job.  The texts number points from 1 (finding 3)."""
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian chromium is not installed (/usr/bin/chromium); apt-get install chromium")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    from nnm_viewer.browser import launch_chromium, open_page, viewer_process
+    from nnm_viewer.demo import write_demo_file
+
+    path = tmp_path / "two.h5"
+    write_demo_file(path, energy_max=10.0, max_points=30)
+    nnm.load_branches(path)[0].motion(0, samples=16)          # the solver's kernels compiled (disk cache)
+    port = free_port()
+    with viewer_process(path, port) as (_, line), sync_api.sync_playwright() as pw:
+        assert f":{port}" in line, line
+        browser = launch_chromium(pw)
+        try:
+            pages = [open_page(browser, port, viewport={"width": 1100, "height": 640}) for _ in range(2)]
+            assert all("branch 1, point 1 of 30" in selected_text(p) for p in pages)
+            for p in pages:
+                p.get_by_role("tab", name="Compute").click()
+                field = p.get_by_label("Max energy (J)", exact=True)      # a job that runs until stopped
+                field.fill("1000000")
+                field.press("Enter")
+            time.sleep(1.0)
+            at = int(pages[0].evaluate("Date.now()")) + 1500
+            assert all(p.evaluate(CLICK_AT_JS, ["Start", at]) for p in pages)
+            time.sleep(3.0)
+            texts = [p.evaluate("document.body.innerText") for p in pages]
+            refused = [k for k, t in enumerate(texts) if "already running" in t]
+            assert len(refused) == 1, [t[:300] for t in texts]
+            for p in pages:                                         # one new branch in each list
+                p.wait_for_function(JOB_LINE_JS, timeout=60000)
+                options = p.evaluate("[...document.querySelectorAll('option')].map(o => o.innerText)")
+                assert not any(o.startswith("4:") for o in options), options
+            other = pages[refused[0]]
+            other.get_by_role("button", name="Stop (keep points)").click()
+            for p in pages:
+                p.wait_for_function("document.body.innerText.includes('points in')", timeout=60000)
+            assert "stopped" in pages[1 - refused[0]].evaluate("document.body.innerText")
+        finally:
+            browser.close()
