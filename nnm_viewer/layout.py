@@ -170,8 +170,9 @@ class Layout:
             self.h_fep_caption = gui.add_markdown(PANEL_FEP_CAPTION)
             self.h_readout = gui.add_markdown("no point picked")
             gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view (each branch in its "
-                             "colour, pale spheres: unstable orbits; the yellow sphere is the picked orbit; the "
-                             "markers show the folds, bifurcations and where a branch failed).")
+                             "colour, pale spheres: unstable orbits, orange: off the backbone (in a tongue); the "
+                             "yellow sphere is the picked orbit; the markers show the folds, bifurcations and where "
+                             "a branch failed).")
         self.tab_point = panel.add_tab("Point", viser.Icon.INFO_CIRCLE)
         with self.tab_point:
             self.h_info = gui.add_markdown("no point selected")
