@@ -495,6 +495,9 @@ def thin(branches, base_bytes, extra_keep=None, log=print):
         idx = keep_points(b, n_keep)
         if extra_keep and extra_keep[j]:
             idx = np.union1d(idx, [i for i in extra_keep[j] if 0 <= i < len(b)])
+        if len(idx) >= len(b):                  # short enough already: saved whole, its message unchanged
+            out.append(b)
+            continue
         c = b.subset(idx)
         c.name = b.name
         c.message = f"{b.message} [saved {len(idx)} of {len(b)} points to keep the file small]"
@@ -522,13 +525,13 @@ def write_file(target, source, branches, keep=None, thin_points=True, log=print)
 
 # ---------------------------------------------------------------------- the results table
 def fmt_tongue(t):
-    folds = ", ".join(f"{e:.3g}" for e in t["folds"]) or "none"
+    folds = f"folds at {', '.join(f'{e:.3g}' for e in t['folds'])} J" if len(t["folds"]) else "no fold"
     how = "jumped over" if t["jumped"] else "traversed"
     lab = t["partner_label"] if not t["partner_label"].startswith("mode ") else t["partner_kind"]
     return (f"**{t['label']}** with mode {t['partner_mode']} ({t['partner_hz']:.1f} Hz; {lab}; "
             f"MAC {t['partner_mac']:.2f}): entry {t['entry_energy']:.3g} J at {t['entry_frequency_hz']:.4f} Hz "
             f"(backbone {how}); tongue branch {t['points']} points, {t['energy_range'][0]:.3g}..{t['energy_range'][1]:.3g} J, "
-            f"folds at {folds} J, harmonic {t['order']} up to {100 * t['tip_fraction']:.0f} % at {t['tip_energy']:.3g} J; "
+            f"{folds}, harmonic {t['order']} up to {100 * t['tip_fraction']:.0f} % at {t['tip_energy']:.3g} J; "
             f"ends {t['status']}")
 
 

@@ -8,7 +8,8 @@ the 3:1 tongue (time series, configuration space, Fourier coefficients), and sav
 small 3D scene (two masses, springs, walls), to an nnm file that ``nnm-view`` animates.
 
     python examples/two_dof_tongues.py                 # full run, ~1 min: ./two_dof_figures/*.png, ./two_dof.h5
-    python examples/two_dof_tongues.py --fast          # a few seconds: coarser steps, no HB check
+    python examples/two_dof_tongues.py --fast          # a few seconds: coarser steps, no HB check; its own
+                                                       # ./two_dof_figures_fast/, ./two_dof_fast.h5
     python examples/two_dof_tongues.py --fast --out-dir /tmp/x --assets /tmp/x/two_dof.h5
     python examples/two_dof_tongues.py --update-shipped   # maintainers: docs/img/two_dof_*.png, assets/two_dof.h5
     nnm-view two_dof.h5
@@ -293,19 +294,21 @@ SHIPPED, SHIPPED_FIGURES = ROOT / "assets" / "two_dof.h5", ROOT / "docs" / "img"
 
 def default_outputs(args):
     """(figure folder, nnm file) of a run: --out-dir / --assets if given, else ./two_dof_figures and
-    ./two_dof.h5 in the current folder; the shipped docs/img and assets/two_dof.h5 only with --update-shipped."""
-    out_dir = args.out_dir or str(SHIPPED_FIGURES if args.update_shipped else Path("two_dof_figures"))
-    assets = args.assets or str(SHIPPED if args.update_shipped else Path("two_dof.h5"))
+    ./two_dof.h5 in the current folder (a --fast run: ./two_dof_figures_fast and ./two_dof_fast.h5, so that it
+    never replaces the full run's results); the shipped docs/img and assets/two_dof.h5 only with --update-shipped."""
+    suffix = "_fast" if getattr(args, "fast", False) and not args.update_shipped else ""
+    out_dir = args.out_dir or str(SHIPPED_FIGURES if args.update_shipped else Path(f"two_dof_figures{suffix}"))
+    assets = args.assets or str(SHIPPED if args.update_shipped else Path(f"two_dof{suffix}.h5"))
     return out_dir, assets
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fast", action="store_true", help="coarser steps, fewer points (a few seconds)")
-    p.add_argument("--out-dir", default=None, help="folder of the PNG figures (default ./two_dof_figures; "
-                   "docs/img with --update-shipped)")
-    p.add_argument("--assets", default=None, help="nnm file written (replaced; default ./two_dof.h5; the shipped "
-                   "assets/two_dof.h5 with --update-shipped)")
+    p.add_argument("--out-dir", default=None, help="folder of the PNG figures (default ./two_dof_figures, "
+                   "./two_dof_figures_fast with --fast; docs/img with --update-shipped)")
+    p.add_argument("--assets", default=None, help="nnm file written (replaced; default ./two_dof.h5, "
+                   "./two_dof_fast.h5 with --fast; the shipped assets/two_dof.h5 with --update-shipped)")
     p.add_argument("--update-shipped", action="store_true", help="maintainers: write the shipped assets/two_dof.h5 "
                    "and docs/img/two_dof_*.png (without it they are never written)")
     p.add_argument("--summary", default=None, help="optional JSON file with the numbers shown")

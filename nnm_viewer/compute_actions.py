@@ -7,10 +7,10 @@ import threading
 
 import numpy as np
 
-from .layout import SEE_COMPUTE_TAB
+from .layout import METHODS, SEE_COMPUTE_TAB
 from .fep import energy_at, energy_to_s
 from .fep_view import sweep_key
-from .state import branch_label
+from .state import JobBusy, branch_label
 from .worker import JobRunner, one_line
 
 
@@ -35,10 +35,10 @@ class ComputeActions:
         its job is being replaced, those of the branch the slider started from.  None: no branch."""
         e = self.selected_entry()
         with self.lock:
-            base = self._slider_base
-        if base is not None and (e is None or e.uid in self._slider_uids):
+            base, slider_uids = self._slider_base, set(self._slider_uids)
+        if base is not None and (e is None or e.uid in slider_uids):
             return base
-        job = self.shared.job
+        job = self.shared.running_job()
         if not self.scaling_law and e is not None and job is not None and job.entry is e:
             return job.mode, job.energy_max, e.uid        # a branch being computed: its job's range
         if e is None or not len(e):
@@ -50,9 +50,8 @@ class ComputeActions:
         """The stiffness slider: pure cubic springs, the FEP and the orbit follow by the exact scaling
         law; otherwise nothing is scaled and the chosen factor is computed (``_slider_recompute``).
         A linear mode shown (Modes tab) gives way to the selected point, the one the factor changes."""
-        with self.lock:
-            self.factor_log = float(self.layout.h_k3.value)
-            linear, self.linear_mode = self.linear_mode, None
+        _, old = self.change_view(lambda v: dict(factor_log=float(self.layout.h_k3.value), linear_mode=None))
+        linear = old.linear_mode
         if self.scaling_law:
             self.request("branches", "point", "controls")
             return
@@ -80,7 +79,7 @@ class ComputeActions:
             return
         mode, emax, origin = target
         existing = self._entry_at(mode, factor, prefer=origin)
-        with self._recompute_lock:
+        with self.lock:
             self._slider_base = (mode, emax, origin)
             runner = self.slider_runner
             busy = runner is not None and runner.running and not runner.cancelled
@@ -101,11 +100,13 @@ class ComputeActions:
         else:
             timer = threading.Timer(RECOMPUTE_DELAY, self._start_pending)
             timer.daemon = True
-            with self._recompute_lock:
+            with self.lock:
                 self._timer = timer
             timer.start()
-        job = self.shared.job
-        if job is not None and job.running and job is not self.slider_runner:
+        with self.lock:
+            slider_runner = self.slider_runner
+        job = self.shared.running_job()
+        if job is not None and job is not slider_runner:
             self.show_status(f"recompute at x {factor:.3g} queued: it starts when the running job ends")
 
     def _supersede(self, runner, origin):
@@ -113,9 +114,8 @@ class ComputeActions:
         slider started from is selected meanwhile."""
         runner.cancel()
         self.shared.remove(runner.entry)
-        with self.lock:
-            if self.sel_uid == runner.entry.uid and self.shared.index_of(origin) is not None:
-                self.sel_uid, self.s = origin, 0.0
+        back = self.shared.index_of(origin) is not None
+        self.change_view(lambda v: dict(sel_uid=origin, s=0.0) if back and v.sel_uid == runner.entry.uid else {})
         self.request("branches", "point", "progress")
 
     def _select_existing(self, e):
@@ -124,7 +124,7 @@ class ComputeActions:
         s = 0.0
         if cur is not None and len(cur) and cur.uid != e.uid:
             ser = cur.series(self.view_factor(cur))
-            energy = energy_at(ser.energy, float(np.clip(self.s, 0, len(ser) - 1)))
+            energy = energy_at(ser.energy, float(np.clip(self.view.s, 0, len(ser) - 1)))
             s = energy_to_s(e.series(e.k3_factor).energy, energy, 0.0)
         elif cur is not None and cur.uid == e.uid:
             return
@@ -133,20 +133,23 @@ class ComputeActions:
     def _start_pending(self):
         """Start the recompute the slider asked for, unless a job is running (then ``_on_shared``
         starts it when that job ends)."""
-        with self._recompute_lock:
+        with self.lock:                      # taken: a second call (timer and job end at once) finds None
             pending = self._pending
-            if pending is None:
-                return
-            job = self.shared.job
-            if job is not None and job.running:
+            if pending is None or self.shared.running_job() is not None:
                 return
             self._pending = None
-            mode, emax, factor = pending
-            try:
-                runner = self._start(mode, emax, factor)
-            except Exception as exc:
-                self.show_error(one_line(exc))
-                return
+        mode, emax, factor = pending
+        try:                                 # outside the tab's lock: starting notifies the other tabs
+            runner = self._start(mode, emax, factor)
+        except JobBusy:                      # another tab's job came first: wait for its end again
+            with self.lock:
+                if self._pending is None:
+                    self._pending = pending
+            return
+        except Exception as exc:
+            self.show_error(one_line(exc))
+            return
+        with self.lock:
             self.slider_runner = runner
             self._slider_uids.add(runner.entry.uid)
 
@@ -156,26 +159,35 @@ class ComputeActions:
         return self._start(mode, emax, self.factor, energy_min=emin if emin > 0 else None)
 
     def _start(self, mode, emax, factor, energy_min=None):
-        with self.shared.lock:
-            if self.shared.job is not None and self.shared.job.running:
-                raise ValueError("a job is already running; stop it first")
-        ui = self.layout
-        spp = int(round(float(ui.h_spp.value)))
-        if spp < 8:
-            raise ValueError(f"steps per period must be at least 8, got {spp}")
-        opts = {"max_points": int(ui.h_maxpts.value), "integrator": str(ui.h_integrator.value),
-                "steps_per_period": spp}
+        """Start a job (one at a time for all tabs: the start is atomic, worker.JobRunner.start raises
+        state.JobBusy if another tab's job runs) and select its branch."""
+        opts = self.job_options()
         if energy_min is not None:
             opts["energy_min"] = float(energy_min)
         runner = JobRunner(self.shared, mode, emax, k3_factor=factor, start=self.start_job, **opts)
         runner.start()
         self.last_runner = runner
-        with self.lock:            # the new branch is selected: its points replace the old animation
-            self.sel_uid, self.s = runner.entry.uid, 0.0
-            self.current_point = self.current_anim = self.current_uid = None
-            self.linear_mode = None
+        self.layout.set(self.layout.h_save_msg, content="")     # a new job: the last save's message is old
+        # the new branch is selected: its points replace the old animation
+        self.set_view(sel_uid=runner.entry.uid, s=0.0, current_point=None, current_anim=None, current_uid=None,
+                      linear_mode=None)
         self.request("branches", "point", "progress")
         return runner
+
+    def job_options(self):
+        """continue_nnm's keywords from the Compute tab: max points, tongues, the method and its options
+        (shooting: integrator and steps per period; harmonic balance: harmonics, condensed)."""
+        ui = self.layout
+        method, condensed = METHODS[str(ui.h_method.value)]
+        opts = {"max_points": int(ui.h_maxpts.value), "tongues": str(ui.h_tongues.value)}
+        if method == "shooting":
+            spp = int(round(float(ui.h_spp.value)))
+            if spp < 8:
+                raise ValueError(f"steps per period must be at least 8, got {spp}")
+            opts.update(integrator=str(ui.h_integrator.value), steps_per_period=spp)
+        else:
+            opts.update(method=method, harmonics=int(round(float(ui.h_harmonics.value))), condensed=condensed)
+        return opts
 
     # ---- the Modes tab
     def _linear_mode_choice(self):
@@ -191,8 +203,7 @@ class ComputeActions:
             raise ValueError(f"linear mode {k} does not exist (valid: 1..{len(freqs)})")
         if not freqs[k - 1] > 1e-9 * max(float(np.max(np.abs(freqs))), 1e-300):
             raise ValueError(f"linear mode {k} is a rigid-body mode (0 Hz): nothing to animate")
-        with self.lock:
-            self.linear_mode = k
+        self.set_view(linear_mode=k)
         self.request("point", "readout")
 
     def _on_show_linear(self, _):
@@ -207,11 +218,22 @@ class ComputeActions:
         return runner
 
     def _on_stop(self, _):
-        job = self.shared.job
+        job = self.shared.running_job()
         if job is not None:
             job.cancel()
 
     def _on_save(self, _):
+        """Save the selected branch; what happened (the file written, or why not) is said under the Save button,
+        where the user looks (finding 4), and in the status line."""
+        try:
+            msg = self._save_selected()
+        except Exception as exc:
+            self.layout.set(self.layout.h_save_msg, content=f"**Not saved:** {one_line(exc)}")
+            raise
+        self.layout.set(self.layout.h_save_msg, content=f"**Saved:** {msg}")
+        self.show_status(msg)
+
+    def _save_selected(self):
         e = self.selected_entry()
         if e is None:
             raise ValueError("select a branch to save")
@@ -219,8 +241,8 @@ class ComputeActions:
             raise ValueError("the branch is still being computed: stop it or wait, then save")
         if e.saved:
             raise ValueError("this branch is already in the file")
-        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model)
+        name = branch_label(e.branch, e.k3_factor, source="file", model=self.model,
+                            reference=self.shared.reference_names)
         target, reason = self.shared.save(e)
-        self.show_status(f"saved {name}, {len(e)} points, to {target}"
-                         + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})"
-                            if reason else ""))
+        return (f"saved {name}, {len(e)} points, to {target}"
+                + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})" if reason else ""))

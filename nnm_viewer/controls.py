@@ -1,9 +1,9 @@
 """One browser tab: its view state, the callbacks of its controls, and what they redraw.
 
-A ``Session`` owns its state (selection, animation and stiffness settings, the point shown),
-a ``Layout`` (the viser handles, ``session.layout``) and a ``Drawing`` (the draw steps,
-``session.drawing``).  Callbacks only change the state under ``self.lock`` and ``request``
-redraws; the drawing coalesces the requests in a per-tab thread (latest state wins), so dragging a
+A ``Session`` owns its state (selection, animation and stiffness settings, the point shown: one
+immutable ``ViewState``, ``session.view``, swapped under ``session.lock``; view_state.py), a ``Layout``
+(the viser handles, ``session.layout``) and a ``Drawing`` (the draw steps, ``session.drawing``).
+Callbacks only change the state (``set_view`` / ``change_view``) and ``request`` redraws; the drawing coalesces the requests in a per-tab thread (latest state wins), so dragging a
 slider never queues up stale work and the slider being dragged is never reset under the user.
 With ``sync=True`` (tests) every request is drawn at once in the caller's thread.
 """
@@ -23,7 +23,9 @@ from .drawing import ALL_KINDS, Drawing
 from .fep import energy_to_s
 from .fep_view import branch_options
 from .layout import Layout
+from .numbering import along_from_slider
 from .state import scaling_law_holds
+from .view_state import ViewHolder, ViewState
 from .worker import one_line
 
 #: controls that set one state field from their value: handle -> (field, type, redraws)
@@ -41,9 +43,14 @@ SIMPLE_CONTROLS = {
 }
 
 
-class Session(ComputeActions, DownloadActions, FepQueries):
+class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
     """State and GUI of one tab. ``api`` is a viser ``ClientHandle`` (one tab) or the
-    ``ViserServer`` (shared by all tabs, used by tests); both have ``.gui`` and ``.scene``."""
+    ``ViserServer`` (shared by all tabs, used by tests); both have ``.gui`` and ``.scene``.
+
+    One lock, ``self.lock``, guards everything of the tab that changes: the view (a ViewState swapped
+    whole) and the stiffness slider's recompute state (``_pending``, ``_timer``, ``slider_runner``,
+    ``_slider_base``, ``_slider_uids``).  Lock order: the drawing's lock, then this one, then the shared
+    state's (state.SharedState)."""
 
     def __init__(self, api, shared, sync=False, start_job=None):
         self.api = api
@@ -57,45 +64,24 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         self.lock = threading.RLock()
         #: pure cubic springs: the stiffness slider applies the exact scaling law; else it recomputes
         self.scaling_law = scaling_law_holds(self.model)
-        # ---- view state (under self.lock)
-        self.sel_uid = None          # uid of the selected BranchEntry
-        self.s = 0.0                 # fractional index along the selected branch
-        self.factor_log = 0.0        # log10 of the k3 factor on the file's springs
-        self.playing = True
-        self.phase = 0.0             # orbit phase (fraction of a period) when paused
-        self.auto_amp = True
-        self.amp_log = 0.0           # log10 of the manual amplification
-        self.speed = 0.5             # displayed cycles per second
-        self.show_board = True
-        self.zoom = False            # FEP axes fitted to the selected branch only (when not zoom_auto)
-        self.zoom_auto = True        # until the user ticks or unticks zoom: zoom when fep.should_zoom
-        self.relative = False        # FEP frequency axis relative to each branch's linear frequency (%)
-        self.dofs_text = "auto"
-        self.show_ghost = False      # the undeformed shape, translucent
-        self.view = "Iso"            # last camera preset
-        self.linear_mode = None      # k (1-based): linear mode k is shown instead of the selected point
-        self.message = ""            # last status line for this tab
-        # ---- the point shown (written by the drawing, under self.lock)
-        self.current_point = None    # PointData shown (scaled to the current k3), or None
-        self.current_anim = None     # its OrbitAnimation (for the branch's own k3)
-        self.current_uid = None      # uid of the branch it belongs to
-        self.ratio = 1.0             # k3 factor of the view / k3 factor of that branch
+        # ---- view state: one immutable record, swapped under self.lock (view_state.py)
+        self.__dict__["_view"] = ViewState()
         self.last_runner = None      # the JobRunner started from this tab
         self.last_download = None    # (file name, bytes) last offered to the browser
-        # ---- recomputes started by the stiffness slider (models that are not pure cubic)
-        self._recompute_lock = threading.RLock()
+        # ---- recomputes started by the stiffness slider (models that are not pure cubic), under self.lock
         self._pending = None         # (mode, energy_max, factor) chosen on the slider, not started yet
         self._timer = None           # the debounce timer that starts it
         self.slider_runner = None    # the last JobRunner the slider started
         self._slider_base = None     # (mode, energy_max, uid of the branch it started from)
         self._slider_uids = set()    # entries computed for the slider
-        self.layout = Layout(api.gui, self.model, shared.linear_freqs, scaling_law=self.scaling_law)
+        self.layout = Layout(api.gui, self.model, shared.linear_freqs, scaling_law=self.scaling_law,
+                             reference=shared.reference_names)
         self.drawing = Drawing(self, sync=sync)
         self.layout.connect(self._callbacks())
         first = next((e for e in shared.snapshot() if len(e)), None)
         if first is not None:
-            self.sel_uid = first.uid
-            self._modes_tab_on(first)
+            self.set_view(sel_uid=first.uid)
+            self._mode_lists_on(first)
         shared.subscribe(self._on_shared)
         self.drawing.start()
         self.request(*ALL_KINDS)
@@ -112,7 +98,7 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         self.drawing.request(*kinds)
 
     def close(self):
-        with self._recompute_lock:
+        with self.lock:
             self._pending = None
             if self._timer is not None:
                 self._timer.cancel()
@@ -135,26 +121,30 @@ class Session(ComputeActions, DownloadActions, FepQueries):
     # ================================================================== state queries
     @property
     def factor(self):
-        return float(10.0 ** self.factor_log)
+        return self.view.factor
 
-    def selected_entry(self):
-        if self.sel_uid is None:
+    def selected_entry(self, v=None):
+        """The selected BranchEntry of view ``v`` (default: the current view), or None."""
+        uid = (v or self.view).sel_uid
+        if uid is None:
             return None
         for e in self.shared.snapshot():
-            if e.uid == self.sel_uid:
+            if e.uid == uid:
                 return e
         return None
 
-    def amplification(self):
-        """Display amplification and the physical peak displacement (m) of the shown orbit."""
-        anim = self.current_anim
+    def amplification(self, v=None):
+        """Display amplification and the physical peak displacement (m) of the orbit shown in view ``v``
+        (default: the current view)."""
+        v = v or self.view
+        anim = v.current_anim
         if anim is None:
             return 1.0, 0.0
-        peak = anim.peak_max * cubic_scaling(self.ratio).amplitude
-        if self.auto_amp:
+        peak = anim.peak_max * cubic_scaling(v.ratio).amplitude
+        if v.auto_amp:
             amp = sc.auto_amplification(self.geom, peak)
         else:
-            amp = 10.0 ** self.amp_log
+            amp = 10.0 ** v.amp_log
         return float(amp), float(peak)
 
     # ================================================================== callbacks
@@ -176,7 +166,7 @@ class Session(ComputeActions, DownloadActions, FepQueries):
                    h_reset=self._on_reset_camera, h_recompute=self._on_recompute, h_start=self._on_start,
                    h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
                    h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
-                   h_view=self._on_view, h_show_linear=self._on_show_linear,
+                   h_view=self._on_view, h_show_linear=self._on_show_linear, h_method=self._on_method,
                    h_compute_linear=self._on_compute_linear)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
@@ -185,17 +175,21 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         field, kind, redraws = SIMPLE_CONTROLS[name]
 
         def on_update(_):
-            with self.lock:
-                setattr(self, field, kind(getattr(self.layout, name).value))
-                if field == "s":             # a point of the branch: no more linear mode
-                    self.linear_mode = None
+            value = kind(getattr(self.layout, name).value)
+            if field == "s":                 # the slider shows the point's number, 1-based; a point: no linear mode
+                self.set_view(s=along_from_slider(value), linear_mode=None)
+            else:
+                self.set_view(**{field: value})
             self.request(*redraws)
         return on_update
 
+    def _on_method(self, _):
+        """The Compute tab's method: its own options shown (time steps for shooting, harmonics for HB)."""
+        self.request("controls")
+
     def _on_zoom(self, _):
         """The user's zoom choice, kept from now on (no more automatic zoom)."""
-        with self.lock:
-            self.zoom, self.zoom_auto = bool(self.layout.h_zoom.value), False
+        self.set_view(zoom=bool(self.layout.h_zoom.value), zoom_auto=False)
         self.request("branches")
 
     def _on_branch(self, _):
@@ -211,22 +205,23 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         self._select_uid(e.uid, float(np.clip(s, 0, max(len(e) - 1, 0))))
 
     def _select_uid(self, uid, s):
-        with self.lock:
-            changed = uid != self.sel_uid
-            self.sel_uid, self.s = uid, float(s)
-            self.linear_mode = None          # a pick (or a branch chosen) shows its point again
+        # a pick (or a branch chosen) shows its point again
+        new, old = self.change_view(lambda v: dict(sel_uid=uid, s=float(s), linear_mode=None))
+        changed = uid != old.sel_uid
         if changed:
             idx = self.shared.index_of(uid)
             if idx is not None:
-                self._modes_tab_on(self.shared.snapshot()[idx])
+                self._mode_lists_on(self.shared.snapshot()[idx])
         self.request("fep", "sliders", "point", *(("branches",) if changed else ()))
 
-    def _modes_tab_on(self, e):
-        """The Modes tab's list on the linear mode of the selected branch ``e`` (its NNM's mode)."""
+    def _mode_lists_on(self, e):
+        """The mode lists of the Modes tab and the Compute tab on the linear mode of the selected branch ``e``
+        (its NNM's mode): Start computes the selected NNM's mode unless another is chosen."""
         k = int(getattr(e.branch, "mode", 0) or 0)
         options = self.layout.mode_options
         if 1 <= k <= len(options):
             self.layout.set(self.layout.h_lin_mode, value=options[k - 1])
+            self.layout.set(self.layout.h_mode, value=options[k - 1])
 
     def pick(self, uid, instance_index):
         """A click on FEP point ``instance_index`` of the branch with ``uid``."""
@@ -241,9 +236,8 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         if e is None or not len(e):
             return
         ser = e.series(self.view_factor(e))
-        with self.lock:
-            self.s = energy_to_s(ser.energy, 10.0 ** float(self.layout.h_energy.value), self.s)
-            self.linear_mode = None
+        energy = 10.0 ** float(self.layout.h_energy.value)
+        self.change_view(lambda v: dict(s=energy_to_s(ser.energy, energy, v.s), linear_mode=None))
         self.request("fep", "sliders:along", "point")
 
     def _on_reset_camera(self, _):
@@ -260,8 +254,7 @@ class Session(ComputeActions, DownloadActions, FepQueries):
         if cam is not None:
             cam.position = tuple(position)
             cam.look_at = tuple(look_at)
-        with self.lock:
-            self.view = name
+        self.set_view(camera_preset=name)
 
     def view_direction(self):
         """Direction the tab's camera looks along (world): from its camera if it has one, else the
@@ -273,7 +266,7 @@ class Session(ComputeActions, DownloadActions, FepQueries):
                 return d
         except Exception:
             pass
-        return -sc.PRESET_DIRECTIONS.get(getattr(self, "view", "Iso"), sc.CAMERA_DIR)
+        return -sc.PRESET_DIRECTIONS.get(self.view.camera_preset, sc.CAMERA_DIR)
 
 
     def _dismiss_error(self, _):
@@ -286,7 +279,9 @@ class Session(ComputeActions, DownloadActions, FepQueries):
             self.request("branches", "progress")
         elif kind == "progress":
             self.request("progress")
-            if self._pending is not None:       # a recompute of the stiffness slider waits for a job
+            with self.lock:
+                pending = self._pending is not None
+            if pending:                         # a recompute of the stiffness slider waits for a job
                 self._start_pending()
         elif kind == "solver":
             self.request("solver", "point", "progress")
@@ -302,13 +297,11 @@ class Session(ComputeActions, DownloadActions, FepQueries):
     # ================================================================== messages
     def show_error(self, msg):
         """Show an error of this tab in the page (the server keeps running)."""
-        with self.lock:
-            self.message = msg
+        self.set_view(message=msg)
         ui = self.layout
         ui.set(ui.h_error, content=f"**Error:** {msg}", visible=True)
         ui.set(ui.h_dismiss, visible=True)
 
     def show_status(self, msg):
-        with self.lock:
-            self.message = msg
+        self.set_view(message=msg)
         self.layout.set(self.layout.h_status, content=msg)

@@ -13,6 +13,8 @@ import numpy as np
 import nnm_solver
 from nnm_solver import cubic_scaling
 
+from .numbering import point_number, point_words
+
 
 def fep_csv(branch):
     """Bytes of ``nnm_solver.export_csv`` for ``branch`` (energy, frequency, period, stable, label)."""
@@ -84,14 +86,14 @@ class DownloadActions:
     def orbit_csv(self):
         """(file name, CSV bytes) of the picked orbit (as shown: at the current k3 factor), or of the
         linear mode shown."""
-        e = self.selected_entry()
-        with self.lock:
-            pd, uid, along, lin = self.current_point, self.current_uid, self.s, self.linear_mode
+        v = self.view
+        e = self.selected_entry(v)
+        pd, uid, along, lin = v.current_point, v.current_uid, v.s, v.linear_mode
         if lin is not None and pd is not None:
             return f"{self._linear_stem(lin)}_orbit.csv", orbit_csv(pd, self.model)
         if e is None or pd is None or uid != e.uid:
             raise ValueError("no orbit shown: pick a point of the FEP first")
-        return f"{self._download_stem(e)}_point{along:.2f}_orbit.csv", orbit_csv(pd, self.model)
+        return f"{self._download_stem(e)}_point{point_number(along)}_orbit.csv", orbit_csv(pd, self.model)
 
     def animation_gif(self):
         """(file name, GIF bytes) of the picked orbit over one period, as shown (amplification, k3
@@ -100,21 +102,20 @@ class DownloadActions:
 
         from .info import linear_mode_title
 
-        e = self.selected_entry()
-        with self.lock:
-            pd, anim, uid, along, lin = (self.current_point, self.current_anim, self.current_uid, self.s,
-                                         self.linear_mode)
+        v = self.view
+        e = self.selected_entry(v)
+        pd, anim, uid, along, lin = v.current_point, v.current_anim, v.current_uid, v.s, v.linear_mode
         if lin is not None and pd is not None and anim is not None:
-            amp, peak = self.amplification()
+            amp, peak = self.amplification(v)
             title = gif_title("L" + linear_mode_title(self.model, self.shared.linear_freqs, lin, freq=False)[1:], pd, peak)
             return f"{self._linear_stem(lin)}.gif", orbit_gif(anim, amp, self.view_direction(), title=title)
         if e is None or pd is None or anim is None or uid != e.uid:
             raise ValueError("no orbit shown: pick a point of the FEP first")
-        amp, peak = self.amplification()
+        amp, peak = self.amplification(v)
         idx = self.shared.index_of(e.uid)
-        title = gif_title(f"Branch {(idx or 0) + 1}: {e.label}, point {along:.2f}", pd, peak)
-        data = orbit_gif(anim, amp * cubic_scaling(self.ratio).amplitude, self.view_direction(), title=title)
-        return f"{self._download_stem(e)}_point{along:.2f}.gif", data
+        title = gif_title(f"Branch {(idx or 0) + 1}: {e.label}, {point_words(along, len(e))}", pd, peak)
+        data = orbit_gif(anim, amp * cubic_scaling(v.ratio).amplitude, self.view_direction(), title=title)
+        return f"{self._download_stem(e)}_point{point_number(along)}.gif", data
 
     def _on_gif(self, _):
         self.show_status("drawing the animation (GIF) …")

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from .fep_view import FepView
-from .layout import k3_text
+from .layout import METHODS, k3_text
 from .point_view import PointView
 from .worker import one_line
 
@@ -26,7 +26,9 @@ ALL_KINDS = ("branches", "controls", "fep", "sliders", "point", "glb", "info", "
 
 
 class Drawing:
-    """Redraw requests and draw steps of one ``Session`` (its state is read under its lock)."""
+    """Redraw requests and draw steps of one ``Session``.  Each step reads the tab's state once, as one
+    immutable record (``session.view``, view_state.py); ``_draw_lock`` lets one thread draw at a time and
+    is taken before the session's lock, never after."""
 
     def __init__(self, session, sync=False):
         self.session = session
@@ -138,15 +140,20 @@ class Drawing:
         """Controls that depend on others: phase slider (paused only), manual amplification,
         the k3 label."""
         s, ui = self.session, self.ui
-        ui.set(ui.h_phase, visible=not s.playing)
-        ui.set(ui.h_amp, disabled=s.auto_amp)
-        ui.set(ui.h_k3_text, content=k3_text(s.factor, s.scaling_law))
+        v = s.view
+        ui.set(ui.h_phase, visible=not v.playing)
+        ui.set(ui.h_amp, disabled=v.auto_amp)
+        ui.set(ui.h_k3_text, content=k3_text(v.factor, s.scaling_law))
+        shooting = METHODS.get(str(ui.h_method.value), ("shooting", False))[0] == "shooting"
+        ui.set(ui.h_integrator, visible=shooting)
+        ui.set(ui.h_spp, visible=shooting)
+        ui.set(ui.h_harmonics, visible=not shooting)
 
     def draw_ghost(self):
         """The undeformed shape, translucent, when asked for."""
         from .scene import draw_ghost
 
-        self.ghost_handle = draw_ghost(self.session.scene, self.session.mesh, self.session.show_ghost)
+        self.ghost_handle = draw_ghost(self.session.scene, self.session.mesh, self.session.view.show_ghost)
 
     def draw_solver(self):
         """'Preparing the solver' while its kernels are being compiled (warmup.py)."""
@@ -154,27 +161,29 @@ class Drawing:
 
     def draw_progress(self):
         s, ui = self.session, self.ui
-        job = s.shared.job
+        with s.shared.lock:
+            job, progress, status = s.shared.job, s.shared.progress, s.shared.status
         running = job is not None and job.running
         e = s.selected_entry()
-        ui.set(ui.h_progress, value=float(np.clip(100.0 * s.shared.progress, 0, 100)))
-        status = s.shared.status or "no job running"
+        ui.set(ui.h_progress, value=float(np.clip(100.0 * progress, 0, 100)))
+        shared_status = status
+        status = status or "no job running"
         if not s.shared.solver_ready.is_set():
             status = ("preparing the solver (compiling its kernels): a job started now begins when it is ready"
-                      + (f"  \n{s.shared.status}" if s.shared.status else ""))
+                      + (f"  \n{shared_status}" if shared_status else ""))
         ui.set(ui.h_job, content=status)
         ui.set(ui.h_start, disabled=running)
         ui.set(ui.h_compute_linear, disabled=running)
-        ui.set(ui.h_modes_job, content=f"**Job:** {status}" if job is not None or s.shared.status else "")
+        ui.set(ui.h_modes_job, content=f"**Job:** {status}" if job is not None or shared_status else "")
         ui.set(ui.h_stop, disabled=not running)
-        ui.set(ui.h_recompute, disabled=running or e is None or abs(s.factor / e.k3_factor - 1.0) < 1e-9)
+        ui.set(ui.h_recompute, disabled=running or e is None or abs(s.view.factor / e.k3_factor - 1.0) < 1e-9)
         ui.set(ui.h_save, disabled=e is None or e.saved or e.source == "running")
 
     def draw_error(self):
         s, ui = self.session, self.ui
-        msg = s.shared.error
+        with s.shared.lock:
+            msg = s.shared.error
         ui.set(ui.h_error, content=f"**Error:** {msg}" if msg else "", visible=bool(msg))
         ui.set(ui.h_dismiss, visible=bool(msg))
-        with s.lock:
-            s.message = msg
+        s.set_view(message=msg)
         ui.set(ui.h_status, content=msg)

@@ -67,10 +67,19 @@ def event_style(kind):
     return EVENT_MARKERS.get(kind, ("o", "k"))
 
 
+def off_backbone_style():
+    """(markers, colour) of the points off the backbone, as in the solver's plots (results/plotting.py)."""
+    from nnm_solver.results.plotting import OFF_BACKBONE_COLOR, OFF_BACKBONE_MARKERS
+    import matplotlib.colors as mcolors
+
+    return OFF_BACKBONE_MARKERS, mcolors.to_hex(OFF_BACKBONE_COLOR)
+
+
 @dataclass
 class FepSeries:
     """One branch as drawn: energy (N,) J, frequency (N,) Hz, stable (N,) bool, label; events
-    [(kind, energy J, frequency Hz)] and status (Branch.status) of the branch."""
+    [(kind, energy J, frequency Hz)] and status (Branch.status) of the branch; labels (N,) the points' labels
+    (Branch.labels: 'backbone', 'tongue 3:1', ...; empty: all on the backbone)."""
 
     energy: np.ndarray
     frequency: np.ndarray
@@ -78,9 +87,17 @@ class FepSeries:
     label: str
     events: list = field(default_factory=list)
     status: str = ""
+    labels: tuple = ()
 
     def __len__(self):
         return len(self.energy)
+
+    def off_backbone(self):
+        """[(label, boolean mask)] of the points off the backbone, by label in order of appearance."""
+        labels = np.asarray([str(x) for x in self.labels], dtype=object)
+        if len(labels) != len(self.energy):
+            return []
+        return [(lab, labels == lab) for lab in dict.fromkeys(labels) if lab != "backbone"]
 
     def relative(self, f_linear):
         """The same branch on the relative frequency axis: 100 (f / f_linear - 1) (%), events too."""
@@ -92,7 +109,8 @@ class FepSeries:
             return 100.0 * (np.asarray(f, dtype=float) / f_linear - 1.0)
 
         return FepSeries(self.energy, rel(self.frequency), self.stable, self.label,
-                         events=[(k, e, float(rel(f))) for k, e, f in self.events], status=self.status)
+                         events=[(k, e, float(rel(f))) for k, e, f in self.events], status=self.status,
+                         labels=self.labels)
 
 
 #: y-axis labels of the FEP: absolute (Hz) or relative to the branch's linear frequency (%)
@@ -115,12 +133,27 @@ def should_zoom(series, selected):
     return span_all > 0 and float(np.ptp(series[selected].frequency)) < AUTO_ZOOM_FRACTION * span_all
 
 
-def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5, event_ms=7.0, event_mew=1.5):
+def _inside(le, f, ranges):
+    """Mask of the points (log10 E, f) inside ``ranges`` (all when ranges is None)."""
+    if ranges is None:
+        return np.ones(len(le), dtype=bool)
+    (elo, ehi), (flo, fhi) = ranges
+    return (le >= elo) & (le <= ehi) & (f >= flo) & (f <= fhi)
+
+
+def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5, event_ms=7.0, event_mew=1.5,
+                  ranges=None, legend_max=None):
     """Draw the branches on a matplotlib Axes in log10(energy) vs frequency: a line per branch in its
     colour (branch_color of its position), its points (``points``: stable filled, unstable hollow),
-    its events by kind and the end of a branch that failed, escaped or closed a loop.  Returns the
-    legend (handles, labels): the branches, 'unstable', then the event and end kinds drawn."""
+    its events by kind and the end of a branch that failed, escaped or closed a loop; the points off the backbone
+    (a tongue's) in the solver's style (``off_backbone_style``: marked over the points; without ``points``, the
+    board's spheres take that colour and the legend says so).  Returns the legend (handles, labels) of what is seen
+    inside ``ranges`` (the axes' ((log10 E lo, hi), (f lo, hi)); everything when None): the branches, the event and
+    end kinds, 'unstable', then the labels off the backbone.  With ``legend_max`` entries at most, the branches
+    give way first ('… and 3 more branches'): every kind of marker drawn keeps its entry."""
     handles, labels, extra = [], [], {}
+    off_handles = {}
+    off_markers, off_color = off_backbone_style()
     any_unstable = False
     for k, s in enumerate(series):
         if not len(s):
@@ -129,29 +162,42 @@ def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5,
         le = np.log10(np.maximum(np.asarray(s.energy, dtype=float), 1e-300))
         f = np.asarray(s.frequency, dtype=float)
         (line,) = ax.plot(le, f, "-", color=c, lw=lw * (1.8 if k == selected_branch else 1.0), zorder=2)
-        handles.append(line)
-        labels.append(s.label)
+        seen = _inside(le, f, ranges)
+        if seen.any():                  # a branch outside the axes (zoomed on another) is not in the legend
+            handles.append(line)
+            labels.append(s.label)
         st = np.asarray(s.stable, dtype=bool)
-        any_unstable |= bool((~st).any())
+        any_unstable |= bool((~st & seen).any())
         if points:
             ax.plot(le[st], f[st], "o", ms=ms, color=c, zorder=3)
             if (~st).any():
                 ax.plot(le[~st], f[~st], "o", ms=ms * 1.25, mfc="white", mec=c, mew=1.2, zorder=3)
+        for j, (lab, mask) in enumerate(s.off_backbone()):
+            marker = off_markers[j % len(off_markers)]
+            if points:
+                for part, fill in ((mask & st, off_color), (mask & ~st, "white")):
+                    if part.any():
+                        (h,) = ax.plot(le[part], f[part], marker, ms=ms * 2.2, color=off_color, mfc=fill,
+                                       mec="k" if fill != "white" else off_color, mew=0.6, zorder=3.5)
+                        if (part & seen).any():
+                            off_handles.setdefault(lab, h)
+            elif lab not in off_handles and (mask & seen).any():
+                (off_handles[lab],) = ax.plot([], [], "o", ms=ms * 1.6, color=off_color)
         for kind, energy, freq in s.events:
             marker, colour = event_style(kind)
-            (h,) = ax.plot([np.log10(max(energy, 1e-300))], [freq], marker, ms=event_ms, mfc="none", mec=colour,
-                           color=colour, mew=event_mew, zorder=4)
-            extra.setdefault(("event", kind), h)
+            x = np.log10(max(energy, 1e-300))
+            (h,) = ax.plot([x], [freq], marker, ms=event_ms, mfc="none", mec=colour, color=colour, mew=event_mew,
+                           zorder=4)
+            if _inside(np.array([x]), np.array([freq]), ranges).all():
+                extra.setdefault(("event", kind), h)
         if s.status in END_MARKERS:
             marker, colour, _ = END_MARKERS[s.status]
             (h,) = ax.plot([le[-1]], [f[-1]], marker, ms=event_ms * 1.5, color=colour, mec="white", mew=0.8,
                            zorder=5)
-            extra.setdefault(("end", s.status), h)
-    if any_unstable:
-        (h,) = ax.plot([], [], "o", ms=ms * 1.25, mfc="white", mec="#555555", mew=1.2) if points else \
-            ax.plot([], [], "o", ms=ms * 1.6, color=pale("#555555"))
-        handles.append(h)
-        labels.append("unstable" if points else "pale: unstable")
+            if seen[-1]:
+                extra.setdefault(("end", s.status), h)
+    n_branches = len(labels)
+    # the markers drawn (events, ends) before the generic entries, so that a full legend never drops them
     order = [("event", k) for k in EVENT_LABELS] + [("end", k) for k in END_MARKERS]
     order += sorted(k for k in extra if k not in order)
     for key in order:
@@ -159,7 +205,28 @@ def plot_branches(ax, series, selected_branch=None, points=True, lw=1.2, ms=3.5,
             handles.append(extra[key])
             labels.append(EVENT_LABELS.get(key[1], key[1].replace("_", " ")) if key[0] == "event"
                           else END_MARKERS[key[1]][2])
-    return handles, labels
+    if any_unstable:
+        (h,) = ax.plot([], [], "o", ms=ms * 1.25, mfc="white", mec="#555555", mew=1.2) if points else \
+            ax.plot([], [], "o", ms=ms * 1.6, color=pale("#555555"))
+        handles.append(h)
+        labels.append("unstable" if points else "pale: unstable")
+    for lab, h in off_handles.items():
+        handles.append(h)
+        labels.append(f"{lab} (off the backbone)" if points else f"orange: {lab} (off the backbone)")
+    return trim_legend(ax, handles, labels, n_branches, legend_max)
+
+
+def trim_legend(ax, handles, labels, n_branches, limit):
+    """At most ``limit`` legend entries: the first ``n_branches`` entries (the branches) give way to the others
+    (the markers' kinds), the last kept line saying how many branches are not listed."""
+    if limit is None or len(labels) <= limit:
+        return handles, labels
+    others = len(labels) - n_branches
+    keep = max(limit - others - 1, 0)
+    (more,) = ax.plot([], [], " ")
+    h = handles[:keep] + [more] + handles[n_branches:]
+    lab = labels[:keep] + [f"\u2026 and {n_branches - keep} more branches"] + labels[n_branches:]
+    return h[:limit], lab[:limit]
 
 
 def energy_to_s(energy, target, s_current=0.0):
@@ -209,8 +276,13 @@ def energy_at(energy, s):
     return interp_at(energy, s)
 
 
+#: padding of the FEP's axis ranges (fraction of the span, each side)
+AXIS_PAD = 0.09
+
+
 def axis_ranges(series):
-    """(log10 E min, log10 E max), (f min, f max) over all non-empty series, padded 5 %."""
+    """(log10 E min, log10 E max), (f min, f max) over all non-empty series, padded AXIS_PAD of the span on each
+    side: room for the largest marker (a branch's end, 10.5 pt) at the edge of the panel's axes."""
     es = [np.log10(np.maximum(s.energy, 1e-300)) for s in series if len(s)]
     fs = [np.asarray(s.frequency, dtype=float) for s in series if len(s)]
     if not es:
@@ -224,7 +296,7 @@ def axis_ranges(series):
     if fhi - flo < 1e-12 * max(abs(fhi), 1.0):
         pad = max(abs(fhi) * 0.01, 1e-3)
         flo, fhi = flo - pad, fhi + pad
-    de, df = 0.05 * (ehi - elo), 0.05 * (fhi - flo)
+    de, df = AXIS_PAD * (ehi - elo), AXIS_PAD * (fhi - flo)
     return (elo - de, ehi + de), (flo - df, fhi + df)
 
 
@@ -283,8 +355,10 @@ class FepRenderer:
                     ax.plot(np.log10(g.energy), g.frequency, "-", color="#c8c8c8", lw=1.0, zorder=1)
             handles += ax.plot([], [], "-", color="#c8c8c8")
             labels.append("as in the file (k3 x 1)")
-        h, lab = plot_branches(ax, series, selected_branch)
-        set_fep_axes(ax, ranges or axis_ranges(list(series) + list(ghosts)), ticks_size=8, label_size=9, ylabel=ylabel)
+        ranges = ranges or axis_ranges(list(series) + list(ghosts))
+        h, lab = plot_branches(ax, series, selected_branch, ranges=ranges,
+                               legend_max=LEGEND_MAX - len(labels))
+        set_fep_axes(ax, ranges, ticks_size=8, label_size=9, ylabel=ylabel)
         if h:
             # below the axes, so that it never hides a branch; as many rows as needed (LEGEND_MAX entries)
             handles, labels = (handles + h)[:LEGEND_MAX], (labels + lab)[:LEGEND_MAX]
@@ -335,6 +409,7 @@ def set_fep_axes(ax, ranges, ticks_size, label_size, grid_alpha=0.25, ylabel=Y_L
     ax.set_xticks(ticks)
     ax.set_xticklabels([f"1e{int(t)}" for t in ticks], fontsize=ticks_size)
     ax.tick_params(labelsize=ticks_size)
+    ax.ticklabel_format(axis="y", useOffset=False)      # the frequencies themselves, never '0.0001 + 1.2345e2'
     ax.set_xlabel("energy (J)", fontsize=label_size)
     ax.set_ylabel(ylabel, fontsize=label_size)
     ax.grid(True, alpha=grid_alpha)

@@ -7,8 +7,9 @@ import numpy as np
 from nnm_solver.sweeps import parse_branch_name
 
 from . import scene as sc
-from .fep import FepRenderer, branch_color, energy_at, interp_at
+from .fep import Y_LABELS, FepRenderer, branch_color, energy_at, interp_at
 from .info import linear_mode_title
+from .numbering import point_number, point_words, slider_value
 
 #: size (px) of the FEP image of the panel (the plot, and its legend below)
 PANEL_FEP_SIZE = (480, 470)
@@ -75,7 +76,8 @@ def sweep_markdown(e):
 
 def branch_markdown(e):
     """How the branch of entry ``e`` ended (status and the solver's message) and its events by kind
-    with the points next to them (markdown)."""
+    with the points next to them (markdown; the points numbered from 1, as everywhere users see them: an
+    event located between rows i and i+1 is 'near point i+1')."""
     from .fep import EVENT_LABELS, event_kind
 
     st = branch_status(e)
@@ -90,7 +92,7 @@ def branch_markdown(e):
     for kind in list(EVENT_LABELS) + sorted(k for k in by_kind if k not in EVENT_LABELS):
         idx = by_kind.get(kind)
         if idx:
-            shown = ", ".join(str(i) for i in idx[:EVENTS_LISTED]) + (", …" if len(idx) > EVENTS_LISTED else "")
+            shown = ", ".join(point_number(i) for i in idx[:EVENTS_LISTED]) + (", …" if len(idx) > EVENTS_LISTED else "")
             name = EVENT_NAMES.get(kind, kind.replace("_", " "))
             parts.append(f"{len(idx)} {name}{'s' if len(idx) > 1 else ''} (near point{'s' if len(idx) > 1 else ''} "
                          f"{shown})")
@@ -115,18 +117,20 @@ def point_facts(e, along):
     return facts
 
 
-def readout_markdown(s, e):
-    """The picked point's readout under the panel FEP: branch, point, energy, frequency (and relative
-    to the branch's linear frequency), stability, label and accuracy estimate."""
-    ser = e.series(s.view_factor(e))
+def readout_markdown(s, e, v=None):
+    """The picked point's readout under the panel FEP (session ``s``, its view ``v``): branch, point (1-based),
+    energy, frequency (and relative to the branch's linear frequency), stability, label and accuracy
+    estimate."""
+    v = v or s.view
+    ser = e.series(s.view_factor(e, v))
     n = len(ser)
-    along = float(np.clip(s.s, 0, n - 1))
+    along = float(np.clip(v.s, 0, n - 1))
     energy = energy_at(ser.energy, along)
     f = interp_at(ser.frequency, along)
     f_lin = e.linear_frequency(s.shared.linear_freqs)
     rel = f" ({100 * (f / f_lin - 1):+.3g} % from its linear {f_lin:.5g} Hz)" if f_lin else ""
     idx = s.shared.index_of(e.uid)
-    return (f"**Picked:** branch {(idx or 0) + 1}, {e.label}, point {along + 1:.2f} of {n}  \n"
+    return (f"**Picked:** branch {(idx or 0) + 1}, {e.label}, {point_words(along, n)}  \n"
             f"E = {energy:.4g} J, f = {f:.6g} Hz{rel}  \n" + " · ".join(point_facts(e, along)))
 
 
@@ -149,15 +153,15 @@ class FepView:
         entries = s.shared.snapshot()
         if not entries:
             return False
-        vanished = s.selected_entry() is None
-        if vanished:
-            first = next((e for e in entries if len(e)), entries[0])
-            with s.lock:
-                s.sel_uid, s.s = first.uid, 0.0
-        e = s.selected_entry()
-        with s.lock:
-            return vanished or (bool(len(e)) and s.linear_mode is None
-                                and (s.current_point is None or s.current_uid != e.uid))
+        first = next((e for e in entries if len(e)), entries[0])
+        live = {e.uid for e in entries}
+        v, old = s.change_view(lambda w: {} if w.sel_uid in live else dict(sel_uid=first.uid, s=0.0))
+        vanished = old.sel_uid not in live
+        e = s.selected_entry(v)
+        if e is None:                     # removed meanwhile: the next 'branches' request selects again
+            return False
+        return vanished or (bool(len(e)) and v.linear_mode is None
+                            and (v.current_point is None or v.current_uid != e.uid))
 
     def draw_branch_list(self):
         """The branch dropdown, showing the selected branch."""
@@ -169,36 +173,37 @@ class FepView:
             return
         listed = branch_options(entries)
         options = tuple(opt for _, opt in listed)
-        sel = s.shared.index_of(s.sel_uid)
-        sel = sel if sel is not None else 0
+        sel_uid = s.view.sel_uid
+        sel = next((i for i, e in enumerate(entries) if e.uid == sel_uid), 0)
         ui.set(ui.h_branch, options=options)
         ui.set(ui.h_branch, value=dict(listed)[sel])
         ui.set(ui.h_branch_info, content=sweep_markdown(entries[sel]) + branch_markdown(entries[sel]))
 
     def draw_board(self):
         s = self.session
-        entries, series = s._series()
-        ranges = s._view_ranges(entries, series)
+        v = s.view
+        entries, series = s._series(v)
+        ranges = s._view_ranges(entries, series, v)
         self.ranges = ranges
         board = s.geom.board
-        if not s.show_board:
-            self.ui.set(self.ui.h_zoom, value=bool(s.zoomed(entries, series)))
+        if not v.show_board:
+            self.ui.set(self.ui.h_zoom, value=bool(s.zoomed(entries, series, v)))
             s.scene.remove_by_name("/fep")
             self.board_handles, self.board_points = {}, {}
             return
-        zoomed = s.zoomed(entries, series)
+        zoomed = s.zoomed(entries, series, v)
         self.ui.set(self.ui.h_zoom, value=bool(zoomed))
-        sc.draw_board_frame(s.scene, board, ranges, series, ylabel=s.ylabel)
+        sc.draw_board_frame(s.scene, board, ranges, series, ylabel=Y_LABELS[bool(v.relative)])
         live = set()
         for k, (e, ser) in enumerate(zip(entries, series)):
             uid = e.uid
-            if zoomed and uid != s.sel_uid:            # zoomed: only the selected branch
+            if zoomed and uid != v.sel_uid:            # zoomed: only the selected branch
                 ser = ser.__class__(ser.energy[:0], ser.frequency[:0], ser.stable[:0], ser.label)
             live.add(uid)
             self.board_points[uid] = board.to_world(ser.energy, ser.frequency, ranges) if len(ser) else None
             self.board_handles[uid] = sc.draw_board_points(s.scene, board, ranges, ser, uid,
                                                            on_click=self._click_handler(uid),
-                                                           emphasized=(uid == s.sel_uid), color=branch_color(k))
+                                                           emphasized=(uid == v.sel_uid), color=branch_color(k))
         for uid in list(self.board_handles):
             if uid not in live:
                 s.scene.remove_by_name(f"/fep/b{uid}")
@@ -240,65 +245,73 @@ class FepView:
     def draw_series(self):
         """The branches of the panel image (redrawn when branches or the k3 factor change)."""
         s = self.session
-        entries, series = s._series()
+        v = s.view
+        entries, series = s._series(v)
         # the branches as computed, in grey, behind their scaled FEP (scaling law only)
-        ghost = ([s.fep_series(e, e.k3_factor) for e in entries if e.scalable]
-                 if s.scaling_law and abs(s.factor_log) > 1e-9 else [])
-        zoomed = s.zoomed(entries, series)
-        title = ("Frequency-energy plot" + (f" (k3 x {s.factor:.3g})" if s.scaling_law else "")
+        ghost = ([s.fep_series(e, e.k3_factor, v) for e in entries if e.scalable]
+                 if s.scaling_law and abs(v.factor_log) > 1e-9 else [])
+        zoomed = s.zoomed(entries, series, v)
+        title = ("Frequency-energy plot" + (f" (k3 x {v.factor:.3g})" if s.scaling_law else "")
                  + (", zoomed on the selected branch" if zoomed else ""))
-        self.renderer.set_series(series, s.shared.index_of(s.sel_uid), ghosts=ghost, title=title,
-                                 ranges=s._view_ranges(entries, series) if zoomed else None, ylabel=s.ylabel)
+        sel = next((i for i, e in enumerate(entries) if e.uid == v.sel_uid), None)
+        self.renderer.set_series(series, sel, ghosts=ghost, title=title,
+                                 ranges=s._view_ranges(entries, series, v) if zoomed else None,
+                                 ylabel=Y_LABELS[bool(v.relative)])
 
-    def selected_point(self):
-        """(energy J, frequency on the FEP's axis: Hz or %) of the selection at the current k3 factor,
+    def selected_point(self, v=None):
+        """(energy J, frequency on the FEP's axis: Hz or %) of the selection of view ``v`` at its k3 factor,
         or None (the energy of the orbit shown, fep.energy_at: linear in energy, as Branch.interpolate)."""
         s = self.session
-        e = s.selected_entry()
+        v = v or s.view
+        e = s.selected_entry(v)
         if e is None or not len(e):
             return None
-        ser = s.fep_series(e)
-        return energy_at(ser.energy, s.s), interp_at(ser.frequency, s.s)
+        ser = s.fep_series(e, v=v)
+        return energy_at(ser.energy, v.s), interp_at(ser.frequency, v.s)
 
     def draw_image(self):
         """The panel image with the selection marker, and the marker on the board."""
         s, ui = self.session, self.ui
-        sel = self.selected_point()
+        v = s.view
+        sel = self.selected_point(v)
         ui.h_fep.image = self.renderer.image(sel)
-        self.draw_readout()
+        self.draw_readout(v)
         board = s.geom.board
-        if s.show_board and self.ranges is not None and sel is not None:
+        if v.show_board and self.ranges is not None and sel is not None:
             pos = board.to_world([sel[0]], [sel[1]], self.ranges)[0]
             sc.draw_marker(s.scene, pos + 0.5 * board.point_radius() * board.normal, 1.6 * board.point_radius())
         elif sel is None:
             s.scene.remove_by_name("/fep/marker")
 
-    def draw_readout(self):
+    def draw_readout(self, v=None):
         """The picked point's readout under the panel image; while a linear mode is animated instead
         (Modes tab) it says so first, so that it never names as shown a point that is not."""
         s, ui = self.session, self.ui
-        e = s.selected_entry()
-        text = readout_markdown(s, e) if e is not None and len(e) else "no point picked"
-        k = s.linear_mode
+        v = v or s.view
+        e = s.selected_entry(v)
+        text = readout_markdown(s, e, v) if e is not None and len(e) else "no point picked"
+        k = v.linear_mode
         if k is not None:
             text = (f"**Shown:** {linear_mode_title(s.model, s.shared.linear_freqs, k)} (Modes tab); pick a "
                     "point or move a slider to animate the picked point again  \n" + text)
         ui.set(ui.h_readout, content=text)
 
     def draw_sliders(self, skip=None):
-        """Energy and along-branch sliders (``skip``: the one being dragged), selection text."""
+        """Energy and along-branch sliders (``skip``: the one being dragged), selection text.  The
+        Along-branch slider gives the point's number, 1 .. n, as the texts do."""
         s, ui = self.session, self.ui
-        e = s.selected_entry()
+        v = s.view
+        e = s.selected_entry(v)
         if e is None or not len(e):
             ui.set(ui.h_energy, disabled=True)
             ui.set(ui.h_along, disabled=True)
             ui.set(ui.h_sel, content="no point selected: compute a branch in the Compute tab")
             return
-        ser = e.series(s.view_factor(e))
+        ser = e.series(s.view_factor(e, v))
         n = len(ser)
-        with s.lock:
-            s.s = float(np.clip(s.s, 0, n - 1))
-            along = s.s
+        uid = e.uid
+        v, _ = s.change_view(lambda w: dict(s=float(np.clip(w.s, 0, n - 1))) if w.sel_uid == uid else {})
+        along = float(np.clip(v.s, 0, n - 1))
         le = np.log10(ser.energy)
         lo, hi = float(np.floor(le.min() * 100) / 100), float(np.ceil(le.max() * 100) / 100)
         if hi - lo < 0.02:
@@ -309,15 +322,18 @@ class FepView:
             ui.set(ui.h_energy, min=lo, max=hi, disabled=False)
             ui.set(ui.h_energy, value=float(np.clip(round(cur_le, 2), lo, hi)))
         if skip != "along":
-            ui.set(ui.h_along, min=0.0, max=float(max(n - 1, 0.01)), disabled=n < 2)
-            ui.set(ui.h_along, value=float(round(along, 2)))
+            ui.set(ui.h_along, min=1.0, max=float(max(n, 1.01)), disabled=n < 2)
+            ui.set(ui.h_along, value=float(round(slider_value(along), 2)))
         f = interp_at(ser.frequency, along)
         st = ", ".join(point_facts(e, along)[:2])
-        idx = s.shared.index_of(s.sel_uid)
-        option = dict(branch_options(s.shared.snapshot())).get(idx)
+        entries = s.shared.snapshot()
+        idx = next((i for i, x in enumerate(entries) if x.uid == uid), None)
+        if idx is None:                   # removed meanwhile: the next draw shows the new selection
+            return
+        option = dict(branch_options(entries)).get(idx)
         if option is not None and option in ui.h_branch.options:
             ui.set(ui.h_branch, value=option)
-        ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, point {along + 1:.2f} of {n}  \n"
+        ui.set(ui.h_sel, content=f"**Selected:** branch {idx + 1}, {point_words(along, n)}  \n"
                                  f"E = {energy:.4g} J, f = {f:.5g} Hz, {st}")
-        ui.set(ui.h_recompute, disabled=abs(s.factor / e.k3_factor - 1.0) < 1e-9)
+        ui.set(ui.h_recompute, disabled=abs(v.factor / e.k3_factor - 1.0) < 1e-9)
         ui.set(ui.h_save, disabled=e.saved or e.source == "running")

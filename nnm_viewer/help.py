@@ -25,7 +25,8 @@ times the frequency, then returns. On the FEP a tongue is a thin spike (often wi
 unstable points); in the Point tab the k-th harmonic of some DOFs grows, up to exceeding the first.
 
 **Point labels.** The solver labels every point: **backbone** (the fundamental NNM family) or
-**tongue k:1** (inside the k:1 internal-resonance tongue). Branches computed with tongue skipping
+**tongue k:1** (inside the k:1 internal-resonance tongue), marked in orange on both FEPs (stars in the
+panel, orange spheres on the board). Branches computed with tongue skipping
 jump over the tongues and stay on the backbone. When the file has it, the Point tab also gives each
 point's estimated relative frequency error (the accuracy of the orbit's frequency).
 

@@ -92,7 +92,7 @@ def point_data(branch, s, samples=None, reference=False):
         except RuntimeError:       # the interpolated state is not on an orbit: show the nearest point
             b, j = branch, i
             t, x = motion(b, j)
-            note = f"the orbit between points could not be integrated; showing computed point {i}"
+            note = f"the orbit between points could not be integrated; showing computed point {i + 1}"
     harm = fourier_amplitudes(np.asarray(x, dtype=float), N_HARMONICS)
     try:
         mac = np.asarray(b.mac_to_linear(j), dtype=float)

@@ -11,6 +11,8 @@ import threading
 import numpy as np
 import viser
 from nnm_solver import INTEGRATORS
+from nnm_solver.cli.defaults import TONGUE_CHOICES, solver_defaults
+from nnm_solver.cli.modes import label_with_reference
 
 from .help import HELP_MARKDOWN
 from .model_info import elements_summary, model_markdown
@@ -23,9 +25,16 @@ MAX_MODES_TABLE = 200
 #: handles that are buttons (wired on click)
 BUTTONS = ("h_dismiss", "h_reset", "h_recompute", "h_start", "h_stop", "h_save", "h_csv_fep", "h_csv_orbit",
            "h_gif", "h_view", "h_show_linear", "h_compute_linear")
-#: Compute tab: default time integrator and steps per period of the shooting
-DEFAULT_INTEGRATOR = "newmark"
-DEFAULT_STEPS_PER_PERIOD = 200
+#: Compute tab: the methods offered -> (continue_nnm's method, condensed); the defaults of every field are the
+#: solver's (nnm_solver.cli.defaults.solver_defaults), never copied here
+METHODS = {"shooting": ("shooting", False), "harmonic balance": ("hb", False),
+           "condensed harmonic balance": ("hb", True)}
+
+
+def method_choice(method, condensed=False):
+    """The Compute tab's method option of continue_nnm's ``method`` (and ``condensed``)."""
+    return next(k for k, v in METHODS.items() if v == (("hb" if method == "harmonic_balance" else method),
+                                                           bool(condensed)))
 #: Modes tab: what "Compute its branch" says (viser 1.1 cannot switch a tab from the server)
 SEE_COMPUTE_TAB = "the job's progress is in the **Compute** tab"
 #: view presets of the camera (scene.preset_camera)
@@ -72,19 +81,21 @@ def k3_text(factor, law=True):
     return ("forces x 1 (as in the file)" if same else f"forces x {factor:.3g} (recomputed)") + f"  \n{NO_SCALING_LAW}"
 
 
-def mode_label(model, linear_freqs, k):
-    """'k: f Hz label' of linear mode k (1-based)."""
+def mode_label(model, linear_freqs, k, reference=None):
+    """'k: f Hz label' of linear mode k (1-based), with the reference's name of it ({mode: name}) if any."""
     labels = model.mode_labels or []
-    lab = f" {labels[k - 1]}" if k - 1 < len(labels) else ""
-    return f"{k}: {linear_freqs[k - 1]:.4g} Hz{lab}"
+    lab = label_with_reference(labels[k - 1] if k - 1 < len(labels) else "", (reference or {}).get(k, ""))
+    return f"{k}: {linear_freqs[k - 1]:.4g} Hz" + (f" {lab}" if lab else "")
 
 
-def modes_markdown(model, linear_freqs):
-    """Markdown table of the linear modes (at most MAX_MODES_TABLE rows)."""
+def modes_markdown(model, linear_freqs, reference=None):
+    """Markdown table of the linear modes (at most MAX_MODES_TABLE rows); the reference's names ({mode: name},
+    e.g. the paper's) in the label column next to the model's."""
     labels = model.mode_labels or []
     rows = ["| mode | f (Hz) | label |", "|---|---|---|"]
     for k in range(min(len(linear_freqs), MAX_MODES_TABLE)):
-        rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {labels[k] if k < len(labels) else ''} |")
+        lab = label_with_reference(labels[k] if k < len(labels) else "", (reference or {}).get(k + 1, ""))
+        rows.append(f"| {k + 1} | {linear_freqs[k]:.5g} | {lab} |")
     more = (f"\n\n({model.n - MAX_MODES_TABLE} more modes not listed)" if model.n > MAX_MODES_TABLE else "")
     if len(linear_freqs) < min(model.n, MAX_MODES_TABLE):            # a large model: only its lowest modes computed
         more = f"\n\n(the lowest {len(linear_freqs)} of the model's {model.n} modes)"
@@ -94,7 +105,7 @@ def modes_markdown(model, linear_freqs):
 class Layout:
     """The GUI handles of one tab, built on ``gui`` (a tab's or the server's ``.gui``)."""
 
-    def __init__(self, gui, model, linear_freqs, scaling_law=True):
+    def __init__(self, gui, model, linear_freqs, scaling_law=True, reference=None):
         self.gui = gui
         self._tl = threading.local()
         name = model.name or "model"
@@ -107,8 +118,9 @@ class Layout:
             self.h_branch = gui.add_dropdown("Branch", options=("(none)",), initial_value="(none)")
             self.h_energy = gui.add_slider("Energy log10(J)", min=-3.0, max=3.0, step=0.01, initial_value=0.0,
                                            hint="Moves the selection along the branch (nearest crossing)")
-            self.h_along = gui.add_slider("Along branch", min=0.0, max=1.0, step=0.01, initial_value=0.0,
-                                          hint="Fractional point index: follows folds and tongues")
+            self.h_along = gui.add_slider("Along branch (point)", min=1.0, max=2.0, step=0.01, initial_value=1.0,
+                                          hint="The point's number (1 = the first computed point; fractional "
+                                               "between two points): follows folds and tongues")
             self.h_sel = gui.add_markdown("no point selected")
             self.h_branch_info = gui.add_markdown("")
         with gui.add_folder("Animation"):
@@ -158,8 +170,9 @@ class Layout:
             self.h_fep_caption = gui.add_markdown(PANEL_FEP_CAPTION)
             self.h_readout = gui.add_markdown("no point picked")
             gui.add_markdown("Pick a point: click a sphere of the FEP in the 3D view (each branch in its "
-                             "colour, pale spheres: unstable orbits; the yellow sphere is the picked orbit; the "
-                             "markers show the folds, bifurcations and where a branch failed).")
+                             "colour, pale spheres: unstable orbits, orange: off the backbone (in a tongue); the "
+                             "yellow sphere is the picked orbit; the markers show the folds, bifurcations and where "
+                             "a branch failed).")
         self.tab_point = panel.add_tab("Point", viser.Icon.INFO_CIRCLE)
         with self.tab_point:
             self.h_info = gui.add_markdown("no point selected")
@@ -175,24 +188,42 @@ class Layout:
                                         hint="the deformed structure over one period, seen as in the 3D view, "
                                              "with its colour bar (a few seconds to draw)")
         # every mode (a large model's: the lowest ones computed, nnm_viewer.state.view_linear_modes)
-        options = tuple(mode_label(model, linear_freqs, k) for k in range(1, len(linear_freqs) + 1))
+        options = tuple(mode_label(model, linear_freqs, k, reference) for k in range(1, len(linear_freqs) + 1))
         self.mode_options = options
+        D = solver_defaults()
         with panel.add_tab("Compute", viser.Icon.PLAYER_PLAY):
-            self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0])
+            self.h_mode = gui.add_dropdown("Mode", options=options, initial_value=options[0],
+                                           hint="The linear mode whose NNM branch is computed (the selected "
+                                                "branch's mode until you choose another)")
             self.h_emin = gui.add_number("Min energy (J), 0 = auto", initial_value=0.0, min=0.0, step=1e-6)
             self.h_emax = gui.add_number("Max energy (J)", initial_value=100.0, min=1e-12, step=1e-6)
-            self.h_maxpts = gui.add_number("Max points", initial_value=80, min=2, max=5000, step=1)
+            self.h_maxpts = gui.add_number("Max points", initial_value=int(D["max_points"]), min=2, max=5000, step=1,
+                                           hint="The branch ends at Max points or Max energy, whichever comes first")
+            self.h_method = gui.add_dropdown(
+                "Method", options=tuple(METHODS), initial_value=method_choice(D["method"], D["condensed"]),
+                hint="shooting (time integration, the seed paper's method), harmonic balance (Fourier series of "
+                     "the orbit), or harmonic balance condensed onto the nonlinear elements (models of any size "
+                     "whose nonlinearity is localized)")
+            self.h_tongues = gui.add_dropdown(
+                "Tongues", options=TONGUE_CHOICES, initial_value=str(D["tongues"]),
+                hint="At an internal-resonance tongue: follow the branch through it, or skip it and compute the "
+                     "backbone (the tongues jumped are listed with the branch; nnm-solve --tongue K continues one)")
             self.h_integrator = gui.add_dropdown(
-                "Integrator", options=tuple(INTEGRATORS), initial_value=DEFAULT_INTEGRATOR,
+                "Integrator", options=tuple(INTEGRATORS), initial_value=str(D["integrator"]),
                 hint="Time integrator of the shooting: newmark (2nd order, the seed paper's), gauss4 or gauss6 "
                      "(Gauss-Legendre, 4th / 6th order, 2 / 3 stages per step)")
             self.h_spp = gui.add_number(
-                "Steps per period", initial_value=DEFAULT_STEPS_PER_PERIOD, min=8, max=20000, step=1,
-                hint="Time steps per period of the shooting: 200 for newmark; about 100 are enough for gauss6 "
-                     "(a step costs ~3 Newmark steps); more for high-order tongues")
+                "Steps per period", initial_value=int(D["steps_per_period"]), min=8, max=20000, step=1,
+                hint=f"Time steps per period of the shooting: {D['steps_per_period']} by default (newmark); about "
+                     f"100 are enough for gauss6 (a step costs ~3 Newmark steps); more for high-order tongues")
+            self.h_harmonics = gui.add_number(
+                "Harmonics", initial_value=int(D["harmonics"]), min=1, max=99, step=1, visible=False,
+                hint="Harmonic balance: the highest harmonic of the Fourier series (more for strong higher "
+                     "harmonics, e.g. inside a tongue)")
             self.h_start = gui.add_button("Start", color="green")
             self.h_stop = gui.add_button("Stop (keep points)", disabled=True)
             self.h_save = gui.add_button("Save selected branch to file", disabled=True)
+            self.h_save_msg = gui.add_markdown("")          # what Save did, right under its button
             self.h_progress = gui.add_progress_bar(0.0, animated=False)
             self.h_job = gui.add_markdown("no job running")
         with panel.add_tab("Modes", viser.Icon.LIST):
@@ -207,7 +238,7 @@ class Layout:
                      "Compute tab's energies, points and integrator)")
             self.h_modes_job = gui.add_markdown("")
             self.h_model = gui.add_markdown(model_markdown(model))
-            gui.add_markdown(modes_markdown(model, linear_freqs))
+            gui.add_markdown(modes_markdown(model, linear_freqs, reference))
         with panel.add_tab("Help", viser.Icon.HELP):
             self.h_help = gui.add_markdown(HELP_MARKDOWN)
         panel.dock_right()

@@ -10,6 +10,7 @@ from nnm_solver import cubic_scaling
 from . import scene as sc
 from .animation import orbit_animation
 from .colorbar import colorbar_image
+from .numbering import point_words
 from .info import (auto_dofs, info_markdown, linear_mode_point, linear_mode_title, method_text, parse_dofs,
                    peak_text, point_data, uplot_harmonics, uplot_time_series)
 
@@ -53,18 +54,17 @@ class PointView:
     def compute(self):
         """Orbit and animation of the selection (None if the branch has no point); True."""
         s = self.session
-        if s.linear_mode is not None:             # a linear mode (Modes tab): no solver needed
-            return self.compute_linear(s.linear_mode)
-        e = s.selected_entry()
+        v = s.view
+        if v.linear_mode is not None:             # a linear mode (Modes tab): no solver needed
+            return self.compute_linear(v.linear_mode)
+        e = s.selected_entry(v)
         if e is None or not len(e):
-            with s.lock:
-                s.current_point = s.current_anim = None
-                s.current_uid = None if e is None else e.uid
+            s.set_view(current_point=None, current_anim=None, current_uid=None if e is None else e.uid)
             return True
         # until the branch's integrator is compiled (warmup.py, then the session asks again) the orbit is
         # scipy's (Branch.reference_motion: no compiled kernel), replaced by the solver's own once ready
         reference = not s.shared.orbits_ready.is_set()
-        along = float(np.clip(s.s, 0, len(e) - 1))
+        along = float(np.clip(v.s, 0, len(e) - 1))
         key = (e.uid, len(e), round(along, 4), reference)
         pd = self._point_cache.get(key)
         if pd is None:
@@ -73,11 +73,9 @@ class PointView:
             except RuntimeError:
                 if not reference:
                     raise
-                with s.lock:                      # too slow or failed: the model at rest until the solver's orbit
-                    drawn = s.current_point is None and self.last_glb is not None
-                    s.current_point = s.current_anim = None
-                    s.current_uid = e.uid
-                return not drawn
+                # too slow or failed: the model at rest until the solver's orbit
+                _, old = s.change_view(lambda w: dict(current_point=None, current_anim=None, current_uid=e.uid))
+                return not (old.current_point is None and self.last_glb is not None)
             if len(self._point_cache) > POINT_CACHE:
                 self._point_cache.clear()
             self._point_cache[key] = pd
@@ -87,12 +85,8 @@ class PointView:
             if len(self._anim_cache) > ANIM_CACHE:
                 self._anim_cache.clear()
             self._anim_cache[key] = anim
-        ratio = s.view_factor(e) / e.k3_factor        # 1 unless the scaling law applies
-        with s.lock:
-            s.current_point = pd.scaled(ratio)
-            s.current_anim = anim
-            s.current_uid = e.uid
-            s.ratio = ratio
+        ratio = s.view_factor(e, v) / e.k3_factor        # 1 unless the scaling law applies
+        s.set_view(current_point=pd.scaled(ratio), current_anim=anim, current_uid=e.uid, ratio=ratio)
         return True
 
     def compute_linear(self, k):
@@ -113,36 +107,34 @@ class PointView:
             if len(self._anim_cache) > ANIM_CACHE:
                 self._anim_cache.clear()
             self._anim_cache[key] = cached
-        with s.lock:
-            s.current_point, s.current_anim = cached
-            s.current_uid = None
-            s.ratio = 1.0
+        s.set_view(current_point=cached[0], current_anim=cached[1], current_uid=None, ratio=1.0)
         return True
 
     def draw_glb(self):
         """The model: animated over one orbit, or at rest if no point is shown."""
         s, ui = self.session, self.ui
-        anim = s.current_anim
+        v = s.view
+        anim = v.current_anim
         if anim is None:
             glb = sc.static_glb(s.mesh)
             ui.set(ui.h_peak, content="")
             ui.set(ui.h_colorbar, visible=False)
         else:
-            amp, peak = s.amplification()
-            shown = 1.0 / max(s.speed, 1e-3)
-            glb = anim.glb(amp * cubic_scaling(s.ratio).amplitude, display_period=shown, playing=s.playing,
-                           phase=s.phase)
-            if s.auto_amp:
+            amp, peak = s.amplification(v)
+            shown = 1.0 / max(v.speed, 1e-3)
+            glb = anim.glb(amp * cubic_scaling(v.ratio).amplitude, display_period=shown, playing=v.playing,
+                           phase=v.phase)
+            if v.auto_amp:
                 ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
-            lin = s.linear_mode
+            lin = v.linear_mode
             ui.set(ui.h_peak, content=(f"**{linear_mode_title(s.model, s.shared.linear_freqs, lin, freq=False)}** "
                                        "(amplitude chosen for display)  \n" if lin is not None else "")
-                   + peak_text(peak, amp, s.auto_amp)
+                   + peak_text(peak, amp, v.auto_amp)
                    + f"  \nreal period {anim.period:.4g} s, shown in {shown:.3g} s")
         s.scene.add_glb("/model", glb, cast_shadow=False, receive_shadow=False)
         self.last_glb = glb
         if anim is not None:             # after the animation, which the user waits for
-            self.draw_colorbar(s.amplification()[1])
+            self.draw_colorbar(s.amplification(v)[1])
 
     def draw_colorbar(self, peak):
         """The colour bar of the displacement colours, 0 .. the true peak displacement (redrawn when
@@ -156,25 +148,28 @@ class PointView:
     def draw_info(self):
         """The Point tab: numbers, MAC table, time series and Fourier amplitudes of chosen DOFs."""
         s, ui = self.session, self.ui
-        pd = s.current_point
+        v = s.view
+        pd = v.current_point
         if pd is None:
             ui.set(ui.h_info, content="no point selected" if s.shared.solver_ready.is_set() else
                    "preparing the solver (compiling its kernels): the orbit is shown as soon as it is ready")
             return
-        lin = s.linear_mode
+        lin = v.linear_mode
         if lin is not None:
             ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, None,
                                                     where=linear_mode_title(s.model, s.shared.linear_freqs, lin)))
         else:
-            idx = s.shared.index_of(s.sel_uid)
-            e = s.selected_entry()
-            where = f"Branch {idx + 1} ({e.label}), point {s.s:.2f}"
-            label, err = point_label_and_error(e.branch, s.s)
-            ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.view_factor(e),
+            idx = s.shared.index_of(v.sel_uid)
+            e = s.selected_entry(v)
+            if e is None or idx is None:          # the branch went away meanwhile: the next draw shows another
+                return
+            where = f"Branch {idx + 1} ({e.label}), {point_words(v.s, len(e))}"
+            label, err = point_label_and_error(e.branch, v.s)
+            ui.set(ui.h_info, content=info_markdown(pd, s.model, s.shared.linear_freqs, s.view_factor(e, v),
                                                     where=where, label=label, freq_error=err,
                                                     method=method_text(e.branch)))
         try:
-            dofs = parse_dofs(s.dofs_text, s.model.n, auto_dofs(s.model, pd.x))
+            dofs = parse_dofs(v.dofs_text, s.model.n, auto_dofs(s.model, pd.x))
         except ValueError as exc:
             s.show_error(str(exc))
             dofs = auto_dofs(s.model, pd.x)

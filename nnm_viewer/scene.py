@@ -10,7 +10,7 @@ import nnm_solver
 
 from .glb import build_glb
 from .board import BOARD_MARGINS, BoardLayout, board_layout
-from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, pale, rgb
+from .fep import MARKER_RGB, STABLE_RGB, UNSTABLE_RGB, off_backbone_style, pale, rgb
 
 #: vertical field of view of the initial camera, degrees
 CAMERA_FOV_DEG = 50.0
@@ -157,6 +157,23 @@ def render_board(board, ranges, series=(), width_px=900, ylabel=None):
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
 
+def fit_left_labels(fig, ax, smallest=10):
+    """Shrink the y tick labels and the y axis label until they fit in the figure's left margin (long tick labels,
+    '31.7825', pushed the axis label out of the picture)."""
+    for _ in range(6):
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        left = min([t.get_window_extent(renderer).x0 for t in ax.get_yticklabels() if t.get_text()]
+                   + [ax.yaxis.label.get_window_extent(renderer).x0])
+        if left >= 2:
+            return
+        size = ax.get_yticklabels()[0].get_fontsize() if ax.get_yticklabels() else smallest
+        if size <= smallest:
+            return
+        ax.tick_params(axis="y", labelsize=max(smallest, 0.85 * size))
+        ax.yaxis.label.set_fontsize(max(smallest, 0.85 * ax.yaxis.label.get_fontsize()))
+
+
 def board_figure(board, ranges, series=(), width_px=900, ylabel=None):
     """The drawn matplotlib Figure of ``render_board`` (its axes fill the board's rectangle; the
     legend is in the bottom margin, below the tick labels)."""
@@ -172,8 +189,10 @@ def board_figure(board, ranges, series=(), width_px=900, ylabel=None):
     ax = fig.add_axes([_ML / (1 + _ML + _MR), _MB / (1 + _MB + _MT), 1 / (1 + _ML + _MR), 1 / (1 + _MB + _MT)])
     ax.set_facecolor("#ffffff")
     # thin lines, and event markers large enough to ring the spheres drawn in front of the picture
-    handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0)
+    handles, labels = plot_branches(ax, series, points=False, lw=2.0, ms=10.0, event_ms=24.0, event_mew=3.0,
+                                    ranges=ranges, legend_max=BOARD_LEGEND_MAX)
     set_fep_axes(ax, ranges, ticks_size=19, label_size=21, grid_alpha=0.3, ylabel=ylabel or Y_LABELS[False])
+    fit_left_labels(fig, ax)
     if handles:
         # below the plotting area, never over the curves (nor over the spheres drawn in front of them)
         ax.legend(handles[:BOARD_LEGEND_MAX], labels[:BOARD_LEGEND_MAX], fontsize=14, loc="upper center",
@@ -203,7 +222,7 @@ def cached_board(board, ranges, series, ylabel=None):
         h.update(np.asarray(ser.energy, dtype=float).tobytes())
         h.update(np.asarray(ser.frequency, dtype=float).tobytes())
         h.update(np.asarray(ser.stable, dtype=bool).tobytes())
-        h.update(repr((ser.label, ser.status, ser.events)).encode())
+        h.update(repr((ser.label, ser.status, ser.events, tuple(lab for lab, _ in ser.off_backbone()))).encode())
     key = h.hexdigest()
     img = _BOARD_CACHE.get(key)
     if img is None:
@@ -227,7 +246,8 @@ def draw_board_frame(scene, board, ranges, series=(), name="/fep", ylabel=None):
 
 def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep", color=None):
     """One batched-sphere object for a branch: instance i = point i, in the branch's ``color``
-    ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; returns
+    ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; the points off the
+    backbone (a tongue's) in the solver's colour for them (fep.off_backbone_style), paler when unstable; returns
     its handle."""
     if not len(series):
         scene.remove_by_name(f"{name}/b{uid}")
@@ -235,7 +255,12 @@ def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=Fa
     V, F = sphere_mesh()
     pos = board.to_world(series.energy, series.frequency, ranges)
     stable_rgb, unstable_rgb = (STABLE_RGB, UNSTABLE_RGB) if color is None else (rgb(color), rgb(pale(color)))
-    colors = np.where(np.asarray(series.stable, dtype=bool)[:, None], stable_rgb, unstable_rgb).astype(np.uint8)
+    stable = np.asarray(series.stable, dtype=bool)
+    colors = np.where(stable[:, None], stable_rgb, unstable_rgb).astype(np.uint8)
+    off_color = off_backbone_style()[1]                # points off the backbone (a tongue's): the solver's colour
+    for _, mask in series.off_backbone():
+        colors[mask & stable] = rgb(off_color)
+        colors[mask & ~stable] = rgb(pale(off_color))
     rad = board.point_radius() * (1.0 if emphasized else 0.7)
     if len(pos) > 2:   # dense branches: spheres no bigger than ~half the typical spacing
         gap = float(np.median(np.linalg.norm(np.diff(pos, axis=0), axis=1)))

@@ -7,7 +7,7 @@ Everything here is plain Python, usable and testable without a browser.
 from __future__ import annotations
 
 import itertools
-import re
+import logging
 import threading
 from dataclasses import dataclass, field
 
@@ -16,9 +16,18 @@ import numpy as np
 import nnm_solver
 from nnm_solver import cubic_scaling
 
+from .branch_names import branch_label, legend_label, mode_name, name_remainder  # noqa: F401 (re-exported)
 from .fep import FepSeries, event_kind
 
 _uids = itertools.count(1)
+log = logging.getLogger("nnm_viewer")
+
+
+class JobBusy(ValueError):
+    """Start refused: a job is already running (the viewer runs one job at a time)."""
+
+    def __init__(self):
+        super().__init__("a job is already running; stop it first")
 
 
 @dataclass
@@ -91,7 +100,24 @@ class BranchEntry:
             label += " (stability not computed)"          # its points are drawn filled, not known to be stable
         return FepSeries(np.asarray(b.energy, dtype=float) * law.energy, np.asarray(b.frequency_hz, dtype=float),
                          np.asarray(b.stable, dtype=bool), label, events=events,
-                         status=str(getattr(b, "status", "") or ""))
+                         status=str(getattr(b, "status", "") or ""),
+                         labels=tuple(str(x) for x in _labels(b)))
+
+
+def reference_names(path):
+    """{mode: name} of the file's /extra/reference/mode_names ({} without a file or names)."""
+    from nnm_solver.cli.modes import reference_mode_names
+    from nnm_solver.files.importers import is_import_path
+
+    if path is None or is_import_path(path):            # an imported model file (.mat, .toml) has no /extra
+        return {}
+    return reference_mode_names(nnm_solver.load_extra(path, "reference"))
+
+
+def _labels(branch):
+    """The branch's point labels (Branch.labels), or () when it has none."""
+    labels = getattr(branch, "labels", None)
+    return () if labels is None else labels
 
 
 #: linear modes shown for a model too large for the dense eigensolution (nnm_solver.model.MAX_DENSE_DOF)
@@ -118,89 +144,17 @@ def scaling_law_holds(model):
     return len(el) == 0 or bool(el.cubic_only)
 
 
-def mode_name(model, mode):
-    """The model's label of linear mode ``mode`` (1-based), or ''."""
-    labels = getattr(model, "mode_labels", None) or []
-    try:
-        k = int(mode)
-    except (TypeError, ValueError):
-        return ""
-    return str(labels[k - 1]).strip() if 1 <= k <= len(labels) else ""
-
-
-def name_remainder(name, mode):
-    """What a branch's stored ``name`` adds to 'NNM <mode>': '' for 'NNM1', 'mode 14', a sweep's
-    'variant <variant>' for a sweep's '<variant>:mode<N>'; 'paper mode 13' for
-    'mode14 (paper mode 13)'; 'harmonic balance H15' for 'NNM1 harmonic balance H15'; 'run 2' for
-    'mode1_2' (save_branch's name of a second branch of mode 1 in the same file)."""
-    from nnm_solver.sweeps import parse_branch_name
-
-    name = str(name or "").strip()
-    swept = parse_branch_name(name)
-    if swept is not None:
-        return f"variant {swept[0]}"
-    if not name:
-        return ""
-    m = re.match(rf"^\s*(?:nnm|mode)\s*{re.escape(str(mode))}(?![0-9])\s*(.*)$", name, flags=re.IGNORECASE)
-    rest = m.group(1) if m else name
-    run = re.match(r"^_(\d+)\b\s*(.*)$", rest) if m else None
-    if run:                                       # 'mode1_2': the second branch of mode 1 saved to the file
-        rest = f"run {run.group(1)}" + (f" {run.group(2)}" if run.group(2) else "")
-    rest = rest.strip().strip(":,-;").strip()
-    if rest.startswith("("):                      # '(paper mode 13): tongue 1 (5:1)' -> 'paper mode 13: ...'
-        depth = 0
-        for k, ch in enumerate(rest):
-            depth += {"(": 1, ")": -1}.get(ch, 0)
-            if depth == 0:
-                rest = (rest[1:k] + rest[k + 1:]).strip()
-                break
-    return rest
-
-
-def legend_label(label, width=42):
-    """A branch label for the FEP legends: without the mode's label ('NNM 14 (fin bending 1) · paper
-    mode 13' -> 'NNM 14 · paper mode 13'; the lists and the readout give it), at most ``width``
-    characters."""
-    text = str(label)
-    m = re.match(r"^(NNM \S+) \(", text)
-    if m:
-        depth, start = 0, m.end() - 1
-        for k in range(start, len(text)):
-            depth += {"(": 1, ")": -1}.get(text[k], 0)
-            if depth == 0:
-                text = m.group(1) + text[k + 1:]
-                break
-    return text if len(text) <= width else text[:width - 1].rstrip() + "\u2026"
-
-
-def branch_label(branch, k3_factor=1.0, source="file", model=None):
-    """The branch's name in every list and legend: 'NNM <k> (<the model's label of mode k>)', then
-    what its stored name adds (' · harmonic balance H15'), the k3 factor if not 1 and, for a branch
-    of this session, its state: 'NNM 2 (out-of-phase mode) (k3 x 10) [running]'.  ``model``: whose
-    mode labels to use when the branch carries no model of its own."""
-    mode = getattr(branch, "mode", "?")
-    label = mode_name(getattr(branch, "model", None) or model, mode) or mode_name(model, mode)
-    text = f"NNM {mode}" + (f" ({label})" if label else "")
-    extra = name_remainder(getattr(branch, "name", ""), mode)
-    if extra:
-        text += f" \u00b7 {extra}"
-    if abs(k3_factor - 1.0) > 1e-12:
-        text += f" (k3 x {k3_factor:.3g})"
-    if source in ("running", "stopped", "failed"):
-        text += f" [{source}]"
-    elif source == "computed":
-        text += " [new]"
-    elif source == "saved":
-        text += " [saved]"
-    return text
-
-
 class SharedState:
     """Model, branch entries and jobs shared by all sessions (thread-safe).
 
     ``mesh`` is the model's display mesh (boxes per DOF if it has none), ``mapper`` its
     displacement map ready for fast products.  Listeners (callables taking a kind string:
-    "branches", "progress", "error", "solver") are called after every change, outside the lock.
+    "branches", "progress", "error", "solver") are called after every change, outside the lock;
+    a listener that raises is logged and the others still run.
+
+    Locks, always taken in this order (never the reverse): a tab's draw lock (drawing.py), the tab's
+    ``Session.lock``, then ``SharedState.lock``.  ``job`` is claimed atomically (``claim_job``): of two
+    tabs pressing Start at once, one starts the job and the other is told one is running.
     """
 
     def __init__(self, model, path=None, branches=(), solver_ready=True):
@@ -215,6 +169,9 @@ class SharedState:
         if solver_ready:
             self.solver_ready.set()
             self.orbits_ready.set()
+        #: {mode: the file's reference name of it} (/extra/reference/mode_names: the paper's names of the Paris
+        #: model's modes), said next to the model's labels
+        self.reference_names = reference_names(path)
         self.entries: list[BranchEntry] = []
         self.listeners: list = []
         self.job = None                 # worker.JobRunner or None
@@ -233,7 +190,8 @@ class SharedState:
 
     # ------------------------------------------------------------------ entries
     def add(self, branch, k3_factor=1.0, source="file", saved=True, notify=True):
-        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source, self.model),
+        entry = BranchEntry(branch=branch, label=branch_label(branch, k3_factor, source, self.model,
+                                                              self.reference_names),
                             k3_factor=k3_factor, source=source, saved=saved)
         with self.lock:
             self.entries.append(entry)
@@ -256,7 +214,7 @@ class SharedState:
                 entry.source = source
             if status is not None:
                 entry.status = status
-            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source, self.model)
+            entry.label = branch_label(entry.branch, entry.k3_factor, entry.source, self.model, self.reference_names)
         if notify:
             self.notify("branches")
 
@@ -287,8 +245,29 @@ class SharedState:
         for fn in listeners:
             try:
                 fn(kind)
-            except Exception:  # a broken tab must not break the others
-                pass
+            except Exception:  # a broken tab must not break the others: logged, the others still run
+                log.exception("a viewer listener failed on %r", kind)
+
+    # ------------------------------------------------------------------ the job (one at a time)
+    def claim_job(self, runner):
+        """Make ``runner`` the running job, atomically: raises JobBusy if another job is running."""
+        with self.lock:
+            if self.job is not None and self.job is not runner and self.job.running:
+                raise JobBusy()
+            self.job = runner
+            self.error = ""
+
+    def release_job(self, runner):
+        """``runner`` has ended (or never started): the job slot is free again."""
+        with self.lock:
+            if self.job is runner:
+                self.job = None
+
+    def running_job(self):
+        """The running JobRunner, or None."""
+        with self.lock:
+            job = self.job
+        return job if job is not None and job.running else None
 
     def set_error(self, message):
         with self.lock:

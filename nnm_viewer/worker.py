@@ -9,9 +9,8 @@ import time
 from dataclasses import dataclass
 
 import nnm_solver
+from nnm_solver.cli.defaults import solver_defaults
 
-#: the solver's default max_points (nnm_solver.iter_nnm), used when a job is started without one
-DEFAULT_MAX_POINTS = 500
 
 
 def one_line(exc):
@@ -116,7 +115,7 @@ class JobRunner:
         self.entry = None
         self.job = None
         self.branch = None           # the rows received so far (extended in place)
-        self.max_points = int(options.get("max_points") or DEFAULT_MAX_POINTS)
+        self.max_points = int(options.get("max_points") or solver_defaults()["max_points"])
         self.t_start = None          # time.monotonic() at Start
         self.t_end = None            # ... when the job ended
         self._energy = 0.0           # the job's energy fraction, last read while it ran
@@ -124,19 +123,33 @@ class JobRunner:
         self.finished = threading.Event()
 
     def start(self):
-        """Start the job; raises the solver's one-line errors for bad arguments at once."""
-        model = self.shared.model
-        if abs(self.k3_factor - 1.0) > 1e-12:
-            model = model.scaled(self.k3_factor)
-        start = self._start or nnm_solver.start_branch
-        self.t_start = time.monotonic()
-        self.job = start(model, mode=self.mode, energy_max=self.energy_max, **self.options)
-        self.branch = nnm_solver.Branch.from_points(model, self.mode, [], settings=self.job.settings,
-                                                    status="running")
-        self.entry = self.shared.add(self._snapshot(), k3_factor=self.k3_factor, source="running", saved=False)
-        with self.shared.lock:
-            self.shared.job = self
-            self.shared.error = ""
+        """Start the job; raises the solver's one-line errors for bad arguments at once, and
+        state.JobBusy if another job is running.  The job slot of ``shared`` is claimed first, atomically
+        (``SharedState.claim_job``), and released if the solver refuses to start."""
+        self._claimed = True              # running from now on: another tab's Start sees it at once
+        try:
+            self.shared.claim_job(self)
+        except Exception:                 # JobBusy: this runner never runs
+            self.finished.set()
+            raise
+        try:
+            model = self.shared.model
+            if abs(self.k3_factor - 1.0) > 1e-12:
+                model = model.scaled(self.k3_factor)
+            start = self._start or nnm_solver.start_branch
+            self.t_start = time.monotonic()
+            self.job = start(model, mode=self.mode, energy_max=self.energy_max, **self.options)
+            self.branch = nnm_solver.Branch.from_points(model, self.mode, [], settings=self.job.settings,
+                                                        status="running")
+            self.entry = self.shared.add(self._snapshot(), k3_factor=self.k3_factor, source="running",
+                                         saved=False)
+        except BaseException:
+            self.finished.set()
+            self.shared.release_job(self)
+            self.shared.notify("progress")
+            raise
+        if self.cancelled:                # Stop pressed while the solver was starting
+            self.job.cancel()
         self.shared.set_progress(0.0, self.status_text())
         self.thread = threading.Thread(target=self._run, name=f"nnm-job-mode{self.mode}", daemon=True)
         self.thread.start()
@@ -202,9 +215,7 @@ class JobRunner:
             self.shared.update(self.entry, source="failed", status=one_line(exc))
             self.shared.set_error(f"solver job failed: {one_line(exc)}")
         finally:
-            with self.shared.lock:
-                if self.shared.job is self:
-                    self.shared.job = None
+            self.shared.release_job(self)
             self.shared.notify("progress")
             self.finished.set()
 
@@ -247,6 +258,9 @@ class JobRunner:
         if self.job is not None:
             self.job.cancel()
 
+    _claimed = False
+
     @property
     def running(self):
-        return self.thread is not None and not self.finished.is_set()
+        """From Start (the job slot claimed, the solver maybe still starting) until the job has ended."""
+        return self._claimed and not self.finished.is_set()

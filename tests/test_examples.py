@@ -58,6 +58,19 @@ def test_two_dof_tongues_writes_the_shipped_files_only_when_asked(tmp_path, monk
     assert ex.default_outputs(ns(update_shipped=True)) == (str(ex.SHIPPED_FIGURES), str(ex.SHIPPED))
     assert ex.default_outputs(ns(assets="x.h5", out_dir="f")) == ("f", "x.h5")
     assert ex.SHIPPED == ROOT / "assets" / "two_dof.h5"
+    # issue 53, finding 9: a --fast run never replaces the full run's file and figures
+    assert ex.default_outputs(ns(fast=True)) == ("two_dof_figures_fast", "two_dof_fast.h5")
+    assert ex.default_outputs(ns(fast=True, update_shipped=True)) == (str(ex.SHIPPED_FIGURES), str(ex.SHIPPED))
+
+
+def test_example_outputs_are_ignored_by_git(tmp_path):
+    """Finding 9: the default folders and files the examples write in the repository's root are ignored."""
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    paths = ["byom/beam.h5", "two_dof.h5", "two_dof_fast.h5", "two_dof_figures_fast/two_dof_fep.png",
+             "paris_fep_figures/x.png"]
+    r = subprocess.run(["git", "check-ignore", "--no-index", *paths], cwd=ROOT, capture_output=True, text=True)
+    assert sorted(r.stdout.split()) == sorted(paths), r.stdout
 
 
 def test_two_dof_tongues_fast(tmp_path):
@@ -211,3 +224,20 @@ def test_bilinear_attachment_two_dof(tmp_path):
     low = r["table"][0]
     assert low["bilinear_percent"] == pytest.approx(0.0, abs=1e-5) and low["cubic_percent"] < -0.01
     assert (tmp_path / "bilinear_two_dof.png").stat().st_size < 150_000
+
+
+def test_paris_fep_texts_say_no_fold_and_thin_only_what_it_thins(two_dof_nnm1, monkeypatch):
+    """Finding 7: the results table said 'folds at none J' for a tongue without folds, and a branch short enough
+    to be saved whole got '[saved 21 of 21 points to keep the file small]' in its message."""
+    ex = load_example("paris_fep")
+    t = dict(label="3:1", partner_mode=39, partner_hz=95.4, partner_label="tail torsion", partner_kind="tail",
+             partner_mac=1.0, entry_energy=3.57, entry_frequency_hz=31.8, jumped=True, points=26,
+             energy_range=(3.57, 276.0), folds=[], order=3, tip_fraction=0.99, tip_energy=246.0, status="done")
+    text = ex.fmt_tongue(t)
+    assert "no fold" in text and "none J" not in text and "folds at" not in text
+    assert "folds at 276, 4.22 J" in ex.fmt_tongue({**t, "folds": [276.0, 4.22]})
+    long, short = two_dof_nnm1, two_dof_nnm1.subset(slice(0, 21))
+    monkeypatch.setattr(ex, "MAX_FILE_BYTES", 80e3)           # room for ~37 points per branch of 2 DOFs
+    out = ex.thin([long, short], 0.0, log=lambda *a: None)
+    assert out[1] is short and "keep the file small" not in out[1].message
+    assert len(out[0]) < len(long) and f"of {len(long)} points to keep the file small" in out[0].message

@@ -211,7 +211,7 @@ def test_point_data_falls_back_to_a_computed_point():
             return np.array([1.0, 0.0])
 
     pd = point_data(Stub(), 0.7)
-    assert pd.energy == 2.0 and not pd.stable and "showing computed point 1" in pd.note
+    assert pd.energy == 2.0 and not pd.stable and "showing computed point 2" in pd.note     # row 1, numbered from 1
     assert len(pd.t) == 64 and pd.harmonics[1, 0] == pytest.approx(1.0)
 
 

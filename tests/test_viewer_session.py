@@ -91,7 +91,7 @@ def test_initial_state_selection_and_animation(server, demo_file):
     assert len(shared.entries) == 2
     assert s.sel_uid == shared.entries[0].uid and s.s == 0.0
     assert s.h_branch.value.startswith("1: NNM 1")
-    assert "branch 1, point 1.00" in s.h_sel.content
+    assert "branch 1, point 1 of 57" in s.h_sel.content
     js = read_glb_json(s.last_glb)
     assert "animations" in js and js["meshes"][0]["primitives"][0]["targets"]
     assert "peak displacement" in s.h_peak.content
@@ -112,7 +112,7 @@ def test_one_energy_for_the_point_shown_in_every_place(server, demo_file):
     j = int(np.argmax(E[1:] / E[:-1]))               # the widest energy step: log and linear differ most
     along = j + 0.5
     s.pick(e.uid, j)
-    s.h_along.value = along
+    s.h_along.value = along + 1                       # the slider gives the point's number, 1-based
     orbit = e.branch.interpolate(along).energy[0]
     assert abs(orbit / np.sqrt(E[j] * E[j + 1]) - 1) > 0.01   # the old readout's value is another number
     shown = f"{orbit:.4g} J"
@@ -148,17 +148,20 @@ def test_pick_energy_and_along_sliders(server, demo_file):
     b2 = shared.entries[1]
     s.pick(b2.uid, 5)                                      # click on point 5 of branch 2 in the scene
     assert s.sel_uid == b2.uid and s.s == 5.0
-    assert s.h_branch.value.startswith("2: NNM 2") and "branch 2, point 6.00" in s.h_sel.content
+    assert s.h_branch.value.startswith("2: NNM 2") and "branch 2, point 6 of 48" in s.h_sel.content
+    assert s.h_along.value == 6.0 and s.h_along.min == 1.0 and s.h_along.max == 48.0   # one numbering
+    assert "point 6 of 48" in s.h_readout.content and "point 6 of 48" in s.h_info.content
     E = b2.branch.energy
     assert s.h_energy.value == pytest.approx(np.log10(E[5]), abs=0.006)
     # energy slider: selection moves along the branch, the along slider follows
     target = 0.5 * (np.log10(E[7]) + np.log10(E[8]))
     s.h_energy.value = round(target, 2)
     assert 7.0 <= s.s <= 8.0
-    assert s.h_along.value == pytest.approx(round(s.s, 2))
+    assert s.h_along.value == pytest.approx(round(s.s + 1, 2))
+    assert f"point {s.s + 1:.2f} of 48" in s.h_sel.content            # between two computed points
     assert s.current_point.energy == pytest.approx(10 ** target, rel=0.1)
     # along slider: the energy slider follows
-    s.h_along.value = 2.0
+    s.h_along.value = 3.0                                  # point 3: row 2
     assert s.s == 2.0 and s.h_energy.value == pytest.approx(np.log10(E[2]), abs=0.006)
     # branch dropdown
     s.h_branch.value = s.h_branch.options[0]
@@ -280,7 +283,7 @@ def test_solver_error_is_shown_in_page_and_server_keeps_running(server, demo_fil
     s2, _ = make_session(server, demo_file)
     s2._cb(lambda _: s2._start(5, 10.0, 1.0))(None)
     assert s2.h_error.visible and "mode 5" in s2.h_error.content
-    s.h_along.value = 1.0                                 # the session still works
+    s.h_along.value = 2.0                                 # the session still works
     assert s.s == 1.0
     s.close()
     s2.close()
@@ -440,7 +443,7 @@ def test_page_is_drawn_while_the_solver_is_prepared(server, demo_file, monkeypat
     np.testing.assert_allclose(s.current_point.x, b1.reference_motion(0, samples=len(s.current_point.t))[1])
     b2 = shared.entries[1]
     s.pick(b2.uid, 5)                                     # picking works meanwhile
-    assert s.sel_uid == b2.uid and "branch 2, point 6.00" in s.h_sel.content and calls == [True, True]
+    assert s.sel_uid == b2.uid and "branch 2, point 6 of 48" in s.h_sel.content and calls == [True, True]
     ref = s.current_point
     shared.set_solver_ready()
     assert not s.h_solver.visible and calls == [True, True, False] and exact
@@ -536,8 +539,9 @@ def test_branch_status_and_events_are_shown(server, demo_file, monkeypatch):
     s.pick(shared.entries[1].uid, 3)
     info = s.h_branch_info.content
     assert "failed" in info and "try a larger steps_per_period" in info
-    assert "1 fold (near point 4)" in info and "1 period doubling (near point 7)" in info
-    assert "1 branch point (near point 9)" in info
+    # numbered from 1 as everywhere (issue 53, finding 3): rows 4, 7, 9 are points 5, 8, 10
+    assert "1 fold (near point 5)" in info and "1 period doubling (near point 8)" in info
+    assert "1 branch point (near point 10)" in info
     # the panel: a marker per event, by kind, and the failed end, with legend entries
     ax = s.drawing.fep.renderer.ax
     legend = [t.get_text() for t in s.drawing.fep.renderer.legend.get_texts()]
@@ -659,7 +663,7 @@ def test_fep_and_orbit_csv_downloads(server, demo_file):
     name, data = s.last_download
     rows = list(csv.reader(io.StringIO(data.decode())))
     pd = s.current_point
-    assert name.endswith("_point3.00_orbit.csv")
+    assert name.endswith("_point4_orbit.csv")
     assert rows[0] == ["t_s", "x1", "x2"] and len(rows) == len(pd.t) + 1
     table = np.array(rows[1:], dtype=float)
     np.testing.assert_array_equal(table[:, 0], pd.t)
@@ -797,7 +801,7 @@ def test_animation_gif_download(server, demo_file):
     s.pick(shared.entries[0].uid, 20)
     s._on_gif(None)                                          # the button's callback
     name, data = s.last_download
-    assert name.endswith("_point20.00.gif") and data[:6] == b"GIF89a"
+    assert name.endswith("_point21.gif") and data[:6] == b"GIF89a"
     im = Image.open(io.BytesIO(data))
     assert im.n_frames == GIF_FRAMES
     frames = []
@@ -910,7 +914,7 @@ def test_fep_zooms_on_a_narrow_branch_by_default_and_relative_axis(server):
                                                       ranges)[0])
     # the readout of the picked point
     text = s.h_readout.content
-    assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 4.00 of" in text
+    assert text.startswith("**Picked:** branch 1, NNM 1 (") and "point 4 of" in text
     assert f"f = {f1[3]:.6g} Hz" in text and "% from its linear" in text and "stable" in text and "backbone" in text
     s.close()
 
@@ -1182,7 +1186,7 @@ def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, 
     assert f"**linear mode 2 ({label}), f = {f2:.6g} Hz**" in s.h_info.content
     assert "Branch 2" not in s.h_info.content and "linear mode 2" in s.h_peak.content
     assert "animations" in read_glb_json(s.last_glb) and s.last_glb != glb_point
-    assert s.sel_uid == e2.uid and s.s == 5.0 and "branch 2, point 6.00" in s.h_sel.content
+    assert s.sel_uid == e2.uid and s.s == 5.0 and "branch 2, point 6 of 48" in s.h_sel.content
     s.request("branches")                                  # e.g. a job's points arriving: the mode stays
     assert s.current_point.frequency == pytest.approx(f2, rel=1e-12)
     name, data = s.orbit_csv()
@@ -1195,7 +1199,7 @@ def test_modes_tab_shows_a_linear_mode_and_a_later_pick_shows_the_point(server, 
     assert s.h_info.content.startswith("**Branch 2") and "linear mode" not in s.h_peak.content
     # the sliders too
     s._cb(s._on_show_linear)(None)
-    s.h_along.value = 3.0
+    s.h_along.value = 4.0                                  # point 4: row 3
     assert s.current_point.energy == pytest.approx(e2.branch.energy[3])
     s.h_lin_mode.value = s.h_lin_mode.options[0]
     s._cb(s._on_show_linear)(None)
@@ -1217,7 +1221,7 @@ def test_stiffness_slider_after_a_linear_mode_animates_the_picked_point(server, 
     s._cb(s._on_show_linear)(None)
     f1 = shared.model.linear_modes()[0][0]
     assert s.current_point.frequency == pytest.approx(f1, rel=1e-12)
-    assert s.h_readout.content.startswith("**Shown:** linear mode 1") and "point 6.00" in s.h_readout.content
+    assert s.h_readout.content.startswith("**Shown:** linear mode 1") and "point 6 of 48" in s.h_readout.content
     s.h_k3.value = 1.0                                     # every k3 x 10
     assert s.linear_mode is None and s.current_uid == e2.uid
     assert s.current_point.frequency == pytest.approx(e2.branch.frequency_hz[5], rel=1e-12)
@@ -1248,7 +1252,7 @@ def test_modes_tab_compute_its_branch_starts_the_job_as_start_does(server, demo_
     runner = shared.job
     runner.poll = 0.01
     assert s.h_mode.value == s.h_mode.options[1] and runner.mode == 2
-    assert calls == [(2, 5.0, {"max_points": 30, "integrator": "newmark", "steps_per_period": 200})]
+    assert calls == [(2, 5.0, {"max_points": 30, "integrator": "newmark", "steps_per_period": 200, "tongues": "follow"})]
     assert s.sel_uid == runner.entry.uid and s.linear_mode is None and s.current_point is None
     assert "Compute" in s.h_status.content and "NNM 2" in s.h_modes_job.content
     assert s.h_compute_linear.disabled and s.h_start.disabled

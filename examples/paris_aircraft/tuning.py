@@ -33,6 +33,14 @@ TABLE2_HZ = np.array([0.0936, 0.7260, 0.9606, 1.2118, 1.2153, 1.7951, 2.1072, 2.
                       8.1913, 9.8644, 16.1790, 21.2193, 22.7619, 23.6525, 25.8667, 28.2679, 29.3309,
                       31.0847, 34.9151, 39.5169, 40.8516, 47.3547, 52.1404])
 
+#: the seed paper's names of its modes 1..24 (Table 2 and its text; '' where it names none): the model's own
+#: labels number each kind of mode by frequency ('wing torsion 2 (symmetric)' is the paper's first symmetric
+#: wing torsion), so a file of the model carries both (/extra/reference/mode_names, shown next to the labels).
+#: The shipped assets/paris.h5 has them; build_paris.py writes them at its next version (the line changes the
+#: builder's fingerprint, so it goes with a rebuild: "reference": {..., "mode_names": PAPER_MODE_NAMES})
+PAPER_MODE_NAMES = [""] * 9 + ["first wing bending", "", "", "first tail bending"] + [""] * 5 + [
+    "first (symmetric) wing torsion", "second (anti-symmetric) wing torsion", "", "", "", ""]
+
 #: suspension-mode targets (Hz), sorted, and control-surface rotation targets (Hz)
 GEAR_TARGETS = np.array([0.0936, 0.7260, 0.9606, 1.2118, 1.7951, 3.5736])
 HINGE_TARGETS = {"rudder": 1.2153, "aileron": 2.1072, "elevator": 2.5157}

@@ -72,7 +72,8 @@ class Tongue:
         return int(self.start + np.argmin(np.abs(E - target)))
 
     def summary(self):
-        return (f"{self.label} tongue: points {self.start}..{self.end}, energy {self.energy_range[0]:.4g}.."
+        """One line on the tongue; its points numbered from 1 (rows start..end)."""
+        return (f"{self.label} tongue: points {self.start + 1}..{self.end + 1}, energy {self.energy_range[0]:.4g}.."
                 f"{self.energy_range[1]:.4g} J, tip at {self.tip_frequency_hz:.6g} Hz where harmonic "
                 f"{self.order} carries {100 * self.tip_fraction:.0f} %"
                 + (f" (closest linear mode {self.mode}, MAC {self.mac:.2f})" if self.mode else "")

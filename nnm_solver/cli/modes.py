@@ -6,7 +6,25 @@ import sys
 
 import numpy as np
 
-__all__ = ["list_modes", "list_modes_legend"]
+__all__ = ["list_modes", "list_modes_legend", "reference_mode_names", "label_with_reference"]
+
+
+def reference_mode_names(reference):
+    """{mode (1-based): the reference's name of it} from a file's /extra/reference/mode_names ('' entries and a
+    missing dataset: none).  The reference numbers its modes as the model does (Table 2 of a paper, say) but may
+    name them otherwise: the Paris model's 'wing torsion 2 (symmetric)' is the paper's first symmetric torsion."""
+    names = (reference or {}).get("mode_names")
+    if names is None:
+        return {}
+    return {k: str(n).strip() for k, n in enumerate(np.atleast_1d(names).tolist(), 1) if str(n).strip()}
+
+
+def label_with_reference(label, name):
+    """The model's label of a mode with the reference's name where the reference has one: 'wing torsion 2
+    (symmetric); paper: first (symmetric) wing torsion'."""
+    if not name:
+        return label
+    return f"{label}; paper: {name}" if label else f"paper: {name}"
 
 
 def list_modes(model, reference=None, count=30, out=sys.stdout):
@@ -14,6 +32,7 @@ def list_modes(model, reference=None, count=30, out=sys.stdout):
     # a model too large for the dense eigensolution (a full FE model): its lowest modes by sparse Lanczos
     freqs = sparse_modes(model, count)[0] if model.n > MAX_DENSE_DOF else model.linear_modes()[0]
     labels = model.mode_labels or []
+    named = reference_mode_names(reference)
     table = None
     if reference and "table2_hz" in reference:
         table = np.asarray(reference["table2_hz"], dtype=float)
@@ -28,10 +47,10 @@ def list_modes(model, reference=None, count=30, out=sys.stdout):
                 line += f"  {table[k]:>10.4f}  {100 * (freqs[k] / table[k] - 1):>+6.2f}%"
             else:
                 line += " " * 21
-        label = labels[k] if k < len(labels) else ""
+        label = label_with_reference(labels[k] if k < len(labels) else "", named.get(k + 1, ""))
         print(line + ("  " + label if label else ""), file=out)
     source = str(reference.get("source", "")) if table is not None else ""
-    print(list_modes_legend(table is not None, bool(labels), source), file=out)
+    print(list_modes_legend(table is not None, bool(labels) or bool(named), source), file=out)
 
 
 def list_modes_legend(reference, labels, source=""):
@@ -42,5 +61,6 @@ def list_modes_legend(reference, labels, source=""):
         words += [f"reference: the file's reference frequency of that mode (Hz; /extra/reference/table2_hz"
                   f"{', from the ' + source if source else ''})", "diff: freq / reference - 1"]
     if labels:
-        words.append("label: the mode's description stored in the file")
+        words.append("label: the mode's description stored in the file (and the reference's name of it, "
+                     "'paper: ...', from /extra/reference/mode_names)")
     return "columns: " + "; ".join(words)

@@ -1,7 +1,8 @@
 """nnm-solve: list the linear modes of a model file, or compute and save an NNM branch.
 
     nnm-solve FILE --list-modes
-    nnm-solve FILE --mode N --energy-max E [--out OUT.h5] [--plot fep.png]
+    nnm-solve FILE --mode N --energy-max E [--tongues skip|follow] [--out OUT.h5] [--plot fep.png]
+    nnm-solve FILE --tongue K [--branch NAME | --mode N]     nnm-solve FILE --switch K --energy-max E [--branch NAME]
     nnm-solve FILE --modes 10-24 --energy-max E [--sweep SWEEP.toml] [--workers N | --scheduler ADDRESS]
 
     nnm-solve FILE --mode N --energy-max E [--csv T.csv] [--uff S.uff] [--backbone B.csv --backbone-dof DOF]
@@ -22,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import NNMInputError, run_reporting_errors
+from .defaults import TONGUE_CHOICES, solver_defaults
+from .report import accuracy_line, report_and_save  # noqa: F401 (accuracy_line: part of the cli's API)
 from .modes import list_modes
 from .outputs import output_file
 
@@ -33,35 +36,6 @@ def _load(path):
     p = Path(path)
     model = load_model(p)          # nnm HDF5, or an import by suffix (.mat, .toml, .full)
     return model, None if is_import_path(p) else load_extra(p, "reference")
-
-
-def accuracy_line(branch):
-    """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator."""
-    s = branch.settings
-    err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
-    if np.isnan(err).all():
-        return "  accuracy: no per-point error estimate"
-    if s.method != "shooting":                 # harmonic balance: the truncation of the harmonics (hb_error.py)
-        fin = np.isfinite(err)
-        unresolved = int(np.sum(np.isinf(err)))
-        if not fin.any():
-            return (f"  accuracy: harmonic balance, {s.harmonics} harmonics; the truncation does not resolve any point "
-                    f"(raise --harmonics)")
-        i = int(np.flatnonzero(fin)[np.argmax(err[fin])])
-        more = " (raise --harmonics)" if err[i] > 1e-4 or unresolved else ""
-        text = (f"  accuracy: harmonic balance, {s.harmonics} harmonics; estimated frequency error (truncation) "
-                f"median {np.median(err[fin]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J)")
-        if unresolved:
-            text += f"; {unresolved} points not resolved by the truncation (no orbit with two harmonics more near them)"
-        return text + more
-    ok = np.isfinite(err)
-    if not ok.any():
-        return "  accuracy: no per-point error estimate"
-    i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
-    steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
-    more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
-    return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "
-            f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i} (E = {branch.energy[i]:.4g} J){more}")
 
 
 def _progress(job, stream, interval=0.2):
@@ -102,21 +76,43 @@ def main(argv=None):
     parser.add_argument("--mode", type=int, help="linear mode to continue (1-based)")
     parser.add_argument("--energy-max", type=float, help="energy (J) where the continuation stops")
     parser.add_argument("--energy-min", type=float, default=None, help="energy (J) of the first point")
-    parser.add_argument("--method", choices=("shooting", "hb"), default="shooting", help="shooting (default; "
-                        "Newmark or Gauss time integration, the seed paper's method) or hb (harmonic balance)")
-    parser.add_argument("--harmonics", type=int, default=7, help="hb: highest harmonic (default 7)")
+    D = solver_defaults()
+    parser.add_argument("--method", choices=("shooting", "hb"), default=D["method"], help=f"shooting (Gauss-Legendre or "
+                        f"Newmark time integration, the seed paper's method) or hb (harmonic balance); default "
+                        f"{D['method']}")
+    parser.add_argument("--harmonics", type=int, default=None, help=f"hb: highest harmonic (default {D['harmonics']})")
     parser.add_argument("--condensed", action="store_true", help="hb: solve the harmonic balance condensed onto "
                         "the nonlinear elements (unknowns: their deformations per harmonic; for models of any size "
                         "whose nonlinearity is localized)")
-    parser.add_argument("--steps-per-period", type=int, default=None, help="shooting: time steps a period (default: "
-                        "the integrator's, gauss6 100, newmark 200)")
-    parser.add_argument("--integrator", default=None, help="time integrator of the shooting: gauss6 (default, "
-                        "Gauss-Legendre order 6), gauss4, or newmark (the seed paper's, order 2)")
+    parser.add_argument("--steps-per-period", type=int, default=None, metavar="STEPS",
+                        help=f"shooting: time steps per period of each orbit (default {D['steps_per_period']}; rounded "
+                        f"up to a multiple of 4 for the quarter-period shooting of symmetric orbits; the integrator's own "
+                        f"default, newmark 200). The frequency error falls as STEPS^-6 with gauss6, STEPS^-2 with "
+                        f"newmark: raise it for orbits with strong higher harmonics (high-order tongues), or use "
+                        f"--freq-tol")
+    parser.add_argument("--integrator", default=None, help=f"time integrator of the shooting: gauss6 or "
+                        f"gauss4 (Gauss-Legendre, orders 6 and 4), or newmark (the seed paper's, order 2); default "
+                        f"{D['integrator']}")
     parser.add_argument("--freq-tol", type=float, default=None, help="raise the steps per period where a "
                         "point's estimated relative frequency error exceeds this (e.g. 1e-6)")
     parser.add_argument("--tol", type=float, default=None, help="relative periodicity tolerance (default 1e-6; "
                         "hb: relative residual, default 1e-8)")
-    parser.add_argument("--max-points", type=int, default=500, help="largest number of points kept (default 500)")
+    parser.add_argument("--max-points", type=int, default=None, metavar="N",
+                        help=f"largest number of points of the branch (default {D['max_points']}); the continuation "
+                        f"stops there if --energy-max is not reached first (status max_points)")
+    parser.add_argument("--tongues", choices=TONGUE_CHOICES, default=None,
+                        help=f"at an internal-resonance tongue: follow the branch through it, or skip it and return "
+                        f"the backbone (the tongues jumped are listed with the branch and saved with it; --tongue K "
+                        f"continues one); default {D['tongues']}")
+    family = parser.add_mutually_exclusive_group()
+    family.add_argument("--tongue", type=int, metavar="K", help="continue the K-th tongue (1-based, as listed after "
+                        "a --tongues skip run) of a saved branch of FILE as its own branch (nnm.continue_tongue); "
+                        "--energy-max is optional (default 100 x the entry energy)")
+    family.add_argument("--switch", type=int, metavar="K", help="continue the family born at the K-th branch point "
+                        "or period doubling (1-based, as listed after a run) of a saved branch of FILE "
+                        "(nnm.switch_branch); needs --energy-max")
+    parser.add_argument("--branch", metavar="NAME", help="--tongue / --switch: the saved branch to start from (its "
+                        "name in FILE or its 1-based number; default: the last branch of --mode N that has one)")
     parser.add_argument("--out", help="HDF5 file the branch is appended to (default: FILE, or FILE.h5 for .mat; "
                         "./STEM_branches.h5 if that is a shipped example or not writable)")
     parser.add_argument("--plot", help="save the frequency-energy plot to this image file")
@@ -142,23 +138,33 @@ def main(argv=None):
         return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
     if args.forced:
         return run_reporting_errors("nnm-solve", _run_forced, args)
+    if args.tongue is not None or args.switch is not None:
+        return run_reporting_errors("nnm-solve", _run_family, args)
     return run_reporting_errors("nnm-solve", _run, args)
 
 
 def _method_arguments(args):
     """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
+    given = dict(steps_per_period=args.steps_per_period, integrator=args.integrator, freq_tol=args.freq_tol)
+    given = {k: v for k, v in given.items() if v is not None}      # the solver's defaults for the others
     if args.method == "shooting":
         if args.condensed:
             raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
-        return {k: v for k, v in dict(steps_per_period=args.steps_per_period, integrator=args.integrator,
-                                      freq_tol=args.freq_tol).items() if v is not None}
-    given = [flag for flag, value, default in (("--steps-per-period", args.steps_per_period, None),
-                                               ("--integrator", args.integrator, None),
-                                               ("--freq-tol", args.freq_tol, None)) if value != default]
+        if args.harmonics is not None:
+            raise NNMInputError("--harmonics belongs to --method hb (harmonic balance)")
+        return given
     if given:
-        raise NNMInputError(f"{', '.join(given)} belong(s) to --method shooting; harmonic balance has no time steps "
+        flags = ", ".join("--" + k.replace("_", "-") for k in given)
+        raise NNMInputError(f"{flags} belong(s) to --method shooting; harmonic balance has no time steps "
                             f"(raise --harmonics instead)")
-    return dict(method="hb", harmonics=args.harmonics, condensed=args.condensed)
+    return dict(method="hb", condensed=args.condensed,
+                **({} if args.harmonics is None else dict(harmonics=args.harmonics)))
+
+
+def _continuation_options(args):
+    """continue_nnm's keywords given on the command line (the solver's defaults for the others)."""
+    opts = dict(tol=args.tol, max_points=args.max_points, energy_min=args.energy_min, tongues=args.tongues)
+    return {k: v for k, v in opts.items() if v is not None}
 
 
 def _check_arguments(model, args):
@@ -168,7 +174,8 @@ def _check_arguments(model, args):
     from ..model import MAX_DENSE_DOF
 
     check_branch_arguments(model, args.mode, args.energy_max, 1e-6 if args.tol is None else args.tol,
-                           args.max_points, args.energy_min, modes_known=model.n <= MAX_DENSE_DOF)
+                           solver_defaults()["max_points"] if args.max_points is None else args.max_points,
+                           args.energy_min, modes_known=model.n <= MAX_DENSE_DOF)
 
 
 def _run_forced(args):
@@ -202,7 +209,7 @@ def _run_forced(args):
 
 def _run(args):
     from . import exchange as cli_exchange
-    from ..files.branch_io import check_branch_file, save_branch
+    from ..files.branch_io import check_branch_file
     from ..driver.jobs import start_branch
 
     model, ref = _load(args.file)
@@ -217,8 +224,7 @@ def _run(args):
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
     cli_exchange.check_exports(args, model)
-    job = start_branch(model, args.mode, args.energy_max, tol=args.tol, max_points=args.max_points,
-                       energy_min=args.energy_min, **_method_arguments(args))
+    job = start_branch(model, args.mode, args.energy_max, **_continuation_options(args), **_method_arguments(args))
     t0 = time.perf_counter()
     try:
         _progress(job, sys.stderr)
@@ -235,25 +241,28 @@ def _run(args):
         print(f"nnm-solve: the continuation failed: {exc}", file=sys.stderr)
         branch = job.points()
     dt = time.perf_counter() - t0
-    print(f"mode {args.mode}: {len(branch)} points in {dt:.1f} s, energy {branch.energy.min():.3e}.."
-          f"{branch.energy.max():.3e} J, frequency {branch.frequency_hz[0]:.5f} -> {branch.frequency_hz[-1]:.5f} Hz; "
-          f"{branch.status}: {branch.message}" if len(branch) else f"no point converged: {branch.message}")
-    for e in branch.events:
-        print(f"  {e['kind']:<12} at point {e['index']:>4}: E = {e['energy']:.4e} J, f = {e['frequency_hz']:.5f} Hz"
-              f"  ({e['detail']}" + (f"; {e['stability_change']} of stability" if e.get("kind") == "fold"
-                                     and e.get("stability_change") else "")
-              + (f"; {e['note']}" if e.get("note") else "") + ")")
-    print(accuracy_line(branch))
-    if len(branch):
-        name = save_branch(out, branch)
-        print(f"saved as /branches/{name} in {out}")
-        if args.plot:
-            from ..results.plotting import plot_fep
-            plot_fep(branch, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM {args.mode}")
-            print(f"FEP written to {args.plot}")
-        cli_exchange.write_exports(args, branch)
-    # a branch that ends by its own physics (escape to a saddle, a closed loop) is a result, not an error
-    return 1 if branch.status == "failed" else 0
+    return report_and_save(args, model, branch, out, f"mode {args.mode}", f"NNM {args.mode}", dt)
+
+
+def _run_family(args):
+    """nnm-solve FILE --tongue K / --switch K: a family started on a saved branch of FILE (families.py)."""
+    from . import exchange as cli_exchange
+    from ..files.branch_io import check_branch_file
+    from .families import compute_family
+
+    if args.list_modes:
+        raise NNMInputError("--list-modes does not go with --tongue / --switch")
+    model, _ = _load(args.file)
+    if args.plot and not Path(args.plot).resolve().parent.is_dir():
+        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    cli_exchange.check_exports(args, model)
+    options = {**_continuation_options(args), **_method_arguments(args)}
+    options.pop("tongues", None)
+    t0 = time.perf_counter()
+    parent, family, title = compute_family(args, model, options)
+    out = output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
+    check_branch_file(out, model)
+    return report_and_save(args, model, family, out, title, title, time.perf_counter() - t0)
 
 
 def _run_sweep(args, parser):

@@ -10,6 +10,7 @@ from ..stability.floquet import detect_events, events_of_rows
 from ..fourier import fourier_amplitudes
 from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
+from .multipliers import floquet_columns, multipliers_of
 from .settings import settings_from_dict
 from .stops import STOP_STATUSES
 from .tongues import TongueRecord
@@ -62,7 +63,7 @@ class Branch:
 
     energy (N,) J, frequency_hz (N,) Hz, period (N,) s, x0, v0 (N, n) initial state (m, m/s) of
     each orbit (t = 0 at the phase condition), floquet (N, 2n) complex multipliers (largest modulus
-    first), stable (N,) bool, coefficients (N, N_b, n) Fourier coefficients (m) of harmonic-balance
+    first; a Ritz branch's (N, 2r): those of its Ritz system, ``multipliers_of``, multipliers.py), stable (N,) bool, coefficients (N, N_b, n) Fourier coefficients (m) of harmonic-balance
     branches (None otherwise), labels (N,) str ("backbone" / "tongue k:1"), events: list of dicts
     (kind, index, energy, frequency_hz, detail; located events also x0, v0, period), tongues: the
     tongues passed by a ``tongues="skip"`` continuation (dicts: ratio, order, partner_mode, entry_energy,
@@ -99,8 +100,8 @@ class Branch:
         self.period = np.asarray(period, dtype=float).reshape(N)
         self.x0 = np.asarray(x0, dtype=float).reshape(N, n)
         self.v0 = np.asarray(v0, dtype=float).reshape(N, n)
-        self.floquet = (np.full((N, 2 * n), np.nan, dtype=complex) if floquet is None
-                        else np.asarray(floquet, dtype=complex).reshape(N, 2 * n))
+        self.floquet = floquet_columns(floquet, N, n, self.settings,
+                                       width=getattr(self, "floquet", np.zeros((0, 2 * n))).shape[1])
         self.stable = np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N)
         self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
         self.labels = (np.full(N, "backbone", dtype=object) if labels is None
@@ -141,13 +142,21 @@ class Branch:
         self._set_columns(np.r_[self.energy, col("energy")], np.r_[self.frequency_hz, col("frequency_hz")],
                           np.r_[self.period, col("period")], np.vstack([self.x0, col("x0", (n,))]),
                           np.vstack([self.v0, col("v0", (n,))]),
-                          np.vstack([self.floquet, col("floquet", (2 * n,), complex)]),
+                          np.vstack([self.floquet, col("floquet", (-1,), complex)]) if len(self)
+                          else col("floquet", (-1,), complex),
                           np.r_[self.stable, col("stable", dtype=bool)], coeffs,
                           np.r_[self.labels, col("label", dtype=object)], np.r_[self.freq_error, col("freq_error")],
                           np.r_[self.steps, col("steps", dtype=int)],
                           np.r_[self.fundamental_share, col("fundamental_share")])
         self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         return self
+
+    @property
+    def multipliers_of(self):
+        """Whose Floquet multipliers ``floquet`` holds: 'model' (the model's 2n) or 'ritz' (the 2r of the Ritz
+        system a Ritz-basis harmonic balance solved: the modes below settings.cutoff_hz and the residual vectors;
+        results/multipliers.py)."""
+        return multipliers_of(self.settings)
 
     def point(self, i):
         """Row i as a Point."""

@@ -7,10 +7,40 @@ import numpy as np
 #: FEP markers of located events by kind: (matplotlib marker, colour)
 EVENT_MARKERS = {"fold": ("x", "k"), "branch_point": ("s", "tab:red"), "period_doubling": ("D", "tab:purple"),
                  "torus": ("^", "tab:green")}
+#: markers of the points off the backbone, one per label in order of appearance ('tongue 3:1', 'tongue 5:1', ...)
+OFF_BACKBONE_MARKERS = ("*", "P", "X", "h")
+#: their colour: another than the branch's, the same in every plot and in the viewer
+OFF_BACKBONE_COLOR = "tab:orange"
+
+
+def off_backbone(branch):
+    """[(label, boolean mask of the rows)] of the points of ``branch`` that are not on the backbone family: its
+    ``labels`` other than 'backbone' ('tongue 3:1', ...), in order of appearance; [] for a backbone."""
+    labels = np.asarray([str(x) for x in getattr(branch, "labels", [])], dtype=object)
+    if len(labels) != len(branch.energy):
+        return []
+    return [(lab, labels == lab) for lab in dict.fromkeys(labels) if lab != "backbone"]
+
+
+def mark_off_backbone(ax, energy, y, branch, name=None, ms=9):
+    """Draw the points of ``branch`` off its backbone over its curve (energy, y: the plotted coordinates), one
+    marker per label in OFF_BACKBONE_COLOR (filled: stable, hollow: unstable, as the branch's points), with the
+    label in the legend ('NNM 19: tongue 3:1 (off the backbone)')."""
+    energy, y = np.asarray(energy), np.asarray(y)
+    stable = np.asarray(branch.stable, dtype=bool)
+    for k, (label, mask) in enumerate(off_backbone(branch)):
+        marker = OFF_BACKBONE_MARKERS[k % len(OFF_BACKBONE_MARKERS)]
+        text = f"{name + ': ' if name else ''}{label} (off the backbone)"
+        for part, fill in ((mask & stable, OFF_BACKBONE_COLOR), (mask & ~stable, "white")):
+            if part.any():
+                ax.plot(energy[part], y[part], marker, ms=ms, color=OFF_BACKBONE_COLOR, mfc=fill, mec=OFF_BACKBONE_COLOR
+                        if fill == "white" else "k", mew=0.8, zorder=3, label=text)
+                text = None
 
 
 def plot_fep(branches, ax=None, path=None, title=None):
-    """Draw the FEP of one or several branches; stable points filled, unstable points hollow.
+    """Draw the FEP of one or several branches; stable points filled, unstable points hollow, the points off the
+    backbone (a tongue's, ``branch.labels``) marked and named in the legend (``mark_off_backbone``).
 
     branches : Branch or list of Branch.  ax : matplotlib Axes (created if None).
     path : if given, the figure is saved there (PNG, PDF, ... by extension).  Returns the Axes.
@@ -36,10 +66,11 @@ def plot_fep(branches, ax=None, path=None, title=None):
                 label=f"{label} stable" if known else f"{label} (stability not computed)")
         if np.any(~st):
             ax.plot(b.energy[~st], b.frequency_hz[~st], "o", ms=4, mfc="none", color=c, label=f"{label} unstable")
+        mark_off_backbone(ax, b.energy, b.frequency_hz, b, name=label if len(branches) > 1 else None)
         for e in b.events:
             marker, colour = EVENT_MARKERS.get(e["kind"], ("o", "k"))
             label = e["kind"].replace("_", " ")
-            ax.plot(e["energy"], e["frequency_hz"], marker, color=colour, ms=7, mfc="none", mew=1.5,
+            ax.plot(e["energy"], e["frequency_hz"], marker, color=colour, ms=7, mfc="none", mew=1.5, zorder=5,
                     label=label if label not in seen else None)
             seen.add(label)
     ax.set_xscale("log")
@@ -62,7 +93,7 @@ def plot_atlas(branches, ax=None, path=None, title=None):
     (``branch.model``, the variant's model for ``sweep`` / ``load_sweep`` branches), as the method
     computes it (shooting: the Newmark-discretised linear period at the branch's steps per period),
     so the curves start at 0 %.  One colour per mode, one line style per variant (the part of the
-    name before ':'); unstable points hollow.
+    name before ':'); unstable points hollow; the points off the backbone marked (``mark_off_backbone``).
     branches : list of Branch.  ax, path, title : as in ``plot_fep``.  Returns the Axes.
     """
     import matplotlib
@@ -103,6 +134,7 @@ def plot_atlas(branches, ax=None, path=None, title=None):
         st = np.asarray(b.stable, dtype=bool)
         if np.any(~st):
             ax.plot(b.energy[~st], change[~st], "o", ms=3, mfc="none", color=c)
+        mark_off_backbone(ax, b.energy, change, b, name=label, ms=6)
     ax.set_xscale("log")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_xlabel("energy (J)")
