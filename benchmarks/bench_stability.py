@@ -50,9 +50,10 @@ def _model(case):
 def worker(case, route):
     """One run in this process (PYTHONPATH: the tree to run): prints one JSON line."""
     import threading
+    import scipy.linalg  # noqa: F401  (scipy's own BLAS is loaded before the limit: threadpoolctl limits loaded ones)
     from threadpoolctl import threadpool_limits
-    threadpool_limits(1)
     import nnm_solver as nnm
+    threadpool_limits(1)
     import nnm_solver.stability.floquet as fl
     counts = {"all": 0, "main": 0}
     eig = fl.eigenvalues
