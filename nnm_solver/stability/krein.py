@@ -7,7 +7,9 @@ discriminant of the colliding pair (floquet.krein_gap), linear in the branch par
 collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
 (shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
 stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
-neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.
+neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.  A pair
+that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
+found in the full spectrum of the margin point next to that collision, and followed from there.
 """
 from __future__ import annotations
 
@@ -56,7 +58,9 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     within one step: the stability changes at the collision nearest the stable end, so a further candidate is
     followed only if it is complex already on the stable side of the nearest collision found so far (one local
     evaluation decides).  The full stability flag's change is then bracketed around that collision
-    (_flag_change_near: two full spectra in most cases); if it does not change there, bisection on the full flag.
+    (_flag_change_near: two full spectra in most cases); where the margin point on the stable side is unstable
+    already, the pairs complex there are followed on the shorter interval (_earlier_change); bisection on the full
+    flag only when neither brackets the change.
     ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
     evaluation.  Returns (lo, hi) like bisect."""
     rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
