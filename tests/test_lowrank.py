@@ -1,6 +1,8 @@
 """The half-period map as a diagonal plus a low-rank term (lowrank.py, newmark.sweep_factors) and the Krein
 follower's shift-invert Arnoldi on it (Woodbury solves), against the dense matrix: the same map, the same
 quotient, the same solves and the same eigenvalues; the Arnoldi's restarts are bounded."""
+import types
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -83,6 +85,7 @@ class _Point(ShootingStability):
         self.n, self.symmetric, self.reversible, self.all_columns, self.quarter = A.n, True, True, False, True
         self._accepted_maps = (A.dense(), None)
         self._accepted_factors = (A, self._accepted_maps[0]) if factored else None
+        self.sys = types.SimpleNamespace(Bq=np.ones((1, A.n)))      # every mode sees the element
 
     def unpack(self, u):
         return u[:self.n], u[self.n:2 * self.n], u[-1]

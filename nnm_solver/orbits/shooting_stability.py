@@ -14,8 +14,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 
-from ..stability.floquet import (collision_coordinates, deflate, eigenvalues, nontrivial_multipliers,
-                       reversible_from_eigenvalues, reversible_matrix, reversible_spectrum)
+from ..stability.floquet import (collision_coordinates, coupled_modes, eigenvalues, nontrivial_multipliers,
+                       reversible_blocks, reversible_from_eigenvalues, reversible_spectrum)
 from .. import threads
 from ..integrators.lowrank import DiagonalPlusLowRank
 from ..threads import background
@@ -125,14 +125,13 @@ class ShootingStability:
         family = self.unpack(tangent)[0]
         deflated = np.linalg.norm(family) > 0
         low = self._low_rank_a11(maps) if self.n > 8 * k + 1 else None
-        C = None
+        C, fixed = None, np.zeros(0)
         if low is not None:
             low = low.deflated(family) if deflated else low
-        else:
-            A11 = maps[0][:, :self.n]
-            C = deflate(A11, family[:, None]) if deflated else A11
+        else:       # the coupled modes only (floquet.reversible_blocks); the others' eigenvalues are `fixed`
+            C, _, fixed = reversible_blocks(maps[0][:, :self.n], family if deflated else None, self.coupled_modes)
             if C.shape[0] <= 8 * k:
-                return sla.eigvals(C, check_finite=False)
+                return np.concatenate([sla.eigvals(C, check_finite=False), fixed])
         # a complex shift far from a dense real spectrum (the pair has gone back to the axis) can stall Arnoldi:
         # then the shift's real part, and the full spectrum if that fails too
         # (a complex shift that stalled is not tried again: the follower asks with the same shift at every step)
@@ -141,11 +140,17 @@ class ShootingStability:
             if isinstance(sigma, complex) and sigma == getattr(self, "_stalled_shift", None):
                 continue
             c = nearest_eigenvalues(low if low is not None else C, sigma, k)
-            if c is not None:
-                return c
+            if c is not None:       # with the decoupled modes' eigenvalues as near the shift as these
+                return np.concatenate([c, fixed[np.abs(fixed - sigma) <= np.max(np.abs(c - sigma))]])
             if isinstance(sigma, complex):
                 self._stalled_shift = sigma
-        return sla.eigvals(C if C is not None else low.dense(), check_finite=False)
+        return np.concatenate([sla.eigvals(C if C is not None else low.dense(), check_finite=False), fixed])
+
+    @property
+    def coupled_modes(self):
+        """Indices of the modes that see the nonlinear elements (floquet.coupled_modes), or None when all do: the
+        multipliers' eigenproblem is of their size, the others' eigenvalues are their diagonal entries of A11."""
+        return coupled_modes(self.sys.Bq)
 
     @property
     def background_spectrum(self):
@@ -165,9 +170,10 @@ class ShootingStability:
         maps = self.stability_maps()
         if maps is None or not (self.symmetric and self.reversible):
             return PendingSpectrum(result=(self.floquet_multipliers(family), self.collision))
-        C, deflated = reversible_matrix(maps[0][:, :self.n], None if family is None else family[0])
+        C, deflated, fixed = reversible_blocks(maps[0][:, :self.n], None if family is None else family[0],
+                                               self.coupled_modes)
         self.collision_per_modulus = 0.5
-        return PendingSpectrum(job=background(eigenvalues, C), deflated=deflated)
+        return PendingSpectrum(job=background(eigenvalues, C), deflated=deflated, fixed=fixed)
 
     def floquet_multipliers(self, family=None):
         """Floquet multipliers (2n,) of the last accepted point.
@@ -182,7 +188,7 @@ class ShootingStability:
             return np.full(2 * self.n, np.nan, dtype=complex)
         if self.symmetric and self.reversible:
             mu, self.collision = reversible_spectrum(self.stability_maps()[0][:, :self.n],
-                                                     None if family is None else family[0])
+                                                     None if family is None else family[0], self.coupled_modes)
             self.collision_per_modulus = 0.5     # |mu| = |lambda|^2: c = a + ib gives |mu| - 1 = 2 b / sqrt(1 - a^2)
             return mu
         A = self.accepted_map
@@ -228,15 +234,15 @@ class PendingSpectrum:
     """The multipliers of one point being computed in a worker thread: call it for (multipliers, collision
     coordinates) (it waits); ``cancel()`` drops it if it has not started (a point the continuation discards)."""
 
-    def __init__(self, job=None, deflated=False, result=None):
-        """job : a Future of the eigenvalues c of reversible_matrix's C (deflated: whether C was); or result : the
-        (multipliers, collision coordinates) computed already."""
-        self.job, self.deflated, self.result = job, deflated, result
+    def __init__(self, job=None, deflated=False, result=None, fixed=()):
+        """job : a Future of the eigenvalues c of floquet.reversible_blocks' C (deflated: whether C was; fixed: the
+        decoupled modes' eigenvalues); or result : the (multipliers, collision coordinates) computed already."""
+        self.job, self.deflated, self.result, self.fixed = job, deflated, result, np.asarray(fixed, dtype=complex)
 
     def __call__(self):
         if self.job is None:
             return self.result
-        return reversible_from_eigenvalues(self.job.result(), self.deflated)
+        return reversible_from_eigenvalues(np.concatenate([self.job.result(), self.fixed]), self.deflated)
 
     def cancel(self):
         if self.job is not None:

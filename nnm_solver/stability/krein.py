@@ -7,7 +7,9 @@ discriminant of the colliding pair (floquet.krein_gap), linear in the branch par
 collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
 (shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
 stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
-neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.
+neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.  A pair
+that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
+found in the full spectrum of the margin point next to that collision, and followed from there.
 """
 from __future__ import annotations
 
@@ -23,6 +25,10 @@ MAX_KREIN_PAIRS = 4
 
 #: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
 KREIN_PROBES = 3
+
+#: nested Krein locations within one step (a pair found complex at a probe or at the stable-side margin point is
+#: followed on the shorter interval), beyond which the full flag is bisected
+KREIN_DEPTH = 3
 
 #: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
 #: with a complex shift (the local solver's window holds 6 eigenvalues)
@@ -52,7 +58,9 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     within one step: the stability changes at the collision nearest the stable end, so a further candidate is
     followed only if it is complex already on the stable side of the nearest collision found so far (one local
     evaluation decides).  The full stability flag's change is then bracketed around that collision
-    (_flag_change_near: two full spectra in most cases); if it does not change there, bisection on the full flag.
+    (_flag_change_near: two full spectra in most cases); where the margin point on the stable side is unstable
+    already, the pairs complex there are followed on the shorter interval (_earlier_change); bisection on the full
+    flag only when neither brackets the change.
     ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
     evaluation.  Returns (lo, hi) like bisect."""
     rho_stars = [rho_stars] if np.isscalar(rho_stars) else list(rho_stars)
@@ -73,7 +81,13 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
     (blo, bhi), root = best
-    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root)
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root, windows=False)
+    if bracket is None:        # the flag changed nearer the stable end: the pairs complex there are followed
+        x_s = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)[0]
+        earlier = _earlier_change(loc, lo, hi, f_lo, r_lo if f_lo else r_hi, x_s, depth)
+        if earlier is not None:
+            return earlier
+        bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root)
     if bracket is None:        # no pair followed changed the stability (e.g. a pair left through +-1 too)
         return loc.bisect(loc.stable, lo, hi)
     # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
@@ -84,7 +98,7 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     for x in probes:
         if not loc.stable(x):             # (the stable end's flag is True)
             r_x = loc.collision(x)
-            cands = candidates(r_x) if r_x is not None and depth < 2 else []
+            cands = candidates(r_x) if r_x is not None and depth < KREIN_DEPTH else []
             if not cands:
                 return loc.bisect(loc.stable, start, x)
             stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
@@ -145,18 +159,30 @@ MARGIN = 0.8
 FLAG_BAND = 1e-3
 
 
-def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None):
-    """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
-    energy tolerance; None if the flag does not change there.
+def _earlier_change(loc, lo, hi, f_lo, r_stable, x_s, depth):
+    """The flag's change between the step's stable end and the stable-side margin point x_s of a followed
+    collision, where x_s is unstable beyond the round-off band (FLAG_BAND): another pair (or the followed one,
+    where its secant stopped short of its root) changed the flag nearer the stable end.  The pairs complex at
+    x_s, whose full spectrum is known, are followed on the shorter interval (locate_collision: local evaluations
+    and a few full spectra, instead of a bisection of the full flag over the step).  r_stable : the collision
+    coordinates at the stable end.  None when x_s is stable, has no complex coordinates or the nesting is
+    KREIN_DEPTH deep (the caller bisects the full flag)."""
+    start = lo if f_lo else hi
+    if depth >= KREIN_DEPTH or x_s == start or loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)):
+        return None
+    r_s = loc.collision(x_s)
+    cands = candidates(r_s) if r_s is not None else []
+    if not cands:
+        return None
+    stable_end, unstable_x = (True, r_stable), (False, r_s)
+    return (locate_collision(loc, start, x_s, cands, [stable_end, unstable_x], depth + 1) if f_lo else
+            locate_collision(loc, x_s, start, cands, [unstable_x, stable_end], depth + 1))
 
-    The tracked pair's threshold (its imaginary part at the stability tolerance) and the full flag's differ by
-    round-off: there the imaginary part grows like the square root of the distance from the collision, so the
-    two eigen-solvers' values, ~1e-4 apart relative, place the crossing up to ~1e-6 of the step apart.  The full
-    spectra are computed at two margin points around the collision, MARGIN x the energy tolerance apart: they
-    bracket the change when the stable side's largest modulus excess |mu| - 1 is within (1 + FLAG_BAND) x the
-    tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise (another
-    pair changed the flag nearby) a bisection on the flag within 10 or 1000 times the bracket's width around it.
-    f_lo : the flag at lo; root : optional (centre, delta) of the margin points (else around the bracket)."""
+
+def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
+    """The two margin points around a followed collision (blo, bhi) where the full flag is checked: (x_s, x_u, c,
+    width), x_s on the stable side, x_u on the unstable one, MARGIN x the energy tolerance apart around the centre
+    c (the secant's root when given: (centre, delta)); width: the bracket's (or 2 delta)."""
     a, b = min(lo, hi), max(lo, hi)
     width = abs(bhi - blo)
     if root is not None:
@@ -173,10 +199,30 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None):
     delta = min(delta, 1e-2 * (b - a))
     sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
     x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
-    x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)         # the margin on the stable side, on the unstable side
+    x_s, x_u = (x_lo, x_hi) if f_lo else (x_hi, x_lo)
+    return x_s, x_u, c, width
+
+
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
+    """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
+    energy tolerance; None if the flag does not change there.
+
+    The tracked pair's threshold (its imaginary part at the stability tolerance) and the full flag's differ by
+    round-off: there the imaginary part grows like the square root of the distance from the collision, so the
+    two eigen-solvers' values, ~1e-4 apart relative, place the crossing up to ~1e-6 of the step apart.  The full
+    spectra are computed at two margin points around the collision, MARGIN x the energy tolerance apart
+    (_margin_points): they bracket the change when the stable side's largest modulus excess |mu| - 1 is within
+    (1 + FLAG_BAND) x the tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise
+    (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or 1000 times the
+    bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin points (else
+    around the bracket)."""
+    a, b = min(lo, hi), max(lo, hi)
+    x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
     loc.prefetch([x_s, x_u])
     if loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)) and not loc.stable(x_u, STABILITY_TOL * (1 - FLAG_BAND)):
-        return (x_lo, x_hi) if x_lo < x_hi else (x_hi, x_lo)
+        return (x_s, x_u) if x_s < x_u else (x_u, x_s)
+    if not windows:
+        return None
     for k in (10.0, 1000.0):
         w = k * max(width, 1e-12 * max(1.0, abs(bhi)))
         x0, x1 = max(a, min(c, blo, bhi) - w), min(b, max(c, blo, bhi) + w)
@@ -197,7 +243,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     shift, spacing = _shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
     widths = [abs(hi - lo)]
-    local = True
+    local, stalled = True, False
     for _ in range(60):
         if loc._converged(lo, hi):
             break
@@ -205,8 +251,9 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         c = None
         if g1 is not None and g2 is not None and g1 != g2:
             c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
-        secant = c is not None and min(lo, hi) < c < max(lo, hi) and not (len(widths) > 3 and
-                                                                         widths[-1] > 0.5 * widths[-4])
+        secant = c is not None and min(lo, hi) < c < max(lo, hi) and not stalled and not (
+            len(widths) > 3 and widths[-1] > 0.5 * widths[-4])
+        stalled = False
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
         r_c = loc.local_collision(c, shift)
@@ -235,5 +282,34 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             # then within the margin points of _flag_change_near around c, which check the flag there
             E_c, E_2 = loc.energy(c), loc.energy(x2)
             if abs(E_c - E_2) <= 0.25 * MARGIN * loc.rtol * abs(E_c) and E_c != E_2:
-                return (lo, hi), local, (c, 0.5 * MARGIN * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2))
+                delta = 0.5 * MARGIN * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
+                verdict = _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm)
+                if verdict is None:
+                    return (lo, hi), local, (c, delta)
+                x_v, g_v = verdict           # a stalled secant (g far from linear): the bracket shrinks by that point
+                if (g_v > 0) == f_lo:
+                    lo = x_v
+                else:
+                    hi = x_v
+                last = [(c, g_c), (x_v, g_v)]
+                widths.append(abs(hi - lo))
+                stalled = True               # the next step bisects
     return (lo, hi), local, None
+
+
+def _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm):
+    """Check a secant's convergence at c: the local test function at the margin point c -+ delta towards the
+    root (the side where the bracket's other end lies) must have the other sign.  A secant step is small also
+    where it stalls: g far from linear, e.g. a complex pair's tiny negative gap beside a real side's large one (the
+    aircraft's NNM 20 at 122.6 J: -8e-11 against 2.5e-5, the step 1e-8 of the bracket while the root lay 4e-2
+    of the step away).  None when the root lies within delta of c, else (x, g) at that point; one local
+    evaluation."""
+    towards = hi if (g_c > 0) == f_lo else lo         # (lo's side has g > 0 where f_lo)
+    x = c + np.sign(towards - c) * delta
+    if not min(lo, hi) <= x <= max(lo, hi):
+        return None
+    r = loc.local_collision(x, shift)
+    g = krein_gap(r, rho_star, pm) if r is not None else None
+    if g is None or (g > 0) != (g_c > 0):
+        return None
+    return x, g

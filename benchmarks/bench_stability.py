@@ -1,0 +1,152 @@
+"""Stability and event location: the local route against the dense one and the code before (issue 52), side by side.
+
+Routes, each run in its own process (BLAS 1 thread, the solver's worker threads on), in turn, ``--repeats`` times:
+
+* ``before``: the solver tree given by ``--before`` (e.g. the commit this work started from, unpacked with
+  ``git archive <commit> | tar -x -C /tmp/base``), as it is;
+* ``local``: this tree: Krein collisions followed by shift-invert Arnoldi, a flag changed nearer the stable end found
+  at the margin points (krein._earlier_change), the multipliers' eigenproblem of the coupled modes only
+  (floquet.coupled_modes);
+* ``dense``: this tree with every Krein collision located by bisection on the full (dense) stability flag and the
+  eigenproblem of all modes: the reference.
+
+Cases: ``m20`` the aircraft's NNM 20 with the defaults until its first energy fold (as bench_targets.py's ``paris``);
+``m13`` its NNM 13 to 26 J (the torus near 22.5 J); ``2dof`` the 2-DOF benchmark's NNM 1 to 100 J (the pitchfork at
+40.97 J); ``3dof`` a 3-DOF chain's combination resonance (two Krein collisions; tests/test_bifurcation.py), gauss6.
+Printed per case and route: the median time, the load average before and after each run, the dense eigenproblems
+(floquet.eigenvalues calls; on the main thread: during event location), the events, and each event's relative
+energy difference from the dense route's.  Usage::
+
+    git archive b28e431 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
+    python benchmarks/bench_stability.py --before /tmp/base --cases m20 --repeats 3
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _model(case):
+    import nnm_solver as nnm
+    if case in ("m20", "m13"):
+        return nnm.load_model(str(ROOT / "assets" / "paris.h5"))
+    if case == "2dof":
+        return nnm.load_model(str(ROOT / "assets" / "two_dof.h5"))
+    from scipy.stats import ortho_group
+    Phi = ortho_group.rvs(3, random_state=0)
+    K = Phi @ np.diag([1.0, 1.8 ** 2, 2.4 ** 2]) @ Phi.T
+    return nnm.Model(M=np.eye(3), K=K, springs=[nnm.CubicSpring(dof=0, k3=1.0)])
+
+
+def worker(case, route):
+    """One run in this process (PYTHONPATH: the tree to run): prints one JSON line."""
+    import threading
+    import scipy.linalg  # noqa: F401  (scipy's own BLAS is loaded before the limit: threadpoolctl limits loaded ones)
+    from threadpoolctl import threadpool_limits
+    import nnm_solver as nnm
+    threadpool_limits(1)
+    import nnm_solver.stability.floquet as fl
+    counts = {"all": 0, "main": 0}
+    eig = fl.eigenvalues
+
+    def counted(C):
+        counts["all"] += 1
+        counts["main"] += threading.current_thread() is threading.main_thread()
+        return eig(C)
+
+    fl.eigenvalues = counted
+    import nnm_solver.orbits.shooting_stability as ss
+    if hasattr(ss, "eigenvalues"):
+        ss.eigenvalues = counted
+    if route == "dense":
+        import nnm_solver.stability.events as ev
+        ev.locate_collision = lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi)
+        if hasattr(ss.ShootingStability, "coupled_modes"):
+            ss.ShootingStability.coupled_modes = property(lambda self: None)
+    for integrator in ("newmark", "gauss6"):          # warm-up: numba kernels compiled (or loaded) outside the time
+        nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0,
+                         integrator=integrator)
+    model = _model(case)
+    counts.update(all=0, main=0)
+    t0 = time.perf_counter()
+    if case == "m20":
+        stop, E = threading.Event(), []
+
+        def on_point(p):
+            E.append(p["energy"])
+            if len(E) > 2 and E[-1] < E[-2]:
+                stop.set()
+        b = nnm.continue_nnm(model, mode=20, energy_max=1e6, on_point=on_point, stop=stop)
+    elif case == "m13":
+        b = nnm.continue_nnm(model, mode=13, energy_max=26.0)
+    elif case == "2dof":
+        b = nnm.continue_nnm(model, mode=1, energy_max=100.0)
+    else:
+        b = nnm.continue_nnm(model, 1, 3.0, integrator="gauss6", steps_per_period=100)
+    t = time.perf_counter() - t0
+    print(json.dumps(dict(seconds=t, points=len(b.energy), eig_all=counts["all"], eig_main=counts["main"],
+                          stable=np.asarray(b.stable).astype(int).tolist(),
+                          events=[(e["kind"], float(e["energy"]), e.get("stability_change")) for e in b.events],
+                          solver=nnm.__file__)))
+
+
+def run(case, route, tree):
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    l0 = os.getloadavg()[0]
+    out = subprocess.run([sys.executable, __file__, "--worker", case, route], env=env, capture_output=True, text=True,
+                         cwd=str(tree))
+    if out.returncode:
+        raise SystemExit(f"{case}/{route} failed:\n{out.stderr[-2000:]}")
+    res = json.loads(out.stdout.strip().splitlines()[-1])
+    res["load"] = (l0, os.getloadavg()[0])
+    return res
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--worker", nargs=2, metavar=("CASE", "ROUTE"))
+    ap.add_argument("--before", default=None, help="a source tree of the solver before (omit: no 'before' route)")
+    ap.add_argument("--cases", default="m20,2dof,3dof", help="comma-separated: m20, m13, 2dof, 3dof")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+    if args.worker:
+        return worker(*args.worker)
+    routes = [("dense", ROOT), ("local", ROOT)] + ([("before", Path(args.before))] if args.before else [])
+    print(f"bench_stability: {os.cpu_count()} cores, BLAS 1 thread, numpy {np.__version__}; "
+          f"{time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}; before: {args.before}")
+    for case in args.cases.split(","):
+        results = {name: [] for name, _ in routes}
+        for _ in range(args.repeats):
+            for name, tree in routes:
+                results[name].append(run(case, name, tree))
+        ref = results["dense"][-1]
+        print(f"\n{case}:")
+        for name, _ in routes:
+            rs = results[name]
+            last = rs[-1]
+            flags = "equal" if last["stable"] == ref["stable"] else (
+                f"{sum(a != b for a, b in zip(last['stable'], ref['stable']))} differ"
+                if len(last["stable"]) == len(ref["stable"]) else f"{len(last['stable'])} vs {len(ref['stable'])} points")
+            times = ", ".join("%.2f" % r["seconds"] for r in rs)
+            loads = ", ".join("%.1f->%.1f" % tuple(r["load"]) for r in rs)
+            print(f"  {name:7s} median {np.median([r['seconds'] for r in rs]):7.2f} s  ({times}; load {loads})  "
+                  f"{last['points']} points, flags {flags}; dense eigenproblems {last['eig_all']} "
+                  f"({last['eig_main']} on the main thread)")
+            for kind, energy, change in last["events"]:
+                same = [e for k, e, c in ref["events"] if k == kind and c == change]
+                near = min(same, key=lambda e: abs(e - energy)) if same else None
+                diff = f"{energy / near - 1:+.1e} from dense" if near else "(not in the dense route)"
+                print(f"      {kind:14s} {energy:.8g} J {change or '':5s} {diff}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,130 @@
+"""The Krein locator without bisection of the full flag over a step (krein._earlier_change, krein._root_within), on
+synthetic spectra whose local solver sees only the 6 eigenvalues nearest its shift (as the shift-invert Arnoldi
+does): a pair that drifts out of that window before the followed collision, and a pair whose test function is far
+from linear (the secant stalls).  Each is checked against the full flag's own change (what a bisection of the
+flag finds) and by the number of full spectra used; the dense route's count is what bisection costs."""
+import numpy as np
+import pytest
+
+import nnm_solver.stability.krein as krein
+from test_bifurcation import _pair, _synthetic_locator
+
+#: a dense real background spectrum (0.01 apart), as a large model's: the local window of 6 spans +-0.03
+BACKGROUND = list(np.arange(-0.95, -0.05, 0.01) + 0.003)
+
+
+def _windowed(coords):
+    """A synthetic locator on coords(sigma) whose local solver returns the 6 coordinates nearest the shift, and the
+    list of sigmas where the full flag was evaluated."""
+    loc = _synthetic_locator(coords)
+    seen = []
+    stable = loc.stable
+
+    def counted(sigma, tol=1e-5):
+        seen.append(float(sigma))
+        return stable(sigma, tol)
+
+    loc.stable = counted
+    loc.local_collision = lambda sigma, shift: (lambda c: c[np.argsort(np.abs(c - shift))[:6]])(coords(sigma))
+    return loc, seen
+
+
+def _flag_change(loc, lo, hi):
+    """The full flag's change between lo and hi by bisection to 1e-12 (the dense reference)."""
+    f_lo = loc.stable(lo)
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if loc.stable(mid) == f_lo else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def _locate(loc, seen, coords, unstable_end):
+    ends = [(loc.stable(x), coords(x)) for x in (0.0, 1.0)]
+    assert ends[0][0] != ends[1][0]
+    seen.clear()
+    lo, hi = krein.locate_collision(loc, 0.0, 1.0, krein.candidates(coords(unstable_end)), ends=ends)
+    return lo, hi, len(set(seen))
+
+
+@pytest.mark.parametrize("earlier", [True, False])
+def test_a_pair_that_drifted_out_of_the_window_is_found_at_the_margin(monkeypatch, earlier):
+    """Pair A collides at 0.8 and is the most unstable at the step's end; pair B collides at 0.3 and keeps still until
+    0.8, then drifts 0.1 along the axis by the step's end: the local window around its end coordinate no longer
+    holds it at A's collision, so it is not followed there.  The full flag at A's stable-side margin point is then
+    unstable, and B is complex there: B is followed from that point (a few full spectra) instead of bisecting the
+    full flag over the step (~30).  Both find the flag's own change at B's collision."""
+    if not earlier:
+        monkeypatch.setattr(krein, "KREIN_DEPTH", 0)
+
+    def coords(sigma):
+        centre = -0.4 - 0.5 * max(0.0, sigma - 0.8)
+        return np.array(BACKGROUND + _pair(0.5, 0.01 * (0.8 - sigma)) + _pair(centre, 1e-4 * (0.3 - sigma)),
+                        dtype=complex)
+
+    loc, seen = _windowed(coords)
+    lo, hi, full = _locate(loc, seen, coords, 1.0)
+    ref = _flag_change(loc, 0.0, 1.0)
+    assert abs(ref - 0.3) < 1e-3
+    assert min(lo, hi) <= ref + 1e-9 and ref - 1e-9 <= max(lo, hi) and abs(hi - lo) <= loc.rtol * (1 + hi)
+    if earlier:
+        assert full <= 2 * (2 + krein.KREIN_PROBES) + 2
+    else:
+        assert full > 25
+
+
+@pytest.mark.parametrize("checked", [True, False])
+def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
+    """A pair complex from the step's unstable start (sigma = 0) whose imaginary part stays at twice the stability
+    threshold until 0.45, where it jumps onto the real axis and separates (its test function: -3e-10, then
+    +7e-11 rising by 0.01 per unit sigma).  The secant from the far real side moves by ~1e-8 of the step and
+    would stop there, short of the root; one local evaluation at the margin point shows the sign unchanged, so the
+    follower bisects on.  Both routes find the flag's change at 0.45; with the check, from two margin spectra and
+    the probes, without it by bisecting the full flag."""
+    if not checked:
+        monkeypatch.setattr(krein, "_root_within", lambda *a, **k: None)
+        monkeypatch.setattr(krein, "KREIN_DEPTH", 0)
+
+    def coords(sigma):
+        pair = ([0.5 + 2e-5j, 0.5 - 2e-5j] if sigma < 0.45 else _pair(0.5, 0.01 * (sigma - 0.45)))
+        return np.array(BACKGROUND + pair, dtype=complex)
+
+    loc, seen = _windowed(coords)
+    loc.rtol = 5e-7                     # Newmark's event tolerance (the aircraft's): the secant's stall looks converged
+    lo, hi, full = _locate(loc, seen, coords, 0.0)
+    ref = _flag_change(loc, 0.0, 1.0)
+    assert abs(ref - 0.45) < 1e-9
+    assert min(lo, hi) <= ref + 1e-9 and ref - 1e-9 <= max(lo, hi) and abs(hi - lo) <= loc.rtol * (1 + hi)
+    if checked:
+        assert full <= 2 + krein.KREIN_PROBES
+    else:
+        assert full > 25
+
+
+@pytest.mark.slow
+def test_aircraft_mode_20_events_and_flags_equal_the_dense_route(monkeypatch):
+    """The aircraft's NNM 20 (548 modes, 4 cubic springs; 470 modes see them) to 10 J with the defaults: the local
+    route (Krein collisions followed by shift-invert Arnoldi, the eigenproblem of the coupled modes) against the
+    dense one (every Krein collision bisected on the full flag, the eigenproblem of all 548 modes): the same points,
+    flags at every point, multipliers, and events (a loss at 7.44 J and a gain at 8.91 J).  The energies agree to
+    1e-5: there the unstable pair's modulus excess |mu| - 1 hovers at the stability tolerance (9.985e-6 to 9.989e-6
+    over 1.2e-5 of relative energy), so where it crosses 1e-5 moves by ~1e-5 with round-off and the orbit's own
+    error (the two routes place it 5.4e-6 and 2.7e-6 apart)."""
+    from pathlib import Path
+    import nnm_solver as nnm
+    import nnm_solver.stability.events as ev
+    from nnm_solver.orbits import shooting_stability as ss
+    from test_decoupled_modes import _matched
+    model = nnm.load_model(str(Path(__file__).resolve().parent.parent / "assets" / "paris.h5"))
+    local = nnm.continue_nnm(model, 20, 10.0)
+    with monkeypatch.context() as m:
+        m.setattr(ev, "locate_collision", lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi))
+        m.setattr(ss.ShootingStability, "coupled_modes", property(lambda self: None))
+        dense = nnm.continue_nnm(model, 20, 10.0)
+    assert len(local.energy) == len(dense.energy) > 15
+    assert np.allclose(local.energy, dense.energy, rtol=1e-9)
+    assert np.array_equal(np.asarray(local.stable), np.asarray(dense.stable))
+    assert max(_matched(a, b) for a, b in zip(local.floquet, dense.floquet)) < 1e-8
+    kinds = [(e["kind"], e.get("stability_change")) for e in dense.events]
+    assert kinds == [("torus", "loss"), ("torus", "gain")]
+    assert [(e["kind"], e.get("stability_change")) for e in local.events] == kinds
+    assert np.allclose([e["energy"] for e in local.events], [e["energy"] for e in dense.events], rtol=1e-5, atol=0)
