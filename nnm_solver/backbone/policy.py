@@ -199,6 +199,8 @@ class SkipPolicy:
                           record.replace(family_end=True, note=sk.message) if record.order >= 2 else None, index)
         if status == "tongue":
             k, partner = sk.partner
+            if not record.partner_mode and partner:   # no partner harmonic in the orbit: the skeleton's resonance
+                record = record.replace(order=k, partner_mode=partner)
             named = f"the {k}:1 internal resonance with mode {partner}" if partner else "a resonance"
             return Finish("tongue", f"{what}, where the backbone family itself ends in {named} (its skeleton: "
                                     f"{sk.message}): no backbone beyond it; the points on the backbone below are kept",

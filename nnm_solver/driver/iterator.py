@@ -191,7 +191,9 @@ class NNMIterator(StepRefinement):
         verdict = Verdict(obs[0].label)
         if self._labels is not None:
             self._estimate_error(point)
-            verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run)
+            falling = bool(self.points) and point.energy < self.points[-1].energy * (1 - 1e-9)
+            verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run,
+                                           falling=falling)
             point.label = verdict.text
         return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1] if self._last_kept else None,
                                    len(self.points), self.tongues)
