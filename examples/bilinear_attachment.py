@@ -46,7 +46,8 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-import nnm_solver as nnm  # noqa: E402
+import nnm_solver as nnm
+from nnm_solver.integrators.registry import get_integrator  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PARIS = ROOT / "assets" / "paris.h5"
@@ -105,10 +106,10 @@ def compare(model, mode, energy_max):
     bil, t_b = backbone(bil_model, mode, energy_max)
     bil_peaks = np.array([peak_deformation(bil, i) for i in range(len(bil))])
     f_lin = float(model.linear_modes()[0][mode - 1])
-    # the linear frequency as the time step sees it: N average-acceleration Newmark steps close a linear
-    # orbit of angular frequency w in T_h = 2 N tan(pi / N) / w (orbits/shooting.py), 8e-5 above 1/f at N = 200
+    # the linear frequency as the time step sees it: the integrator's discrete linear orbit of angular frequency w
+    # closes in linear_period(w, N) (integrators/registry.py; Newmark 200 steps: 8e-5 above 1/f, gauss6 100: 1e-11)
     N = cubic.settings.steps_per_period
-    f_ref = 1.0 / (2 * N * np.tan(np.pi / N) / (2 * np.pi * f_lin))
+    f_ref = 1.0 / get_integrator(cubic.settings.integrator).linear_period(2 * np.pi * f_lin, N)
 
     def drop(b, E):
         """Frequency change (%) at energy E (interpolated in log E) from the discrete linear frequency."""
@@ -172,7 +173,7 @@ def fig_compare(cubic, bil, res, title, path, d_unit=1.0, d_label="d (m)", f_uni
         if b.status != "done":
             ax2.plot(b.energy[-1], b.frequency_hz[-1], "r*", ms=9, label=f"{lab}: branch ends ({b.status})")
     ax2.axhline(res["f_linear_discrete_hz"], color="0.5", ls="--", lw=0.8,
-                label=f"linear ({res['steps_per_period']} Newmark steps/period)")
+                label=f"linear ({res['steps_per_period']} steps/period)")
     if res["bilinear"]["first_energy_past_d1"]:
         ax2.axvline(res["bilinear"]["first_energy_past_d1"], color="C1", ls=":", lw=1,
                     label="bilinear: first point with |d| > d1")

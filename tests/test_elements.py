@@ -259,7 +259,7 @@ def test_monodromy_and_energy_across_kinks_two_dof():
     springs = [nnm.PiecewiseLinearSpring(dof=1, other=0, stiffnesses=[1.0, 0.2, 3.0], breakpoints=[0.1, 0.3]),
                nnm.PiecewiseLinearSpring(dof=0, stiffnesses=[0.0, 2.0], breakpoints=[0.05])]
     m = nnm.Model(np.eye(2), K, springs)
-    b = nnm.continue_nnm(m, 2, 1.0, steps_per_period=400, max_points=30)
+    b = nnm.continue_nnm(m, 2, 1.0, steps_per_period=400, max_points=30, integrator="newmark")   # _monodromy_and_fd's map
     i = len(b) - 1
     t, x, v = b.orbit(i, 256)
     assert np.abs(x[:, 1] - x[:, 0]).max() > 0.4 and np.abs(x[:, 0]).max() > 0.2      # past every breakpoint

@@ -101,28 +101,30 @@ def test_solve_refuses_a_branch_of_another_model_in_the_same_file(tmp_path):
 
 
 def test_status_texts_name_the_tongue_once_and_count_what_they_say():
-    """Issue 32: a status read 'the tongue 3:1 tongue ... (121 points inside it)' with max_points = 120.
-    The messages of ends.py name the resonance once ('the 3:1 internal-resonance tongue') and say what
-    the number is: the orbits computed inside the tongue, not kept, max_points of them."""
+    """Issue 32: a status read 'the tongue 3:1 tongue ... (121 points inside it)'.  The backbone policy's messages
+    (backbone/policy.py) name the resonance once ('the 3:1 internal-resonance tongue with mode 2') and say what was
+    tried: the orbits of the skeleton that did not land, or the family's end."""
     import re
 
-    from nnm_solver.driver import ends
+    from nnm_solver.backbone.policy import SkipPolicy
+    from nnm_solver.results.tongues import TongueRecord
 
-    t = dict(label="tongue 3:1", partner_mode=2, entry_energy=4708.0, entry_frequency_hz=0.22344, hidden_points=120)
-    by_points = ends.inside_tongue(None, t, False, 0, max_points=120)
-    assert by_points.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2 at E = 4708 J")
-    assert "(max_points = 120 orbits computed inside it without coming back onto the backbone, not kept)" in by_points
-    t["hidden_points"] = 7
-    by_energy = ends.inside_tongue(None, t, True, 0, max_points=120)
-    assert "(energy_max reached inside it; 7 orbits computed inside it, not kept)" in by_energy
+    t = TongueRecord(order=3, partner_mode=2, entry_energy=4708.0, entry_frequency_hz=0.22344)
     bpoint = nnm.Point(4708.0, 0.22344, 1 / 0.22344, np.zeros(2), np.zeros(2), np.ones(4), True)
 
     class Skeleton:
-        energy_peak = 5000.0
+        energy = np.array([1.0, 5000.0])
+        energy_peak, end, partner, message, sheet_starts = 5000.0, "peak", (1, 0), "its energy turns back", []
 
-    escape = ends.escape_below_peak(Skeleton(), t, bpoint)
-    assert escape.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2")
-    for text in (by_points, by_energy, escape):
+    pol = SkipPolicy(nnm.Skip(), None, "the skeleton could not be computed: singular")
+    no_skeleton = pol.no_landing(bpoint, t, ()).message
+    assert no_skeleton.startswith("the backbone entered the 3:1 internal-resonance tongue with mode 2 at E = 4708 J")
+    tried = SkipPolicy(nnm.Skip(), type("S", (Skeleton,), dict(end="reach", energy_peak=None))()).no_landing(
+        bpoint, t, (4731.5, 5179.0)).message
+    assert "none of the skeleton's 2 orbits from 4732 to 5179 J landed on the family" in tried
+    escape = SkipPolicy(nnm.Skip(), Skeleton()).no_landing(bpoint, t, (4731.5,))
+    assert escape.status == "escape" and "energy maximum 5000 J" in escape.message
+    for text in (no_skeleton, tried, escape.message):
         assert not re.search(r"\b(\w+) \1\b", text), text          # no doubled word
         assert "tongue 3:1" not in text and text.count("3:1 internal-resonance tongue") == 1, text
 

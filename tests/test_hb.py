@@ -105,7 +105,7 @@ def test_backbones_agree_with_shooting(mode):
     model = two_dof()
     spp = 200
     hb = continue_nnm_hb(model, mode, 20.0, harmonics=21, tol=1e-11, max_rel_step=0.1, floquet=False)
-    sh = nnm.continue_nnm(model, mode, 10.0, steps_per_period=spp, tol=1e-10)
+    sh = nnm.continue_nnm(model, mode, 10.0, steps_per_period=spp, tol=1e-10, integrator="newmark")
     assert hb.status == "done" and sh.status == "done"
     assert np.all(np.diff(hb.energy) > 0)
     f_hb = CubicSpline(np.log(hb.energy), hb.frequency_hz)(np.log(sh.energy))

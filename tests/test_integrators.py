@@ -153,7 +153,7 @@ def test_error_estimate_bounds_the_true_error_on_the_two_dof(name, spp):
 def test_freq_tol_raises_the_steps_where_needed(tmp_path):
     m = two_dof_model()
     # Newmark at 100 steps: 3.3e-4 on the linear mode, several times more in the 3:1 tongue (3rd harmonic)
-    b = nnm.continue_nnm(m, 1, 1e4, steps_per_period=100, freq_tol=1e-4)
+    b = nnm.continue_nnm(m, 1, 1e4, steps_per_period=100, freq_tol=1e-4, integrator="newmark")
     assert b.status == "done" and "exceed" not in b.message
     assert np.nanmax(b.freq_error) <= 1e-4
     assert b.steps.min() > 100 and len(np.unique(b.steps)) >= 2     # refined at the start, and again later
