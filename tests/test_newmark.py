@@ -87,7 +87,9 @@ def test_monodromy_of_converged_orbit_matches_finite_differences(two_dof_nnm1):
     N = b.settings["steps_per_period"]
     T = b.period[i]
     q0, v0 = ms.to_modal(b.x0[i]), ms.to_modal(b.v0[i])
-    prob = ShootingProblem(ms, 0, N, symmetric=True)
+    from nnm_solver.integrators.registry import get_integrator
+    integ = get_integrator(b.settings["integrator"])             # the branch's own scheme (default gauss6)
+    prob = ShootingProblem(ms, 0, N, symmetric=True, integrator=integ)
     prob.all_columns = True
     prob.jacobian(prob.pack(q0, v0, T))
     prob.accept(prob.pack(q0, v0, T), None)
@@ -97,8 +99,8 @@ def test_monodromy_of_converged_orbit_matches_finite_differences(two_dof_nnm1):
     cols = []
     for j in range(4):
         dz = eps * np.eye(4)[j]
-        qp, vp, _ = sweep_state(*np.split(z0 + dz, 2), T / N, N, *ms.kernel)
-        qm, vm, _ = sweep_state(*np.split(z0 - dz, 2), T / N, N, *ms.kernel)
+        qp, vp, _ = integ.state(ms, *np.split(z0 + dz, 2), T / N, N)
+        qm, vm, _ = integ.state(ms, *np.split(z0 - dz, 2), T / N, N)
         cols.append(np.concatenate([qp - qm, vp - vm]) / (2 * eps))
     assert np.allclose(Mono, np.column_stack(cols), rtol=1e-5, atol=1e-6)
     # and its eigenvalues are the stored multipliers

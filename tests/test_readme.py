@@ -37,7 +37,8 @@ def test_readme_solver_block_runs_and_its_comments_are_true(tmp_path, monkeypatc
     first = backbone.tongues[0]
     assert first["label"] == "tongue 3:1" and first["partner_mode"] == 2 and len(backbone.tongues) > 1
     assert "3:1 tongue" in ns["tongue"].name and len(ns["tongue"]) > 10
-    assert ns["born"].message.startswith("family from the branch_point at E = 41.0") and len(ns["born"]) > 1
+    # the pitchfork at 40.9748 J (shared/reference: the 2-DOF benchmark; Newmark at 200 steps put it at 41.08 J)
+    assert ns["born"].message.startswith("family from the branch_point at E = 40.97") and len(ns["born"]) > 1
     # gauss6 and freq_tol: estimated errors, smaller than Newmark's at 200 steps
     assert np.nanmax(ns["accurate"].freq_error) < 1e-5 < np.nanmax(branch.freq_error)
     refined = ns["refined"]
