@@ -73,7 +73,7 @@ def test_two_dof_multipliers_match_ivp_monodromy(energy):
     m = two_dof_model()
     mus = []
     for N in (2000, 4000):
-        b = nnm.continue_nnm(m, 1, 1e9, energy_min=energy, steps_per_period=N, max_points=1)
+        b = nnm.continue_nnm(m, 1, 1e9, energy_min=energy, steps_per_period=N, max_points=1, integrator="newmark")
         assert len(b) == 1, b.message
         mus.append(_sorted(_nontrivial(b.floquet[0])))
     x, T = periodic_orbit_ivp(m, b.x0[0], None, b.period[0], fix="energy")
