@@ -102,7 +102,7 @@ def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
 
 @pytest.mark.slow
 def test_aircraft_mode_20_events_and_flags_equal_the_dense_route(monkeypatch):
-    """The aircraft's NNM 20 (548 modes, 4 cubic springs; 470 modes see them) to 10 J with the defaults: the local
+    """The aircraft's NNM 20 (548 modes, 4 cubic springs; 470 modes see them) to 10 J (Newmark, 200 steps): the local
     route (Krein collisions followed by shift-invert Arnoldi, the eigenproblem of the coupled modes) against the
     dense one (every Krein collision bisected on the full flag, the eigenproblem of all 548 modes): the same points,
     flags at every point, multipliers, and events (a loss at 7.44 J and a gain at 8.91 J).  The energies agree to
@@ -115,11 +115,11 @@ def test_aircraft_mode_20_events_and_flags_equal_the_dense_route(monkeypatch):
     from nnm_solver.orbits import shooting_stability as ss
     from test_decoupled_modes import _matched
     model = nnm.load_model(str(Path(__file__).resolve().parent.parent / "assets" / "paris.h5"))
-    local = nnm.continue_nnm(model, 20, 10.0)
+    local = nnm.continue_nnm(model, 20, 10.0, integrator="newmark")      # the routes measured with Newmark-200
     with monkeypatch.context() as m:
         m.setattr(ev, "locate_collision", lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi))
         m.setattr(ss.ShootingStability, "coupled_modes", property(lambda self: None))
-        dense = nnm.continue_nnm(model, 20, 10.0)
+        dense = nnm.continue_nnm(model, 20, 10.0, integrator="newmark")
     assert len(local.energy) == len(dense.energy) > 15
     assert np.allclose(local.energy, dense.energy, rtol=1e-9)
     assert np.array_equal(np.asarray(local.stable), np.asarray(dense.stable))
