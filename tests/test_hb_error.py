@@ -38,6 +38,8 @@ def _changes(branch, mode, harmonics, reference, samples=None):
     prob = HBProblem(system, mode - 1, HBBasis(harmonics, branch.settings.basis, samples))
     est, true = [], []
     for i in range(len(branch.energy)):
+        if np.isinf(branch.freq_error[i]):            # not resolved: H + 2 does not settle there (no reference either)
+            continue
         A = system.to_modal(branch.coefficients_at(i))
         u = prob.pack(A, 2 * np.pi * branch.frequency_hz[i])
         q0 = prob.initial_state(u)[0]
@@ -98,9 +100,12 @@ def test_estimate_on_the_ecl_beam_past_its_tongues(condensed):
     not asserted here."""
     b = nnm.continue_nnm(ecl_beam(), 1, 0.5, method="hb", harmonics=5, condensed=condensed, floquet=False,
                          tongues="skip")
-    assert np.isfinite(b.freq_error).all()
+    # the skip backbone (issue 51: the family past its tongues, jumped from the skeleton) has a few points next to a
+    # 7:1 or 9:1 tongue where H + 2 does not settle: their estimate is inf, 'not resolved' (no silent number)
+    finite = np.isfinite(b.freq_error)
+    assert finite.mean() > 0.9 and np.all(np.isinf(b.freq_error[~finite]))
     est, true = _changes(b, 1, 5, lambda H: (H + 2, None))
-    ratio = est / true
+    ratio = est[np.isfinite(est)] / true[np.isfinite(est)]
     assert len(ratio) > 100 and true.max() > 1e-3
     assert ratio.min() > 0.9 and ratio.max() < 1.1 and abs(np.median(ratio) - 1) < 0.01, (ratio.min(), ratio.max())
 

@@ -102,8 +102,7 @@ class FamilyLabels:
 
     def verdict(self, energy, frequency_hz, content, error=0.0, run=(), reference_hz=None, falling=False):
         """The Verdict of a point of energy (J), frequency (Hz), Content (content.py) and estimated relative
-        frequency error (NaN: unknown, taken as 0; inf: the method does not resolve the orbit, so it is not claimed
-        on the family: next to a k:1 tongue with k above the harmonics + 2); run : the kept points of its run
+        frequency error (NaN or inf: unknown or not resolved, taken as 0; the branch's freq_error says it); run : the kept points of its run
         (``locked``); reference_hz : the frequency of the skeleton's own orbit at that energy (a jump's landing),
         instead of its interpolated one; falling : its energy is below the branch's point before it (the backbone
         continued in energy has no fold: past one the branch is off the family, e.g. in a 1:1 resonance)."""
@@ -137,7 +136,6 @@ class FamilyLabels:
         trunc = sk.truncation_at(energy) if dev > strict else 0.0   # a solve per skeleton point: asked here only
         tol = strict + 2 * (trunc if math.isfinite(trunc) else 0.0)
         drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0
-        unresolved = error == math.inf         # the method says its truncation does not resolve the orbit (HB)
-        on = (dev <= strict or (dev <= tol and not drop > s.share_drop)) and not falling and not unresolved and not (
+        on = (dev <= strict or (dev <= tol and not drop > s.share_drop)) and not falling and not (
             run and self.locked(energy, frequency_hz, run))
         return Verdict("backbone" if on else tongue, dev, tol)
