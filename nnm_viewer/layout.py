@@ -210,12 +210,12 @@ class Layout:
                      "backbone (the tongues jumped are listed with the branch; nnm-solve --tongue K continues one)")
             self.h_integrator = gui.add_dropdown(
                 "Integrator", options=tuple(INTEGRATORS), initial_value=str(D["integrator"]),
-                hint="Time integrator of the shooting: newmark (2nd order, the seed paper's), gauss4 or gauss6 "
-                     "(Gauss-Legendre, 4th / 6th order, 2 / 3 stages per step)")
+                hint="Time integrator of the shooting: gauss6 or gauss4 (Gauss-Legendre, 6th / 4th order, 3 / 2 "
+                     "stages per step), or newmark (2nd order, the seed paper's)")
             self.h_spp = gui.add_number(
                 "Steps per period", initial_value=int(D["steps_per_period"]), min=8, max=20000, step=1,
-                hint=f"Time steps per period of the shooting: {D['steps_per_period']} by default (newmark); about "
-                     f"100 are enough for gauss6 (a step costs ~3 Newmark steps); more for high-order tongues")
+                hint=f"Time steps per period of the shooting: {D['steps_per_period']} by default ({D['integrator']}); "
+                     f"newmark needs about 200 (a gauss6 step costs ~3 Newmark steps); more for high-order tongues")
             self.h_harmonics = gui.add_number(
                 "Harmonics", initial_value=int(D["harmonics"]), min=1, max=99, step=1, visible=False,
                 hint="Harmonic balance: the highest harmonic of the Fourier series (more for strong higher "
