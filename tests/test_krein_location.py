@@ -7,6 +7,22 @@ import nnm_solver.stability.krein as krein
 from test_bifurcation import _pair, _synthetic_locator
 
 
+def _windowed(coords):
+    """A synthetic locator on coords(sigma) whose local solver returns the 6 coordinates nearest the shift, and the
+    list of sigmas where the full flag was evaluated."""
+    loc = _synthetic_locator(coords)
+    seen = []
+    stable = loc.stable
+
+    def counted(sigma, tol=1e-5):
+        seen.append(float(sigma))
+        return stable(sigma, tol)
+
+    loc.stable = counted
+    loc.local_collision = lambda sigma, shift: (lambda c: c[np.argsort(np.abs(c - shift))[:6]])(coords(sigma))
+    return loc, seen
+
+
 def _noisy_locator(excess):
     """A synthetic step (E = 1 + sigma) with one pair colliding at sigma = 0.4, slowly (its imaginary part reaches
     the stability tolerance at 0.475); the full flag sees that imaginary part (1 + excess) times the local
@@ -101,16 +117,7 @@ def test_a_pair_far_off_the_axis_in_a_dense_spectrum_is_followed(monkeypatch, co
     def coords(sigma):
         return np.array(dense + _pair(0.3903, 4e-4 * (0.3 - sigma)), dtype=complex)
 
-    loc = _synthetic_locator(coords)
-    seen = []
-    stable = loc.stable
-
-    def counted(sigma, tol=1e-5):
-        seen.append(float(sigma))
-        return stable(sigma, tol)
-
-    loc.stable = counted
-    loc.local_collision = lambda sigma, shift: (lambda c: c[np.argsort(np.abs(c - shift))[:6]])(coords(sigma))
+    loc, seen = _windowed(coords)
     ends = [(loc.stable(x), coords(x)) for x in (0.0, 1.0)]
     seen.clear()
     lo, hi = krein.locate_collision(loc, 0.0, 1.0, krein.candidates(coords(1.0)), ends=ends)

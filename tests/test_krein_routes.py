@@ -8,25 +8,10 @@ import pytest
 
 import nnm_solver.stability.krein as krein
 from test_bifurcation import _pair, _synthetic_locator
+from test_krein_location import _windowed
 
 #: a dense real background spectrum (0.01 apart), as a large model's: the local window of 6 spans +-0.03
 BACKGROUND = list(np.arange(-0.95, -0.05, 0.01) + 0.003)
-
-
-def _windowed(coords):
-    """A synthetic locator on coords(sigma) whose local solver returns the 6 coordinates nearest the shift, and the
-    list of sigmas where the full flag was evaluated."""
-    loc = _synthetic_locator(coords)
-    seen = []
-    stable = loc.stable
-
-    def counted(sigma, tol=1e-5):
-        seen.append(float(sigma))
-        return stable(sigma, tol)
-
-    loc.stable = counted
-    loc.local_collision = lambda sigma, shift: (lambda c: c[np.argsort(np.abs(c - shift))[:6]])(coords(sigma))
-    return loc, seen
 
 
 def _flag_change(loc, lo, hi):

@@ -9,26 +9,13 @@ import pytest
 
 import nnm_solver as nnm
 from nnm_viewer.controls import Session
-from nnm_viewer.demo import write_demo_file
 from nnm_viewer.state import SharedState
 
-from test_viewer_session import FakeJob, wait_for
+from test_viewer_session import FakeJob, demo_file, server, wait_for  # noqa: F401 (fixtures)
 
 viser = pytest.importorskip("viser")
 
 
-@pytest.fixture(scope="module")
-def demo_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("viewer_threads") / "two.h5"
-    write_demo_file(path, energy_max=10.0)
-    return path
-
-
-@pytest.fixture(scope="module")
-def server():
-    s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    yield s
-    s.stop()
 
 
 class SlowStart:
