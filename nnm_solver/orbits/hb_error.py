@@ -10,8 +10,8 @@ frequency when two more harmonics are added (H + 2), at the same energy:
   leftover on the others);
 * Newton steps of the larger problem with the energy held at the point's (the frequency error at a fixed energy,
   what the FEP shows); one where it is short (below).  Next to an energy fold, where the frequency at a fixed energy
-  is not defined, one step orthogonal to the branch tangent, as the corrector takes it (as for shooting,
-  shooting_error.py).
+  is not defined (fep_slope.py: the branch's slope in the FEP plane), one step orthogonal to the branch tangent, as
+  the corrector takes it (as for shooting, shooting_error.py).
 
 The frequency moved by the steps estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
 (f_(H+2) being much nearer the exact one).  Against the frequency with 3H harmonics at the same energy (an
@@ -39,9 +39,10 @@ import math
 import numpy as np
 
 from ..continuation.engine import LeastSquares, stacked
+from .fep_slope import at_energy_fold
 from .hb_basis import HBBasis, harmonics_in
 
-__all__ = ["HBTruncationError", "EXTRA_HARMONICS", "FOLD_RATE"]
+__all__ = ["HBTruncationError", "EXTRA_HARMONICS"]
 
 #: harmonics added for the estimate (H -> H + 2: the next odd harmonic, which odd laws excite)
 EXTRA_HARMONICS = 2
@@ -54,11 +55,6 @@ MAX_STEPS = 8
 #: steps that end farther than this from the point's energy (relative), or do not settle, found no solution of the
 #: larger problem near the orbit: the estimate is then inf (not resolved)
 UNSETTLED_ENERGY = 1e-3
-#: next to an energy fold the frequency at a fixed energy is not defined: there (the energy's rate along the branch
-#: tangent, d ln E per unit of the balanced norm, below this; about 2 in the linear regime, E ~ a^2) the step is
-#: the one orthogonal to the tangent, as for shooting (shooting_error.FOLD_COSINE; a cosine in the balanced norm would
-#: not do here: the condensed unknowns' energy gradient is dominated by the frequency's share)
-FOLD_RATE = 0.1
 
 
 class HBTruncationError:
@@ -107,7 +103,7 @@ class HBTruncationError:
                     r2, J2 = big.jacobian(v)
                     w = big.scale(v)
                     g = big.energy_gradient(v)
-                    fold = abs(g @ t2) < FOLD_RATE * E0 * np.linalg.norm(w * t2)
+                    fold = at_energy_fold(g @ t2 / E0, t2[-1] / v[-1])
                     if fold:                   # next to a fold: the step orthogonal to the branch tangent, once
                         du = LeastSquares(stacked(J2, w * w * t2)).solve(np.r_[-r2, 0.0])
                     else:                      # Newton on [equations; energy - E0]

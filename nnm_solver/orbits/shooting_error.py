@@ -8,12 +8,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..continuation.engine import LeastSquares, stacked
+from .fep_slope import at_energy_fold
 
-__all__ = ["ShootingError", "FOLD_COSINE"]
-
-#: next to an energy fold (|cos| between the branch tangent and the energy gradient, balanced norm, below
-#: this) the frequency error estimate is not taken at a fixed energy (ShootingProblem.frequency_error)
-FOLD_COSINE = 0.05
+__all__ = ["ShootingError"]
 
 
 class ShootingError:
@@ -29,10 +26,10 @@ class ShootingError:
           per period) minus the residual with N steps moves the period by dT = T_N/2 - T_N to first order,
           and with the scheme's order p, T_N - T_exact = -dT 2^p / (2^p - 1) (Richardson);
         - the corrector's tolerance: the step that the residual left at convergence would still make.
-        The step is taken orthogonal to the branch tangent (as the corrector does), then moved along the
-        branch back to the point's energy, so that the estimate is the frequency error at a fixed energy,
-        what the FEP shows.  Next to an energy fold (the tangent within FOLD_COSINE of the fixed-energy
-        directions), where the frequency at a fixed energy is not defined, the orthogonal step is kept:
+        The step is taken across the branch (as the corrector does); the discretisation's part is then moved along
+        the branch back to the point's energy, so that the estimate is the frequency error at a fixed energy,
+        what the FEP shows.  Next to an energy fold (fep_slope.py: the tangent nearly vertical in the FEP
+        plane), where the frequency at a fixed energy is not defined, the orthogonal step is kept:
         the distance between the discrete and the exact branch.  Cost: two state sweeps (N and 2N steps)
         and one factorisation of the corrector's size (``factor``: the continuation's factorisation of
         [J; previous tangent], reused away from folds).  NaN if an integration fails.
@@ -53,18 +50,21 @@ class ShootingError:
         w = self.scale(u)
         g = self.energy_gradient(u)
         gp = g @ tangent
-        cos = abs(gp) / max(np.linalg.norm(g / w) * np.linalg.norm(w * tangent), 1e-300)
-        # away from folds the result is moved along the tangent to a fixed energy, so any factorisation of J
-        # with a row transversal to the tangent gives it; at a fold the orthogonal one is needed
-        A = factor if factor is not None and cos >= FOLD_COSINE else LeastSquares(stacked(J, w * w * tangent))
+        fold = at_energy_fold(gp / self.energy(u), tangent[-1] / u[-1])     # u[-1] = T / T_r
+        # the step is taken with a row transversal to the tangent (the continuation's factorisation of [J; previous
+        # tangent] where given, else the orthogonal one); the time discretisation's part (an offset of the whole
+        # branch) is then moved along the tangent to the point's energy, except at a fold; the corrector's part (a
+        # leftover of this point's Newton solve, which its next step would remove across the branch) is not: near a
+        # fold the move would magnify it without bound (the 2-DOF's fold at 4681 J: 1e-4 from a 1e-6 tolerance)
+        A = factor if factor is not None else LeastSquares(stacked(J, w * w * tangent))
 
-        def period_step(r):
+        def period_step(r, to_energy):
             du = A.solve(np.r_[-r, 0.0])
-            if cos >= FOLD_COSINE:               # move along the branch back to the point's energy
+            if to_energy and not fold:           # move along the branch back to the point's energy
                 du = du - (g @ du) / gp * tangent
             return du[-1] * self.T_r / T
 
         p = self.integrator.order
-        disc = period_step(r_f - r_c) * 2 ** p / (2 ** p - 1)
-        conv = period_step(r_c)
+        disc = period_step(r_f - r_c, True) * 2 ** p / (2 ** p - 1)
+        conv = period_step(r_c, False)
         return float(abs(disc + conv)), float(abs(disc))
