@@ -90,6 +90,18 @@ def test_estimate_is_the_change_with_two_more_harmonics_on_a_chain(condensed):
     assert np.all(np.abs(est / true - 1) < 0.03), est / true
 
 
+def test_estimate_follows_the_error_where_a_softening_branch_steepens_before_its_saddle():
+    """A 2-DOF chain with a softening spring (saddle at 0.417 J), NNM 1 at H = 9: over its last 1 % in energy below
+    its saddle the frequency falls 25 % (|d ln E / d ln f| 0.12 to 0.02, no fold); the estimate is the change to
+    31 harmonics at the same energy within a factor 2 (a balanced-norm fold test once made it 8e-9 for 4e-5)."""
+    m = nnm.Model(np.eye(2), np.array([[1.3, -0.3], [-0.3, 10.9]]), springs=[nnm.CubicSpring(dof=0, k3=-1.0)])
+    b = nnm.continue_nnm(m, 1, 0.5, method="hb", harmonics=9, basis="full", floquet=False, tongues="skip")
+    steep = b.subset(np.flatnonzero((b.energy > 0.409) & (b.energy < 0.4145)))
+    est, true = _changes(steep, 1, 9, lambda H: (31, None))
+    assert len(est) >= 20 and true.max() > 5e-5
+    assert np.all((est / true > 0.5) & (est / true < 2.0)), est / true
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("condensed", [False, True])
 def test_estimate_on_the_ecl_beam_past_its_tongues(condensed):
