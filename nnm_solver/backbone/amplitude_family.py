@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ..continuation.engine import ContinuationSettings, CorrectorFailure, correct
+from ..continuation.natural import LogStepper, LogSteps
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
 from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump
 from .settings import SkeletonSettings
@@ -161,14 +162,21 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
     if u is None:
         return [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0)
     pts = [(a_start, prob.energy(u), u[-1] * prob.w_r / (2 * math.pi), u)]
-    ratio, dlnf_prev, falls = s.step_max, 0.0, 0
+    dlnf_prev, falls = 0.0, 0
     end, message, gaps = "reach", "", []
     partner = (1, 0)                   # (k, 1-based mode) of the resonance that ends the family
     nD = prob.nb * prob.ns
     shares = {}                        # id of a point's orbit -> (the orbit, its family_share): the orbit is kept
                                        # with it (points are dropped at a sheet switch: a freed id is reused)
     guide = OneHarmonicGuide(prob, s) if prob.basis.harmonics > 1 else None
-    dev_checked, ddev_prev, switches, fresh = 0.0, 0.0, 0, False
+    dev_checked, ddev_prev, switches = 0.0, 0.0, 0
+
+    def at_amplitude(a, guess):
+        guess[nD] = a * prob.beta
+        return solve_at_amplitude(prob, guess)
+
+    # the stepping in ln a (continuation/natural.py): secant predictor, Newton at the fixed amplitude, step control
+    stepper = LogStepper(at_amplitude, LogSteps(s.step_max, s.step_min, s.step_max, s.step_growth))
 
     def share_of(u):
         if id(u) not in shares or shares[id(u)][0] is not u:
@@ -178,7 +186,7 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
     def to_sheet(a, found):
         """Go on from the backbone's sheet found at amplitude a (found: (orbit, share)), from where it begins
         (family_guide.sheet_start): the stepping's points above that amplitude are left out."""
-        nonlocal ratio, falls, ddev_prev, dlnf_prev, dev_checked, switches, fresh
+        nonlocal falls, ddev_prev, dlnf_prev, dev_checked, switches
         a, v, share = sheet_start(prob, guide, pts, a, found)
         del pts[next((i for i, p in enumerate(pts) if p[0] >= a), len(pts)):]
         gaps[:] = [g for g in gaps if g[2] < a]
@@ -186,13 +194,14 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
         E = prob.energy(v)
         gaps.append((pts[-1][1], E, a, "sheet"))
         pts.append((a, E, v[-1] * prob.w_r / (2 * math.pi), v))
-        ratio, falls, ddev_prev, dlnf_prev, switches = s.sheet_ratio, 0, 0.0, 0.0, switches + 1
-        dev_checked, fresh = guide.deviation(a, v) or 0.0, True
+        falls, ddev_prev, dlnf_prev, switches = 0, 0.0, 0.0, switches + 1
+        stepper.restart(s.sheet_ratio)
+        dev_checked = guide.deviation(a, v) or 0.0
 
     def resonance(v, what, off_trend=False):
         """The family met a resonance at the last point: jump it (True) or end the family (False).  off_trend: the
         step found v but only left the one-harmonic family's trend (the partner is then read from the last point)."""
-        nonlocal end, message, ratio, falls, partner, ddev_prev
+        nonlocal end, message, falls, partner, ddev_prev
         a0, E0, f0, u0 = pts[-1]
         if guide is not None and switches < s.max_switches:
             landed = guided_jump(prob, guide, pts, share_of(u0), s.jumps)
@@ -220,7 +229,7 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
         if jumped is not None:
             gaps.append((E0, jumped[1], jumped[0], "jump"))
             pts.append(jumped)
-            ratio, falls, ddev_prev = s.step_max, 0, 0.0
+            stepper.ratio, falls, ddev_prev = s.step_max, 0, 0.0
             return True
         if v is None and _folds_at_peak(prob, pts, s):
             end = "peak"
@@ -238,14 +247,7 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
 
     while len(pts) < 3000:
         a0, _, f0, u0 = pts[-1]
-        a = a0 * ratio
-        guess = u0.copy()
-        if len(pts) > 1 and not fresh:  # secant predictor in ln a (not across a sheet switch: the point before
-                                        # is on the tongue's sheet)
-            a1, u1 = pts[-2][0], pts[-2][3]
-            guess = u0 + (u0 - u1) * (math.log(ratio) / math.log(a0 / a1))
-        guess[nD] = a * prob.beta
-        v = solve_at_amplitude(prob, guess)
+        a, v = stepper.trial([(p[0], p[3]) for p in pts[-2:]])
         dlnf = math.log(v[-1] * prob.w_r / (2 * math.pi) / f0) if v is not None else math.inf
         dev = guide.deviation(a, v) if guide is not None and v is not None else None
         dev = dev if dev is not None and abs(dev) <= s.guide_trust else None          # the guide trusted there only
@@ -253,8 +255,7 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
         ddev = dev - dev_last if dev_last is not None and abs(dev_last) <= s.guide_trust else 0.0
         if (v is None or abs(dlnf) > s.jump_factor * abs(dlnf_prev) + s.jump_floor
                 or abs(ddev) > s.jump_factor * abs(ddev_prev) + s.dev_jump):
-            if ratio > s.step_min:
-                ratio = 1 + (ratio - 1) / 2
+            if stepper.shorter():
                 continue
             jumps = abs(dlnf) > s.jump_factor * abs(dlnf_prev) + s.jump_floor
             what = ("no solution at a larger amplitude" if v is None else
@@ -265,13 +266,12 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
             break
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
-        dlnf_prev, ddev_prev, fresh = dlnf, ddev, False
-        # the next step: grown by half, at most s.step_max (s.step_max_linear while the frequency is within s.linear_shift
-        # of the first point's), and moving the frequency by about s.dlnf_max at most (the skeleton's interpolation
-        # between points stays at ~1e-7, Skeleton.frequency_at)
+        dlnf_prev, ddev_prev = dlnf, ddev
+        # the next step: grown by at most s.step_growth, at most s.step_max (s.step_max_linear while the frequency is
+        # within s.linear_shift of the first point's), and moving the frequency by about s.dlnf_max at most (the
+        # skeleton's interpolation between points stays at ~1e-7, Skeleton.frequency_at)
         cap = s.step_max_linear if abs(v[-1] / pts[0][3][-1] - 1.0) < s.linear_shift else s.step_max
-        ratio = min(cap, 1 + (ratio - 1) * min(1.5, s.dlnf_max / max(abs(dlnf), 1e-300)))
-        ratio = max(ratio, s.step_min)
+        stepper.accept(s.dlnf_max / max(abs(dlnf), 1e-300), cap)
         share = share_of(v)
         if (dev is not None and switches < s.max_switches
                 and abs(dev - dev_checked) > max(s.dev_check, s.dev_check_rel * abs(dev_checked))):

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from ..continuation.natural import LogStepper, LogSteps
 from .amplitude_orbit import solve_at_amplitude, family_share
 from .settings import SkeletonSettings
 
@@ -47,21 +48,23 @@ class OneHarmonicGuide:
         self._a, self._u = [], []
         self._end = math.inf
         self.s = settings
-        self._ratio = settings.guide_step_min
+        # its stepping in ln a (continuation/natural.py); at a first step the orbit is scaled with a
+        self._stepper = LogStepper(self._solve, LogSteps(settings.guide_step_min, settings.guide_step_min,
+                                                         settings.guide_step_max, settings.guide_step_growth),
+                                   scaled_first=slice(0, self._nD))
 
     def _solve(self, a, guess):
         guess = guess.copy()
         guess[self._nD] = a * self.prob.beta
         return solve_at_amplitude(self.prob, guess)
 
+    def _points(self):
+        return list(zip(self._a[-2:], self._u[-2:]))
+
     def _step(self, a1):
         """(orbit, predictor's relative frequency error) of the guide at a1 above its last point, from the secant
         predictor in ln a; (None, inf) where Newton fails."""
-        a0, u0 = self._a[-1], self._u[-1]
-        guess = u0.copy()
-        guess[:self._nD] *= a1 / a0
-        if len(self._a) > 1:
-            guess = u0 + (u0 - self._u[-2]) * (math.log(a1 / a0) / math.log(a0 / self._a[-2]))
+        guess = self._stepper.predict(self._points(), a1)
         u = self._solve(a1, guess)
         return (None, math.inf) if u is None else (u, abs(u[-1] / guess[-1] - 1.0))
 
@@ -81,11 +84,10 @@ class OneHarmonicGuide:
             self._a.insert(0, a)
             self._u.insert(0, u)
         while self._a[-1] < a:                   # step the family up past a
-            a1 = self._a[-1] * self._ratio
+            a1 = self._a[-1] * self._stepper.ratio
             u, err = self._step(a1)
             if u is None or (err > s.guide_prediction and len(self._a) > 1):
-                if self._ratio > s.guide_step_min:     # too far for the interpolation (or for Newton): shorter
-                    self._ratio = max(s.guide_step_min, 1 + (self._ratio - 1) / 2)
+                if self._stepper.shorter():      # too far for the interpolation (or for Newton): shorter
                     continue
                 if u is None:                        # the family ends between: at a itself, if there
                     u = self._step(a)[0] if a < a1 else None
@@ -94,8 +96,7 @@ class OneHarmonicGuide:
                         return False
                     a1 = a
             # the next step: the secant predictor's error grows as the square of the step
-            grow = math.sqrt(s.guide_prediction / max(err, 1e-300)) if len(self._a) > 1 else 2.0
-            self._ratio = min(s.guide_step_max, max(s.guide_step_min, 1 + (self._ratio - 1) * min(2.0, grow)))
+            self._stepper.accept(math.sqrt(s.guide_prediction / max(err, 1e-300)) if len(self._a) > 1 else 2.0)
             self._a.append(a1)
             self._u.append(u)
         return True
@@ -192,21 +193,24 @@ def sheet_start(prob, guide, pts, a, found):
     last point: while it converges).  (a, u, share) of its lowest such orbit."""
     s = guide.s
     nD = prob.nb * prob.ns
-    (v, share), last = found, None
-    while a / s.sheet_resolution > pts[0][0]:
-        a_t = a / s.sheet_resolution
-        guess = v.copy()
-        if last is not None:
-            guess = v + (v - last) * (math.log(a_t / a) / math.log(a / (last[nD] / prob.beta)))
+
+    def at_amplitude(a_t, guess):
         guess[nD] = a_t * prob.beta
-        c = solve_at_amplitude(prob, guess)
+        return solve_at_amplitude(prob, guess)
+
+    # down in ln a by fixed steps (continuation/natural.py: secant predictor, Newton at the fixed amplitude)
+    down = LogStepper(at_amplitude, LogSteps(1 / s.sheet_resolution, 1 / s.sheet_resolution, 1 / s.sheet_resolution))
+    (v, share), path = found, [(a, found[0])]
+    while a / s.sheet_resolution > pts[0][0]:
+        a_t, c = down.trial(path)
         if c is None or abs(math.log(c[-1] / v[-1])) > s.sheet_frequency / 3:    # no solution, or another family
             break
         if a_t <= pts[-1][0]:
             w = _stepping_orbit(prob, pts, a_t)
             if w is None or not better_of(guide, a_t, c, w):
                 break
-        a, v, last, share = a_t, c, v, family_share(prob, c)
+        a, v, share = a_t, c, family_share(prob, c)
+        path = [path[-1], (a, v)]
     return a, v, share
 
 

@@ -21,7 +21,8 @@ class SkeletonSettings:
     reach, follow_reach : the skeleton is stepped up to this multiple of the branch's energy_max with tongues
         skipped (the jumps' targets lie beyond the tongues) or followed (only labels are asked, up to energy_max).
     start_shift : it starts where its frequency has moved from the linear mode's by about this much.
-    step_max, step_min : largest and smallest ratio a_{i+1} / a_i of its modal amplitude steps;
+    step_max, step_min : largest and smallest ratio a_{i+1} / a_i of its modal amplitude steps (halved towards
+        step_min where refused); step_growth : the most a_{i+1} / a_i - 1 grows from one step to the next;
     dlnf_max : the largest move of ln f in a step (its spline interpolation between points then stays at 3e-7 on
         the 2-DOF benchmark, 7e-9 on NLvib's example 04; Skeleton.frequency_at);
     step_max_linear, linear_shift : steps up to step_max_linear while f is within linear_shift of the first point's.
@@ -55,7 +56,8 @@ class SkeletonSettings:
         soft 3-DOF chain's mode 1 moves 18 % away near the one-harmonic fold), between sheets within
         sheet_frequency of each other in ln f (the 2-DOF benchmark's tongue sheets 0.3-0.8 % from its backbone);
         guide_step_min, guide_step_max, guide_prediction : the guide's own steps (ratios of a), where its secant
-        predictor's frequency is within guide_prediction; guide_order : its orbits are interpolated by a polynomial
+        predictor's frequency is within guide_prediction (the step grown by at most guide_step_growth, as the
+        predictor's error allows: it grows as the square of the step); guide_order : its orbits are interpolated by a polynomial
         of this degree in ln a (frequency to 5e-5 on the 2-DOF benchmark and NLvib's beam).
     """
 
@@ -65,6 +67,7 @@ class SkeletonSettings:
     start_shift: float = 1e-6
     step_max: float = 1.05
     step_min: float = 1.0005
+    step_growth: float = 1.5
     dlnf_max: float = 0.005
     step_max_linear: float = 1.2
     linear_shift: float = 1e-4
@@ -97,6 +100,7 @@ class SkeletonSettings:
     sheet_frequency: float = 0.03
     guide_step_min: float = 1.01
     guide_step_max: float = 2.0
+    guide_step_growth: float = 2.0
     guide_prediction: float = 1e-3
     guide_order: int = 3
 
