@@ -13,6 +13,7 @@ from reference_models import cantilever_beam
 from test_bifurcation import _combination_resonance_model
 from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits import hill
+from nnm_solver.orbits.hill_shared import forget_warm_starts
 from nnm_solver.orbits.harmonic_balance import HBProblem
 from nnm_solver.orbits.hb_basis import HBBasis
 from nnm_solver.stability.floquet import is_stable, without_nearest_to_one
@@ -327,7 +328,7 @@ def test_cold_starts_inside_a_tongue_equal_dense(beam_tongue):
 
 def _cold_orbits(problem, us, indices, flags):
     for i in indices:
-        problem._hill_secular = problem._hill_warm = None
+        forget_warm_starts(problem)
         mu = without_nearest_to_one(hill.hill_multipliers(problem, us[i], method="secular"))
         A, w, _, bp, C = hill._galerkin_blocks(problem, us[i], None)
         ref = without_nearest_to_one(hill._dense(problem, w, bp, C))

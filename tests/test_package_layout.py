@@ -218,3 +218,34 @@ def test_the_backbone_and_the_branch_iterator_keep_their_thresholds_in_settings_
     found = {p.relative_to(root).as_posix(): _module_thresholds(p) for p in places}
     found = {k: v for k, v in found.items() if v}
     assert not found, f"module-level thresholds: {found}"
+
+
+def _foreign_private_assignments(path):
+    """``obj._name = ...`` assignments of a module where obj is not self or cls (a private attribute hung on
+    another object)."""
+    import ast
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        targets = node.targets if isinstance(node, ast.Assign) else (
+            [node.target] if isinstance(node, (ast.AugAssign, ast.AnnAssign)) else [])
+        for t in targets:
+            for e in (t.elts if isinstance(t, ast.Tuple) else [t]):
+                if (isinstance(e, ast.Attribute) and e.attr.startswith("_") and not e.attr.startswith("__")
+                        and not (isinstance(e.value, ast.Name) and e.value.id in ("self", "cls"))):
+                    out.append((node.lineno, ast.unparse(e)))
+    return out
+
+
+def test_no_private_attribute_is_hung_on_another_object():
+    """Working data about a point or a problem lives beside it (driver/candidate.py, orbits/hill_shared.py's warm
+    starts), not as private attributes set on it from outside."""
+    root = _root("nnm_solver")
+    found = {p.relative_to(root).as_posix(): _foreign_private_assignments(p) for p in sorted(root.rglob("*.py"))}
+    found = {k: v for k, v in found.items() if v}
+    assert not found, f"private attributes set on other objects: {found}"
+
+
+def test_the_check_finds_a_private_attribute_on_another_object(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text("def f(point, x):\n    point._seen = x\n    self._ok = x\n    a, point._b = 1, 2\n")
+    assert [name for _, name in _foreign_private_assignments(p)] == ["point._seen", "point._b"]

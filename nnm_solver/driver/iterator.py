@@ -24,6 +24,7 @@ from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
+from .candidate import Candidate
 from .refinement import StepRefinement
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
@@ -32,7 +33,7 @@ from ..threads import blas_limited
 __all__ = ["NNMIterator"]
 
 
-class NNMIterator(StepRefinement):
+class NNMIterator:
     """Iterator over the converged points of one NNM branch (create it with ``iter_nnm``).
 
     Each ``next()`` runs the continuation to the next converged orbit and returns its ``Point``.
@@ -46,17 +47,15 @@ class NNMIterator(StepRefinement):
                  tol=None, locate=True, error_estimate=True, freq_tol=None, labels=None, policy=None,
                  start_is_low=True, max_refusals=3, max_steps_per_period=20000):
         self.model = model
-        self.freq_tol = None if not freq_tol else float(freq_tol)
         self.max_refusals = int(max_refusals)            # driver/settings.py: Continuation.max_refusals
-        self.max_steps_per_period = int(max_steps_per_period)    # Shooting.max_steps_per_period (freq_tol)
-        self._refine_pause = 0
-        self.refine_failures = 0
-        self.error_estimate = bool(error_estimate) or self.freq_tol is not None
+        self._refinement = StepRefinement(freq_tol, error_estimate, max_steps_per_period)   # freq_tol, estimates
+        self.freq_tol = self._refinement.freq_tol
         self.mode = int(mode)
         self.settings = settings
         self.energy_max = float(energy_max)
         self.max_points = int(max_points)
         self.points = []
+        self._disc_errors = []         # the time discretisation's part of each kept point's freq_error
         self.status = "running"
         self.message = ""
         self._problem = problem
@@ -64,7 +63,7 @@ class NNMIterator(StepRefinement):
         self._w_r = float(np.sqrt(system.omega2[mode - 1]))
         self._loops = LoopDetector(mirror=system.elements.odd)
         self._last = None
-        self._prev = None              # (ContinuationPoint, Point, dE/ds) of the last point
+        self._prev = None              # (ContinuationPoint, Candidate, dE/ds) of the last point
         self._cs, self._tol = continuation, tol
         self.locate = bool(locate) and continuation is not None and hasattr(problem, "energy")
         self.events = []
@@ -73,7 +72,7 @@ class NNMIterator(StepRefinement):
         self._policy = policy if policy is not None else FollowPolicy()   # backbone/policy.py: keep, jump or finish
         self.tongues = []              # TongueRecords (results/tongues.py)
         self._start_is_low = bool(start_is_low)   # the branch starts at low energy (not a tongue from its entry)
-        self._last_kept = None         # (ContinuationPoint, Point) of the last point kept
+        self._last_kept = None         # (ContinuationPoint, Candidate) of the last point kept
         self._run = []                 # (E, f) of the points kept on the family since the last jump
         self._run_length = (labels.settings if labels is not None else LabelSettings()).run_length
         self._refusals = 0             # steps refused in a row because an event in them was not located
@@ -97,10 +96,14 @@ class NNMIterator(StepRefinement):
                     self._failed(cp)
                     raise StopIteration
                 command = None
-                point, (q0, v0, T) = self._record(cp, self._problem, later=self._ahead)
-                if self._refined(cp, point):
+                cand, (q0, v0, T) = self._record(cp, self._problem, later=self._ahead)
+                finer = self._refinement.refine(self._problem, cp, cand, self._cs, self._tol)
+                if finer is not None:           # the point again with a finer time step
+                    self._engine.restart(finer)
+                    self._prev = None           # no event is located across a change of time step
+                    self._refusals = 0
                     continue
-                decision = self._decide(cp, point)
+                decision = self._decide(cp, cand)
                 if isinstance(decision, Jump):
                     decision = self._jump(cp, decision)
                     if decision is None:        # landed beyond the tongue: the continuation restarts there
@@ -110,21 +113,22 @@ class NNMIterator(StepRefinement):
                     raise StopIteration
                 if self._ahead:             # the next step runs while this point's eigenproblem does
                     self._engine.ahead()
-                self._settle(point)
+                self._settle(cand)
                 if not self.locate:
                     break
-                located = self._locate(cp, point, (q0, v0, T))
+                located = self._locate(cp, cand, (q0, v0, T))
                 if located is not None:
-                    point, (q0, v0, T) = located
+                    cand, (q0, v0, T) = located
                     break
                 command = REFUSE                # an event could not be located: a shorter step
-            self._last_kept = (cp, point)
+            point = cand.point
+            self._last_kept = (cp, cand)
             if point.label == "backbone":       # the run of points on the family since the last jump (labels.py)
                 self._run = self._run[-self._run_length:] + [(point.energy, point.frequency_hz)]
             else:
                 self._run = []
-            self._estimate_error(point)
-            self._release(point)
+            self._refinement.estimate(cand)
+            cand.release()
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
             p = self.points[loop]
@@ -133,8 +137,9 @@ class NNMIterator(StepRefinement):
                                         f"one lap is kept")
             raise StopIteration
         self.points.append(point)
+        self._disc_errors.append(cand.disc_error)
         E, E0 = point.energy, self.points[0].energy
-        ratio = min(self._turning_ratio(q0, v0), getattr(point, "_restoring", 1.0))
+        ratio = min(self._turning_ratio(q0, v0), cand.restoring)
         if ratio < ESCAPE_RATIO:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
@@ -147,14 +152,13 @@ class NNMIterator(StepRefinement):
         self._last = (q0, v0)
         return point
 
-    def _settle(self, point):
-        """Wait for the multipliers of a point recorded with later=True and set its floquet, stable, _collision."""
-        job = getattr(point, "_spectrum", None)
-        if job is not None:
-            mu, point._collision = job()
-            point.floquet = sort_multipliers(mu)
-            point.stable = is_stable(point.floquet, STABILITY_TOL)
-            point._spectrum = None
+    def _settle(self, cand):
+        """Wait for the multipliers of a point recorded with later=True: its floquet, stable and collision."""
+        if cand.spectrum is not None:
+            mu, cand.collision = cand.spectrum()
+            cand.point.floquet = sort_multipliers(mu)
+            cand.point.stable = is_stable(cand.point.floquet, STABILITY_TOL)
+            cand.spectrum = None
 
     def _turning_ratio(self, q0, v0):
         """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
@@ -164,7 +168,8 @@ class NNMIterator(StepRefinement):
 
     def _failed(self, reason):
         N = len(self.points)
-        ratio = min(self._turning_ratio(*self._last), getattr(self.points[-1], "_restoring", 1.0)) if N else 1.0
+        restoring = self._last_kept[1].restoring if self._last_kept else 1.0
+        ratio = min(self._turning_ratio(*self._last), restoring) if N else 1.0
         if ratio < 0.1:
             self._finish("escape", escape_message(self.points[-1], ratio) +
                          f" (the continuation could not go further: {reason})")
@@ -185,23 +190,24 @@ class NNMIterator(StepRefinement):
         self._apply(end)
         return True
 
-    def _decide(self, cp, point):
+    def _decide(self, cp, cand):
         """The point's label (against the skeleton, with its error estimated first) and the policy's decision."""
-        obs = point._observed
+        point, obs = cand.point, cand.observed
         verdict = Verdict(obs[0].label)
         if self._labels is not None:
-            self._estimate_error(point)
+            self._refinement.estimate(cand)
             falling = bool(self.points) and point.energy < self.points[-1].energy * (1 - 1e-9)
             verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run,
                                            falling=falling)
             point.label = verdict.text
-        return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1] if self._last_kept else None,
+        return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1].point if self._last_kept else None,
                                    len(self.points), self.tongues)
 
     def _jump(self, cp, jump):
         """Try the jump's targets (backbone/jumps.py: ``find_landing``); restart the continuation at the first that
         lands on the family and record the tongue (None), or the policy's Finish when none lands."""
-        prob, (bcp, bpoint) = self._problem, self._last_kept
+        prob, (bcp, bcand) = self._problem, self._last_kept
+        bpoint = bcand.point
         landing, tried = find_landing(prob, self._system, self._policy, self._labels, jump, self._run, self._cs,
                                       self._tol)
         record = jump.record.replace(attempts=jump.record.attempts + len(tried))
@@ -231,40 +237,45 @@ class NNMIterator(StepRefinement):
             self._store(finish.record, finish.index)
         self._finish(finish.status, finish.message)
 
-    def _locate(self, cp, point, state):
+    def _locate(self, cp, cand, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at
         energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
         could not be located and the step should be refused (at most Continuation.max_refusals times in a row)."""
+        point = cand.point
         slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
-        prev, self._prev = self._prev, (cp, point, slope)
+        prev, self._prev = self._prev, (cp, cand, slope)
         if prev is None:
-            return point, state
-        pcp, ppoint, pslope = prev
+            return cand, state
+        pcp, pcand, pslope = prev
+        ppoint = pcand.point
         loc = Locator(self._problem, self._cs, self._tol, pcp.u, pcp.tangent, step=cp.step,
-                      rtol=event_rtol(getattr(ppoint, "_disc_error", ppoint.freq_error)))
+                      rtol=event_rtol(pcand.disc_error))
         loc.cache[0.0] = (pcp.u, pcp.jacobian, pcp.tangent)
         if self._ahead:                    # the engine went on to the next point: its copy's state at this one again
             loc.problem.accept(cp.u, cp.jacobian)
         if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
             loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
-        for sigma, pt in ((0.0, ppoint), (cp.step, point)):     # their multipliers are known too
-            if not np.isnan(pt.floquet).any():
-                loc.spectra[float(sigma)] = (pt.floquet, getattr(pt, "_collision", None))
+        for sigma, c in ((0.0, pcand), (cp.step, cand)):     # their multipliers are known too
+            if not np.isnan(c.point.floquet).any():
+                loc.spectra[float(sigma)] = (c.point.floquet, c.collision)
         if self._refusals < self.max_refusals and cp.step > 4 * self._cs.step_min and loc.jumped():
             # the step's corrector landed on another branch alongside (near a tongue): half the step
             self._refusals += 1
             self._prev = prev
             return None
 
+        made = {}                          # id(Point) -> its Candidate, for the cut at energy_max
+
         def record(sigma):
             u, J, p = loc.at(sigma)
             loc.refresh(u, J)
-            pt = self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
-                              known=loc.spectra.get(float(sigma)))[0]
+            c = self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
+                             known=loc.spectra.get(float(sigma)))[0]
             if self._labels is not None:
-                pt.label = self._labels.verdict(pt.energy, pt.frequency_hz, pt._observed[0]).text
-            pt._observed = None
-            return pt
+                c.point.label = self._labels.verdict(c.point.energy, c.point.frequency_hz, c.observed[0]).text
+            c.observed = None
+            made[id(c.point)] = c
+            return c.point
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
@@ -279,17 +290,19 @@ class NNMIterator(StepRefinement):
         self.events.extend(events)
         if end is not None:
             u, J, p = loc.at(end[0])
+            ecand = made[id(end[1])]
             if J is None:                  # (not kept by the locator) the last point's error estimate needs it
                 J = loc.problem.jacobian(u)[1]
-                end[1]._solution = (loc.problem, u, J, p, None)
+                ecand.solution = (loc.problem, u, J, p, None)
             end[1].label = point.label          # the cut at energy_max is the decided point's orbit, moved back
-            self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), end[1], slope)
+            self._prev = (ContinuationPoint(u, p, J, 0, end[0], 0.0), ecand, slope)
             self._landed = True
-            return end[1], self._problem.state(u)
-        return point, state
+            return ecand, self._problem.state(u)
+        return cand, state
 
     def _record(self, cp, prob, known=None, later=False):
-        """The Point of a converged ContinuationPoint and its modal state (q0, v0, T).  known : optional (sorted
+        """The Candidate (the Point and the iterator's data about it) of a converged ContinuationPoint and its modal
+        state (q0, v0, T).  known : optional (sorted
         multipliers, collision coordinates) already computed at it (e.g. by event location).  later : the
         multipliers are computed in the worker threads (problem.multipliers_later, started by the engine driver);
         _settle waits for them."""
@@ -317,13 +330,11 @@ class NNMIterator(StepRefinement):
                       v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
                       coefficients=None if A is None else sys_.to_physical(A), label=content.label)
         point.steps = int(getattr(prob, "spp", 0))
-        point._collision = collision          # the Krein locator's coordinates
-        point._spectrum = job
-        point._solution = (prob, cp.u, cp.jacobian, cp.tangent, cp.factor)   # for the error estimate of the points that are kept
-        point._observed = (content, Q)        # harmonic content and modal orbit, for the label and the policy
         point.fundamental_share = content.share
-        point._restoring = restoring_ratio(sys_, Q) if Q is not None else 1.0   # escape test along the orbit
-        return point, (q0, vq0, T)
+        cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
+                         restoring=restoring_ratio(sys_, Q) if Q is not None else 1.0, collision=collision,
+                         spectrum=job)
+        return cand, (q0, vq0, T)
 
     def _finish(self, status, message):
         self.status, self.message = status, message
@@ -340,8 +351,8 @@ class NNMIterator(StepRefinement):
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
         message = self.message
         if self.freq_tol:
-            over = [p for p in self.points if p.freq_error > self.freq_tol]
-            steps = [p for p in over if getattr(p, "_disc_error", 0.0) > self.freq_tol]
+            over = [i for i, p in enumerate(self.points) if p.freq_error > self.freq_tol]
+            steps = [i for i in over if self._disc_errors[i] > self.freq_tol]
             if steps:
                 message += (f"; {len(steps)} points exceed freq_tol = {self.freq_tol:g} (the finer step did not "
                             f"converge next to them, e.g. near a fold: see freq_error)")

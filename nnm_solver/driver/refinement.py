@@ -1,9 +1,9 @@
 """Finer time steps where the frequency error demands it, and the error estimate of the kept points.
 
-A mixin of the branch iterator (iterator.NNMIterator; attributes used: freq_tol, error_estimate, _problem, _engine,
-_cs, _tol, _prev, _refusals, _refine_pause, refine_failures, max_steps_per_period).  With ``freq_tol`` a point whose estimated
+``StepRefinement`` is held by the branch iterator (iterator.NNMIterator).  With ``freq_tol`` a point whose estimated
 frequency error (the time discretisation's part, step doubling: ShootingProblem.frequency_error) exceeds it
-raises the steps per period, by the scheme's order, and the continuation starts again from that orbit.
+raises the steps per period, by the scheme's order, and the continuation starts again from that orbit: ``refine``
+returns the new engine, which the iterator restarts on.
 """
 from __future__ import annotations
 
@@ -15,47 +15,51 @@ __all__ = ["StepRefinement"]
 
 
 class StepRefinement:
-    """freq_tol refinement and the points' frequency error estimate, for NNMIterator."""
+    """freq_tol refinement and the points' frequency error estimate (driver/candidate.Candidate's).
 
-    def _refined(self, cp, point):
-        """freq_tol: if the point's estimated frequency error exceeds it, raise the steps per period (aiming at
-        a quarter of the tolerance, by the scheme's order) and restart the continuation from this orbit, so
-        that the point is computed again with the finer step.  False if nothing was done."""
-        prob = self._problem
-        if not self.freq_tol or not hasattr(prob, "set_steps"):
-            return False
-        self._estimate_error(point)
-        est = getattr(point, "_disc_error", point.freq_error)   # what finer steps can reduce
-        if not est > self.freq_tol or prob.spp >= self.max_steps_per_period:
-            return False
-        if self._refine_pause > 0:
-            self._refine_pause -= 1
-            return False
-        factor = min(max((est / (0.25 * self.freq_tol)) ** (1.0 / prob.integrator.order), 1.25), 4.0)
-        old = prob.spp
-        prob.set_steps(min(int(np.ceil(prob.spp * factor)), self.max_steps_per_period))
+    freq_tol : the largest estimated error of the time discretisation (None: no refinement); error_estimate : estimate
+    every point's error; max_steps_per_period : the finest step it goes to (Shooting.max_steps_per_period);
+    pause_after_failure : points it waits after a finer step failed (next to a fold that the finer step moves);
+    failures : how many finer steps failed."""
+
+    def __init__(self, freq_tol=None, error_estimate=True, max_steps_per_period=20000, pause_after_failure=3):
+        self.freq_tol = None if not freq_tol else float(freq_tol)
+        self.error_estimate = bool(error_estimate) or self.freq_tol is not None
+        self.max_steps_per_period = int(max_steps_per_period)
+        self.pause_after_failure = int(pause_after_failure)
+        self.failures = 0
+        self._pause = 0
+
+    def refine(self, problem, cp, cand, settings, tol):
+        """freq_tol: if the point's estimated frequency error exceeds it, raise the problem's steps per period
+        (aiming at a quarter of the tolerance, by the scheme's order) and return the continuation restarted from
+        this orbit (engine.pseudo_arclength), so that the point is computed again with the finer step; None if
+        nothing was done."""
+        if not self.freq_tol or not hasattr(problem, "set_steps"):
+            return None
+        self.estimate(cand)
+        est = cand.disc_error                   # what finer steps can reduce
+        if not est > self.freq_tol or problem.spp >= self.max_steps_per_period:
+            return None
+        if self._pause > 0:
+            self._pause -= 1
+            return None
+        factor = min(max((est / (0.25 * self.freq_tol)) ** (1.0 / problem.integrator.order), 1.25), 4.0)
+        old = problem.spp
+        problem.set_steps(min(int(np.ceil(problem.spp * factor)), self.max_steps_per_period))
         try:                                    # the orbit with the finer step, near this one
-            correct(prob, cp.u, cp.tangent, self._cs, self._tol, prob.scale(cp.u))
+            correct(problem, cp.u, cp.tangent, settings, tol, problem.scale(cp.u))
         except CorrectorFailure:                # e.g. next to a fold that the finer step moves: keep the
-            prob.set_steps(old)                 # coarse point and try again a few points later
-            self._refine_pause = 3
-            self.refine_failures += 1
-            return False
-        self._engine.restart(pseudo_arclength(prob, cp.u, cp.tangent, self._cs, self._tol))
-        self._prev = None                       # no event is located across a change of time step
-        self._refusals = 0
-        return True
+            problem.set_steps(old)              # coarse point and try again a few points later
+            self._pause = self.pause_after_failure
+            self.failures += 1
+            return None
+        return pseudo_arclength(problem, cp.u, cp.tangent, settings, tol)
 
-    def _estimate_error(self, point):
-        """point.freq_error from the problem's estimate (shooting: step doubling), unless disabled."""
-        prob, u, J, p, factor = getattr(point, "_solution", None) or (None,) * 5
+    def estimate(self, cand):
+        """cand.point.freq_error (and cand.disc_error) from the problem's estimate (shooting: step doubling),
+        unless disabled."""
+        prob, u, J, p, factor = cand.solution or (None,) * 5
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
-            if not np.isfinite(point.freq_error):
-                point.freq_error, point._disc_error = prob.frequency_error(u, J, p, factor)
-
-    @staticmethod
-    def _release(point):
-        """Drop the Jacobian and factorisation a kept point carried for its error estimate (O(n^2) each)."""
-        point._solution = None
-        point._observed = None
-
+            if not np.isfinite(cand.point.freq_error):
+                cand.point.freq_error, cand.disc_error = prob.frequency_error(u, J, p, factor)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .hill_copies import hard_copies
-from .hill_shared import _classes, _exp_transform, _setup, velocity_overlaps
+from .hill_shared import _classes, _exp_transform, _setup, set_warm_start, velocity_overlaps, warm_start
 from .hill_structured import _HillOperator, _iterate, warm_from_zeros
 
 #: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
@@ -56,7 +56,7 @@ def _secular(problem, A, w, bp, C):
         for j in range(ns):
             Ct[j::ns, j::ns] = Cexp[j]
         key = (n, nb, S)
-        warm = getattr(problem, "_hill_secular", None)
+        warm = warm_start(problem, "secular")
         if warm is not None and warm[0] == key:
             nu = warm[1] / w
         else:
@@ -188,13 +188,14 @@ def _secular(problem, A, w, bp, C):
             if len(mg) and np.min(np.abs(mf[:, None] - mg[None, :])) < SECULAR_DISTINCT:
                 return None                       # the structured blocks found a secular class's exponent again
             nu_kept += list(nu[good]) + list(-nu[good]) + list(found)
-            if getattr(problem, "_hill_secular", None) is not None and problem._hill_secular[0] == key:
-                nu[bad] = problem._hill_secular[1][bad] / w          # the hard classes: their last secular exponents
+            last = warm_start(problem, "secular")
+            if last is not None and last[0] == key:
+                nu[bad] = last[1][bad] / w          # the hard classes: their last secular exponents
             else:
                 nu[bad] = 1j * np.sqrt(np.maximum(beta2[classes], 0.0))[bad]
         else:
             nu_kept += list(nu) + list(-nu)
-        problem._hill_secular = (key, nu * w)
+        set_warm_start(problem, "secular", (key, nu * w))
     if len(nu_kept) != 2 * n - 2:
         return None
     mu = np.concatenate([np.exp(2 * np.pi * np.asarray(nu_kept, dtype=complex)), [1.0, 1.0]])

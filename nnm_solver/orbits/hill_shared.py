@@ -6,10 +6,13 @@ trivial pair (_trivial_pair: the two exponents nearest 0 on the velocity)."""
 from __future__ import annotations
 
 import functools
+import threading
+import weakref
 
 import numpy as np
 
-__all__ = ["CENTROID_MAX", "TRIVIAL_COS", "central_pool", "distinct", "velocity_overlaps"]
+__all__ = ["CENTROID_MAX", "TRIVIAL_COS", "central_pool", "distinct", "velocity_overlaps", "warm_start",
+           "set_warm_start", "forget_warm_starts"]
 
 #: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
 CENTROID_MAX = 0.6
@@ -142,3 +145,26 @@ def distinct(z, rtol):
     one."""
     same = np.abs(z[:, None] - z[None, :]) <= rtol * np.maximum(1.0, np.abs(z))[None, :]
     return ~np.any(np.tril(same, -1), axis=1)
+
+
+#: the structured and secular Hill routes' warm starts, per orbit problem: {problem: {route: value}}, kept beside the
+#: problem (weakly: they go with it) rather than hung on it; the next orbit of the same problem starts from them
+_WARM = weakref.WeakKeyDictionary()
+_WARM_LOCK = threading.Lock()
+
+
+def warm_start(problem, route):
+    """The last warm start that ``route`` ("structured" / "secular") stored for this problem, or None."""
+    with _WARM_LOCK:
+        return _WARM.get(problem, {}).get(route)
+
+
+def set_warm_start(problem, route, value):
+    with _WARM_LOCK:
+        _WARM.setdefault(problem, {})[route] = value
+
+
+def forget_warm_starts(problem):
+    """Cold starts from now on for this problem's next orbit (tests compare cold and warm)."""
+    with _WARM_LOCK:
+        _WARM.pop(problem, None)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .hill_shared import (CENTROID_MAX, TRIVIAL_COS, _classes, _exp_transform, _setup, _trivial_pair, central_pool,
-                          velocity_overlaps)
+                          set_warm_start, velocity_overlaps, warm_start)
 
 #: vectors per exponent in the structured route (a collision of two exponents needs 2, the trivial pair beside a
 #: real pair near +1 needs 4)
@@ -150,7 +150,7 @@ def _structured(problem, A, w, bp, C):
     if classes:
         op = _HillOperator(omega2, Bq, Cexp, H, w)
         found = _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True)
-        if found is None and getattr(problem, "_hill_warm", None) is not None:
+        if found is None and warm_start(problem, "structured") is not None:
             found = _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=False)      # a cold start
         if found is None:
             return None
@@ -219,7 +219,7 @@ def warm_from_zeros(problem, op, tm, Vbar, beta2, classes, vel, nu_classes, zero
     shifts = sigma.copy()
     shifts[nc:] = lattice + ZERO_SHIFT
     X = op.lift(c, shifts)
-    problem._hill_warm = ((nb, n, S), (shifts + 1e-9j * np.maximum(1.0, np.abs(shifts))) * op.w, X)
+    set_warm_start(problem, "structured", ((nb, n, S), (shifts + 1e-9j * np.maximum(1.0, np.abs(shifts))) * op.w, X))
 
 
 def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
@@ -234,7 +234,7 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     S = nc + H + 1
     lattice = 1j * np.arange(H + 1) + ZERO_SHIFT                             # the last H + 1 blocks' shifts
     is_lat = np.arange(S) >= nc
-    warm = getattr(problem, "_hill_warm", None) if warm else None
+    warm = warm_start(problem, "structured") if warm else None
     if warm is not None and warm[0] == (nb, n, S):
         sigma = warm[1] / op.w                 # the exponents in rad/s, in units of this orbit's omega
         V = op.lift(warm[2][:, :op.m].reshape(S, nb, n, b), sigma)
@@ -337,5 +337,5 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     t = np.argmin(np.abs(theta - sigma[:, None]) + 1e9 * (triv > 0.5), axis=1)
     nu_t = theta[np.arange(S), t]
     nu_t[is_lat] = lattice
-    problem._hill_warm = ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy())
+    set_warm_start(problem, "structured", ((nb, n, S), (nu_t + 1e-9j * np.maximum(1.0, np.abs(nu_t))) * op.w, X.copy()))
     return kept
