@@ -30,8 +30,10 @@ def two_dof():
 
 @pytest.fixture(scope="module")
 def nnm1_hb():
-    """NNM1 of the 2-DOF benchmark by HB (with Hill's multipliers) up to 1e4 J, through the 3:1 tongue."""
-    return continue_nnm_hb(two_dof(), 1, 1e4, harmonics=11, tol=1e-10, max_points=1000, floquet=True)
+    """NNM1 of the 2-DOF benchmark by HB (with Hill's multipliers) up to 1e4 J, through the 3:1 tongue, at 11 harmonics
+    throughout (freq_tol=None: the numbers below are this truncation's)."""
+    return nnm.continue_nnm(two_dof(), 1, 1e4, nnm.HarmonicBalance(harmonics=11, tol=1e-10, freq_tol=None),
+                            max_points=1000, floquet=True)
 
 
 @pytest.fixture(scope="module")

@@ -117,6 +117,8 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     freq_tol = getattr(method, "freq_tol", None)
     if freq_tol is not None:
         check_positive("freq_tol", freq_tol)
+    if name == "hb" and not method.error_estimate:
+        freq_tol = None                        # more harmonics where the estimate asks: no estimate, no refinement
     if ritz:                                   # the modes below a cutoff + residual flexibility (model/ritz.py)
         check_positive("harmonics", method.harmonics, integer=True)
         system = ritz_system(model, mode, method.harmonics)
@@ -149,7 +151,8 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
                        locate=locate_events, error_estimate=method.error_estimate, freq_tol=freq_tol, labels=labels,
                        policy=policy_for(tongues, sk, failure, mode), start_is_low=_start is None,
                        max_refusals=cont.max_refusals,
-                       max_steps_per_period=getattr(method, "max_steps_per_period", 0) or 1)
+                       max_steps_per_period=getattr(method, "max_steps_per_period", 0) or 1,
+                       max_harmonics=0 if ritz else getattr(method, "max_harmonics", 0))
 
 
 def _skeleton_system(model, mode, harmonics):

@@ -25,7 +25,8 @@ from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
 from .candidate import Candidate
-from .refinement import StepRefinement
+from .refinement import HarmonicRefinement, StepRefinement
+from ..orbits.hb_basis import harmonics_in
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..threads import blas_limited
 
@@ -45,10 +46,11 @@ class NNMIterator:
 
     def __init__(self, model, mode, problem, system, engine, settings, energy_max, max_points, continuation=None,
                  tol=None, locate=True, error_estimate=True, freq_tol=None, labels=None, policy=None,
-                 start_is_low=True, max_refusals=3, max_steps_per_period=20000):
+                 start_is_low=True, max_refusals=3, max_steps_per_period=20000, max_harmonics=0):
         self.model = model
         self.max_refusals = int(max_refusals)            # driver/settings.py: Continuation.max_refusals
         self._refinement = StepRefinement(freq_tol, error_estimate, max_steps_per_period)   # freq_tol, estimates
+        self._harmonics = HarmonicRefinement(freq_tol, max_harmonics)      # freq_tol of harmonic balance
         self.freq_tol = self._refinement.freq_tol
         self.mode = int(mode)
         self.settings = settings
@@ -79,7 +81,7 @@ class NNMIterator:
         # the engine's next point, computed while the last point's multipliers are (in the worker thread)
         self._ahead = bool(settings.floquet and getattr(problem, "background_spectrum", False))
         self._engine = EngineDriver(engine, problem, continuation, tol, launch=(
-            (lambda cp: problem.multipliers_later(cp.u, cp.tangent)) if self._ahead else None))
+            (lambda cp: self._problem.multipliers_later(cp.u, cp.tangent)) if self._ahead else None))
 
     def __iter__(self):
         return self
@@ -103,6 +105,12 @@ class NNMIterator:
                     self._prev = None           # no event is located across a change of time step
                     self._refusals = 0
                     continue
+                if self._harmonics.freq_tol:
+                    self._refinement.estimate(cand)
+                    more = self._harmonics.refine(self._problem, cp, cand, self._cs, self._tol)
+                    if more is not None:        # the point again with more harmonics
+                        self._more_harmonics(*more)
+                        continue
                 decision = self._decide(cp, cand)
                 if isinstance(decision, Jump):
                     decision = self._jump(cp, decision)
@@ -151,6 +159,24 @@ class NNMIterator:
             self._finish("done", "the branch returned to low energy")
         self._last = (q0, v0)
         return point
+
+    def _more_harmonics(self, problem, engine):
+        """Go on with the harmonic-balance problem with more harmonics (HarmonicRefinement): the points so far get
+        its basis (their higher harmonics zero, which they are at their truncation), the settings its harmonics."""
+        old = self._problem.basis
+        for p in self.points:
+            p.coefficients = harmonics_in(problem.basis, old, p.coefficients)
+        if self._last_kept is not None:        # its tangent orients a later jump's landing (upward_tangent)
+            cp0, c0 = self._last_kept
+            self._last_kept = (ContinuationPoint(self._problem.embedded(problem, cp0.u),
+                                                 self._problem.embedded(problem, cp0.tangent), None,
+                                                 cp0.iterations, cp0.step, cp0.error), c0)
+        self._problem = self._engine.problem = problem
+        self._engine.restart(engine)
+        self.settings = self.settings.replace(harmonics=problem.basis.harmonics,
+                                              samples=None if self.settings.samples is None else problem.basis.samples)
+        self._prev = None                       # no event is located across a change of the truncation
+        self._refusals = 0
 
     def _settle(self, cand):
         """Wait for the multipliers of a point recorded with later=True: its floquet, stable and collision."""

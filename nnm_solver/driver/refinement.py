@@ -63,3 +63,36 @@ class StepRefinement:
         if self.error_estimate and prob is not None and hasattr(prob, "frequency_error") and J is not None:
             if not np.isfinite(cand.point.freq_error):
                 cand.point.freq_error, cand.disc_error = prob.frequency_error(u, J, p, factor)
+
+
+class HarmonicRefinement:
+    """freq_tol for harmonic balance: more harmonics where a point's estimated truncation error exceeds it.
+
+    The estimate (orbits/hb_error.py) is the change of the frequency with two more harmonics at the same energy; where
+    it exceeds freq_tol the branch goes on with ``step`` more harmonics from that orbit (its coefficients embedded,
+    the new ones zero), up to max_harmonics, and the point is computed again.  Points whose estimate is inf (the
+    larger problem does not settle: inside a tongue the truncation does not resolve) are left as they are: more
+    harmonics there would follow the tongue, not the backbone.  Only a problem on every mode (not a Ritz basis, whose
+    modes were chosen for the first number of harmonics) is refined."""
+
+    def __init__(self, freq_tol=None, max_harmonics=0, step=2):
+        self.freq_tol = None if not freq_tol else float(freq_tol)
+        self.max_harmonics = int(max_harmonics)
+        self.step = int(step)
+        self.raised = 0
+
+    def refine(self, problem, cp, cand, settings, tol):
+        """(new problem, the continuation restarted on it) when the point asks for more harmonics, else None."""
+        err = cand.point.freq_error
+        if (not self.freq_tol or not hasattr(problem, "with_harmonics") or not np.isfinite(err)
+                or not err > self.freq_tol or problem.basis.harmonics + self.step > self.max_harmonics):
+            return None
+        finer = problem.with_harmonics(problem.basis.harmonics + self.step)
+        u, t = problem.embedded(finer, cp.u), problem.embedded(finer, cp.tangent)
+        try:
+            correct(finer, u, t, settings, tol, finer.scale(u))
+        except CorrectorFailure:
+            self.max_harmonics = problem.basis.harmonics          # no orbit with more: keep this truncation
+            return None
+        self.raised += 1
+        return finer, pseudo_arclength(finer, u, t, settings, tol)

@@ -61,7 +61,9 @@ class HarmonicBalance:
     basis : "odd" / "full" (None: "odd" for odd forces); condensed : solve the equations condensed onto the
     elements' deformations (n_s (H + 1) / 2 + 2 unknowns whatever the model size); modal_basis : "full" or "ritz"
     (None: Ritz above driver.problems.RITZ_MIN_DOF DOFs); tol : relative residual; error_estimate : each point's
-    truncation error (orbits/hb_error.py).
+    truncation error (orbits/hb_error.py); freq_tol : where a point's estimated truncation error exceeds it, the
+    branch goes on with two more harmonics from there (None: never), up to max_harmonics
+    (driver/refinement.HarmonicRefinement; problems on every mode only, not a Ritz basis).
     """
 
     harmonics: int = 7
@@ -71,6 +73,8 @@ class HarmonicBalance:
     modal_basis: str | None = None
     tol: float = 1e-8
     error_estimate: bool = True
+    freq_tol: float | None = 1e-4
+    max_harmonics: int = 31
     name = "hb"
 
     def options(self):

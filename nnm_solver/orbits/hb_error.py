@@ -74,6 +74,19 @@ class HBTruncationError:
             self._larger_problem = big
         return big
 
+    def with_harmonics(self, harmonics):
+        """The same problem with ``harmonics`` harmonics, sampled at least as densely per harmonic as this one (the
+        branch's refinement to its freq_tol, driver/refinement.py), with this one's phase reference."""
+        H, N = self.basis.harmonics, self.basis.samples
+        finer = self.with_basis(HBBasis(harmonics, self.basis.kind, max(4 * harmonics + 4, math.ceil(N * harmonics / H))))
+        if getattr(self, "q_ref", None) is not None:
+            finer.q_ref = self.q_ref
+        return finer
+
+    def embedded(self, other, u):
+        """u (or a direction) of this problem as a vector of ``other`` (the same problem with more harmonics)."""
+        return self._embed(other, u)
+
     def _embed(self, big, u):
         """u (or a direction) of this problem as a vector of the larger problem ``big``: the coefficients on the
         harmonics both have, zero on the new ones, the tail unchanged."""

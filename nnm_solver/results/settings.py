@@ -95,7 +95,8 @@ class HarmonicBalanceSettings(MethodSettings):
     """Harmonic balance (orbits/harmonic_balance.py): highest harmonic, basis "odd"/"full", AFT samples;
     ``condensed``: the equations were condensed onto the elements' deformations (orbits/condensed_hb.py);
     ``modal_basis``: "full" (every mode) or "ritz" (the modes below ``cutoff_hz`` (Hz) plus the residual
-    flexibility of the others, model/ritz.py)."""
+    flexibility of the others, model/ritz.py); ``freq_tol``: the branch raised its harmonics where a point's
+    estimated truncation error exceeded it (0: it did not; ``harmonics`` is then the most it reached)."""
 
     method: ClassVar[str] = "harmonic_balance"
     tol: float = 1e-8
@@ -105,6 +106,7 @@ class HarmonicBalanceSettings(MethodSettings):
     condensed: bool = False
     modal_basis: str = "full"
     cutoff_hz: float = 0.0
+    freq_tol: float = 0.0
 
     def hb_basis(self):
         from ..orbits.hb_basis import HBBasis
