@@ -525,6 +525,10 @@ def write_file(target, source, branches, keep=None, thin_points=True, log=print)
 
 # ---------------------------------------------------------------------- the results table
 def fmt_tongue(t):
+    if t.get("family_end"):
+        return (f"**{t['label']}** with mode {t['partner_mode']}: the backbone family itself ends in it at "
+                f"{t['entry_energy']:.3g} J, {t['entry_frequency_hz']:.4f} Hz (no backbone beyond; "
+                f"`continue_tongue` follows the tongue)")
     folds = f"folds at {', '.join(f'{e:.3g}' for e in t['folds'])} J" if len(t["folds"]) else "no fold"
     how = "jumped over" if t["jumped"] else "traversed"
     lab = t["partner_label"] if not t["partner_label"].startswith("mode ") else t["partner_kind"]
@@ -562,7 +566,7 @@ def results_table(results, times, spp, tol, integrator="newmark", floquet=True):
              "|---|---|---|---|---|---|---|---|---|"]
     paper_mac = {10: "0.99", 13: "unchanged", 19: "0.98", 20: "0.97"}
     for m, r in results.items():
-        tg = "<br>".join(fmt_tongue(t) for t in r["tongues"]) or "none met"
+        tg = "<br>".join(fmt_tongue(t) for t in r["tongues"] + r.get("family_end", [])) or "none met"
         if r.get("tongue_records_left_out"):
             tg += (f"<br>({r['tongue_records_left_out']} more record(s) of the skip continuation re-enter a tongue above "
                    f"and are left out: each tongue once)")
@@ -790,7 +794,12 @@ def main(argv=None):
                       f"{tb.energy.max():.4g} J) runs over the branch of tongue {j + 1}: left out", flush=True)
                 continue
             pairs.append((t, tb))
-        res_dup = len(b.tongues) - len(pairs)
+        ends = [t for t in b.tongues if t.get("family_end")]
+        res_dup = len(b.tongues) - len(pairs) - len(ends)
+        # where the backbone family itself ends in a resonance: said as such (not a tongue branch, not a re-entry)
+        res["family_end"] = [dict(label=f"{t['order']}:1", family_end=True, partner_mode=int(t["partner_mode"]),
+                                  entry_energy=float(t["entry_energy"]), entry_frequency_hz=float(t["entry_frequency_hz"]))
+                             for t in ends[:1]]
         tbs = [tb for _, tb in pairs]
         for t, tb in pairs:
             F = analysis.harmonic_fractions(tb, max(N_HARM, int(t["order"]) + 1))
