@@ -93,8 +93,9 @@ def main(argv=None):
     parser.add_argument("--integrator", default=None, help=f"time integrator of the shooting: gauss6 or "
                         f"gauss4 (Gauss-Legendre, orders 6 and 4), or newmark (the seed paper's, order 2); default "
                         f"{D['integrator']}")
-    parser.add_argument("--freq-tol", type=float, default=None, help="raise the steps per period where a "
-                        "point's estimated relative frequency error exceeds this (e.g. 1e-6)")
+    parser.add_argument("--freq-tol", type=float, default=None, help="accuracy target: raise the steps per period "
+                        "(hb: the harmonics) where a point's estimated relative frequency error exceeds this "
+                        f"(default {D['freq_tol']:g}; e.g. 1e-6)")
     parser.add_argument("--tol", type=float, default=None, help="relative periodicity tolerance (default 1e-6; "
                         "hb: relative residual, default 1e-8)")
     parser.add_argument("--max-points", type=int, default=None, metavar="N",
@@ -145,19 +146,20 @@ def main(argv=None):
 
 def _method_arguments(args):
     """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
-    given = dict(steps_per_period=args.steps_per_period, integrator=args.integrator, freq_tol=args.freq_tol)
+    given = dict(steps_per_period=args.steps_per_period, integrator=args.integrator)
     given = {k: v for k, v in given.items() if v is not None}      # the solver's defaults for the others
+    target = {} if args.freq_tol is None else dict(freq_tol=args.freq_tol)     # both methods have one
     if args.method == "shooting":
         if args.condensed:
             raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
         if args.harmonics is not None:
             raise NNMInputError("--harmonics belongs to --method hb (harmonic balance)")
-        return given
+        return {**given, **target}
     if given:
         flags = ", ".join("--" + k.replace("_", "-") for k in given)
         raise NNMInputError(f"{flags} belong(s) to --method shooting; harmonic balance has no time steps "
                             f"(raise --harmonics instead)")
-    return dict(method="hb", condensed=args.condensed,
+    return dict(method="hb", condensed=args.condensed, **target,
                 **({} if args.harmonics is None else dict(harmonics=args.harmonics)))
 
 

@@ -117,8 +117,8 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     freq_tol = getattr(method, "freq_tol", None)
     if freq_tol is not None:
         check_positive("freq_tol", freq_tol)
-    if name == "hb" and not method.error_estimate:
-        freq_tol = None                        # more harmonics where the estimate asks: no estimate, no refinement
+    if not method.error_estimate:
+        freq_tol = None                        # the accuracy target acts on the estimates: none, no refinement
     if ritz:                                   # the modes below a cutoff + residual flexibility (model/ritz.py)
         check_positive("harmonics", method.harmonics, integer=True)
         system = ritz_system(model, mode, method.harmonics)
