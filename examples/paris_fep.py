@@ -526,8 +526,8 @@ def write_file(target, source, branches, keep=None, thin_points=True, log=print)
 # ---------------------------------------------------------------------- the results table
 def fmt_tongue(t):
     if t.get("family_end"):
-        return (f"**{t['label']}** with mode {t['partner_mode']}: the backbone family itself ends in it at "
-                f"{t['entry_energy']:.3g} J, {t['entry_frequency_hz']:.4f} Hz (no backbone beyond; "
+        return (f"**{t['label']}** with mode {t['partner_mode']}: the backbone family itself ends in it, at "
+                f"{t['end_energy']:.3g} J, {t['end_frequency_hz']:.4f} Hz (no backbone beyond; "
                 f"`continue_tongue` follows the tongue)")
     folds = f"folds at {', '.join(f'{e:.3g}' for e in t['folds'])} J" if len(t["folds"]) else "no fold"
     how = "jumped over" if t["jumped"] else "traversed"
@@ -797,9 +797,10 @@ def main(argv=None):
         ends = [t for t in b.tongues if t.get("family_end")]
         res_dup = len(b.tongues) - len(pairs) - len(ends)
         # where the backbone family itself ends in a resonance: said as such (not a tongue branch, not a re-entry)
+        top = int(np.argmax(b.energy))
         res["family_end"] = [dict(label=f"{t['order']}:1", family_end=True, partner_mode=int(t["partner_mode"]),
-                                  entry_energy=float(t["entry_energy"]), entry_frequency_hz=float(t["entry_frequency_hz"]))
-                             for t in ends[:1]]
+                                  end_energy=float(b.energy[top]), end_frequency_hz=float(b.frequency_hz[top]))
+                             for t in ends[-1:]]
         tbs = [tb for _, tb in pairs]
         for t, tb in pairs:
             F = analysis.harmonic_fractions(tb, max(N_HARM, int(t["order"]) + 1))
