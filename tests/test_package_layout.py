@@ -233,12 +233,19 @@ def _foreign_private_assignments(path):
                 if (isinstance(e, ast.Attribute) and e.attr.startswith("_") and not e.attr.startswith("__")
                         and not (isinstance(e.value, ast.Name) and e.value.id in ("self", "cls"))):
                     out.append((node.lineno, ast.unparse(e)))
+        # getattr / hasattr / setattr of a private name on another object (a side channel read or written)
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                and node.func.id in ("getattr", "hasattr", "setattr") and len(node.args) >= 2
+                and isinstance(node.args[1], ast.Constant) and isinstance(node.args[1].value, str)
+                and node.args[1].value.startswith("_") and not node.args[1].value.startswith("__")
+                and not (isinstance(node.args[0], ast.Name) and node.args[0].id in ("self", "cls"))):
+            out.append((node.lineno, ast.unparse(node)))
     return out
 
 
 def test_no_private_attribute_is_hung_on_another_object():
     """Working data about a point or a problem lives beside it (driver/candidate.py, orbits/hill_shared.py's warm
-    starts), not as private attributes set on it from outside."""
+    starts, the locator's spectra), not as private attributes set on it or read from it from outside."""
     root = _root("nnm_solver")
     found = {p.relative_to(root).as_posix(): _foreign_private_assignments(p) for p in sorted(root.rglob("*.py"))}
     found = {k: v for k, v in found.items() if v}
@@ -247,5 +254,7 @@ def test_no_private_attribute_is_hung_on_another_object():
 
 def test_the_check_finds_a_private_attribute_on_another_object(tmp_path):
     p = tmp_path / "m.py"
-    p.write_text("def f(point, x):\n    point._seen = x\n    self._ok = x\n    a, point._b = 1, 2\n")
-    assert [name for _, name in _foreign_private_assignments(p)] == ["point._seen", "point._b"]
+    p.write_text("def f(point, x):\n    point._seen = x\n    self._ok = x\n    a, point._b = 1, 2\n"
+                 "    c = getattr(point, '_c', None)\n    d = getattr(self, '_d', None)\n")
+    assert [name for _, name in _foreign_private_assignments(p)] == ["point._seen", "point._b",
+                                                                     "getattr(point, '_c', None)"]

@@ -301,6 +301,8 @@ class NNMIterator:
                 c.point.label = self._labels.verdict(c.point.energy, c.point.frequency_hz, c.observed[0]).text
             c.observed = None
             made[id(c.point)] = c
+            if not np.isnan(c.point.floquet).any():     # its multipliers and Krein coordinates, for the locators
+                loc.spectra.setdefault(float(sigma), (c.point.floquet, c.collision))
             return c.point
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,

@@ -130,6 +130,11 @@ class ShootingProblem(ShootingError, ShootingStability):
         """u of a first guess from a modal state (q0, v0) and a period T (s): ``pack``."""
         return self.pack(q0, v0, T)
 
+    def last_evaluated(self):
+        """The unknowns u of the latest Jacobian evaluation (the problem's monodromy is that orbit's), or None."""
+        last = getattr(self, "_last_residual", None)
+        return None if last is None else last[0]
+
     def unpack(self, u):
         """(q0, v0, T) from the unknown vector u."""
         n = self.n

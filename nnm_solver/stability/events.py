@@ -57,7 +57,8 @@ def event_record(kind, index, point, detail, **extra):
 def locate_between(loc, s, a, b, index, record, energy_max=None):
     """Events between point a (sigma = 0) and point b (sigma = s) of the continuation.
 
-    a, b : (point, slope) with slope = dE/ds at the point; record(sigma) -> Point at sigma.
+    a, b : (point, slope) with slope = dE/ds at the point; record(sigma) -> Point at sigma.  The multipliers and the
+    Krein locator's coordinates known at a step parameter are loc.spectra[sigma] = (multipliers, coordinates).
     energy_max : if the step crosses it upwards, the branch is cut there: returns the located end
     point as well.  Returns (events, end) with end = (sigma, Point) or None.  An event whose
     location fails (the corrector does not converge inside the step) is kept, bracketed by the two
@@ -103,10 +104,12 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             if kind != "torus" and ga * gb < 0:      # a real pair: a smooth test function, regula falsi
                 sig = loc.root(loc.real_crossing, 0.0, s, ga, gb)
             else:                                    # a Krein collision
-                rho_u = getattr(pu, "_collision", None)
+                # the Krein locator's coordinates at the two ends: kept with their multipliers (loc.spectra)
+                rho_a, rho_b = (loc.spectra.get(float(x), (None, None))[1] for x in (0.0, s))
+                rho_u = rho_b if pu is pb else rho_a
                 if rho_u is not None and np.any(np.abs(np.imag(rho_u)) > 1e-9):
                     lo, hi = locate_collision(loc, 0.0, s, krein_candidates(rho_u),
-                                       ends=[(p.stable, getattr(p, "_collision", None)) for p in (pa, pb)])
+                                              ends=[(pa.stable, rho_a), (pb.stable, rho_b)])
                 else:                                # no coordinates (e.g. Hill's method): bisection on the flag
                     lo, hi = loc.bisect(loc.stable, 0.0, s)
                 # the bracket's end towards the step's unstable end (its spectrum is known, so the event's point

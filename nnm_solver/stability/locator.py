@@ -232,10 +232,10 @@ class Locator(BracketRoots):
     def refresh(self, u, J):
         """Make u the problem's accepted point; its monodromy is that of the latest Jacobian evaluation,
         so it is evaluated again when a later point was computed since (a cached u)."""
-        last = getattr(self.problem, "_last_residual", None)
+        last = self.problem.last_evaluated() if hasattr(self.problem, "last_evaluated") else None
         # (quarter-period shooting sweeps the maps of its multipliers at the accepted point itself)
         needs = getattr(self.problem, "stability_needs_jacobian", True)
-        if needs and last is not None and not np.array_equal(last[0], u):
+        if needs and last is not None and not np.array_equal(last, u):
             _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
 
