@@ -76,8 +76,35 @@ def _pure_cubic(model):
     return all(hasattr(s, "law") and not hasattr(s, "kinks") and set(s.law()) == {3} for s in model.springs)
 
 
+def _record_points(record, dof, labels):
+    """(amplitude, frequency_hz) of a measured frequency record: its only channel, else the channel of the
+    model's DOF ``dof`` (its DOF label, e.g. 'node 14 uz')."""
+    if record.kind != "frequency":
+        raise NNMInputError(f"fit_backbone: {record.source} is a time record; give peak amplitudes against "
+                            f"frequency (a frequency record)")
+    if record.n_channels == 1:
+        j = 0
+    elif labels and isinstance(dof, (int, np.integer)) and 0 <= dof < len(labels) and labels[dof] in record.labels:
+        j = record.labels.index(labels[dof])
+    else:
+        raise NNMInputError(f"fit_backbone: {record.source} has {record.n_channels} channels and none is labelled "
+                            f"like DOF {dof} of the model; pass record.channel(...) and record.frequency_hz")
+    if record.quantities[j] not in ("displacement", "unknown"):
+        raise NNMInputError(f"fit_backbone: channel {record.labels[j]!r} of {record.source} is a "
+                            f"{record.quantities[j]}; the backbone's amplitudes are displacements (m)")
+    return np.abs(record.data[:, j]), record.frequency_hz
+
+
 def _data(model, mode, dof, amplitude, frequency_hz):
+    from ..files.importers.measured import Measurement
     from ..model import Model
+
+    if isinstance(amplitude, Measurement):
+        if frequency_hz is not None:
+            raise NNMInputError("fit_backbone: a measured record carries its frequencies; leave frequency_hz out")
+        amplitude, frequency_hz = _record_points(amplitude, dof, getattr(model, "dof_labels", None))
+    elif frequency_hz is None:
+        raise NNMInputError("fit_backbone: give frequency_hz (Hz), one per amplitude")
 
     if not isinstance(model, Model):
         raise NNMInputError(f"fit_backbone: model must be an nnm_solver.Model, got {type(model).__name__}")
@@ -142,7 +169,7 @@ def _minimise(cost, lo, hi, nodes=61):
     return float(res.x)
 
 
-def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, method=None, amplitude_rtol=0.01,
+def fit_backbone(model, mode, dof, amplitude, frequency_hz=None, *, energy_max=None, method=None, amplitude_rtol=0.01,
                  frequency_rtol=0.001, **continuation):
     """The factor on every element's nonlinear coefficients whose NNM backbone best matches measured points.
 
@@ -152,6 +179,8 @@ def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, 
     energy_max : energy (J) of the nominal branch; default from the largest amplitude on the linear mode.
     method and further keywords go to ``continue_nnm`` (default: its defaults, Newmark shooting; ``method="hb"``
     is faster on large models, its peak amplitudes differ from shooting's by the two methods' errors, ~1e-4).
+    A measured frequency record (``nnm.read_measured``, e.g. a CSV "frequency (Hz), amplitude (mm)") may stand
+    for amplitude, frequency_hz left out: its only channel, or the one labelled like the model's DOF ``dof``.
     amplitude_rtol, frequency_rtol : relative measurement uncertainties, the distance's units.
     Returns a ``BackboneFit`` (module doc).
     """
