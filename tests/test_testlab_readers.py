@@ -59,7 +59,7 @@ def test_uff58_time_series_written_by_pyuff(tmp_path):
     ])
     rec = nnm.read_measured(path)
     assert rec.kind == "time" and len(rec) == len(T) and rec.sampling == pytest.approx(1000.0)
-    assert rec.labels == ("node 14 uz", "node 20 uz", "node 20 ux")
+    assert rec.labels == ("node 14 uz", "node 20 uz", "node 20 ux force")
     assert rec.quantities == ("acceleration", "acceleration", "force")
     assert rec.units == ("m/s^2", "m/s^2", "N") and rec.file_units == ("g", "m/s^2", "lbf")
     assert rec.nodes == (14, 20, 20) and rec.directions == ("uz", "uz", "ux")

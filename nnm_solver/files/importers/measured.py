@@ -133,6 +133,8 @@ class Measurement:
         node, direction = (key if isinstance(key, tuple) and len(key) == 2 else parse_channel_label(key)[:2])
         if node is not None:
             node, direction = node_key(node), direction_name(direction)
+            if f"node {node} {direction}" in self.labels:        # the response, before a force at the same DOF
+                return self.labels.index(f"node {node} {direction}")
             for j, (n, d) in enumerate(zip(self.nodes, self.directions)):
                 if n == node and d == direction:
                     return j

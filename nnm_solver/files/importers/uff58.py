@@ -3,7 +3,7 @@
 ``read_uff58(path)``: every data set 58 of the file (or the 0-based ``sets`` among them), all on one axis, as
 one ``Measurement``.  Time records: abscissa type 17 (time) or function type 1 (time response); otherwise a
 frequency record (FRFs: function type 4, complex).  Each data set is one channel: response node and direction
-(``node 14 uz``; a negative direction, e.g. -3 for -Z, flips the sign so that the channel is along +uz), the
+(``node 14 uz``, a force ``node 14 uz force``; a negative direction, e.g. -3 for -Z, flips the sign so that the channel is along +uz), the
 reference node of an FRF, and its unit:
 
 1. the ordinate's unit label when it is one ``parse_unit`` knows (``g``, ``mm/s^2``, ``m/s^2/N`` ...);
@@ -118,7 +118,9 @@ def read_uff58(path, sets=None):
         node, direction, sign = _where_label(s.get("rsp_node", 0), s.get("rsp_dir", 0))
         u, st = _channel_unit(s, length, force, where)
         cols.append(sign * y)
-        names.append(f"node {node} {direction}" if direction else (str(s.get("id1", "")).strip() or f"set {j + 1}"))
+        suffix = " force" if u.quantity == "force" else ""        # a driving point: force and response at one DOF
+        names.append(f"node {node} {direction}{suffix}" if direction else
+                     (str(s.get("id1", "")).strip() or f"set {j + 1}"))
         units.append(u)
         stated.append(st)
         rn, rd, _ = _where_label(s.get("ref_node", 0), s.get("ref_dir", 0))
