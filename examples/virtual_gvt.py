@@ -22,8 +22,10 @@
     python examples/virtual_gvt.py --fast             # 6 s sweep, for the test (about 20 s)
     python examples/virtual_gvt.py --plot gvt.png --out-dir /tmp/gvt
 
-Written (only where asked; default a temporary folder): gvt_accelerations.uff (the measured record) and, with
---plot, the figure (RFS stiffness curves, backbones with the decay points).
+Written (only where asked; default a temporary folder): gvt_accelerations.uff (the measured record), gvt.h5
+(the model and its nominal backbone) and gvt_decay_backbone.csv (the decay points) for
+``nnm-view gvt.h5 --measured gvt_decay_backbone.csv``, and, with --plot, the figure (RFS stiffness curves,
+backbones with the decay points).
 """
 from __future__ import annotations
 
@@ -279,12 +281,30 @@ def main(argv=None):
           f"{fit.confidence[1]:.3f}), k3 = {fit.k3_factor * K3_MODEL:.4g} N/m^3, residual {fit.residual:.2f}")
     print(f"backbones and fit: {t_bb:.1f} s")
 
+    viewer = write_for_viewer(out, model, branches["nominal"], dof, amp, freq)
+    print(f"for the viewer: nnm-view {viewer[0]} --measured {viewer[1]} (k3 slider at {k3_id / K3_MODEL:.3f}: "
+          f"the identified model's branch beside the nominal one, in grey)")
     if args.plot:
         plot(args.plot, laws, branches, dof, amp, freq, fit)
         print(f"plot: {args.plot}")
     load1 = os.getloadavg()
     print(f"wall time {time.perf_counter() - t_all:.1f} s (load average {load1[0]:.2f} at the end)")
     return 0
+
+
+def write_for_viewer(out, model, branch, dof, amp, freq):
+    """gvt.h5 (the model and its nominal backbone) and gvt_decay_backbone.csv (the decay points, mm) in ``out``,
+    each written next to its target and renamed over it."""
+    from nnm_solver.files.h5file import atomic_file
+
+    h5, csv = out / "gvt.h5", out / "gvt_decay_backbone.csv"
+    with atomic_file(h5) as tmp:
+        nnm.save_model(tmp, model)
+        nnm.save_branch(tmp, branch)
+    with atomic_file(csv) as tmp:
+        np.savetxt(tmp, np.column_stack([freq, 1e3 * amp]), delimiter=",", comments="",
+                   header=f"frequency (Hz), {model.dof_labels[dof]} (mm)")
+    return h5, csv
 
 
 def plot(path, laws, branches, dof, amp, freq, fit):

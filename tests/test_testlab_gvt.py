@@ -122,3 +122,14 @@ def test_plot_backbone_with_measured_points(tmp_path):
         assert (tmp_path / f"{axis}.png").stat().st_size > 1000
     with pytest.raises(nnm.NNMInputError, match="axis 'phase' is not one of"):
         plot_backbone(b, 0, axis="phase")
+
+
+def test_a_branch_named_with_a_slash_is_saved_and_read_back(tmp_path):
+    """Branch names carry units ("k3 = -1e13 N/m^3"): the '/' must not open an HDF5 sub-group."""
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)])
+    b = nnm.continue_nnm(model, 1, 0.5, method="hb")
+    b.name = "NNM 1 (k3 = 0.5 N/m^3)"
+    nnm.save_branch(tmp_path / "a.h5", b)
+    back = nnm.load_branches(tmp_path / "a.h5")
+    assert [x.name for x in back] == ["NNM 1 (k3 = 0.5 N/m^3)"]
+    np.testing.assert_array_equal(back[0].energy, b.energy)

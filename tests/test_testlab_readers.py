@@ -181,7 +181,7 @@ def test_fit_backbone_takes_a_measured_backbone(tmp_path):
     ("a.csv", "time (s), x (g)\n0, 1\n0.001, abc\n0.002, 1\n", "line 3: 'abc' in column 'x (g)' is not a number"),
     ("a.csv", "time (s), x (furlong)\n0, 1\n0.001, 1\n0.002, 1\n", "unit 'furlong' is not known"),
     ("a.csv", "speed (m/s), x (g)\n0, 1\n0.001, 1\n0.002, 1\n", "name it time (s) or frequency (Hz)"),
-    ("a.csv", "time (s), x (g)\n0, 1\n0.001, 1\n0.001, 1\n", "strictly increasing"),
+    ("a.csv", "time (s), x (g)\n0, 1\n0.001, 1\n0.001, 1\n", "time axis is not strictly increasing (sample 3)"),
     ("a.csv", "time (s), x (g), y (Hz)\n0, 1, 1\n0.001, 1, 1\n0.002, 1, 1\n", "only the first column is the axis"),
     ("a.csv", "time (s), x (g)\n0, 1\n0.001, 1, 2\n0.002, 1\n", "line 3: 3 values for 2 columns"),
     ("a.csv", "time (s), x (g)\n0, 1\n0.001, nan\n0.002, 1\n", "NaN or infinite value at sample 2"),

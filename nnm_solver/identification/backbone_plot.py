@@ -27,22 +27,30 @@ def measured_points(measured):
     return amp, freq
 
 
-def energy_of_amplitude(branch, dof, amplitude):
-    """Energy (J) on ``branch`` where its peak amplitude at ``dof`` equals each of ``amplitude`` (m): the model's
-    amplitude-energy relation, by interpolation in log-log on the part of the branch where the amplitude grows;
-    NaN outside the branch."""
-    from ..files import amplitude_backbone
-
-    bb = amplitude_backbone(branch, dof)
-    a, e = bb.amplitude, np.asarray(branch.energy, dtype=float)
+def energy_at_amplitude(branch_amplitude, branch_energy, amplitude):
+    """Energy (J) where a branch whose points have peak amplitudes ``branch_amplitude`` (m) at some DOF and
+    energies ``branch_energy`` (J) reaches each of ``amplitude`` (m): log-log interpolation on the first part of
+    the branch where the amplitude grows; NaN outside it (the model's amplitude-energy relation)."""
+    a, e = np.asarray(branch_amplitude, dtype=float), np.asarray(branch_energy, dtype=float)
     keep = (a > 0) & (e > 0)
     a, e = a[keep], e[keep]
-    grow = np.concatenate([[True], np.diff(a) > 0])
-    a, e = a[grow], e[grow]
-    out = np.full(len(np.atleast_1d(amplitude)), np.nan)
-    inside = (np.atleast_1d(amplitude) >= a[0]) & (np.atleast_1d(amplitude) <= a[-1])
-    out[inside] = np.exp(np.interp(np.log(np.atleast_1d(amplitude)[inside]), np.log(a), np.log(e)))
+    amplitude = np.atleast_1d(np.asarray(amplitude, dtype=float))
+    out = np.full(len(amplitude), np.nan)
+    if len(a) < 2:
+        return out
+    stop = int(np.argmax(np.diff(a) <= 0)) + 1 if np.any(np.diff(a) <= 0) else len(a)
+    a, e = a[:stop], e[:stop]
+    inside = (amplitude >= a[0]) & (amplitude <= a[-1])
+    out[inside] = np.exp(np.interp(np.log(amplitude[inside]), np.log(a), np.log(e)))
     return out
+
+
+def energy_of_amplitude(branch, dof, amplitude):
+    """Energy (J) on ``branch`` where its peak amplitude at ``dof`` (``amplitude_backbone``) equals each of
+    ``amplitude`` (m); NaN outside the branch (``energy_at_amplitude``)."""
+    from ..files import amplitude_backbone
+
+    return energy_at_amplitude(amplitude_backbone(branch, dof).amplitude, branch.energy, amplitude)
 
 
 def plot_backbone(branches, dof, measured=None, *, axis="amplitude", ax=None, scale=1.0, unit="m",

@@ -48,14 +48,15 @@ def parse_channel_label(label):
 class Measurement:
     """Measured signals on one axis, in SI (module doc).
 
-    kind : ``"time"`` (axis t, s) or ``"frequency"`` (axis f, Hz).  axis (N,), increasing.  data (N, channels),
+    kind : ``"time"`` (axis t, s; strictly increasing) or ``"frequency"`` (axis f, Hz; increasing for FRFs, in
+    any order for measured backbone points).  data (N, channels),
     real, or complex for frequency response functions.  Per channel: ``labels`` (``"node 14 uz"`` when the
     file gives node and direction, else the file's name), ``quantities`` (displacement, velocity,
     acceleration, force, receptance, mobility, accelerance or unknown), ``units`` (the SI unit of
     the values held), ``file_units`` (the unit the file stated, and where from), ``nodes`` and ``directions``
     (ux..rz; None when not stated; a negative direction in the file has flipped the signal's sign),
     ``references`` (the excitation point of an FRF, '' otherwise).  ``sampling`` : sample rate (Hz) of a
-    time record, frequency step (Hz) of a frequency record, 0 when the axis is not uniform.  ``source`` : file.
+    time record, frequency step (Hz) of a frequency record, 0 when the axis is not uniform and increasing.  ``source`` : file.
     """
 
     kind: str
@@ -76,8 +77,13 @@ class Measurement:
         if self.kind not in KINDS:
             raise NNMInputError(f"{where}measurement kind {self.kind!r} is not one of {', '.join(KINDS)}")
         ax = np.asarray(self.axis, dtype=float)
-        if ax.ndim != 1 or len(ax) < 2 or not np.all(np.isfinite(ax)) or not np.all(np.diff(ax) > 0):
-            raise NNMFileError(f"{where}the {self.kind} axis must be at least 2 finite, strictly increasing values")
+        if ax.ndim != 1 or len(ax) < 2 or not np.all(np.isfinite(ax)):
+            raise NNMFileError(f"{where}the {self.kind} axis must be at least 2 finite values")
+        if self.kind == "time" and not np.all(np.diff(ax) > 0):
+            raise NNMFileError(f"{where}the time axis is not strictly increasing (sample "
+                               f"{int(np.argmin(np.diff(ax) > 0)) + 2}); sort the record")
+        if self.kind == "frequency" and not np.all(ax >= 0):
+            raise NNMFileError(f"{where}the frequency axis has negative values ({ax.min():g} Hz)")
         data = np.asarray(self.data)
         if data.ndim != 2 or data.shape[0] != len(ax) or data.shape[1] < 1:
             raise NNMFileError(f"{where}data of shape {data.shape} does not fit {len(ax)} samples of the {self.kind} "
@@ -158,17 +164,18 @@ def uniform_step(axis):
     """The axis' constant step, or 0 when its steps differ by more than 1e-6 relative."""
     d = np.diff(axis)
     step = (axis[-1] - axis[0]) / (len(axis) - 1)
-    return float(step) if np.max(np.abs(d - step)) <= 1e-6 * abs(step) else 0.0
+    return float(step) if step > 0 and np.max(np.abs(d - step)) <= 1e-6 * step else 0.0
 
 
 def build(kind, axis, columns, names, units, file_units, source, references=None):
     """A Measurement from raw columns (file units) and each channel's SignalUnit: converted to SI, labels parsed."""
     nodes, directions, labels, data = [], [], [], []
     for col, name, u in zip(columns, names, units):
-        node, direction, sign = parse_channel_label(name)
+        force = re.search(r"\s+force$", str(name).strip())           # 'node 4 uz force': a force at a DOF
+        node, direction, sign = parse_channel_label(str(name).strip()[:force.start()] if force else name)
         nodes.append(node)
         directions.append(direction)
-        labels.append(f"node {node} {direction}" if node is not None else str(name).strip())
+        labels.append(f"node {node} {direction}{' force' if force else ''}" if node is not None else str(name).strip())
         data.append(sign * u.factor * np.asarray(col))
     step = uniform_step(np.asarray(axis, dtype=float))
     return Measurement(kind=kind, axis=np.asarray(axis, dtype=float), data=np.column_stack(data),
