@@ -70,7 +70,7 @@ def load_measured(path, model, dof=None):
     k = _dof_index(model, dof)
     amp = np.abs(record.data[:, j]).astype(float)
     return MeasuredBackbone(amplitude=amp, frequency=np.asarray(record.frequency_hz, dtype=float), dof=k,
-                            label=f"measured ({len(amp)} points at {labels[k] if labels else f'DOF {k}'})",
+                            label=f"measured ({len(amp)} points)",
                             source=str(path))
 
 
