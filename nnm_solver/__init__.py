@@ -23,6 +23,9 @@ from .driver import METHODS, Job, NNMIterator, continue_nnm, continue_tongue, it
 from .files import (Backbone, amplitude_backbone, export_backbone_csv, export_csv, export_uff, export_uff_orbit,
                     load_branches, load_extra, load_model, save_branch, save_model, store_ritz_basis)
 from .files.importers import DofMap, import_model
+from .files.importers.measured import Measurement
+from .files.importers.measured_read import read_measured
+from .files.importers.uff58 import write_uff58
 from .files.importers.matlab import load_mat_model
 from .files.importers.toml import load_toml_model
 from .files.importers.ansys import load_full_model
@@ -73,7 +76,8 @@ __all__ = [
     # forced responses (docs/forced.md)
     "forced_response", "energy_balance", "ForcedResponse", "save_forced_response", "load_forced_responses",
     # identification from test data (docs/testlab.md)
-    "rfs", "RestoringForceSurface", "FittedLaw", "fit_backbone", "BackboneFit",
+    "rfs", "RestoringForceSurface", "FittedLaw", "fit_backbone", "BackboneFit", "Measurement", "read_measured",
+    "write_uff58",
 ]
 
 __version__ = "0.1.0"

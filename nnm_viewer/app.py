@@ -60,6 +60,19 @@ def load(path):
     return model, branches
 
 
+def load_measured_file(path, model, dof=None):
+    """The measured backbone of ``--measured`` (None without it); one-line ViewerError on a bad file."""
+    if path is None:
+        if dof is not None:
+            raise ViewerError("--measured-dof needs --measured FILE")
+        return None
+    from .measured import load_measured
+    try:
+        return load_measured(path, model, dof)
+    except nnm_solver.NNMInputError as exc:
+        raise ViewerError(str(exc)) from None
+
+
 def check_port(host, port):
     """Raise ViewerError if ``port`` cannot be bound on ``host`` (viser would silently take another)."""
     if not 0 < port < 65536:
@@ -83,11 +96,11 @@ class ViewerApp:
     """The server: shared state plus one Session per connected tab."""
 
     def __init__(self, model, branches=(), path=None, host="127.0.0.1", port=8080, start_job=None,
-                 verbose=False, warm=None):
+                 verbose=False, warm=None, measured=None):
         import viser
         from . import scene as sc
 
-        self.shared = SharedState(model, path=path, branches=branches, solver_ready=False)
+        self.shared = SharedState(model, path=path, branches=branches, solver_ready=False, measured=measured)
         self.start_job = start_job
         with contextlib.redirect_stdout(io.StringIO()):   # viser's own banner: we print one line
             self.server = viser.ViserServer(host=host, port=port, label="nnm-view", verbose=verbose)
@@ -163,6 +176,10 @@ def parse_args(argv=None):
                         "(paris.h5: the Paris-like aircraft, the default; two_dof.h5: the 2-DOF teaching model)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
+    p.add_argument("--measured", metavar="BACKBONE", help="a measured backbone (.csv, .uff, .mat: peak amplitude "
+                   "of one DOF against frequency) drawn on the FEP at the selected branch's energies (docs/testlab.md)")
+    p.add_argument("--measured-dof", metavar="DOF", help="the model DOF of --measured (0-based index or DOF label; "
+                   "default: the file's channel label)")
     p.add_argument("-v", "--verbose", action="store_true", help="log timings to stderr")
     return p.parse_args(argv)
 
@@ -174,8 +191,9 @@ def main(argv=None):
     try:
         path, shipped = find_file(args.file)
         model, branches = load(path)
+        measured = load_measured_file(args.measured, model, args.measured_dof)
         check_port(args.host, args.port)
-        app = ViewerApp(model, branches, path=path, host=args.host, port=args.port)
+        app = ViewerApp(model, branches, path=path, host=args.host, port=args.port, measured=measured)
     except ViewerError as exc:
         print(f"nnm-view: error: {exc}", file=sys.stderr)
         return 2

@@ -339,9 +339,11 @@ class FepRenderer:
         (self._star,) = self.ax.plot([], [], "*", ms=16, color=_hex(MARKER_RGB), mec="black", mew=0.8,
                                      zorder=5, animated=True)
 
-    def set_series(self, series, selected_branch=None, title=None, ghosts=(), ranges=None, ylabel=Y_LABELS[False]):
+    def set_series(self, series, selected_branch=None, title=None, ghosts=(), ranges=None, ylabel=Y_LABELS[False],
+                   measured=None):
         """Draw all branches (series: list of FepSeries); ghosts in light grey; ranges: axis
-        ranges ((log10 E lo, hi), (f lo, hi)), default: fitted to everything drawn."""
+        ranges ((log10 E lo, hi), (f lo, hi)), default: fitted to everything drawn; measured: (energy J,
+        frequency, legend label) of measured points, drawn as black rings (nnm_viewer/measured.py)."""
         ax = self.ax
         for artist in list(ax.lines) + list(ax.texts):
             if artist is not self._star:
@@ -355,6 +357,10 @@ class FepRenderer:
                     ax.plot(np.log10(g.energy), g.frequency, "-", color="#c8c8c8", lw=1.0, zorder=1)
             handles += ax.plot([], [], "-", color="#c8c8c8")
             labels.append("as in the file (k3 x 1)")
+        if measured is not None and len(measured[0]):
+            handles += ax.plot(np.log10(measured[0]), measured[1], "o", mfc="none", color="k", ms=5, mew=1.0,
+                               zorder=4)
+            labels.append(measured[2])
         ranges = ranges or axis_ranges(list(series) + list(ghosts))
         h, lab = plot_branches(ax, series, selected_branch, ranges=ranges,
                                legend_max=LEGEND_MAX - len(labels))

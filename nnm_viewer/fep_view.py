@@ -256,7 +256,26 @@ class FepView:
         sel = next((i for i, e in enumerate(entries) if e.uid == v.sel_uid), None)
         self.renderer.set_series(series, sel, ghosts=ghost, title=title,
                                  ranges=s._view_ranges(entries, series, v) if zoomed else None,
-                                 ylabel=Y_LABELS[bool(v.relative)])
+                                 ylabel=Y_LABELS[bool(v.relative)],
+                                 measured=self.measured_points(entries[sel], v) if sel is not None else None)
+
+    def measured_points(self, e, v):
+        """(energy J, frequency on the view's axis, label) of the measured backbone placed on entry ``e``'s
+        branch at the view's k3 factor (nnm_viewer/measured.py), or None."""
+        from .measured import on_fep
+
+        s = self.session
+        m = s.shared.measured
+        if m is None or not len(e):
+            return None
+        pts = on_fep(m, e.branch, e.series(s.view_factor(e, v)).energy, e.branch.energy)
+        if pts is None:
+            return None
+        f = pts[1]
+        if v.relative:
+            f_lin = e.linear_frequency(s.shared.linear_freqs)
+            f = 100.0 * (f / f_lin - 1.0) if f_lin else f
+        return pts[0], f, m.label
 
     def selected_point(self, v=None):
         """(energy J, frequency on the FEP's axis: Hz or %) of the selection of view ``v`` at its k3 factor,

@@ -157,9 +157,12 @@ class SharedState:
     tabs pressing Start at once, one starts the job and the other is told one is running.
     """
 
-    def __init__(self, model, path=None, branches=(), solver_ready=True):
+    def __init__(self, model, path=None, branches=(), solver_ready=True, measured=None):
         self.model = model
         self.path = path
+        #: a measured backbone drawn on every FEP (measured.MeasuredBackbone), or None; set here only, never
+        #: changed: read without the lock
+        self.measured = measured
         self.lock = threading.RLock()
         #: set once the solver's compiled kernels are ready (app.py warms them in the background);
         #: until then the sessions draw everything but the orbits

@@ -28,7 +28,8 @@ __all__ = ["save_branch", "check_branch_file", "load_branches", "MODEL_RTOL"]
 # ---------------------------------------------------------------------- branches
 def _branch_group_name(f, branch):
     g = f.require_group("branches")
-    base = branch.name or f"mode{branch.mode}"
+    base = (branch.name or f"mode{branch.mode}").replace("/", "∕")   # '/' separates HDF5 groups; the
+    # name itself is kept in the group's attribute "name"
     name, k = base, 2
     while name in g:
         name, k = f"{base}_{k}", k + 1

@@ -7,7 +7,9 @@ model's nonlinear coefficients that best matches a measured backbone (``backbone
 Layer: imports ``nnm_solver.files`` and the layers below it (the driver computes the backbones).
 """
 from .backbone_fit import BackboneFit, fit_backbone, scale_nonlinear
+from .frf_peaks import frf_peaks
 from .rfs import RestoringForceSurface, rfs
 from .rfs_fit import LAWS, FittedLaw
 
-__all__ = ["rfs", "RestoringForceSurface", "FittedLaw", "LAWS", "fit_backbone", "BackboneFit", "scale_nonlinear"]
+__all__ = ["rfs", "RestoringForceSurface", "FittedLaw", "LAWS", "fit_backbone", "BackboneFit", "scale_nonlinear",
+           "frf_peaks"]

@@ -23,11 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import NNMInputError, finite_number
+from .backbone_curves import _curve, _distances, _minimise, scale_nonlinear
 
 __all__ = ["BackboneFit", "fit_backbone", "scale_nonlinear"]
 
-#: points the backbone curve is resampled to (shape-preserving interpolation between branch points)
-CURVE_SAMPLES = 4000
 #: search range of the factor
 FACTOR_RANGE = (1e-4, 1e4)
 
@@ -41,7 +40,9 @@ class BackboneFit:
     covered : True when the fitted backbone reaches past the largest measured amplitude (else the model's
     branch ended first, e.g. at a fold, and the largest points were matched to its end).
     model : the fitted model; frequency_hz, amplitude : its backbone (Hz, m) at DOF ``dof`` (0-based).
-    branches : number of NNM branches computed."""
+    branches : number of NNM branches computed.  With ``groups``: factors (one per group) and group_fit (the
+    GroupFit: standard errors, intervals, correlation); k3_factor, stderr and confidence are then those of the
+    only group, NaN for several."""
 
     k3_factor: float
     residual: float
@@ -55,29 +56,43 @@ class BackboneFit:
     frequency_hz: np.ndarray
     amplitude: np.ndarray
     branches: int
-
-
-def scale_nonlinear(spring, factor):
-    """``spring`` with its nonlinear coefficients times ``factor``: a piecewise-linear spring keeps its slope
-    k0 at d = 0 (part of the linear model) and scales the slope changes; the others scale every coefficient."""
-    from ..model import PiecewiseLinearSpring
-
-    if not isinstance(spring, PiecewiseLinearSpring):
-        return spring.scaled(factor)
-    k0 = spring.stiffnesses[0]
-    neg = {} if spring.symmetric else dict(
-        stiffnesses_negative=[k0 + factor * (k - k0) for k in spring.stiffnesses_negative],
-        breakpoints_negative=spring.breakpoints_negative)
-    return PiecewiseLinearSpring(dof=spring.dof, other=spring.other, eps=spring.eps, breakpoints=spring.breakpoints,
-                                 stiffnesses=[k0 + factor * (k - k0) for k in spring.stiffnesses], **neg)
+    factors: tuple = None
+    group_fit: object = None
 
 
 def _pure_cubic(model):
     return all(hasattr(s, "law") and not hasattr(s, "kinks") and set(s.law()) == {3} for s in model.springs)
 
 
+def _record_points(record, dof, labels):
+    """(amplitude, frequency_hz) of a measured frequency record: its only channel, else the channel of the
+    model's DOF ``dof`` (its DOF label, e.g. 'node 14 uz')."""
+    if record.kind != "frequency":
+        raise NNMInputError(f"fit_backbone: {record.source} is a time record; give peak amplitudes against "
+                            f"frequency (a frequency record)")
+    if record.n_channels == 1:
+        j = 0
+    elif labels and isinstance(dof, (int, np.integer)) and 0 <= dof < len(labels) and labels[dof] in record.labels:
+        j = record.labels.index(labels[dof])
+    else:
+        raise NNMInputError(f"fit_backbone: {record.source} has {record.n_channels} channels and none is labelled "
+                            f"like DOF {dof} of the model; pass record.channel(...) and record.frequency_hz")
+    if record.quantities[j] not in ("displacement", "unknown"):
+        raise NNMInputError(f"fit_backbone: channel {record.labels[j]!r} of {record.source} is a "
+                            f"{record.quantities[j]}; the backbone's amplitudes are displacements (m)")
+    return np.abs(record.data[:, j]), record.frequency_hz
+
+
 def _data(model, mode, dof, amplitude, frequency_hz):
+    from ..files.importers.measured import Measurement
     from ..model import Model
+
+    if isinstance(amplitude, Measurement):
+        if frequency_hz is not None:
+            raise NNMInputError("fit_backbone: a measured record carries its frequencies; leave frequency_hz out")
+        amplitude, frequency_hz = _record_points(amplitude, dof, getattr(model, "dof_labels", None))
+    elif frequency_hz is None:
+        raise NNMInputError("fit_backbone: give frequency_hz (Hz), one per amplitude")
 
     if not isinstance(model, Model):
         raise NNMInputError(f"fit_backbone: model must be an nnm_solver.Model, got {type(model).__name__}")
@@ -100,50 +115,8 @@ def _data(model, mode, dof, amplitude, frequency_hz):
     return a, f
 
 
-def _curve(branch, dof):
-    """(ln amplitude, ln frequency) of the branch's backbone at ``dof``, resampled finely (PCHIP in the point index)."""
-    from scipy.interpolate import PchipInterpolator
-
-    from ..files import amplitude_backbone
-
-    bb = amplitude_backbone(branch, dof)
-    keep = (bb.amplitude > 0) & np.isfinite(bb.amplitude) & (bb.frequency_hz > 0)
-    la, lf = np.log(bb.amplitude[keep]), np.log(bb.frequency_hz[keep])
-    if len(la) < 2:
-        raise NNMInputError(f"fit_backbone: the model's backbone has {len(la)} usable point(s) (branch status "
-                            f"{branch.status!r}); check the mode and the energy range")
-    s = np.arange(len(la), dtype=float)
-    fine = np.linspace(0.0, s[-1], CURVE_SAMPLES)
-    return PchipInterpolator(s, la)(fine), PchipInterpolator(s, lf)(fine)
-
-
-def _distances(curve, shift, la, lf, wa, wf):
-    """Normalised distance of each point (la, lf) to the polyline curve shifted by ``shift`` in ln amplitude."""
-    cx, cy = (curve[0] + shift) / wa, curve[1] / wf
-    px, py = la / wa, lf / wf
-    x0, y0, dx, dy = cx[:-1], cy[:-1], np.diff(cx), np.diff(cy)
-    length2 = np.maximum(dx * dx + dy * dy, 1e-300)
-    out = np.empty(len(px))
-    for i, (x, y) in enumerate(zip(px, py)):
-        u = np.clip(((x - x0) * dx + (y - y0) * dy) / length2, 0.0, 1.0)
-        out[i] = np.sqrt(np.min((x0 + u * dx - x) ** 2 + (y0 + u * dy - y) ** 2))
-    return out
-
-
-def _minimise(cost, lo, hi, nodes=61):
-    """ln s in [lo, hi] minimising cost: a grid of ``nodes``, then a bounded search around its best node."""
-    from scipy.optimize import minimize_scalar
-
-    grid = np.linspace(lo, hi, nodes)
-    values = [cost(g) for g in grid]
-    j = int(np.argmin(values))
-    res = minimize_scalar(cost, bounds=(grid[max(j - 1, 0)], grid[min(j + 1, len(grid) - 1)]), method="bounded",
-                          options={"xatol": 1e-7})
-    return float(res.x)
-
-
-def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, method=None, amplitude_rtol=0.01,
-                 frequency_rtol=0.001, **continuation):
+def fit_backbone(model, mode, dof, amplitude, frequency_hz=None, *, energy_max=None, method=None, amplitude_rtol=0.01,
+                 frequency_rtol=0.001, groups=None, also=(), **continuation):
     """The factor on every element's nonlinear coefficients whose NNM backbone best matches measured points.
 
     model : nnm_solver.Model with its nominal nonlinear elements.  mode : 1-based mode number.  dof : 0-based
@@ -152,7 +125,12 @@ def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, 
     energy_max : energy (J) of the nominal branch; default from the largest amplitude on the linear mode.
     method and further keywords go to ``continue_nnm`` (default: its defaults, Newmark shooting; ``method="hb"``
     is faster on large models, its peak amplitudes differ from shooting's by the two methods' errors, ~1e-4).
+    A measured frequency record (``nnm.read_measured``, e.g. a CSV "frequency (Hz), amplitude (mm)") may stand
+    for amplitude, frequency_hz left out: its only channel, or the one labelled like the model's DOF ``dof``.
     amplitude_rtol, frequency_rtol : relative measurement uncertainties, the distance's units.
+    groups : optional lists of 0-based element indices, one factor per group (backbone_groups.py); elements in no
+    group keep their coefficients.  also : further measured backbones [(mode, dof, amplitude, frequency_hz), ...]
+    fitted together with the first (with groups only: what tells groups apart).
     Returns a ``BackboneFit`` (module doc).
     """
     from ..driver import continue_nnm
@@ -172,6 +150,10 @@ def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, 
         energy_max = 2.0 * lam[mode - 1] * (np.max(a) / shape) ** 2       # 4x the linear mode's energy at max a
     energy_max = finite_number(energy_max, "fit_backbone: energy_max")
     kw = dict(continuation) if method is None else dict(continuation, method=method)
+    if groups is not None:
+        return _fit_groups(model, (mode, dof, la, lf), groups, also, (wa, wf), energy_max, kw)
+    if also:
+        raise NNMInputError("fit_backbone: further backbones (also=...) are fitted with groups=[...] only")
     exact = _pure_cubic(model)
     branches = 0
     lo, hi = np.log(FACTOR_RANGE[0]), np.log(FACTOR_RANGE[1])
@@ -216,3 +198,36 @@ def fit_backbone(model, mode, dof, amplitude, frequency_hz, *, energy_max=None, 
                        covered=bool(np.max(shifted[0]) >= np.max(la)),
                        model=fitted, dof=int(dof), mode=int(mode), frequency_hz=np.exp(shifted[1]),
                        amplitude=np.exp(shifted[0]), branches=branches)
+
+
+def _fit_groups(model, first, groups, also, weights, energy_max, kw):
+    """fit_backbone with one factor per group of elements (backbone_groups.py)."""
+    from ..driver import continue_nnm
+    from .backbone_groups import check_groups, fit_groups
+
+    groups = check_groups(model, groups)
+    data = [first]
+    for item in also:
+        try:
+            mode, dof, amplitude, frequency_hz = item
+        except (TypeError, ValueError):
+            raise NNMInputError("fit_backbone: also=[(mode, dof, amplitude, frequency_hz), ...]") from None
+        a, f = _data(model, mode, dof, amplitude, frequency_hz)
+        data.append((mode, dof, np.log(a), np.log(f)))
+    lam, phi = model.eigensolution
+    energies = {}
+    for mode, dof, la, _ in data:
+        shape = abs(phi[dof, mode - 1])
+        e = energy_max if energy_max is not None and mode == first[0] else 2.0 * lam[mode - 1] * (np.exp(la.max()) /
+                                                                                                   shape) ** 2
+        energies[mode] = max(energies.get(mode, 0.0), e)
+    fit = fit_groups(model, groups, data, weights, lambda m, mode: continue_nnm(m, mode, energies[mode], **kw))
+    mode, dof, la, lf = first
+    curve = _curve(continue_nnm(fit.model, mode, energies[mode], **kw), dof)
+    one = len(groups) == 1
+    nan = float("nan")
+    return BackboneFit(k3_factor=fit.factors[0] if one else nan, residual=fit.residual,
+                       stderr=fit.stderr[0] if one else nan, confidence=fit.confidence[0] if one else (nan, nan),
+                       exact_scaling=False, covered=bool(np.max(curve[0]) >= np.max(la)), model=fit.model,
+                       dof=int(dof), mode=int(mode), frequency_hz=np.exp(curve[1]), amplitude=np.exp(curve[0]),
+                       branches=fit.branches + 1, factors=fit.factors, group_fit=fit)

@@ -161,6 +161,27 @@ class RestoringForceSurface:
         return plot_rfs(self, law=law, path=path, band=band, title=title)
 
 
+def _from_record(t, acceleration, acceleration_other, force):
+    """(t, a, a_other, force) as arrays: from a Measurement's channels when t is one, else unchanged."""
+    from ..files.importers.measured import Measurement
+
+    if not isinstance(t, Measurement):
+        return t, acceleration, acceleration_other, force
+    if t.kind != "time":
+        raise NNMInputError(f"rfs: {t.source} is a frequency record; the restoring force surface needs time series")
+    out = []
+    for name, key in (("acceleration", acceleration), ("acceleration_other", acceleration_other), ("force", force)):
+        if key is None:
+            out.append(None)
+            continue
+        j = t.index(key)
+        q, need = t.quantities[j], "force" if name == "force" else "acceleration"
+        if q not in (need, "unknown"):
+            raise NNMInputError(f"rfs: {name} channel {t.labels[j]!r} of {t.source} is a {q}, not {need}")
+        out.append(t.data[:, j].real)
+    return (t.t, *out)
+
+
 def rfs(t, acceleration, acceleration_other, mass, force=None, *, highpass_hz=None):
     """The restoring force surface of a connection (seed §4.1.3, eq. 20-21).
 
@@ -169,7 +190,12 @@ def rfs(t, acceleration, acceleration_other, mass, force=None, *, highpass_hz=No
     external force on the point c (N; e.g. a shaker there), default none.  highpass_hz : drift filter's
     cut-off (Hz); default a fifth of the relative velocity's dominant frequency; 0 removes only the best
     straight line.  Returns a ``RestoringForceSurface`` with x_rel = x_c - x_o, x'_rel and f_r = F - m_c x''_c.
+
+    A measured time record (``nnm.read_measured``) may stand for t: then acceleration, acceleration_other
+    and force name its channels (index, label, ``"node 14 uz"`` or (node, direction)):
+    ``rfs(record, "node 14 uz", "node 20 uz", mass)``.
     """
+    t, acceleration, acceleration_other, force = _from_record(t, acceleration, acceleration_other, force)
     t, dt = _time(t)
     n = len(t)
     a = _signal("acceleration", acceleration, n)
