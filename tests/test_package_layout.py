@@ -166,11 +166,6 @@ def _newton_loop(names):
 #: the places a Newton loop may live: the engine's corrector and the fixed-parameter Newton (continuation/), and the
 #: events' bracketing root finder (stability/roots.py)
 NEWTON_PLACES = ("continuation/", "stability/roots.py")
-#: Newton loops not yet moved onto continuation/newton.py (issue 51 left them: each has its own stopping rule, and the
-#: forced responses' loops run on their own problems); no other module may gain one
-NEWTON_NOT_YET_MOVED = {"orbits/harmonic_balance.py", "orbits/hb_error.py", "orbits/forced_hb.py", "driver/forced.py",
-                        "driver/forced_points.py"}
-
 
 def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
     root = _root("nnm_solver")
@@ -180,8 +175,7 @@ def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
         lines = _loops(path, _newton_loop)
         if lines and not rel.startswith(NEWTON_PLACES):
             found[rel] = lines
-    assert set(found) <= NEWTON_NOT_YET_MOVED, f"Newton loops outside continuation/: {found}"
-    assert not any(rel.startswith(("backbone/", "driver/iterator", "driver/api")) for rel in found)
+    assert not found, f"Newton loops outside continuation/ and stability/roots.py: {found}"
 
 
 def test_the_check_finds_a_newton_loop(tmp_path):

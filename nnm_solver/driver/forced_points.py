@@ -1,11 +1,25 @@
-"""Two points of a forced response curve found apart from the continuation (driver/forced.py): the first orbit
-(Newton from the linear response, with the force ramped up where that fails) and a fold between two converged
-points (regula falsi on the frequency component of the tangent along the chord)."""
+"""Points of a forced response curve found apart from the continuation's steps (driver/forced.py), all with the
+continuation layer's correctors: the first orbit (Newton at the start frequency from the linear response, with the
+force ramped up where that fails: continuation/newton.py), the curve's tangent at a point, the landing on the end
+frequency (Newton at that frequency), and a fold between two converged points (the bracketing root finder of
+stability/roots.py on the frequency component of the tangent along the chord, each trial point corrected onto the
+curve by the engine's corrector on the hyperplane orthogonal to the chord)."""
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
-__all__ = ["first_orbit", "locate_fold"]
+from ..continuation.engine import CorrectorFailure, correct_factored, tangent_factored
+from ..stability.roots import BracketRoots
+
+__all__ = ["first_orbit", "frequency_tangent", "land_on_frequency", "locate_fold", "FOLD_ITERATIONS",
+           "FOLD_CORRECTOR_ITERATIONS"]
+
+#: largest number of trial points of the fold's root finder
+FOLD_ITERATIONS = 40
+#: largest number of corrector iterations of a trial point
+FOLD_CORRECTOR_ITERATIONS = 30
 
 
 def first_orbit(problem, omega, tol):
@@ -30,53 +44,56 @@ def first_orbit(problem, omega, tol):
                   f"response, also with the force ramped up in 128 steps): start the range elsewhere")
 
 
-def locate_fold(problem, ua, ub, tol, max_iter=40):
+def frequency_tangent(J):
+    """The curve's tangent [dA/d(omega / w_ref); 1] at a point whose Jacobian is J (rising frequency; the
+    coefficients' block of J nonsingular, i.e. not at a fold)."""
+    return np.concatenate([np.linalg.solve(J[:, :-1], -J[:, -1]), [1.0]])
+
+
+def land_on_frequency(problem, ua, ub, omega, tol, along):
+    """The response at omega between the converged points ua and ub (omega between their frequencies): Newton at
+    that frequency from the chord's point there.  (u, J, tangent oriented along ``along``), or None if it does not
+    converge."""
+    wa, wb = problem.frequency(ua), problem.frequency(ub)
+    t = (omega - wa) / (wb - wa)
+    u, ok = problem.solve_at_frequency(problem.with_frequency(ua + t * (ub - ua), omega), tol)
+    if not ok:
+        return None
+    _, J = problem.jacobian(u)
+    p = frequency_tangent(J)
+    return u, J, (p if p @ along >= 0 else -p)
+
+
+def locate_fold(problem, ua, ub, tol, settings):
     """The fold of the curve between the converged points ua and ub (the frequency component of the tangent
-    changes sign): Illinois regula falsi on that component along the chord, each trial point corrected onto
-    the curve on the hyperplane orthogonal to the chord.  None if a correction fails."""
+    changes sign): the root of that component along the chord (stability/roots.py: Illinois regula falsi with a
+    bisection safeguard, to 1e-13 of the chord or of the component), each trial point corrected onto the curve on
+    the hyperplane orthogonal to the chord (the engine's corrector, ``correct_factored``, with the engine's
+    ``settings``; at most FOLD_CORRECTOR_ITERATIONS iterations).  None if a correction fails or the component does
+    not change sign."""
     c = ub - ua
     w = problem.scale(ua)
-    row = w * w * c
+    cs = replace(settings, max_iter=FOLD_CORRECTOR_ITERATIONS)
+    points = {}
 
-    def point(t):
-        target = ua + t * c
-        u = target.copy()
-        for _ in range(30):
-            r, J = problem.jacobian(u)
-            A = np.vstack([J, row])
-            if problem.error(u, r) < tol and abs(row @ (u - target)) <= 1e-14 * abs(row @ c):
-                b = np.zeros(len(u))
-                b[-1] = 1.0
-                p = np.linalg.solve(A, b)
-                return u, p[-1] / np.linalg.norm(w * p)
-            u = u + np.linalg.solve(A, -np.concatenate([r, [row @ (u - target)]]))
+    def component(t):
+        """The tangent's frequency component at the curve's point on the hyperplane through ua + t c (NaN where the
+        corrector fails: the root finder then returns that t, and the fold is not located)."""
+        try:
+            u, J, _, _, factor = correct_factored(problem, ua + t * c, c, cs, tol, w)
+            p, _ = tangent_factored(J, c, w, factor)
+        except (CorrectorFailure, np.linalg.LinAlgError):
+            points[t] = None
+            return float("nan")
+        points[t] = u
+        return float(p[-1])
+
+    ga, gb = component(0.0), component(1.0)
+    if not ga * gb <= 0:                      # (a failed correction gives NaN: not a bracket either)
         return None
 
-    try:
-        a, b = point(0.0), point(1.0)
-        if a is None or b is None or a[1] * b[1] > 0:
-            return None
-        ta, tb, ga, gb = 0.0, 1.0, a[1], b[1]
-        best = a if abs(ga) < abs(gb) else b
-        side = 0
-        for _ in range(max_iter):
-            t = (ta * gb - tb * ga) / (gb - ga)
-            res = point(t)
-            if res is None:
-                return None
-            best, g = res, res[1]
-            if abs(g) < 1e-13 or abs(tb - ta) < 1e-13:
-                break
-            if g * gb > 0:                    # t replaces b (Illinois: halve a's value if b moved twice)
-                tb, gb = t, g
-                if side == -1:
-                    ga *= 0.5
-                side = -1
-            else:
-                ta, ga = t, g
-                if side == 1:
-                    gb *= 0.5
-                side = 1
-        return best[0]
-    except np.linalg.LinAlgError:
-        return None
+    def converged(a, b, fa, fb):
+        return abs(b - a) < 1e-13 or min(abs(fa), abs(fb)) < 1e-13
+
+    t = BracketRoots().root(component, 0.0, 1.0, ga, gb, max_iter=FOLD_ITERATIONS, converged=converged)
+    return points.get(t)
