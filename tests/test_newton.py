@@ -159,3 +159,76 @@ def test_the_fold_locator_finds_where_the_fixed_frequency_jacobian_is_singular()
     assert prob.error(end[0], prob.residual(end[0])) < 1e-12
     lo, hi = sorted([first.u[0], second.u[0]])
     assert lo < end[0][0] < hi and end[2] @ second.tangent > 0
+
+
+def test_natural_parameter_steps_through_the_values_and_stops_at_the_first_failure():
+    """x^3 + x = lam, solved for lam = 1..10 by Newton from the last solution: each against numpy's cubic roots; a
+    corrector that fails at lam = 4 stops the stepping with the solution at lam = 3."""
+    from nnm_solver.continuation import natural_parameter
+
+    class Cubic:
+        lam = 0.0
+
+        def residual(self, u):
+            return np.array([u[0] ** 3 + u[0] - self.lam])
+
+        def jacobian(self, u):
+            return self.residual(u), np.array([[3 * u[0] ** 2 + 1.0]])
+
+        def error(self, u, r):
+            return abs(r[0])
+
+    prob, seen = Cubic(), []
+
+    def solve(u, lam):
+        prob.lam = lam
+        seen.append(lam)
+        res = newton_solve(prob, u, NewtonSettings(tol=1e-13, positive_last=False))
+        return res.u, res.converged
+
+    values = np.arange(1.0, 11.0)
+    res = natural_parameter(solve, [0.0], values, predict=lambda u, a, b: u * (b / a) ** (1 / 3))
+    assert res.completed and res.reached == 10 and seen == list(values)
+    exact = [r.real for r in np.roots([1.0, 0.0, 1.0, -10.0]) if abs(r.imag) < 1e-12][0]
+    assert res.u[0] == pytest.approx(exact, rel=1e-12)
+
+    def fails_at_4(u, lam):
+        return solve(u, lam) if lam < 4 else (u, False)
+
+    res = natural_parameter(fails_at_4, [0.0], values)
+    exact3 = [r.real for r in np.roots([1.0, 0.0, 1.0, -3.0]) if abs(r.imag) < 1e-12][0]
+    assert not res.completed and res.reached == 3 and res.u[0] == pytest.approx(exact3, rel=1e-12)
+    res = natural_parameter(lambda u, lam: (u, False), [0.0], values)
+    assert res.u is None and res.reached == 0 and not res.completed
+
+
+def test_the_first_orbit_by_a_force_ramp_is_a_periodic_orbit_of_the_ode():
+    """Duffing forced 10x harder (F = 3) at 0.5 rad/s: Newton from the linear response fails there, the ramp of the
+    force converges; one period of DOP853 from the orbit's initial state comes back to it and passes through the
+    orbit's state at a quarter period (to the truncation at H = 21: 7e-8; 1.6e-3 at H = 9, 1e-11 at H = 31)."""
+    from scipy.integrate import solve_ivp
+
+    from nnm_solver.driver.forced_points import first_orbit
+
+    model = nnm.Model(np.eye(1), np.eye(1), [nnm.CubicSpring(dof=0, k3=0.1)])
+    s = modal_system(model)
+    w = 0.5
+    prob = ForcedHBProblem(s, ForcedBasis(21, "odd"), s.Phi.T @ [3.0], [0.1], 1.0)
+    assert not prob.solve_at_frequency(prob.linear_start(w), 1e-11)[1]
+    u, why = first_orbit(prob, w, 1e-11)
+    assert u is not None and why == "" and prob.load == 1.0 and prob.frequency(u) == w
+    A, _ = prob.modal_coefficients(u)
+    basis = prob.basis
+
+    def state(t):
+        theta = np.array([w * t])
+        return (basis.functions(theta) @ A)[0, 0] * s.Phi[0, 0], w * (basis.derivatives(theta) @ A)[0, 0] * s.Phi[0, 0]
+
+    def rhs(t, y):
+        return [y[1], 3.0 * np.cos(w * t) - 0.1 * y[1] - y[0] - 0.1 * y[0] ** 3]
+
+    T = 2 * np.pi / w
+    sol = solve_ivp(rhs, (0.0, T), state(0.0), method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True)
+    amp = np.abs(A).max() * abs(s.Phi[0, 0])
+    for t in (0.25 * T, T):
+        np.testing.assert_allclose(sol.sol(t), state(t), atol=1e-7 * amp)

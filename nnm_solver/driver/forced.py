@@ -8,8 +8,8 @@ uncondensed or condensed onto the nonlinear elements), converges the first orbit
 (from the linear response; if Newton fails there, by ramping the force from a small fraction of it), and
 runs the generic pseudo-arclength engine (``continuation/engine.py``) in frequency until the curve leaves
 the range; the last point is corrected onto the end frequency.  Between two points where the frequency
-turns back (the tangent's frequency component changes sign) the fold is located (secant on that component
-along the chord).  Stability: Hill's method with damping (``damped_hill_multipliers``) while the Hill matrix
+turns back (the tangent's frequency component changes sign) the fold is located (the root of that component
+along the chord).  Every Newton iteration of these is the continuation layer's (forced_points.py).  Stability: Hill's method with damping (``damped_hill_multipliers``) while the Hill matrix
 is small, else the fold test (sign of det dR/dx), or as asked with ``stability=``.
 """
 from __future__ import annotations

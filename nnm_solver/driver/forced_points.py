@@ -1,9 +1,9 @@
 """Points of a forced response curve found apart from the continuation's steps (driver/forced.py), all with the
 continuation layer's correctors: the first orbit (Newton at the start frequency from the linear response, with the
-force ramped up where that fails: continuation/newton.py), the curve's tangent at a point, the landing on the end
-frequency (Newton at that frequency), and a fold between two converged points (the bracketing root finder of
-stability/roots.py on the frequency component of the tangent along the chord, each trial point corrected onto the
-curve by the engine's corrector on the hyperplane orthogonal to the chord)."""
+force ramped up where that fails: continuation/newton.py, continuation/natural.py), the curve's tangent at a point,
+the landing on the end frequency (Newton at that frequency), and a fold between two converged points (the bracketing
+root finder of stability/roots.py on the frequency component of the tangent along the chord, each trial point
+corrected onto the curve by the engine's corrector on the hyperplane orthogonal to the chord)."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -11,11 +11,15 @@ from dataclasses import replace
 import numpy as np
 
 from ..continuation.engine import CorrectorFailure, correct_factored, tangent_factored
+from ..continuation.natural import natural_parameter
 from ..stability.roots import BracketRoots
 
-__all__ = ["first_orbit", "frequency_tangent", "land_on_frequency", "locate_fold", "FOLD_ITERATIONS",
+__all__ = ["first_orbit", "frequency_tangent", "land_on_frequency", "locate_fold", "FORCE_RAMPS", "FOLD_ITERATIONS",
            "FOLD_CORRECTOR_ITERATIONS"]
 
+#: the force ramps of the first orbit, tried in turn where Newton fails at full force: from 1/8 of it in 8 equal steps,
+#: then 32, then 128
+FORCE_RAMPS = (8, 32, 128)
 #: largest number of trial points of the fold's root finder
 FOLD_ITERATIONS = 40
 #: largest number of corrector iterations of a trial point
@@ -24,24 +28,27 @@ FOLD_CORRECTOR_ITERATIONS = 30
 
 def first_orbit(problem, omega, tol):
     """(u, '') of the converged response at omega, from the linear response, ramping the force from a small
-    fraction of it when Newton fails at full force; (None, why) if it does not converge."""
+    fraction of it when Newton fails at full force (natural-parameter continuation in the force's scale, each step
+    predicted by scaling the coefficients, continuation/natural.py); (None, why) if it does not converge."""
     u, ok = problem.solve_at_frequency(problem.linear_start(omega), tol)
     if ok:
         return u, ""
-    for ramp in (8, 32, 128):
+
+    def at_load(u, load):
+        problem.load = load
+        return problem.solve_at_frequency(u, tol)
+
+    def scaled(u, load_from, load_to):
+        return np.concatenate([u[:-1] * (load_to / load_from), u[-1:]])
+
+    for ramp in FORCE_RAMPS:
         problem.load = 1.0 / ramp
-        u, ok = problem.solve_at_frequency(problem.linear_start(omega), tol)
-        k = 1
-        while ok and k < ramp:
-            k += 1
-            scale = k / (k - 1)
-            problem.load = k / ramp
-            u, ok = problem.solve_at_frequency(np.concatenate([u[:-1] * scale, u[-1:]]), tol)
+        res = natural_parameter(at_load, problem.linear_start(omega), np.arange(1, ramp + 1) / ramp, scaled)
         problem.load = 1.0
-        if ok:
-            return u, ""
+        if res.completed:
+            return res.u, ""
     return None, (f"the response at f_start = {omega / (2 * np.pi):.6g} Hz did not converge (Newton from the linear "
-                  f"response, also with the force ramped up in 128 steps): start the range elsewhere")
+                  f"response, also with the force ramped up in {FORCE_RAMPS[-1]} steps): start the range elsewhere")
 
 
 def frequency_tangent(J):
