@@ -6,7 +6,7 @@ root finder of stability/roots.py on the frequency component of the tangent alon
 corrected onto the curve by the engine's corrector on the hyperplane orthogonal to the chord)."""
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -14,19 +14,24 @@ from ..continuation.engine import CorrectorFailure, correct_factored, tangent_fa
 from ..continuation.natural import natural_parameter
 from ..stability.roots import BracketRoots
 
-__all__ = ["first_orbit", "frequency_tangent", "land_on_frequency", "locate_fold", "FORCE_RAMPS", "FOLD_ITERATIONS",
-           "FOLD_CORRECTOR_ITERATIONS"]
-
-#: the force ramps of the first orbit, tried in turn where Newton fails at full force: from 1/8 of it in 8 equal steps,
-#: then 32, then 128
-FORCE_RAMPS = (8, 32, 128)
-#: largest number of trial points of the fold's root finder
-FOLD_ITERATIONS = 40
-#: largest number of corrector iterations of a trial point
-FOLD_CORRECTOR_ITERATIONS = 30
+__all__ = ["first_orbit", "frequency_tangent", "land_on_frequency", "locate_fold", "ForcedPointSettings"]
 
 
-def first_orbit(problem, omega, tol):
+@dataclass(frozen=True)
+class ForcedPointSettings:
+    """The points' own limits.  force_ramps : the force ramps of the first orbit, tried in turn where Newton fails at
+    full force (from 1/8 of the force in 8 equal steps, then 32, then 128); fold_iterations : largest number of trial
+    points of the fold's root finder; fold_corrector_iterations : largest number of corrector iterations of a trial
+    point; fold_tol : the fold's root is converged when the bracket (in units of the chord) or the tangent's frequency
+    component (balanced norm) is below this."""
+
+    force_ramps: tuple = (8, 32, 128)
+    fold_iterations: int = 40
+    fold_corrector_iterations: int = 30
+    fold_tol: float = 1e-13
+
+
+def first_orbit(problem, omega, tol, settings=ForcedPointSettings()):
     """(u, '') of the converged response at omega, from the linear response, ramping the force from a small
     fraction of it when Newton fails at full force (natural-parameter continuation in the force's scale, each step
     predicted by scaling the coefficients, continuation/natural.py); (None, why) if it does not converge."""
@@ -41,14 +46,15 @@ def first_orbit(problem, omega, tol):
     def scaled(u, load_from, load_to):
         return np.concatenate([u[:-1] * (load_to / load_from), u[-1:]])
 
-    for ramp in FORCE_RAMPS:
+    for ramp in settings.force_ramps:
         problem.load = 1.0 / ramp
         res = natural_parameter(at_load, problem.linear_start(omega), np.arange(1, ramp + 1) / ramp, scaled)
         problem.load = 1.0
         if res.completed:
             return res.u, ""
     return None, (f"the response at f_start = {omega / (2 * np.pi):.6g} Hz did not converge (Newton from the linear "
-                  f"response, also with the force ramped up in {FORCE_RAMPS[-1]} steps): start the range elsewhere")
+                  f"response, also with the force ramped up in {settings.force_ramps[-1]} steps): start the range "
+                  f"elsewhere")
 
 
 def frequency_tangent(J):
@@ -71,16 +77,16 @@ def land_on_frequency(problem, ua, ub, omega, tol, along):
     return u, J, (p if p @ along >= 0 else -p)
 
 
-def locate_fold(problem, ua, ub, tol, settings):
+def locate_fold(problem, ua, ub, tol, engine_settings, settings=ForcedPointSettings()):
     """The fold of the curve between the converged points ua and ub (the frequency component of the tangent
     changes sign): the root of that component along the chord (stability/roots.py: Illinois regula falsi with a
-    bisection safeguard, to 1e-13 of the chord or of the component), each trial point corrected onto the curve on
-    the hyperplane orthogonal to the chord (the engine's corrector, ``correct_factored``, with the engine's
-    ``settings``; at most FOLD_CORRECTOR_ITERATIONS iterations).  None if a correction fails or the component does
-    not change sign."""
+    bisection safeguard, to settings.fold_tol of the chord or of the component), each trial point corrected onto the
+    curve on the hyperplane orthogonal to the chord (the engine's corrector, ``correct_factored``, with the engine's
+    ``engine_settings``, at most settings.fold_corrector_iterations iterations).  None if a correction fails or the
+    component does not change sign."""
     c = ub - ua
     w = problem.scale(ua)
-    cs = replace(settings, max_iter=FOLD_CORRECTOR_ITERATIONS)
+    cs = replace(engine_settings, max_iter=settings.fold_corrector_iterations)
     points = {}
 
     def component(t):
@@ -100,7 +106,7 @@ def locate_fold(problem, ua, ub, tol, settings):
         return None
 
     def converged(a, b, fa, fb):
-        return abs(b - a) < 1e-13 or min(abs(fa), abs(fb)) < 1e-13
+        return abs(b - a) < settings.fold_tol or min(abs(fa), abs(fb)) < settings.fold_tol
 
-    t = BracketRoots().root(component, 0.0, 1.0, ga, gb, max_iter=FOLD_ITERATIONS, converged=converged)
+    t = BracketRoots().root(component, 0.0, 1.0, ga, gb, max_iter=settings.fold_iterations, converged=converged)
     return points.get(t)
