@@ -159,18 +159,15 @@ def _loops(path, predicate):
 
 
 def _newton_loop(names):
-    """A Newton loop: a Jacobian evaluated and a linear system solved in the same loop."""
-    return bool({"jacobian", "jacobian_of"} & names) and bool({"solve", "lstsq", "lu_solve", "solve_triangular"} & names)
+    """A Newton loop: a Jacobian (or, for chord Newton, a residual) evaluated and a linear system solved in the same
+    loop."""
+    return (bool({"jacobian", "jacobian_of", "residual", "residual_parts"} & names)
+            and bool({"solve", "lstsq", "lu_solve", "solve_triangular"} & names))
 
 
 #: the places a Newton loop may live: the engine's corrector and the fixed-parameter Newton (continuation/), and the
-#: events' bracketing root finder (stability/roots.py)
+#: events' bracketing root finder (stability/roots.py); every other module corrects with these (no exemption)
 NEWTON_PLACES = ("continuation/", "stability/roots.py")
-#: Newton loops not yet moved onto continuation/newton.py (issue 51 left them: each has its own stopping rule, and the
-#: forced responses' loops run on their own problems); no other module may gain one
-NEWTON_NOT_YET_MOVED = {"orbits/harmonic_balance.py", "orbits/hb_error.py", "orbits/forced_hb.py", "driver/forced.py",
-                        "driver/forced_points.py"}
-
 
 def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
     root = _root("nnm_solver")
@@ -180,8 +177,7 @@ def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
         lines = _loops(path, _newton_loop)
         if lines and not rel.startswith(NEWTON_PLACES):
             found[rel] = lines
-    assert set(found) <= NEWTON_NOT_YET_MOVED, f"Newton loops outside continuation/: {found}"
-    assert not any(rel.startswith(("backbone/", "driver/iterator", "driver/api")) for rel in found)
+    assert not found, f"Newton loops outside continuation/ and stability/roots.py: {found}"
 
 
 def test_the_check_finds_a_newton_loop(tmp_path):
@@ -189,6 +185,9 @@ def test_the_check_finds_a_newton_loop(tmp_path):
     p.write_text("def f(prob, u):\n    for _ in range(9):\n        r, J = prob.jacobian(u)\n"
                  "        u = u - np.linalg.solve(J, r)\n    return u\n")
     assert _loops(p, _newton_loop) == [2]
+    p.write_text("def f(prob, u, lu):\n    while True:\n        r = prob.residual(u)\n"
+                 "        u = u - lu_solve(lu, r)\n    return u\n")
+    assert _loops(p, _newton_loop) == [2]                   # chord Newton: an old factorisation, a new residual
     p.write_text("def f(prob, u):\n    for _ in range(9):\n        u = newton(prob, u)\n    return u\n")
     assert _loops(p, _newton_loop) == []
 

@@ -10,15 +10,20 @@ ratio's: halved towards 1 on a refusal down to ``ratio_min``, grown by a factor 
 jumps, a point off a trend) and what the points mean are the caller's decisions; the stepping is here, once.
 
 Pseudo-arclength continuation, for paths that fold in p, is engine.py.
+
+``natural_parameter`` is the plain form: the solutions at a given list of values in turn (e.g. a forced response's
+force ramped up to its full value, driver/forced_points.py), each corrected from a prediction off the one before; it
+stops at the first value whose correction fails.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable, Optional
 
 import numpy as np
 
-__all__ = ["LogSteps", "LogStepper"]
+__all__ = ["LogSteps", "LogStepper", "natural_parameter", "NaturalResult"]
 
 
 @dataclass(frozen=True)
@@ -94,3 +99,27 @@ class LogStepper:
         if ratio is not None:
             self.ratio = ratio
         self._fresh = True
+
+
+@dataclass(frozen=True)
+class NaturalResult:
+    """u : the solution at the last value reached (None if not even the first converged); reached : how many of the
+    values were solved, in order; completed : all of them."""
+
+    u: Optional[np.ndarray]
+    reached: int
+    completed: bool
+
+
+def natural_parameter(solve: Callable, u, values, predict: Optional[Callable] = None) -> NaturalResult:
+    """The solutions at ``values`` in turn (module docstring), from the first guess u at values[0]."""
+    values = list(values)
+    guess, done = u, None
+    for i, value in enumerate(values):
+        if i > 0:
+            guess = predict(done, values[i - 1], value) if predict is not None else done
+        sol, ok = solve(guess, value)
+        if not ok:
+            return NaturalResult(done, i, False)
+        done = sol
+    return NaturalResult(done, len(values), True)

@@ -8,8 +8,8 @@ uncondensed or condensed onto the nonlinear elements), converges the first orbit
 (from the linear response; if Newton fails there, by ramping the force from a small fraction of it), and
 runs the generic pseudo-arclength engine (``continuation/engine.py``) in frequency until the curve leaves
 the range; the last point is corrected onto the end frequency.  Between two points where the frequency
-turns back (the tangent's frequency component changes sign) the fold is located (secant on that component
-along the chord).  Stability: Hill's method with damping (``damped_hill_multipliers``) while the Hill matrix
+turns back (the tangent's frequency component changes sign) the fold is located (the root of that component
+along the chord).  Every Newton iteration of these is the continuation layer's (forced_points.py).  Stability: Hill's method with damping (``damped_hill_multipliers``) while the Hill matrix
 is small, else the fold test (sign of det dR/dx), or as asked with ``stability=``.
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ from ..orbits.forced_hb_condensed import CondensedForcedHBProblem
 from ..orbits.forced_hill import damped_hill_multipliers
 from ..results.forced import STABILITY_METHODS, ForcedResponse
 from ..stability.floquet import is_stable
-from .forced_points import first_orbit, locate_fold
+from .forced_points import first_orbit, frequency_tangent, land_on_frequency, locate_fold
 from .problems import HILL_AUTO_SIZE, check_positive
 
 __all__ = ["forced_response", "CONDENSE_RATIO"]
@@ -200,9 +200,7 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
     if u0 is None:
         return ForcedResponse(model, force, [], np.zeros((0, len(fb), n)), status="failed", message=message,
                               **result_args)
-    r, J = problem.jacobian(u0)
-    dA = np.linalg.solve(J[:, :-1], -J[:, -1])
-    p0 = direction * np.concatenate([dA, [1.0]])
+    p0 = direction * frequency_tangent(problem.jacobian(u0)[1])
 
     # ------------------------------------------------------------ the continuation
     cs = ContinuationSettings(step=float(step), step_min=1e-9, step_max=np.inf, max_angle=float(max_angle),
@@ -227,7 +225,7 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
 
     def fold_between(ua, pa, ub, pb):
         if pa[-1] * pb[-1] < 0:
-            uf = locate_fold(problem, ua, ub, tol) if locate_folds else None
+            uf = locate_fold(problem, ua, ub, tol, cs) if locate_folds else None
             if uf is None:
                 uf = ua if abs(pa[-1]) < abs(pb[-1]) else ub
                 located = False
@@ -245,16 +243,9 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
             break
         w = problem.frequency(cp.u)
         if prev is not None and (w - w1) * direction >= 0:          # past the end: land on it
-            ua = prev[0]
-            wa = problem.frequency(ua)
-            t = (w1 - wa) / (w - wa)
-            ug = problem.with_frequency(ua + t * (cp.u - ua), w1)
-            ue, ok = problem.solve_at_frequency(ug, tol)
-            if ok:
-                r, Je = problem.jacobian(ue)
-                dA = np.linalg.solve(Je[:, :-1], -Je[:, -1])
-                pe = np.concatenate([dA, [1.0]])
-                pe = pe if pe @ cp.tangent >= 0 else -pe
+            end = land_on_frequency(problem, prev[0], cp.u, w1, tol, cp.tangent)
+            if end is not None:
+                ue, Je, pe = end
                 fold_between(prev[0], prev[1], ue, pe)
                 keep(ue, Je, pe)
                 status, message = "done", f"reached f_end = {f1:.6g} Hz"

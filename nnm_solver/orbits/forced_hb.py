@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..continuation.newton import NewtonSettings, newton_solve
 from .hb_basis import HBBasis
 from .hill import derivative_matrix
 
@@ -126,21 +127,9 @@ class _ForcedProtocol:
         return v
 
     def solve_at_frequency(self, u, tol, max_iter=30):
-        """Newton at the fixed frequency of u from u: (u, converged)."""
-        u = np.array(u, dtype=float)
-        for _ in range(max_iter):
-            r, J = self.jacobian(u)
-            if not np.all(np.isfinite(r)):
-                return u, False
-            if self.error(u, r) < tol:
-                return u, True
-            try:
-                du = np.linalg.solve(J[:, :-1], -r)
-            except np.linalg.LinAlgError:
-                return u, False
-            u[:-1] += du
-        r = self.residual(u)
-        return u, bool(np.all(np.isfinite(r)) and self.error(u, r) < tol)
+        """Newton at the fixed frequency of u from u (continuation/newton.py, on the coefficients): (u, converged)."""
+        res = newton_solve(self, u, NewtonSettings(tol, max_iter, positive_last=False), free=slice(0, -1))
+        return res.u, res.converged
 
     def fold_sign(self, J):
         """Sign (+1 / -1; 0 if singular) of det dR/d(coefficients) at fixed frequency (module docstring)."""

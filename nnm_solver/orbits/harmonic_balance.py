@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..continuation.newton import NOT_FINITE, NewtonSettings, newton_solve
 from ..integrators.registry import record_orbit
 from ..stability.floquet import without_nearest_to_one
 from .hb_basis import BASES, HBBasis, harmonics_in  # noqa: F401
@@ -234,18 +235,39 @@ def recover_coefficients(system, mode_index, basis, x0, v0, period, tol):
     sub = 16
     Q, _, _ = record_orbit(system, q0, v0, period, basis.samples * sub)
     u = problem.pack(basis.P @ Q[:-1:sub], 2 * np.pi / period)
-    c0, s0 = basis.functions([0.0])[0], basis.derivatives([0.0])[0]
-    n = problem.n
-    for _ in range(30):
-        r, J = problem.jacobian(u)
-        A, w = problem.unpack(u)
-        r0 = np.concatenate([c0 @ A - q0, (w * (s0 @ A) - v0) / problem.w_r])
-        J0 = np.vstack([np.hstack([np.kron(c0, np.eye(n)), np.zeros((n, 1))]),
-                        np.hstack([np.kron(s0, np.eye(n)) * w / problem.w_r, (s0 @ A)[:, None]])])
-        du = np.linalg.lstsq(np.vstack([J, J0]), -np.concatenate([r, r0]), rcond=None)[0]
-        u += du
-        if np.linalg.norm(du) <= 1e-13 * np.linalg.norm(u):
-            break
-    if not problem.error(u, problem.residual(u)) < 10 * tol:
+    res = newton_solve(_ThroughState(problem, q0, v0), u, NewtonSettings(tol=0.0, max_iter=30, positive_last=False),
+                       stop=_round_off_step)
+    u = res.u
+    if res.reason == NOT_FINITE or not problem.error(u, problem.residual(u)) < 10 * tol:
         raise RuntimeError("the harmonic-balance coefficients could not be recomputed")
     return system.to_physical(problem.unpack(u)[0])
+
+
+def _round_off_step(k, u, du, u_new):
+    """recover_coefficients' stopping rule: the Gauss-Newton step fell to round-off (1e-13 of the unknowns)."""
+    return "the step fell to round-off" if np.linalg.norm(du) <= 1e-13 * np.linalg.norm(u_new) else ""
+
+
+class _ThroughState:
+    """The HB equations of ``problem`` with the rows of the orbit's initial state (q0, v0) appended (an
+    over-determined system, solved by Gauss-Newton in continuation/newton.py): r0 = [c(0) A - q0;
+    (omega c'(0) A - v0) / w_r]."""
+
+    def __init__(self, problem, q0, v0):
+        self.problem, self.q0, self.v0 = problem, q0, v0
+        self.c0, self.s0 = problem.basis.functions([0.0])[0], problem.basis.derivatives([0.0])[0]
+
+    def jacobian(self, u):
+        p, n = self.problem, self.problem.n
+        r, J = p.jacobian(u)
+        A, w = p.unpack(u)
+        r0 = np.concatenate([self.c0 @ A - self.q0, (w * (self.s0 @ A) - self.v0) / p.w_r])
+        J0 = np.vstack([np.hstack([np.kron(self.c0, np.eye(n)), np.zeros((n, 1))]),
+                        np.hstack([np.kron(self.s0, np.eye(n)) * w / p.w_r, (self.s0 @ A)[:, None]])])
+        return np.concatenate([r, r0]), np.vstack([J, J0])
+
+    def residual(self, u):
+        return self.jacobian(u)[0]
+
+    def error(self, u, r):
+        return self.problem.error(u, r)

@@ -11,7 +11,8 @@ frequency when two more harmonics are added (H + 2), at the same energy:
 * Newton steps of the larger problem with the energy held at the point's (the frequency error at a fixed energy,
   what the FEP shows); one where it is short (below).  Next to an energy fold, where the frequency at a fixed energy
   is not defined (fep_slope.py: the branch's slope in the FEP plane), one step orthogonal to the branch tangent, as
-  the corrector takes it (as for shooting, shooting_error.py).
+  the corrector takes it (as for shooting, shooting_error.py).  The steps are continuation/newton.py's, on the larger problem bordered by the energy row
+  (``_AtTheEnergy``), with this estimate's own stopping rule (``_AtTheEnergy.settled``).
 
 The frequency moved by the steps estimates |f_H - f_(H+2)| / f, the error of f_H wherever the harmonics decay
 (f_(H+2) being much nearer the exact one).  Against the frequency with 3H harmonics at the same energy (an
@@ -39,6 +40,7 @@ import math
 import numpy as np
 
 from ..continuation.engine import LeastSquares, stacked
+from ..continuation.newton import NOT_FINITE, SINGULAR, NewtonSettings, newton_solve
 from .fep_slope import at_energy_fold
 from .hb_basis import HBBasis, harmonics_in
 
@@ -108,34 +110,66 @@ class HBTruncationError:
         u2, t2 = self._embed(big, u), self._embed(big, tangent)
         E0 = self.energy(u)        # the point's (a condensed problem's energy of u2 is not it: its eliminated
                                    # amplitudes see the new harmonics' forces)
-        v = u2
-        settled = fold = False
+        bordered = _AtTheEnergy(big, E0, t2)
         try:
             with np.errstate(all="ignore"):
-                for step in range(MAX_STEPS):
-                    r2, J2 = big.jacobian(v)
-                    w = big.scale(v)
-                    g = big.energy_gradient(v)
-                    fold = at_energy_fold(g @ t2 / E0, t2[-1] / v[-1])
-                    if fold:                   # next to a fold: the step orthogonal to the branch tangent, once
-                        du = LeastSquares(stacked(J2, w * w * t2)).solve(np.r_[-r2, 0.0])
-                    else:                      # Newton on [equations; energy - E0]
-                        du = LeastSquares(stacked(J2, g)).solve(np.r_[-r2, E0 - big.energy(v)])
-                    before = v[-1]
-                    v = v + du
-                    if not np.all(np.isfinite(v)):
-                        break
-                    if fold or (step == 0 and np.linalg.norm(w * du) < ONE_STEP):
-                        settled = True         # (a short step: its own error is of the order of its square)
-                        break
-                    if step > 0 and abs(v[-1] - before) <= SETTLED * abs(v[-1] - u2[-1]):
-                        settled = True
-                        break
-                err = abs(v[-1] / u2[-1] - 1.0)
-        except (np.linalg.LinAlgError, ValueError):
+                res = newton_solve(bordered, u2, NewtonSettings(tol=0.0, max_iter=MAX_STEPS, positive_last=False),
+                                   stop=bordered.settled(u2), linear=_least_squares)
+        except (np.linalg.LinAlgError, ValueError):      # (from the problem's own evaluations)
             return float("nan"), float("nan")
+        if res.reason in (SINGULAR, NOT_FINITE):
+            return float("nan"), float("nan")
+        err = abs(res.u[-1] / u2[-1] - 1.0)
         if not np.isfinite(err):
             return float("nan"), float("nan")
-        if not settled or (not fold and abs(big.energy(v) / E0 - 1.0) > UNSETTLED_ENERGY):
+        if not res.converged or (not bordered.fold and abs(big.energy(res.u) / E0 - 1.0) > UNSETTLED_ENERGY):
             return float("inf"), float("nan")
         return float(err), float("nan")
+
+
+def _least_squares(J, b):
+    """The engine's least-squares solve (QR, or LU when square) of the bordered system."""
+    return LeastSquares(np.asfortranarray(J)).solve(b)
+
+
+class _AtTheEnergy:
+    """The larger problem ``big`` bordered by one row, for continuation.newton: Newton on [equations; energy - E0]
+    (the frequency error at the point's energy), or next to an energy fold (the energy's rate along the embedded
+    branch tangent t2 within fep_slope.FOLD_SLOPE of vertical in the FEP plane) the step orthogonal to t2 in the
+    balanced norm.  ``fold`` : the last
+    iterate's choice; ``settled(u2)`` : the stopping rule (module docstring)."""
+
+    def __init__(self, big, E0, t2):
+        self.big, self.E0, self.t2 = big, E0, t2
+        self.fold = False
+        self.w = None
+
+    def jacobian(self, v):
+        big = self.big
+        r2, J2 = big.jacobian(v)
+        self.w = w = big.scale(v)
+        g = big.energy_gradient(v)
+        self.fold = at_energy_fold(g @ self.t2 / self.E0, self.t2[-1] / v[-1])
+        if self.fold:          # the step orthogonal to the branch tangent (the hyperplane through v)
+            return np.r_[r2, 0.0], stacked(J2, w * w * self.t2)
+        return np.r_[r2, big.energy(v) - self.E0], stacked(J2, g)
+
+    def residual(self, v):
+        return self.jacobian(v)[0]
+
+    def error(self, v, r):
+        return self.big.error(v, r)
+
+    def settled(self, u2):
+        """The stopping rule: after a step next to a fold (taken once), or a first step shorter than ONE_STEP (its
+        own error is of the order of its square), or a later step that moved the frequency by at most SETTLED of
+        its change from u2."""
+        def stop(k, v, du, v_new):
+            if self.fold:
+                return "next to an energy fold: one step orthogonal to the branch"
+            if k == 0 and np.linalg.norm(self.w * du) < ONE_STEP:
+                return "a short first step"
+            if k > 0 and abs(v_new[-1] - v[-1]) <= SETTLED * abs(v_new[-1] - u2[-1]):
+                return "the frequency settled"
+            return ""
+        return stop
