@@ -158,8 +158,8 @@ class PolynomialStiffness:
         dofs = tuple(range(n)) if self.dofs is None else self.dofs
         D = np.eye(len(dofs)) if self.directions is None else self.directions
         if D.shape != (self.m, len(dofs)):
-            raise NNMInputError(f"PolynomialStiffness acts on {D.shape[1]} DOFs (directions {D.shape}) but the model "
-                                f"has {n}; give dofs=[...] or directions of shape ({self.m}, {n})")
+            raise NNMInputError(f"PolynomialStiffness has {self.m} coordinates and no dofs, the model {n} DOFs; give "
+                                f"dofs=[...] or directions of shape ({self.m}, {n})")
         if max(dofs) >= n:
             raise NNMInputError(f"PolynomialStiffness dof {max(dofs)} is not a DOF of this model (valid: 0..{n - 1})")
         W = np.zeros((self.m, n))
