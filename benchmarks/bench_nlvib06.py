@@ -12,8 +12,10 @@ with om1 = 1.13, om2 = 2 and the damping set to zero (its NMA then returns del =
 writes NLvib's points (its Fourier coefficients and frequencies) with ``save -v7``; here each point's energy is
 computed from its coefficients (kinetic + linear + the PolynomialStiffness potential at t = 0, where q' = 0 for
 nnm's phase: NLvib's phase differs, so the energy is taken as the mean over one period of the HB orbit), and nnm
-solves (a) its own HB equations (same H) at that energy and (b) the exact orbit by shooting (gauss6, its branch
-interpolated in energy).  Reported: the largest relative frequency difference over NLvib's points below the
+solves (a) its own HB equations (same H) at NLvib's amplitude and (b) the exact orbit by shooting (gauss6, its branch
+interpolated in energy).  nnm's HB is compared at NLvib's own amplitude measure, the fundamental amplitude |Q_1,1|
+of q1 (the same equations at the same point: the energy of a truncated orbit is defined only to its truncation, at
+t = 0 for nnm and here the mean over the period).  Reported: the largest relative frequency difference over NLvib's points below the
 first energy maximum for each, and the times.  Without Octave or an NLvib checkout: prints why, exits 0.
 """
 from __future__ import annotations
@@ -77,26 +79,31 @@ def orbit_energy(model, Q, om, H, samples=256):
     return float(np.mean(model.energy(q, v)))
 
 
-def hb_at_energies(model, H, E, guess_branch):
-    """nnm's HB frequency (Hz) at each energy of E: Newton on [HB equations; energy - E_i], from the branch."""
+def hb_at_amplitudes(model, H, a1, guess_branch):
+    """nnm's HB frequency (Hz) at each fundamental amplitude a1 (m) of coordinate q1 (NLvib's own amplitude
+    measure, so that both solve the same equations at the same point): Newton on [HB equations; |Q_1,1| - a1_i]
+    (least squares: the full basis' phase row makes one more row), from nnm's branch."""
     from nnm_solver.model.modal import modal_system
     from nnm_solver.orbits.harmonic_balance import HBProblem
     system = modal_system(model)
     prob = HBProblem(system, 0, guess_branch.settings.hb_basis())
-    Eb = np.asarray(guess_branch.energy)
+    c1, s1 = 1, 2                                          # full basis: mean, cos 1, sin 1, ...
     U = [prob.pack(np.array([system.to_modal(x) for x in np.asarray(guess_branch.coefficients_at(i))]),
-                   2 * np.pi * guess_branch.frequency_hz[i]) for i in range(len(Eb))]
+                   2 * np.pi * guess_branch.frequency_hz[i]) for i in range(len(guess_branch.energy))]
+    amp = lambda u: float(np.hypot(*prob.unpack(u)[0][[c1, s1], 0]))
+    ab = np.array([amp(u) for u in U])
     out = []
-    for Ei in E:
-        j = int(np.clip(np.searchsorted(Eb, Ei), 1, len(Eb) - 1))
-        t = (np.log(Ei) - np.log(Eb[j - 1])) / (np.log(Eb[j]) - np.log(Eb[j - 1]))
-        u = (1 - t) * U[j - 1] + t * U[j]
+    for ai in a1:
+        j = int(np.argmin(np.abs(ab - ai)))
+        u = U[j].copy()
         prob.q_ref = prob.initial_state(u)[0] / np.linalg.norm(prob.initial_state(u)[0])
         for _ in range(40):
             r, J = prob.jacobian(u)
-            g = prob.energy_gradient(u)
-            du = np.linalg.lstsq(np.vstack([J, g / Ei]), -np.concatenate([r, [(prob.energy(u) - Ei) / Ei]]),
-                                 rcond=None)[0]
+            A = prob.unpack(u)[0]
+            g = np.zeros(len(u))
+            g[c1 * prob.n] = A[c1, 0] / amp(u)
+            g[s1 * prob.n] = A[s1, 0] / amp(u)
+            du = np.linalg.lstsq(np.vstack([J, g]), -np.concatenate([r, [amp(u) - ai]]), rcond=None)[0]
             u = u + du
             if np.linalg.norm(du) <= 1e-14 * np.linalg.norm(u):
                 break
@@ -109,6 +116,7 @@ def main(argv=None):
     ap.add_argument("--octave", default=os.environ.get("OCTAVE", "octave"))
     ap.add_argument("--nlvib", default=os.environ.get("NLVIB_DIR"))
     ap.add_argument("--H", type=int, default=7)
+    ap.add_argument("--verbose", action="store_true", help="every point's difference")
     a = ap.parse_args(argv)
     octave = shutil.which(a.octave)
     if octave is None or not a.nlvib or not (Path(a.nlvib) / "SRC" / "HB_residual.m").is_file():
@@ -140,15 +148,19 @@ def main(argv=None):
     print(f"nnm HB (H = {H}): {len(hb)} points, {t_hb:.2f} s CPU, {hb.status}; shooting (gauss6): {len(sh)} points, "
           f"{t_sh:.2f} s CPU, {sh.status}")
     inside = (E >= hb.energy[0]) & (E <= hb.energy[-1])
-    f_hb = hb_at_energies(model, H, E[inside], hb)
+    a1 = np.hypot(Q[2, :], Q[4, :])[:k][keep]        # |Q_1,1|: rows n + 1 (cos 1) and 2n + 1 (sin 1), 1-based
+    f_hb = hb_at_amplitudes(model, H, a1[inside], hb)
     d_hb = np.abs(f_hb / f[inside] - 1)
     inside_sh = (E >= sh.energy[0]) & (E <= sh.energy[-1])
     f_sh = CubicSpline(sh.energy, sh.frequency_hz)(E[inside_sh])
     d_sh = np.abs(f_sh / f[inside_sh] - 1)
     print(f"NLvib's {int(inside.sum())} points from {E[inside][0]:.3g} J to {E[inside][-1]:.4g} J "
           f"(f {f[inside][0]:.6f} -> {f[inside][-1]:.6f} Hz):")
-    print(f"  nnm HB at NLvib's energies (same H):        max |f_nnm / f_NLvib - 1| = {d_hb.max():.2e}")
+    print(f"  nnm HB (same H) at NLvib's amplitudes |Q_1,1|: max |f_nnm / f_NLvib - 1| = {d_hb.max():.2e}")
     print(f"  nnm shooting (spline at NLvib's energies): max |f_nnm / f_NLvib - 1| = {d_sh.max():.2e}")
+    if a.verbose:
+        for Ei, fi, dh in zip(E[inside], f[inside], d_hb):
+            print(f"    E {Ei:.4e} J  f_NLvib {fi:.8f} Hz  HB diff {dh:.2e}")
     print(f"load average: {os.getloadavg()[0]:.2f}")
     return 0
 

@@ -48,19 +48,28 @@ def _int_matrix(value, what):
     return a
 
 
-def _monomials(d, ex):
+def _monomials(d, ex, derivative=True):
     """z (..., n_z) and dz/dd (..., n_z, m) of the monomials z_i = prod_j d_j^ex[i, j] at d (..., m); exact at
-    d_j = 0 (the factor j of dz_i/dd_j is ex d_j^(ex - 1), 0 for ex = 0)."""
+    d_j = 0 (the factor j of dz_i/dd_j is ex d_j^(ex - 1), 0 for ex = 0).  The powers d_j^k, k <= max ex, by
+    repeated products (a table), then gathered: no pow calls.  derivative=False: dz is None (not computed)."""
     d = np.asarray(d, dtype=float)
-    P = d[..., None, :] ** ex                                        # (..., n_z, m) factors d_j^e_ij
+    nz, m = ex.shape
+    top = int(ex.max(initial=0))
+    pw = np.empty(d.shape + (top + 1,))                              # pw[..., j, k] = d_j^k
+    pw[..., 0] = 1.0
+    for k in range(1, top + 1):
+        pw[..., k] = pw[..., k - 1] * d
+    cols = np.arange(m)[None, :]
+    P = pw[..., cols, ex]                                            # (..., n_z, m) factors d_j^e_ij
     z = np.prod(P, axis=-1)
+    if not derivative:
+        return z, None
     dz = np.empty(P.shape)
-    m = ex.shape[1]
+    low = ex * pw[..., cols, np.maximum(ex - 1, 0)]                  # d/dd_j of factor j (0 where e_ij = 0)
     for j in range(m):
-        e = ex[:, j]
-        fj = np.where(e > 0, e * d[..., None, j] ** np.maximum(e - 1, 0), 0.0)       # d/dd_j of factor j
-        others = np.prod(np.delete(P, j, axis=-1), axis=-1) if m > 1 else 1.0
-        dz[..., j] = fj * others
+        Q = P.copy()
+        Q[..., j] = low[..., j]
+        dz[..., j] = np.prod(Q, axis=-1)
     return z, dz
 
 
@@ -168,7 +177,7 @@ class PolynomialStiffness:
 
     def force(self, d):
         """g(d) (..., m) in N at the deformations d (..., m) in m."""
-        return _monomials(d, self.exponents)[0] @ self.coefficients
+        return _monomials(d, self.exponents, False)[0] @ self.coefficients
 
     def tangent(self, d):
         """T = dg/dd (..., m, m) in N/m: T[a, b] = sum_i C[i, a] dz_i/dd_b."""
@@ -178,7 +187,7 @@ class PolynomialStiffness:
     def potential(self, d):
         """V(d) (...) in J: sum_i z_i (C_i . d) / (p_i + 1)."""
         d = np.asarray(d, dtype=float)
-        z = _monomials(d, self.exponents)[0]
+        z = _monomials(d, self.exponents, False)[0]
         return np.sum(z * (d @ self.coefficients.T) / (self.degrees + 1.0), axis=-1)
 
     def law(self):
@@ -203,7 +212,7 @@ class CoupledGroup:
 
     def force(self, d):
         """g (..., G, m) at the full deformation vector d (..., n_d)."""
-        z = _monomials(d[..., self.rows], self.exponents)[0]                  # (..., G, n_z)
+        z = _monomials(d[..., self.rows], self.exponents, False)[0]           # (..., G, n_z)
         return np.einsum("...gi,gia->...ga", z, self.coefficients)
 
     def tangent(self, d):
@@ -214,13 +223,13 @@ class CoupledGroup:
     def potential(self, d):
         """V (..., G)."""
         dd = d[..., self.rows]
-        z = _monomials(dd, self.exponents)[0]
+        z = _monomials(dd, self.exponents, False)[0]
         return np.sum(z * np.einsum("...ga,gia->...gi", dd, self.coefficients) / (self.degrees + 1.0), axis=-1)
 
     def abs_potential(self, d):
         """Bound on |V| (..., G): every coefficient and deformation taken positive."""
         dd = np.abs(d[..., self.rows])
-        z = _monomials(dd, self.exponents)[0]
+        z = _monomials(dd, self.exponents, False)[0]
         return np.sum(z * np.einsum("...ga,gia->...gi", dd, np.abs(self.coefficients)) / (self.degrees + 1.0), axis=-1)
 
 

@@ -93,19 +93,27 @@ class LinearPart:
 
 
 def coupled_galerkin(basis, elements, d):
-    """The Galerkin blocks Ct (n_d, n_d, N_b, N_b) of the whole element tangent at the sampled deformations d (N, n_d):
-    Ct[u, t, j, l] = d F[j, u] / d D[l, t], the springs' on the diagonal, the coupled elements' (model/coupled.py) in
-    their m x m blocks: the condensed equations of a model with coupled elements (their deformations stacked)."""
+    """The non-zero Galerkin blocks of the whole element tangent at the sampled deformations d (N, n_d), as a list of
+    (u, t, C): index arrays u, t (k,) and C (k, N_b, N_b), C[i, j, l] = d F[j, u_i] / d D[l, t_i]; the springs' on
+    the diagonal, the coupled elements' (model/coupled.py) in their m x m blocks, one entry per block position (a, b)
+    (t unique within an entry).  The condensed equations of a model with coupled elements use them."""
     nd = d.shape[1]
-    nb = len(basis)
-    Ct = np.zeros((nd, nd, nb, nb))
     idx = np.arange(nd)
-    Ct[idx, idx] = basis.galerkin(elements.tangent(d))
+    out = [(idx, idx, basis.galerkin(elements.tangent(d)))]
     for rows, T in elements.coupled_tangents(d):
         for a in range(rows.shape[1]):
             for b in range(rows.shape[1]):
-                Ct[rows[:, a], rows[:, b]] = basis.galerkin(T[:, :, a, b])
-    return Ct
+                out.append((rows[:, a], rows[:, b], basis.galerkin(T[:, :, a, b])))
+    return out
+
+
+def flexibility_times_tangent(G, blocks, nb, nd):
+    """JD (N_b, n_d, N_b, n_d): JD[j, s, l, t] = sum_u G[j, s, u] dF[j, u] / dD[l, t] (G (N_b, n_d, n_d), blocks of
+    ``coupled_galerkin``); O(N_b^2 n_d (n_d + sum m^2)), the tangent's sparsity kept."""
+    JD = np.zeros((nb, nd, nb, nd))
+    for u, t, C in blocks:
+        JD[:, :, :, t] += np.einsum("jsk,kjl->jslk", G[:, :, u], C)
+    return JD
 
 
 class CondensedHBProblem(HBTruncationError):
@@ -211,8 +219,8 @@ class CondensedHBProblem(HBTruncationError):
         nD = nb * ns
         J = np.zeros((len(r), nD + 2))                                       # unknowns: D, a, omega
         if self.sys.elements.coupled:
-            Ct = coupled_galerkin(bs, self.sys.elements, d)                  # dF[j, u] / dD[l, t] = Ct[u, t, j, l]
-            JD = np.einsum("jsu,utjl->jslt", G, Ct).reshape(nD, nD)
+            blocks = coupled_galerkin(bs, self.sys.elements, d)
+            JD = flexibility_times_tangent(G, blocks, nb, ns).reshape(nD, nD)
         else:
             C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
             # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
@@ -226,7 +234,10 @@ class CondensedHBProblem(HBTruncationError):
         for i, j in enumerate(self.fund):
             row = nD + i
             if self.sys.elements.coupled:
-                J[row, :nD] = c * np.einsum("u,utl->lt", self.b_r, Ct[:, :, j, :]).ravel()
+                R = np.zeros((nb, ns))                                      # [l, t] = sum_u b_r[u] dF[j, u] / dD[l, t]
+                for u_, t_, C_ in blocks:
+                    R[:, t_] += (self.b_r[u_][:, None] * C_[:, j, :]).T
+                J[row, :nD] = c * R.ravel()
             else:
                 J[row, :nD] = c * (self.b_r[:, None] * C[:, j, :]).T.ravel()
             if j == self.cos1:

@@ -125,9 +125,12 @@ class CondensedForcedHBProblem(_ForcedProtocol):
         D, w, z, dz, W, G, d, F, Fh, r = self._parts(u)
         bs, nb, ns = self.basis, self.nb, self.ns
         nD = nb * ns
-        if self.sys.elements.coupled:                 # coupled elements: dF[a, u] / dD[l, t] = Ct[u, t, a, l]
-            Ct = coupled_galerkin(bs, self.sys.elements, d)
-            JD = np.einsum("jsau,utal->jslt", self.flexibility(G), Ct).reshape(nD, nD)
+        if self.sys.elements.coupled:                 # coupled elements: their tangent blocks (condensed_hb.py)
+            Gr = self.flexibility(G)
+            JD = np.zeros((nb, ns, nb, ns))
+            for u_, t_, C_ in coupled_galerkin(bs, self.sys.elements, d):
+                JD[:, :, :, t_] += np.einsum("jsak,kal->jslk", Gr[:, :, :, u_], C_)
+            JD = JD.reshape(nD, nD)
         else:
             C = bs.galerkin(self.sys.tangent(d))          # dF[j, s] / dD[l, s]
             JD = np.einsum("jsat,tal->jslt", self.flexibility(G), C).reshape(nD, nD)
