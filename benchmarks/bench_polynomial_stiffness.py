@@ -14,9 +14,16 @@ Usage (from the repository root)::
 """
 from __future__ import annotations
 
+import os
+
+# single-threaded BLAS for both parts (set before numpy loads it): with other jobs on the machine, OpenBLAS's threads
+# made the general gauss6 sensitivity at n = 60 take 42 s instead of 0.75 s (threadpoolctl's limit did not reach
+# the BLAS numba calls)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -46,7 +53,7 @@ for name in ("newmark", "gauss6"):
     for what, fn in (("state", lambda: it.state(s, q0, v0, h, it.steps)),
                      ("sensitivity", lambda: it.sensitivity(s, q0, v0, h, it.steps // 2, False, False))):
         ts = []
-        for _ in range(5):
+        for _ in range(20):
             t = time.perf_counter(); fn(); ts.append(time.perf_counter() - t)
         out[f"{name} {what}"] = min(ts)
 print(json.dumps(out))
@@ -117,14 +124,15 @@ def main(argv=None):
     for _ in range(a.rounds):
         for name, tree in trees:
             runs[name].append(springs_path(tree, a.rounds))
-    print("\n1. springs path, aircraft mode 20 (548 DOF, 3 springs), best of 5 per process, median over "
+    print("\n1. springs path, aircraft mode 20 (548 DOF, 3 springs), best of 20 per process, median over "
           f"{a.rounds} processes (s)")
     keys = list(runs[trees[0][0]][0])
     print(f"{'':26s}" + "".join(f"{name:>12s}" for name, _ in trees) + ("      ratio" if a.other else ""))
     for key in keys:
         med = [statistics.median(r[key] for r in runs[name]) for name, _ in trees]
         print(f"{key:26s}" + "".join(f"{m:12.4f}" for m in med) + (f"{med[0] / med[1]:11.3f}" if a.other else ""))
-    print("\n2. general kernels (this tree), best of 3 (s): one period (newmark 200 / gauss6 100 steps)")
+    print("\n2. general kernels (this tree, BLAS single-threaded), best of 3 (s): one period (newmark 200 / gauss6 100 "
+          "steps)")
     for row in general_path():
         print("  " + ", ".join(f"{k}: {v:.4g}" if isinstance(v, float) else str(v) for k, v in row.items()))
     print(f"\nload average after: {os.getloadavg()}")
