@@ -20,6 +20,7 @@ from ..errors import NNMFileError, NNMInputError
 from .importers import is_import_path
 from .h5file import STR, atomic_h5, open_nnm, read_matrix, strings
 from .sweep_groups import parse_branch_name, recorded_variants, with_variant_models
+from . import coupled_io
 from .io import BRANCH_COLUMNS, read_model_group, read_springs, spring_law_json, write_model_group
 
 __all__ = ["save_branch", "check_branch_file", "load_branches", "MODEL_RTOL"]
@@ -159,6 +160,10 @@ def _spring_difference(file_springs, springs, free_k3=True, where=""):
     if len(file_springs) != len(springs):
         return f"the file's model{where} has {len(file_springs)} springs, the branch's {len(springs)}"
     for i, (a, b) in enumerate(zip(file_springs, springs)):
+        if coupled_io.is_coupled(a) or coupled_io.is_coupled(b):
+            if not coupled_io.same_element(a, b):
+                return f"element {i} (a PolynomialStiffness) differs between the file{where} and the branch's model"
+            continue
         if (a.dof, a.other) != (b.dof, b.other):
             return f"spring {i} joins DOFs {_joint(a)} in the file{where}, {_joint(b)} in the branch's model"
         if type(a) is not type(b):

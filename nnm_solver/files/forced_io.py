@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from . import coupled_io
 from ..errors import NNMFileError, NNMInputError
 from ..results.forced import ForcedResponse
 from .h5file import atomic_h5, open_nnm, read_matrix
@@ -137,6 +138,10 @@ def _model_difference(f, path, model):
     if len(a) != len(b):
         return f"the file's model has {len(a)} nonlinear elements, the response's {len(b)}"
     for i, (s, t) in enumerate(zip(a, b)):
+        if coupled_io.is_coupled(s) or coupled_io.is_coupled(t):
+            if not coupled_io.same_element(s, t):
+                return f"element {i} (a PolynomialStiffness) differs between the file and the response's model"
+            continue
         if (s.dof, s.other) != (t.dof, t.other) or type(s) is not type(t) or not _close(spring_law_json(s),
                                                                                         spring_law_json(t)):
             return (f"element {i} differs ({json.dumps(spring_law_json(s))} in the file, "

@@ -14,6 +14,7 @@ import scipy.sparse as sp
 
 from ..model.elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring
 from ..errors import NNMFileError, NNMInputError
+from . import coupled_io
 from .importers import import_model, is_import_path
 from .h5file import (STR, atomic_h5, open_nnm, read_attrs, read_group_tree, read_matrix, strings, write_attrs,
                      write_group_tree, write_matrix)
@@ -84,14 +85,18 @@ def write_model_group(f, model, extra=None):
     g.attrs["name"] = model.name
     write_matrix(g, "M", model.M)
     write_matrix(g, "K", model.K)
+    scalar, coupled = coupled_io.split(model.springs)
+    marker = [coupled_io.MARKER] if coupled else []         # coupled elements: /model/coupled (coupled_io.py)
     sg = g.create_group("springs")
-    sg.create_dataset("dof", data=np.array([s.dof for s in model.springs], dtype=np.int64))
-    sg.create_dataset("other", data=np.array([-1 if s.other is None else s.other for s in model.springs],
+    sg.create_dataset("dof", data=np.array([s.dof for s in scalar] + [-1] * len(marker), dtype=np.int64))
+    sg.create_dataset("other", data=np.array([-1 if s.other is None else s.other for s in scalar] + [-1] * len(marker),
                                              dtype=np.int64))
-    sg.create_dataset("k3", data=model.k3)
+    sg.create_dataset("k3", data=np.array([s.law().get(3, 0.0) for s in scalar] + [0.0] * len(marker), dtype=float))
     # every element's force law ({power: coefficient}, or a typed object); k3 alone describes cubic springs
     # (first-release files)
-    sg.attrs["laws_json"] = json.dumps([spring_law_json(s) for s in model.springs])
+    sg.attrs["laws_json"] = json.dumps([spring_law_json(s) for s in scalar] + marker)
+    if coupled:
+        coupled_io.write_coupled(g, coupled)
     if model.dof_labels is not None:
         g.create_dataset("dof_labels", data=np.array(model.dof_labels, dtype=STR))
     if model.mode_labels is not None:
@@ -168,7 +173,13 @@ def read_springs(g, path):
     laws = json.loads(sg.attrs["laws_json"]) if "laws_json" in sg.attrs else [{"3": float(k)} for k in k3]
     if len(laws) != len(dof):
         raise NNMFileError(f"{path}: /model/springs/laws_json has {len(laws)} entries for {len(dof)} springs")
-    return [spring_from_json(int(d), None if o < 0 else int(o), law, path) for d, o, law in zip(dof, other, laws)]
+    coupled = coupled_io.read_coupled(g, path)
+    marked = [law == coupled_io.MARKER for law in laws]
+    if any(marked) != bool(coupled):
+        raise NNMFileError(f"{path}: /model/springs and /model/{coupled_io.GROUP} disagree about coupled elements")
+    scalar = [spring_from_json(int(d), None if o < 0 else int(o), law, path)
+              for d, o, law, mk in zip(dof, other, laws, marked) if not mk]
+    return coupled_io.merge(scalar, coupled, path)
 
 
 def store_ritz_basis(path, model, mode, harmonics, f_cut_hz=None):

@@ -31,6 +31,10 @@ model/ritz.py), the residual flexibility of the modes left out,
 R0 + Omega^2 R1 with R0 = B (K^-1 - sum phi phi^T / w^2) B^T and R1 = B (K^-1 M K^-1 - sum phi phi^T / w^4) B^T:
 exact at Omega = 0, relative error O((Omega / w_cut)^4) for the left-out modes above w_cut.
 
+Coupled elements (model/coupled.py, one force on m deformations) take their m rows of B each; their tangent is an
+m x m block instead of a diagonal entry, so their Jacobian is assembled from the full Galerkin blocks
+(``coupled_galerkin``): the same equations, n_d = n_s + sum m deformations.
+
 Unknowns (scaled, all in m): u = [D.ravel(); a beta; omega / w_r], beta = |b_r| (1 if mode r does not
 deform the elements); residuals [R_D; R_a beta / w_r^2] in m.  Each evaluation costs
 O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.
@@ -86,6 +90,30 @@ class LinearPart:
     def flexibility_slope(self, W, Omega2):
         """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
         return (self.Bq[None] * (W * W)[:, None, :]) @ self.Bq.T + self.R1[None]
+
+
+def coupled_galerkin(basis, elements, d):
+    """The non-zero Galerkin blocks of the whole element tangent at the sampled deformations d (N, n_d), as a list of
+    (u, t, C): index arrays u, t (k,) and C (k, N_b, N_b), C[i, j, l] = d F[j, u_i] / d D[l, t_i]; the springs' on
+    the diagonal, the coupled elements' (model/coupled.py) in their m x m blocks, one entry per block position (a, b)
+    (t unique within an entry).  The condensed equations of a model with coupled elements use them."""
+    nd = d.shape[1]
+    idx = np.arange(nd)
+    out = [(idx, idx, basis.galerkin(elements.tangent(d)))]
+    for rows, T in elements.coupled_tangents(d):
+        for a in range(rows.shape[1]):
+            for b in range(rows.shape[1]):
+                out.append((rows[:, a], rows[:, b], basis.galerkin(T[:, :, a, b])))
+    return out
+
+
+def flexibility_times_tangent(G, blocks, nb, nd):
+    """JD (N_b, n_d, N_b, n_d): JD[j, s, l, t] = sum_u G[j, s, u] dF[j, u] / dD[l, t] (G (N_b, n_d, n_d), blocks of
+    ``coupled_galerkin``); O(N_b^2 n_d (n_d + sum m^2)), the tangent's sparsity kept."""
+    JD = np.zeros((nb, nd, nb, nd))
+    for u, t, C in blocks:
+        JD[:, :, :, t] += np.einsum("jsk,kjl->jslk", G[:, :, u], C)
+    return JD
 
 
 class CondensedHBProblem(HBTruncationError):
@@ -188,11 +216,15 @@ class CondensedHBProblem(HBTruncationError):
         tested the residual first and needs the Jacobian only when it is not converged)."""
         D, a, w, Omega2, W, G, d, F, r = parts
         bs, nb, ns = self.basis, self.nb, self.ns
-        C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
         nD = nb * ns
         J = np.zeros((len(r), nD + 2))                                       # unknowns: D, a, omega
-        # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
-        JD = np.einsum("jst,tjl->jslt", G, C).reshape(nD, nD)
+        if self.sys.elements.coupled:
+            blocks = coupled_galerkin(bs, self.sys.elements, d)
+            JD = flexibility_times_tangent(G, blocks, nb, ns).reshape(nD, nD)
+        else:
+            C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
+            # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
+            JD = np.einsum("jst,tjl->jslt", G, C).reshape(nD, nD)
         JD[np.diag_indices(nD)] += 1.0
         J[:nD, :nD] = JD
         J[self.cos1 * ns:(self.cos1 + 1) * ns, nD] = -self.b_r / self.beta
@@ -201,7 +233,13 @@ class CondensedHBProblem(HBTruncationError):
         c = self.beta / self.w_r ** 2
         for i, j in enumerate(self.fund):
             row = nD + i
-            J[row, :nD] = c * (self.b_r[:, None] * C[:, j, :]).T.ravel()
+            if self.sys.elements.coupled:
+                R = np.zeros((nb, ns))                                      # [l, t] = sum_u b_r[u] dF[j, u] / dD[l, t]
+                for u_, t_, C_ in blocks:
+                    R[:, t_] += (self.b_r[u_][:, None] * C_[:, j, :]).T
+                J[row, :nD] = c * R.ravel()
+            else:
+                J[row, :nD] = c * (self.b_r[:, None] * C[:, j, :]).T.ravel()
             if j == self.cos1:
                 J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
                 J[row, nD + 1] = -2.0 * w * a * c * self.w_r

@@ -197,6 +197,8 @@ class ForcedHBProblem(_ForcedProtocol):
         s, bs, nb, n = self.sys, self.basis, self.nb, self.n
         C = bs.galerkin(s.tangent(d))
         J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
+        if s.elements.coupled:                                 # coupled elements: full tangent blocks (model/coupled.py)
+            J += bs.galerkin_matrix(s.coupled_stiffness(d))
         J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w * w).ravel()
         J += w * np.kron(self.Dm, self.Cq)
         J /= self.w_ref ** 2

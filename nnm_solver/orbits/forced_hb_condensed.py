@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .condensed_hb import LinearPart
+from .condensed_hb import LinearPart, coupled_galerkin
 from .forced_hb import _ForcedProtocol
 
 __all__ = ["CondensedForcedHBProblem"]
@@ -124,9 +124,16 @@ class CondensedForcedHBProblem(_ForcedProtocol):
     def jacobian(self, u):
         D, w, z, dz, W, G, d, F, Fh, r = self._parts(u)
         bs, nb, ns = self.basis, self.nb, self.ns
-        C = bs.galerkin(self.sys.tangent(d))          # dF[j, s] / dD[l, s]
         nD = nb * ns
-        JD = np.einsum("jsat,tal->jslt", self.flexibility(G), C).reshape(nD, nD)
+        if self.sys.elements.coupled:                 # coupled elements: their tangent blocks (condensed_hb.py)
+            Gr = self.flexibility(G)
+            JD = np.zeros((nb, ns, nb, ns))
+            for u_, t_, C_ in coupled_galerkin(bs, self.sys.elements, d):
+                JD[:, :, :, t_] += np.einsum("jsak,kal->jslk", Gr[:, :, :, u_], C_)
+            JD = JD.reshape(nD, nD)
+        else:
+            C = bs.galerkin(self.sys.tangent(d))          # dF[j, s] / dD[l, s]
+            JD = np.einsum("jsat,tal->jslt", self.flexibility(G), C).reshape(nD, nD)
         JD[np.diag_indices(nD)] += 1.0
         dW = -dz * W * W                                                          # d(1/z) / domega
         dRh = (self._flex(dW) @ Fh[:, :, None])[:, :, 0]

@@ -35,6 +35,8 @@ def damped_hill_multipliers(system, basis, A, omega, damping_q, harmonics=None):
     Cmat = np.diag(damping_q) if np.ndim(damping_q) == 1 else np.asarray(damping_q)
     C = bp.galerkin(s.tangent(d))
     Kh = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
+    if s.elements.coupled:                                     # coupled elements: full tangent blocks (model/coupled.py)
+        Kh += bp.galerkin_matrix(s.coupled_stiffness(d))
     Kh[np.diag_indices(nb * n)] += np.tile(s.omega2, nb)
     D = np.kron(derivative_matrix(bp), np.eye(n)) * omega
     Ch = np.kron(np.eye(nb), Cmat)
