@@ -10,7 +10,8 @@ from .geometric import GeometricStructure, StaticSolution, internal_force, stati
 from .shell import shell_matrices
 from .solve import modes
 from .vk_beam import beam_structure, von_karman_beam
+from .vk_plate import plate_structure, von_karman_plate
 
 __all__ = ["DOF_NAMES", "FEModel", "beam_matrices", "shell_matrices", "modes", "von_karman_beam",
            "beam_structure", "GeometricStructure", "StaticSolution", "internal_force", "tangent_stiffness",
-           "static_solve"]
+           "static_solve", "von_karman_plate", "plate_structure"]

@@ -26,7 +26,9 @@ __all__ = ["GeometricStructure", "StaticSolution", "internal_force", "tangent_st
 class GeometricStructure:
     """M, K (sparse, free DOFs, SI) and the nonlinear strain energy of a geometrically nonlinear structure.
 
-    labels: one string per DOF ("node k uz"); mesh: a DisplayMesh (or None); name, info: as for nnm.Model.
+    labels: one string per DOF ("node k uz"); mesh: a DisplayMesh (or None); name, info: as for nnm.Model;
+    unit_loads: named consistent load vectors (n,) of a unit distributed load ("pressure": 1 Pa on a plate,
+    "uniform": 1 N/m on a beam) for static solutions.
     """
 
     M: sp.csr_matrix
@@ -36,6 +38,7 @@ class GeometricStructure:
     mesh: object = None
     name: str = ""
     info: dict = field(default_factory=dict)
+    unit_loads: dict = field(default_factory=dict)
 
     @property
     def n(self):

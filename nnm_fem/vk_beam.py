@@ -204,7 +204,8 @@ def beam_structure(length, thickness, width, E, rho, elements=DEFAULT_BEAM_ELEME
             "width_m": float(width), "E_Pa": float(E), "rho_kg_m3": float(rho), "elements": bm.n_elements,
             "ends": ends, "midspan_dof": f"node {bm.n_elements + 1} uz"}
     return GeometricStructure(M, K, bm.energy.restricted(free), [bm.labels[k] for k in free],
-                              _ribbon(bm, free, float(width)), f"von Karman beam ({ends})", info)
+                              _ribbon(bm, free, float(width)), f"von Karman beam ({ends})", info,
+                              {"uniform": bm.load_vector(np.ones_like)[free]})
 
 
 def von_karman_beam(length, thickness, width, E, rho, elements=DEFAULT_BEAM_ELEMENTS, ends="hinged"):
