@@ -7,6 +7,7 @@ docs/geometric.md for the von Karman structures.
 from .assembly import DOF_NAMES, FEModel
 from .beam import beam_matrices
 from .geometric import GeometricStructure, StaticSolution, internal_force, static_solve, tangent_stiffness
+from .rom import ReducedModel, condensed_rom, constrained_static
 from .shell import shell_matrices
 from .solve import modes
 from .vk_beam import beam_structure, von_karman_beam
@@ -14,4 +15,5 @@ from .vk_plate import plate_structure, von_karman_plate
 
 __all__ = ["DOF_NAMES", "FEModel", "beam_matrices", "shell_matrices", "modes", "von_karman_beam",
            "beam_structure", "GeometricStructure", "StaticSolution", "internal_force", "tangent_stiffness",
-           "static_solve", "von_karman_plate", "plate_structure"]
+           "static_solve", "von_karman_plate", "plate_structure",
+           "condensed_rom", "ReducedModel", "constrained_static"]
