@@ -37,7 +37,7 @@ from nnm_solver.errors import NNMInputError
 from .geometric import _structure
 from .polynomial import force_law
 
-__all__ = ["ReducedModel", "condensed_rom", "constrained_static", "linear_modes"]
+__all__ = ["ReducedModel", "condensed_rom", "constrained_static", "membrane_static", "linear_modes"]
 
 
 def linear_modes(structure, modes):
@@ -72,6 +72,23 @@ def constrained_static(structure, Phi, q, *, steps=4, tol=1e-10, max_iter=30):
         else:
             ok = False
     return x, mu, ok
+
+
+def membrane_static(structure, Phi, q, membrane, *, tol=1e-10, max_iter=30):
+    """x*(q) with the non-membrane DOFs at Phi q and the ``membrane`` DOFs in equilibrium, f(x)[membrane] = 0:
+    (x (n,), mu = Phi^T f(x) (m,), converged).  For a von Karman structure f[membrane] is linear in the
+    membrane DOFs and one Newton step solves it."""
+    s = _structure(structure)
+    P = np.asarray(membrane, dtype=np.int64)
+    x = Phi @ q
+    x[P] = 0.0
+    fscale = max(np.linalg.norm(s.K @ (Phi @ q)), 1e-300)
+    for _ in range(max_iter):
+        r = s.internal_force(x)[P]
+        if np.linalg.norm(r) <= tol * fscale:
+            return x, Phi.T @ s.internal_force(x), True
+        x[P] -= sp.linalg.spsolve(s.tangent(x)[P][:, P].tocsc(), r)
+    return x, Phi.T @ s.internal_force(x), False
 
 
 def _potential_monomials(m):
@@ -155,16 +172,24 @@ class ReducedModel:
                          info=dict(self.info or {}))
 
 
-def condensed_rom(structure, modes, scale, *, steps=4):
+def condensed_rom(structure, modes, scale, *, relax="membrane", steps=4):
     """Condensed ROM of a GeometricStructure (or an nnm.Model built from one) on its 1-based linear ``modes``.
 
     scale (m): each mode is sampled up to a largest physical displacement ``scale`` (typically the amplitudes
-    of interest, e.g. one or two thicknesses).  Returns a ReducedModel (module docstring).
+    of interest, e.g. one or two thicknesses).  relax: "membrane" (default) relaxes the in-plane DOFs only
+    (labels ending " ux" / " uy"; the transverse DOFs follow Phi q exactly, so a flat von Karman structure's
+    condensed energy is exactly quartic and the fit does not depend on ``scale``); "all" relaxes every other DOF,
+    the other modes included (implicit condensation: the fit then depends on ``scale``).  Returns a ReducedModel.
     """
     s = _structure(structure)
     scale = float(scale)
     if not np.isfinite(scale) or scale <= 0:
         raise NNMInputError(f"scale must be a positive displacement in m, got {scale}")
+    if relax not in ("membrane", "all"):
+        raise NNMInputError(f"relax must be 'membrane' or 'all', got {relax!r}")
+    membrane = [k for k, lab in enumerate(s.labels) if lab.endswith((" ux", " uy"))]
+    if relax == "membrane" and not membrane:
+        raise NNMInputError("relax='membrane' needs in-plane DOFs (labels ending ' ux' or ' uy'); use relax='all'")
     omega2, Phi = linear_modes(s, modes)
     m = Phi.shape[1]
     trans = [k for k, lab in enumerate(s.labels) if lab.endswith((" ux", " uy", " uz"))] or list(range(s.n))
@@ -175,7 +200,10 @@ def condensed_rom(structure, modes, scale, *, steps=4):
     rows, rhs, quad, ys = [], [], [], []
     for p in pts:
         q = p * q0
-        x, mu, ok = constrained_static(s, Phi, q, steps=steps)
+        if relax == "membrane":
+            x, mu, ok = membrane_static(s, Phi, q, membrane)
+        else:
+            x, mu, ok = constrained_static(s, Phi, q, steps=steps)
         if not ok:
             raise NNMInputError(f"condensed_rom: no static solution at modal amplitudes {q} (scale {scale} m); "
                                 f"lower the scale")
@@ -202,7 +230,7 @@ def condensed_rom(structure, modes, scale, *, steps=4):
         mesh = nnm.DisplayMesh(s.mesh.vertices, s.mesh.faces, np.asarray(s.mesh.displacement_map @ Phi),
                                part_ids=s.mesh.part_ids, part_names=list(s.mesh.part_names))
     modes = [int(k) for k in np.atleast_1d(modes)]
-    info = dict(s.info, rom="condensed (implicit condensation / STEP)", rom_modes=",".join(map(str, modes)),
+    info = dict(s.info, rom=f"condensed (STEP samples, {relax} relaxed)", rom_modes=",".join(map(str, modes)),
                 rom_scale_m=scale, rom_fit_residual=resid)
     return ReducedModel(omega2, F, C, Phi, modes, Y, pairs, scale, resid, len(pts), mesh,
                         f"ROM of {s.name}" if s.name else "ROM", info)
