@@ -225,3 +225,23 @@ def von_karman_beam(length, thickness, width, E, rho, elements=DEFAULT_BEAM_ELEM
     own error against the closed-form backbone is dominated by axial inertia, (w / w_axial)^2.
     """
     return beam_structure(length, thickness, width, E, rho, elements, ends).model()
+
+
+def hinged_backbone(amplitude, length, thickness, E, rho):
+    """Closed-form NNM 1 of the hinged-hinged beam with immovable ends (axial inertia neglected).
+
+    With w = a(t) sin(pi x / L) the axial force is uniform, N = EA / (2L) int w'^2 = EA pi^2 a^2 / (4 L^2), and the
+    continuum reduces exactly to  a'' + w0^2 (a + a^3 / (4 r^2)) = 0,  w0 = (pi / L)^2 sqrt(EI / (rho A)),
+    r^2 = I / A = h^2 / 12.  For midspan amplitudes ``amplitude`` (m) returns (frequency_hz, energy_per_width):
+    the period is 4 K(m) / (w0 sqrt(1 + kap)), kap = a^2 / (4 r^2), m = kap / (2 (1 + kap)) (K the complete
+    elliptic integral of the first kind, parameter m); the energy of a beam of width 1 m is
+    (rho h L / 2) w0^2 (a^2 / 2 + a^4 / (16 r^2)) (J/m; multiply by the width).
+    """
+    from scipy.special import ellipk
+    a = np.asarray(amplitude, dtype=float)
+    r2 = thickness ** 2 / 12
+    w0 = (np.pi / length) ** 2 * np.sqrt(E * r2 / rho)
+    kap = a ** 2 / (4 * r2)
+    period = 4 * ellipk(kap / (2 * (1 + kap))) / (w0 * np.sqrt(1 + kap))
+    energy = rho * thickness * length / 2 * w0 ** 2 * (a ** 2 / 2 + a ** 4 / (16 * r2))
+    return 1 / period, energy
