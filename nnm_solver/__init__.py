@@ -11,7 +11,7 @@ Public API (SI units, frequencies in Hz, energies in J, 1-based mode numbers)::
 """
 from .errors import NNMFileError, NNMInputError
 from .model import (CubicSpring, DisplayMesh, ElementSet, ModalSystem, Model, PiecewiseLinearSpring,
-                    PolynomialSpring, Variant, craig_bampton, cubic_scaling, mac, modal_system, variant_grid)
+                    PolynomialSpring, PolynomialStiffness, Variant, craig_bampton, cubic_scaling, mac, modal_system, variant_grid)
 from .integrators import INTEGRATORS
 from .stability import STABILITY_TOL
 from .results import STATUSES, Branch, HarmonicBalanceSettings, MethodSettings, Point, ShootingSettings, plot_atlas, plot_fep
@@ -50,7 +50,7 @@ def __getattr__(name):
 
 __all__ = [
     # models
-    "Model", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
+    "Model", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "PolynomialStiffness", "ElementSet", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac",
     # computing branches
     "continue_nnm", "iter_nnm", "NNMIterator", "METHODS", "start_branch", "Job", "hb", "switch_branch",
     "continue_tongue", "INTEGRATORS", "Shooting", "HarmonicBalance", "Continuation", "Follow", "Skip", "TongueRecord",

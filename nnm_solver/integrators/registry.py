@@ -14,7 +14,8 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
     relative_error(y)                             -> relative frequency error of a harmonic with h w = y
 
 All share the low-rank treatment of the localised nonlinearity (the implicit solve is on the element
-deformations only), so a step costs O(n n_s) for every scheme.
+deformations only), so a step costs O(n n_s) for every scheme.  Models with coupled elements (PolynomialStiffness,
+several deformations in one force) take the same schemes in the full modal space (general.py).
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ import math
 
 import numpy as np
 
-from . import gauss, newmark
+from . import gauss, general, newmark
 from ..errors import NNMInputError
 
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "record_orbit"]
@@ -88,17 +89,30 @@ class Integrator:
         return None
 
 
+def _general(system):
+    """True when the model has coupled elements (PolynomialStiffness): the general kernels (general.py)."""
+    return system.elements.coupled
+
+
 class _Newmark(Integrator):
     def state(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return general.state(system, 1, q0, v0, h, nsteps)
         return newmark.sweep_state(q0, v0, h, nsteps, *system.kernel)
 
     def record(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return general.record(system, 1, q0, v0, h, nsteps)
         return newmark.sweep_record(q0, v0, h, nsteps, *system.kernel)
 
     def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        if _general(system):
+            return general.sensitivity(system, 1, q0, v0, h, nsteps, all_columns, velocities)
         return newmark.sweep_sensitivity(q0, v0, h, nsteps, *system.kernel, all_columns, velocities)
 
     def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return None
         return newmark.sweep_factors(q0, v0, h, nsteps, *system.kernel)
 
 
@@ -108,12 +122,18 @@ class _Gauss(Integrator):
         return (*system.kernel, k.C1, k.Cc, k.F, k.G, k.b, k.bbar, k.c)
 
     def state(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return general.state(system, self.stages, q0, v0, h, nsteps)
         return gauss.sweep_state(q0, v0, h, nsteps, *self._args(system, h))
 
     def record(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return general.record(system, self.stages, q0, v0, h, nsteps)
         return gauss.sweep_record(q0, v0, h, nsteps, *self._args(system, h))
 
     def sensitivity(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        if _general(system):
+            return general.sensitivity(system, self.stages, q0, v0, h, nsteps, all_columns, velocities)
         return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
 
 

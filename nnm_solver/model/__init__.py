@@ -7,6 +7,7 @@ model, Craig-Bampton reduction and the MAC, the sparse factorisation.
 
 Layer: imports only ``nnm_solver.errors`` and ``nnm_solver.jit``.
 """
+from .coupled import PolynomialStiffness
 from .element_set import ElementSet
 from .elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring, check_element
 from .mesh import DisplayMesh
@@ -17,6 +18,7 @@ from .ritz import sparse_modes
 from .scaling import cubic_scaling
 from .variants import Variant, variant_grid
 
-__all__ = ["Model", "MAX_DENSE_DOF", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "ElementSet",
+__all__ = ["Model", "MAX_DENSE_DOF", "CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "PolynomialStiffness",
+           "ElementSet",
            "check_element", "DisplayMesh", "ModalSystem", "modal_system", "craig_bampton", "mac", "mass_mac",
            "cubic_scaling", "Variant", "variant_grid", "sparse_modes"]

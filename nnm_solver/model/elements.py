@@ -250,7 +250,7 @@ class PiecewiseLinearSpring:
                                      breakpoints=self.breakpoints, eps=self.eps, **neg)
 
 
-#: element types the models accept (the next element types are added here)
+#: element types the models accept (the next element types are added here; PolynomialStiffness: coupled.py)
 ELEMENT_TYPES = (CubicSpring, PolynomialSpring, PiecewiseLinearSpring)
 
 
@@ -261,9 +261,18 @@ def element_law(element):
 
 def check_element(i, element, n):
     """One-line NNMInputError if ``element`` (index i) is not a valid element of an n-DOF model."""
+    from .coupled import PolynomialStiffness
+
+    if isinstance(element, PolynomialStiffness):
+        try:
+            element.matrix(n)
+        except NNMInputError as exc:
+            raise NNMInputError(f"spring {i}: {exc}") from None
+        return
     if not isinstance(element, ELEMENT_TYPES):
         raise NNMInputError(f"spring {i} is {type(element).__name__}, expected nnm_solver.CubicSpring, "
-                            f"nnm_solver.PolynomialSpring or nnm_solver.PiecewiseLinearSpring")
+                            f"nnm_solver.PolynomialSpring, nnm_solver.PiecewiseLinearSpring or "
+                            f"nnm_solver.PolynomialStiffness")
     for which, d in (("dof", element.dof), ("other", element.other)):
         if d is None and which == "other":
             continue

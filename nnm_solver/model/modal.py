@@ -54,6 +54,22 @@ class ModalSystem:
         """Element stiffnesses g'(d) (..., n_s)."""
         return self.elements.tangent(d)
 
+    def coupled_stiffness(self, d):
+        """Modal stiffness (..., n, n) of the coupled elements (PolynomialStiffness) at the deformations d (..., n_d):
+        sum over elements of W^T T(d) W, W = their rows of Bq (0 when there are none)."""
+        d = np.asarray(d, dtype=float)
+        K = np.zeros(d.shape[:-1] + (self.n, self.n))
+        for rows, T in self.elements.coupled_tangents(d):
+            W = self.Bq[rows]                                                  # (G, m, n)
+            Y = np.einsum("...gab,gbj->...gaj", T, W).reshape(d.shape[:-1] + (-1, self.n))
+            K += np.swapaxes(W.reshape(-1, self.n), 0, 1) @ Y
+        return K
+
+    def nonlinear_force(self, q):
+        """f_nl (..., n) in modal coordinates at q (..., n): Bq^T g(Bq q), coupled elements included."""
+        q = np.asarray(q, dtype=float)
+        return self.elements.force(q @ self.Bq.T) @ self.Bq
+
     def energy(self, q0, v0):
         """Energy (J) of the modal state (q0, v0): |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + element potentials."""
         return float(0.5 * v0 @ v0 + 0.5 * q0 @ (self.omega2 * q0) + np.sum(self.elements.potential(self.Bq @ q0)))

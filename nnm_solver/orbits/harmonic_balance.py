@@ -154,6 +154,8 @@ class HBProblem(HBTruncationError):
         s, bs, nb, n = self.sys, self.basis, self.nb, self.n
         C = bs.galerkin(s.tangent(d))
         J = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
+        if s.elements.coupled:                                 # coupled elements: full tangent blocks (model/coupled.py)
+            J += bs.galerkin_matrix(s.coupled_stiffness(d))
         J[np.diag_indices(nb * n)] += (s.omega2[None, :] - self.h2 * w ** 2).ravel()
         J /= self.w_r ** 2
         dw = (-2.0 * self.h2 * w * A).ravel() / self.w_r        # d r / d(omega / w_r)

@@ -61,6 +61,15 @@ class HBBasis:
         # before the skeleton's guide)
         return (self.P[None] * np.asarray(g_prime).T[:, None]) @ self.E
 
+    def galerkin_matrix(self, K):
+        """The Galerkin matrix (N_b n, N_b n) of modal stiffnesses K (N, n, n) sampled at this basis's instants:
+        block [j, l] = sum_k P[j, k] K_k E[k, l], rows (j, i), columns (l, m) (the coupled elements' part of the HB
+        Jacobian and of Hill's matrix, whose stiffness is not diagonal on the deformations)."""
+        K = np.asarray(K)
+        nb, n = len(self.h), K.shape[-1]
+        G = self.P.T[:, :, None] * self.E[:, None, :]                        # (N, N_b, N_b): P[j, k] E[k, l]
+        return np.tensordot(G, K, axes=(0, 0)).transpose(0, 2, 1, 3).reshape(nb * n, nb * n)
+
     def functions(self, theta):
         """c_j(theta) (len(theta), N_b)."""
         ht = np.outer(np.asarray(theta, dtype=float), self.h)

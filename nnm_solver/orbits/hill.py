@@ -117,6 +117,11 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
     if method not in HILL_METHODS:
         raise ValueError(f"method must be one of {HILL_METHODS}, got {method!r}")
     A, w, H, bp, C = _galerkin_blocks(problem, u, harmonics)
+    s = problem.sys
+    if s.elements.coupled:             # coupled elements (model/coupled.py): their tangent is not diagonal on the
+        theta = 2 * np.pi * np.arange(bp.samples) / bp.samples          # deformations, which the other routes need
+        d = problem.basis.functions(theta) @ (A @ s.Bq.T)
+        return _dense(problem, w, bp, C, bp.galerkin_matrix(s.coupled_stiffness(d)))
     if method == "auto":
         method = "reversible" if 2 * problem.n * len(bp) <= DENSE_MAX_ROWS else "secular"
     if method == "secular":
@@ -148,10 +153,13 @@ def central_exponents(V, bp, n):
     return np.argsort(np.abs(centroid), kind="stable")[:2 * n]
 
 
-def _dense(problem, w, bp, C):
+def _dense(problem, w, bp, C, extra=None):
+    """The dense route; extra: a further Galerkin stiffness (N_b n, N_b n) (the coupled elements')."""
     s, n = problem.sys, problem.n
     nb = len(bp)
     Kh = np.einsum("sjl,si,sm->jilm", C, s.Bq, s.Bq).reshape(nb * n, nb * n)
+    if extra is not None:
+        Kh += extra
     Kh[np.diag_indices(nb * n)] += np.tile(s.omega2, nb)
     D = np.kron(derivative_matrix(bp), np.eye(n)) * w
     m = nb * n
