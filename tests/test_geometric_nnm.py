@@ -60,3 +60,24 @@ def test_rom_backbone_follows_the_closed_form_to_two_thicknesses():
     assert a[-1] == pytest.approx(2 * H, rel=1e-3)
     err = branch.frequency_hz / hinged_backbone(a, L, H, E, RHO)[0] - 1
     assert np.max(np.abs(err)) < 1e-4                       # measured 5.7e-5 (8 elements; the linear part 1.6e-5)
+
+
+def test_geometric_beams_example_fast(tmp_path):
+    """examples/geometric_beams.py --fast: the hinged ROM on the closed form; the clamped ROM (modes 1, 3) hardens
+    past its 5:1 resonance with mode 3 (a tongue: the energy turns back where 5 f meets mode 3) to 40 J."""
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "examples" / "geometric_beams.py"
+    spec = importlib.util.spec_from_file_location("geometric_beams_example", path)
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    hinged_runs, clamped_runs = ex.main(["--fast", "--out-dir", str(tmp_path)])
+    _, rows = hinged_runs["rom"]
+    assert rows[-1, 0] == pytest.approx(2.0, rel=1e-3) and np.max(np.abs(rows[:, 3])) < 1e-4
+    rom, branch = clamped_runs[(1, 3)]
+    assert branch.status == "done" and branch.energy[-1] == pytest.approx(ex.CLAMPED_ENERGY_MAX, rel=1e-6)
+    f3 = np.sqrt(rom.omega2[1]) / (2 * np.pi)
+    back = np.flatnonzero(np.diff(branch.energy) < 0)           # the tongue: energy turning back
+    assert back.size and np.all(np.abs(5 * branch.frequency_hz[back] / f3 - 1) < 0.06)
+    assert branch.frequency_hz[-1] > 2 * branch.frequency_hz[0]
+    assert (tmp_path / "geometric_beams_fep.png").exists()
