@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from nnm_solver.errors import NNMInputError, finite_number
 from .polynomial import PolynomialEnergy
 
-__all__ = ["plate_structure", "von_karman_plate", "PLATE_ENERGY", "DEFAULT_PLATE_ELEMENTS"]
+__all__ = ["plate_structure", "von_karman_plate", "plate_energy", "DEFAULT_PLATE_ELEMENTS"]
 
 #: default grid of ``von_karman_plate`` (elements along x, along y)
 DEFAULT_PLATE_ELEMENTS = (6, 6)
@@ -39,8 +39,6 @@ def plate_energy(nu):
     c = np.array([0.5, nu / 2, nu / 2, 0.5, (1 - nu) / 2, 0.125, 0.125, 0.25])
     return E, c
 
-
-PLATE_ENERGY = plate_energy
 
 
 def _hermite(xi, h):
