@@ -90,7 +90,17 @@ def test_ctrl_c_keeps_points(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             # a runner started in the background ignores SIGINT, and children inherit that
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    time.sleep(4.0)
+    # Ctrl-C once the first point is there (its progress line says so): under load the import alone can take
+    # seconds, and a signal during it is not the case under test
+    import os
+    import selectors
+    sel = selectors.DefaultSelector()
+    sel.register(proc.stderr, selectors.EVENT_READ)          # (the progress line is on stderr)
+    seen, deadline = b"", time.time() + 120
+    while b" points " not in seen and time.time() < deadline and proc.poll() is None:
+        if sel.select(timeout=1.0):
+            seen += os.read(proc.stderr.fileno(), 4096)
+    time.sleep(0.5)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
