@@ -183,7 +183,8 @@ def parse_dofs(text, n, auto):
 def auto_dofs(model, x, count=2):
     """DOFs to plot by default: the spring DOFs moving most, else the DOFs moving most."""
     amp = np.ptp(np.asarray(x), axis=0)
-    spring_dofs = sorted({s.dof for s in model.springs} | {s.other for s in model.springs if s.other is not None})
+    spring_dofs = sorted({s.dof for s in model.springs if hasattr(s, "dof")}
+                         | {s.other for s in model.springs if getattr(s, "other", None) is not None})
     cands = spring_dofs if spring_dofs else list(range(model.n))
     cands = sorted(cands, key=lambda d: -amp[d])
     return cands[:count]

@@ -21,6 +21,10 @@ def dof_text(model, d):
 
 def element_dofs(model, el):
     """The element's deformation in words: 'x[3]' (grounded) or 'x[3] - x[8]' (relative), with labels."""
+    if not hasattr(el, "dof"):                       # an element in several coordinates (PolynomialStiffness)
+        dofs = getattr(el, "dofs", None)
+        dofs = range(model.n) if dofs is None else dofs
+        return ", ".join(f"x[{dof_text(model, d)}]" for d in list(dofs)[:6]) + (" ..." if len(list(dofs)) > 6 else "")
     other = getattr(el, "other", None)
     text = f"x[{dof_text(model, el.dof)}]"
     return text if other is None else f"{text} − x[{dof_text(model, other)}]"

@@ -45,7 +45,8 @@ def backbone_dof(args, model):
     if dof is None:
         if not model.springs:
             raise NNMInputError("--backbone needs --backbone-dof (the model has no spring to default to)")
-        dof = model.springs[0].dof
+        first = model.springs[0]
+        dof = first.dof if hasattr(first, "dof") else int((getattr(first, "dofs", None) or (0,))[0])
     elif dof.strip().lstrip("-").isdigit():
         dof = int(dof)
     try:

@@ -24,7 +24,7 @@ def _same_model(a, b):
 
     if a.n != b.n or len(a.springs) != len(b.springs):
         return False
-    if any((s.dof, s.other) != (t.dof, t.other) for s, t in zip(a.springs, b.springs)):
+    if any(not _same_place(s, t) for s, t in zip(a.springs, b.springs)):
         return False
     return (np.allclose(dense(a.M), dense(b.M), rtol=1e-12, atol=0) and np.allclose(dense(a.K), dense(b.K), rtol=1e-12,
                                                                                      atol=0)
@@ -70,3 +70,14 @@ def load_sweep(path):
     """The sweep branches (names ``<variant>:mode<N>``) of an nnm file, each with its variant's model
     (``load_branches`` gives them those models too; this keeps only the sweep's branches)."""
     return [b for b in load_branches(path) if parse_branch_name(b.name) is not None]
+
+
+def _same_place(s, t):
+    """Do two elements act on the same coordinates (a spring's dof and other; an element in several coordinates,
+    model/coupled.py: its dofs and directions, and its exponents)?"""
+    if type(s) is not type(t):
+        return False
+    if hasattr(s, "dof"):
+        return (s.dof, getattr(s, "other", None)) == (t.dof, getattr(t, "other", None))
+    same = lambda x, y: (x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y))
+    return all(same(getattr(s, k, None), getattr(t, k, None)) for k in ("dofs", "directions", "exponents"))
