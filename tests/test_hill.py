@@ -43,7 +43,7 @@ def _with_route(monkeypatch, route, *args, **kw):
 def beam_tongue():
     """A 20-DOF cantilever's NNM 1 by HB (H = 5) through its 5:1 tongue (energy maximum 0.0141 J, minimum 0.0012 J)."""
     m = cantilever_beam(n_el=10)
-    b = nnm.continue_nnm(m, 1, 0.05, method="hb", harmonics=5, floquet=False, max_points=300)
+    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=5, floquet=False, max_points=300)
     assert [e["kind"] for e in b.events].count("fold") == 2
     return m, b
 
@@ -188,7 +188,7 @@ def test_reversible_route_needs_the_symmetry():
     decides; on a symmetric orbit its multipliers are the whole matrix's."""
     from nnm_solver.orbits.hill_reversible import reversible_multipliers
     m = two_dof_model()
-    b = nnm.continue_nnm(m, 1, 30.0, method="hb", harmonics=7, floquet=False, max_points=40)
+    b = nnm.continue_nnm(m, 1, 30.0, method="hb", freq_tol=None, harmonics=7, floquet=False, max_points=40)
     problem, us = _orbits(m, b, 7)
     u = us[-1]
     A, w, _, bp, C = hill._galerkin_blocks(problem, u, None)
@@ -251,7 +251,7 @@ def test_copies_of_a_class_beyond_the_hill_harmonics():
     fix: 2.2e-3 off at one orbit, the copy at 2.02 i kept instead of 5.02 i)."""
     from nnm_solver.orbits import hill_secular
     m = cantilever_beam(n_el=10)
-    b = nnm.continue_nnm(m, 1, 0.05, method="hb", harmonics=3, floquet=False, max_points=300)
+    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=3, floquet=False, max_points=300)
     problem, us = _orbits(m, b, 3, every=2)
     beyond = []
     copies = hill_secular.hard_copies
@@ -343,7 +343,7 @@ def test_secular_route_with_two_elements_equals_dense():
     H = 5 to 0.3 J)."""
     from test_condensed_hb import two_springs_chain
     m = two_springs_chain()
-    b = nnm.continue_nnm(m, 2, 0.3, method="hb", harmonics=5, basis="full", floquet=False, tongues="skip")
+    b = nnm.continue_nnm(m, 2, 0.3, method="hb", freq_tol=None, harmonics=5, basis="full", floquet=False, tongues="skip")
     system = modal_system(m)
     problem = HBProblem(system, 1, HBBasis(5, "full"))
     us = [problem.pack(system.to_modal(b.coefficients_at(i)), 2 * np.pi * b.frequency_hz[i])

@@ -37,11 +37,13 @@ def test_reference_orbit_agrees_with_the_integrators_on_the_shipped_aircraft():
         t_ref, x_ref = b.reference_motion(i, samples=200)
         t, x = b.motion(i, samples=200)
         np.testing.assert_allclose(t_ref, t)
-        assert np.abs(x_ref - x).max() < 1e-6 * np.abs(x).max(), (b.name, i)
+        # the shipped branches are gauss6 at 100 steps (the default): the discrete orbit is the exact flow to 6.3e-6 of
+        # the peak at mode 10's point 14 (at 200 steps, as shipped before: 1e-9 to 1.2e-7)
+        assert np.abs(x_ref - x).max() < 2e-5 * np.abs(x).max(), (b.name, i)
         # the half-period symmetry the shooting used holds for the exact flow too: the whole period agrees,
-        # less closely (the error has twice the time to grow: 1.3e-6 at the last point of the shipped NNM 10)
+        # less closely (the error has twice the time to grow)
         xs, _ = reference_orbit(modal_system(b.model), b.x0[i], b.v0[i], b.period[i], 200, symmetric=False)
-        assert np.abs(xs - x).max() < 1e-5 * np.abs(x).max(), (b.name, i)
+        assert np.abs(xs - x).max() < 1e-4 * np.abs(x).max(), (b.name, i)
 
 
 def test_reference_orbit_is_the_exact_flow_of_a_linear_mode():

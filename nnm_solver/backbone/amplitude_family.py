@@ -176,7 +176,7 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
         return solve_at_amplitude(prob, guess)
 
     # the stepping in ln a (continuation/natural.py): secant predictor, Newton at the fixed amplitude, step control
-    stepper = LogStepper(at_amplitude, LogSteps(s.step_max, s.step_min, s.step_max, s.step_growth))
+    stepper = LogStepper(at_amplitude, LogSteps(s.step_max, s.step_min, s.step_max, s.step_growth, clamp=False))
 
     def share_of(u):
         if id(u) not in shares or shares[id(u)][0] is not u:

@@ -30,12 +30,14 @@ __all__ = ["LogSteps", "LogStepper", "natural_parameter", "NaturalResult"]
 class LogSteps:
     """Step control of LogStepper: ratio the first ratio p_{i+1} / p_i (> 1 up, < 1 down); ratio_min, ratio_max the
     smallest and largest (for steps up; for steps down their inverses); grow_max the largest growth of ratio - 1 at
-    one acceptance."""
+    one acceptance; clamp: a halving never goes below ratio_min (else the last halving may, once: the skeleton's
+    stepping, whose family ends are placed by that last, shortest trial)."""
 
     ratio: float
     ratio_min: float
     ratio_max: float
     grow_max: float = 2.0
+    clamp: bool = True
 
 
 class LogStepper:
@@ -76,13 +78,13 @@ class LogStepper:
         return self._solve(p, self.predict(points, p))
 
     def shorter(self):
-        """Halve the step (ratio - 1 halved, not below ratio_min) after a refusal; False when it is at ratio_min
-        already."""
+        """Halve the step (ratio - 1 halved, not below ratio_min with clamp) after a refusal; False when it is at
+        ratio_min or below already."""
         s = self.steps
         if abs(math.log(self.ratio)) <= abs(math.log(s.ratio_min)):
             return False
         self.ratio = 1 + (self.ratio - 1) / 2
-        if abs(math.log(self.ratio)) < abs(math.log(s.ratio_min)):
+        if s.clamp and abs(math.log(self.ratio)) < abs(math.log(s.ratio_min)):
             self.ratio = s.ratio_min
         return True
 
