@@ -94,7 +94,7 @@ def test_two_dof_skip_backbone_traverses_its_three_to_one_tongue():
     # the skeleton gives no target beyond it)
     assert max(t.get("reentries", 0) for t in b.tongues) <= 5, [(t["label"], t.get("reentries")) for t in b.tongues]
     for kw in (dict(condensed=True), dict()):
-        h = nnm.continue_nnm(two_dof(), 1, 3e5, tongues="skip", floquet=False, method="hb", harmonics=9, **kw)
+        h = nnm.continue_nnm(two_dof(), 1, 3e5, tongues="skip", floquet=False, method="hb", freq_tol=None, harmonics=9, **kw)
         assert h.status in ("done", "tongue"), h.message
         if h.status == "tongue":
             assert "5:1" in h.message and "mode 2" in h.message and h.energy.max() < 3e5
@@ -156,10 +156,10 @@ def test_two_dof_hb_skip_jumps_the_three_to_one_onto_the_backbone_the_default_br
     from the skeleton's orbit in at most 3 attempts.  Above the tongue both branches lie on the same family: the
     skip branch's points and the default branch's backbone (an independent path through the tongue) lie on the
     skeleton's family to 1e-6 (from 10 % above the last landing: next to a tongue, 1e-5 to 1e-4)."""
-    default = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", harmonics=9, condensed=True, floquet=False)
+    default = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", freq_tol=None, harmonics=9, condensed=True, floquet=False)
     assert default.status == "done" and "tongue 3:1" in set(default.labels)
     assert default.labels[-1] == "backbone" and "off the backbone" not in default.message
-    skip = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", harmonics=9, condensed=True, tongues="skip", floquet=False)
+    skip = nnm.continue_nnm(two_dof(), 1, 2e4, method="hb", freq_tol=None, harmonics=9, condensed=True, tongues="skip", floquet=False)
     assert skip.status == "done", skip.message
     t = skip.tongues[0]
     assert t["label"] == "tongue 3:1" and t["partner_mode"] == 2 and t["skipped"] and "skeleton" in t["jump"]
@@ -197,7 +197,7 @@ def test_single_harmonic_backbones_end_at_their_fold_not_in_a_tongue_with_their_
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     f_lin = model.linear_modes()[0]
     for mode in (20, 10):
-        b = nnm.continue_nnm(model, mode, 20.0, method="hb", harmonics=1, condensed=True, floquet=False,
+        b = nnm.continue_nnm(model, mode, 20.0, method="hb", freq_tol=None, harmonics=1, condensed=True, floquet=False,
                              tongues="skip")
         sk = skeleton(model, mode, 20.0, _skeleton_system, 1)
         assert sk.end == "peak" and sk.energy_peak is not None, sk.message
@@ -205,7 +205,7 @@ def test_single_harmonic_backbones_end_at_their_fold_not_in_a_tongue_with_their_
         assert b.tongues == [] and set(b.labels) == {"backbone"}
         assert 0.8 * sk.energy_peak <= b.energy.max() <= sk.energy_peak * 1.01
         assert b.frequency_hz[-1] < 0.99 * f_lin[mode - 1] and abs(b.frequency_hz[0] / f_lin[mode - 1] - 1) < 1e-4
-    b = nnm.continue_nnm(model, 19, 20.0, method="hb", harmonics=1, condensed=True, floquet=False, tongues="skip")
+    b = nnm.continue_nnm(model, 19, 20.0, method="hb", freq_tol=None, harmonics=1, condensed=True, floquet=False, tongues="skip")
     # builder 1.4: its family ends in a 1:1 resonance with mode 18 (the skeleton's end, a family_end record)
     assert b.tongues and all((t["label"] == "fold" and t["order"] == 1 and t["partner_mode"] == 0)
                              or (t["label"] == "tongue 1:1" and t.get("family_end") and t["partner_mode"] not in (0, 19))
@@ -256,7 +256,7 @@ def test_two_dof_backbone_past_its_five_to_one_tongue_is_labelled_backbone():
     skeleton, stepped onto a tongue's sheet, ended 'locked' at 1.32e5 J) before the one-harmonic guide."""
     model = two_dof()
     b = nnm.continue_nnm(model, 1, 1e6, floquet=False)
-    h1 = nnm.continue_nnm(model, 1, 2e6, method="hb", harmonics=1, floquet=False)
+    h1 = nnm.continue_nnm(model, 1, 2e6, method="hb", freq_tol=None, harmonics=1, floquet=False)
     E, f = np.asarray(b.energy), np.asarray(b.frequency_hz)
     beyond = np.flatnonzero((E > 1.4e5) & (E < 4.5e5) & (np.arange(len(E)) > np.argmax(E > 1.0914e5)))
     f1 = np.interp(E[beyond], h1.energy, h1.frequency_hz)
@@ -302,7 +302,7 @@ def test_three_dof_chain_skeleton_past_a_three_to_one_tongue_is_where_the_branch
     backbone; the skeleton before its one-harmonic guide stayed on the tongue's sheet (0.2439 Hz at 1 kJ, 2.8e-3
     off the branch that had come back)."""
     model = _chain3(nnm.CubicSpring(dof=0, other=1, k3=2.0))
-    b = nnm.continue_nnm(model, 2, 1e4, method="hb", harmonics=15, floquet=False)
+    b = nnm.continue_nnm(model, 2, 1e4, method="hb", freq_tol=None, harmonics=15, floquet=False)
     assert b.status == "done", b.message
     E, f = np.asarray(b.energy), np.asarray(b.frequency_hz)
     inside = np.flatnonzero(b.labels == "tongue 3:1")
