@@ -35,7 +35,7 @@ class DocScreenshot:
 
 
 SCREENSHOTS = (
-    DocScreenshot("viewer.png", ("README.md", "docs/viewer.md"), "assets/paris.h5", branch=9, point=0.9),
+    DocScreenshot("viewer.png", ("README.md", "docs/viewer.md"), "assets/paris.h5", branch=6, point=0.9),
     DocScreenshot("byom_viewer.png", ("docs/byom.md",), "byom", branch=1, point=0.9),
 )
 
