@@ -87,7 +87,7 @@ class Skeleton:
         self.orbits = [us[i] for i in keep]
         self.blips = n - len(keep)            # points left out below the end: inside narrow tongues
         starts = {float(g[1]) for g in gaps if g[3] == "sheet"}
-        self._starts = np.array([float(E0) in starts for E0 in self.energy])   # the first points of new sheets
+        self._starts = np.array([float(E0) in starts for E0 in self.energy], dtype=bool)   # the first points of new sheets
         #: energies (J) where the stepping moved onto the backbone's sheet beyond a tongue it had slid onto
         #: (family_guide.py), among the points kept: below each, back to the tongue's entry, the skeleton's points
         #: are the tongue's sheet
