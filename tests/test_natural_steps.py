@@ -57,10 +57,3 @@ def test_a_restart_steps_from_the_last_point_alone_and_steps_go_down_too():
     p, u = st.trial(pts)
     assert math.isclose(p, 1.0 / 1.01) and abs(u[0] ** 3 + u[0] - p) < 1e-12
 
-
-def test_a_skeleton_with_no_point_says_why_instead_of_failing():
-    """A skeleton whose stepping found no orbit (amplitude_family's 'stuck' at the linear mode) is an empty Skeleton
-    with its end and message (it raised IndexError building its sheet starts from an empty float array)."""
-    from nnm_solver.backbone.skeleton import Skeleton
-    s = Skeleton(None, [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0), 1)
-    assert len(s.energy) == 0 and s.sheet_starts == [] and s.end == "stuck"

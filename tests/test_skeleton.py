@@ -328,3 +328,11 @@ def test_soft_three_dof_chain_skeleton_keeps_its_family_where_the_one_harmonic_g
     b = nnm.continue_nnm(model, 1, 1.3, floquet=False, integrator="gauss6", steps_per_period=100)
     on = np.asarray(b.energy) > 0.5
     assert max(abs(f / sk.frequency_at(E) - 1) for E, f in zip(b.energy[on], b.frequency_hz[on])) < 1e-3
+
+
+def test_a_skeleton_with_no_point_says_why_instead_of_failing():
+    """A skeleton whose stepping found no orbit (amplitude_family's 'stuck' at the linear mode) is an empty Skeleton
+    with its end and message (it raised IndexError building its sheet starts from an empty float array)."""
+    from nnm_solver.backbone.skeleton import Skeleton
+    s = Skeleton(None, [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0), 1)
+    assert len(s.energy) == 0 and s.sheet_starts == [] and s.end == "stuck"
