@@ -70,16 +70,10 @@ def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
 
 
 @_jit
-def _newmark(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width, record, ncols):
-    """Newmark sweep; returns (q, v, Q, V, SQ, SV, k, ok): Q, V every state when record (else (0, n)); SQ, SV
-    (n, ncols + 1) the derivatives of the final state with respect to the first ncols entries of [q0; v0] and to h
-    (last column) when ncols > 0 (else (n, 0)); k the steps done."""
+def _sweep_start(q0, v0, nsteps, record, ncols):
+    """The state, the recorded trajectory's arrays (its first row set) and the sensitivity seed of a sweep (both
+    schemes): SQ, SV (n, ncols + 1) with the identity on the first ncols entries of [q0; v0]; sens, m = ncols + 1."""
     n = q0.shape[0]
-    c1 = 4.0 / h ** 2
-    c2 = 4.0 / h
-    S = c1 + omega2
-    f, K = force_stiffness(q0, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
-    a = -omega2 * q0 - f
     q = q0.copy()
     v = v0.copy()
     Q = np.empty((nsteps + 1 if record else 0, n))
@@ -91,13 +85,29 @@ def _newmark(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, inde
     m = ncols + 1 if sens else 0
     SQ = np.zeros((n, m))
     SV = np.zeros((n, m))
-    SA = np.zeros((n, m))
     if sens:
         for i in range(n):
             if i < ncols:
                 SQ[i, i] = 1.0
             if n + i < ncols:
                 SV[i, n + i] = 1.0
+    return q, v, Q, V, SQ, SV, sens, m
+
+
+@_jit
+def _newmark(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width, record, ncols):
+    """Newmark sweep; returns (q, v, Q, V, SQ, SV, k, ok): Q, V every state when record (else (0, n)); SQ, SV
+    (n, ncols + 1) the derivatives of the final state with respect to the first ncols entries of [q0; v0] and to h
+    (last column) when ncols > 0 (else (n, 0)); k the steps done."""
+    n = q0.shape[0]
+    c1 = 4.0 / h ** 2
+    c2 = 4.0 / h
+    S = c1 + omega2
+    f, K = force_stiffness(q0, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
+    a = -omega2 * q0 - f
+    q, v, Q, V, SQ, SV, sens, m = _sweep_start(q0, v0, nsteps, record, ncols)
+    SA = np.zeros((n, m))
+    if sens:
         SA = -(omega2[:, None] * SQ) - K @ SQ
     for k in range(nsteps):
         r = c1 * q + c2 * v + a
@@ -147,23 +157,7 @@ def _gauss(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index,
     s = b.shape[0]
     f, K = force_stiffness(q0, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
     a = -omega2 * q0 - f
-    q = q0.copy()
-    v = v0.copy()
-    Q = np.empty((nsteps + 1 if record else 0, n))
-    V = np.empty((nsteps + 1 if record else 0, n))
-    if record:
-        Q[0] = q
-        V[0] = v
-    sens = ncols > 0
-    m = ncols + 1 if sens else 0
-    SQ = np.zeros((n, m))
-    SV = np.zeros((n, m))
-    if sens:
-        for i in range(n):
-            if i < ncols:
-                SQ[i, i] = 1.0
-            if n + i < ncols:
-                SV[i, n + i] = 1.0
+    q, v, Q, V, SQ, SV, sens, m = _sweep_start(q0, v0, nsteps, record, ncols)
     N = s * n
     X = np.empty((s, n))
     for l in range(s):
