@@ -10,9 +10,14 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..results.branch import Point
+import numpy as np
 
-__all__ = ["Candidate"]
+from ..backbone.content import content_of
+from ..results.branch import Point
+from ..results.stops import restoring_ratio
+from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
+
+__all__ = ["Candidate", "record_candidate"]
 
 
 @dataclass
@@ -38,3 +43,41 @@ class Candidate:
     def release(self):
         """Drop the large working data (a solve's Jacobian and factorisation, O(n^2) each, and the orbit)."""
         self.solution = self.observed = self.spectrum = None
+
+
+def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=False):
+    """The Candidate (the Point and the iterator's data about it) of a converged ContinuationPoint of the problem
+    prob (modal system ``system`` of ``model``, 1-based ``mode``; multipliers when ``floquet``) and its modal state
+    (q0, v0, T).  known : optional (sorted
+    multipliers, collision coordinates) already computed at it (e.g. by event location).  later : the
+    multipliers are computed in the worker threads (problem.multipliers_later, started by the engine driver);
+    _settle waits for them."""
+    sys_ = system
+    q0, vq0, T = prob.state(cp.u)
+    x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
+    collision = job = None
+    if floquet and later:     # started when the engine gave the point (EngineDriver.launch)
+        job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
+        mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
+    elif floquet and known is not None:
+        mu, collision = known
+        stable = is_stable(mu, STABILITY_TOL)
+    elif floquet:
+        mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
+        stable = is_stable(mu, STABILITY_TOL)
+        collision = getattr(prob, "collision", None)
+    else:
+        mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
+    A = prob.coefficients(cp.u)
+    Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
+    content = content_of(Q, mode - 1)
+    energy = float(model.energy(x0, v0))
+    point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
+                  v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
+                  coefficients=None if A is None else sys_.to_physical(A), label=content.label)
+    point.steps = int(getattr(prob, "spp", 0))
+    point.fundamental_share = content.share
+    cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
+                     restoring=restoring_ratio(sys_, Q) if Q is not None else 1.0, collision=collision,
+                     spectrum=job)
+    return cand, (q0, vq0, T)

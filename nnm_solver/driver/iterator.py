@@ -13,18 +13,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..results.branch import Branch, Point
+from ..results.branch import Branch
 from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 from ..stability.locator import event_rtol
-from ..backbone.content import content_of
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
-from .candidate import Candidate
+from .candidate import record_candidate
 from .refinement import HarmonicRefinement, StepRefinement
 from ..orbits.hb_basis import harmonics_in
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
@@ -329,40 +328,8 @@ class NNMIterator:
         return cand, state
 
     def _record(self, cp, prob, known=None, later=False):
-        """The Candidate (the Point and the iterator's data about it) of a converged ContinuationPoint and its modal
-        state (q0, v0, T).  known : optional (sorted
-        multipliers, collision coordinates) already computed at it (e.g. by event location).  later : the
-        multipliers are computed in the worker threads (problem.multipliers_later, started by the engine driver);
-        _settle waits for them."""
-        sys_ = self._system
-        q0, vq0, T = prob.state(cp.u)
-        x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
-        collision = job = None
-        if self.settings.floquet and later:     # started when the engine gave the point (EngineDriver.launch)
-            job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
-            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
-        elif self.settings.floquet and known is not None:
-            mu, collision = known
-            stable = is_stable(mu, STABILITY_TOL)
-        elif self.settings.floquet:
-            mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
-            stable = is_stable(mu, STABILITY_TOL)
-            collision = getattr(prob, "collision", None)
-        else:
-            mu, stable = np.full(2 * self.model.n, np.nan, dtype=complex), True
-        A = prob.coefficients(cp.u)
-        Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-        content = content_of(Q, self.mode - 1)
-        energy = float(self.model.energy(x0, v0))
-        point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
-                      v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
-                      coefficients=None if A is None else sys_.to_physical(A), label=content.label)
-        point.steps = int(getattr(prob, "spp", 0))
-        point.fundamental_share = content.share
-        cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
-                         restoring=restoring_ratio(sys_, Q) if Q is not None else 1.0, collision=collision,
-                         spectrum=job)
-        return cand, (q0, vq0, T)
+        """The Candidate of a converged ContinuationPoint and its modal state (candidate.record_candidate)."""
+        return record_candidate(cp, prob, self._system, self.model, self.mode, self.settings.floquet, known, later)
 
     def _finish(self, status, message):
         self.status, self.message = status, message
