@@ -11,6 +11,9 @@ from dataclasses import dataclass
 import nnm_solver
 from nnm_solver.cli.defaults import solver_defaults
 
+from .eta import TimeLeft
+from .eta import time_left as estimate_time_left
+
 
 
 def one_line(exc):
@@ -37,13 +40,16 @@ class JobProgress:
     """How far a job is: ``points`` converged of at most ``max_points``, ``energy_fraction`` (0..1,
     the solver's ``Job.progress``: the way in log energy from the first point to energy_max) and
     ``elapsed`` seconds since Start.  A branch ends at max_points or at energy_max, whichever comes
-    first, so the progress is the further of the two fractions."""
+    first, so the progress is the further of the two fractions.  ``left``: the time left at the
+    recent points' pace (``eta.time_left``; no number before three points or while a point takes
+    much longer than the recent ones)."""
 
     points: int
     max_points: int
     energy_fraction: float
     elapsed: float
     done: bool = False
+    left: TimeLeft = TimeLeft(None, "too few points")
 
     @property
     def points_fraction(self):
@@ -65,19 +71,13 @@ class JobProgress:
 
     @property
     def eta(self):
-        """Seconds left, at the pace so far, to whichever end comes first (max_points or energy_max);
-        None before two points."""
-        if self.done or self.points < 2 or self.elapsed <= 0:
-            return None
-        etas = []
-        if self.max_points > self.points:
-            etas.append((self.max_points - self.points) * self.elapsed / self.points)
-        if 0.0 < self.energy_fraction < 1.0:
-            etas.append(self.elapsed * (1.0 - self.energy_fraction) / self.energy_fraction)
-        return min(etas) if etas else 0.0
+        """Seconds left at the recent points' pace, to whichever end comes first (max_points or
+        energy_max); None when no estimate can be made (done, too few points, a stall)."""
+        return None if self.done else self.left.seconds
 
     def text(self):
-        """One line: progress and the measure it is by, elapsed time, rate and time left."""
+        """One line: progress and the measure it is by, elapsed time, rate and time left (or, with no
+        estimate, how long the job has waited for its next point)."""
         parts = [f"{self.points} of at most {self.max_points} points",
                  f"{100 * self.fraction:.0f} % (by energy)" if self.by == "energy" else
                  f"{100 * self.fraction:.0f} % (by {self.by}; by energy {100 * self.energy_fraction:.0f} %)",
@@ -86,7 +86,9 @@ class JobProgress:
             parts.append(f"{self.rate_per_min:.3g} points/min")
         eta = self.eta
         if eta is not None:
-            parts.append(f"about {duration_text(eta)} left")
+            parts.append(f"about {duration_text(eta)} left at the recent pace")
+        elif not self.done and self.left.by == "stalled":
+            parts.append(f"no new point for {duration_text(self.left.wait)}: time left unknown")
         return " · ".join(parts)
 
 
@@ -118,6 +120,7 @@ class JobRunner:
         self.max_points = int(options.get("max_points") or solver_defaults()["max_points"])
         self.t_start = None          # time.monotonic() at Start
         self.t_end = None            # ... when the job ended
+        self._arrivals = []          # s after Start, when each point was received
         self._energy = 0.0           # the job's energy fraction, last read while it ran
         self.thread = None
         self.finished = threading.Event()
@@ -171,8 +174,13 @@ class JobRunner:
         energy = self._energy
         end = self.t_end if self.t_end is not None else time.monotonic()
         n = 0 if self.branch is None else len(self.branch)
+        t0 = self.t_start or end
+        left = TimeLeft(None, "too few points")
+        if n and self.t_end is None:
+            left = estimate_time_left(self._arrivals[:n], self.branch.energy[:n], end - t0, self.energy_max,
+                                      self.max_points, resolution=self.poll)
         return JobProgress(points=n, max_points=self.max_points, energy_fraction=energy,
-                           elapsed=end - (self.t_start or end))
+                           elapsed=end - t0, left=left)
 
     def status_text(self, p=None, ended=""):
         """Markdown of the Compute tab's job line."""
@@ -206,6 +214,7 @@ class JobRunner:
                 points, ended = self._drain()
                 if points:
                     self.branch.extend(points)
+                    self._arrivals.extend([time.monotonic() - self.t_start] * len(points))
                     self.shared.update(self.entry, branch=self._snapshot())
                 p = self.progress()
                 self.shared.set_progress(p.fraction, self.status_text(p))

@@ -684,21 +684,21 @@ def test_fep_and_orbit_csv_downloads(server, demo_file):
 
 
 def test_job_progress_is_the_further_of_points_and_energy():
-    """Issue 14, item 10: progress by points (of max_points) or by energy, whichever is further; rate
-    and time left at the pace so far, to whichever end comes first."""
+    """Issue 14, item 10: progress by points (of max_points) or by energy, whichever is further; the rate
+    so far and the time left (issue 53: at the recent pace, tests/test_viewer_eta.py)."""
+    from nnm_viewer.eta import TimeLeft
     from nnm_viewer.worker import JobProgress, duration_text
 
     p = JobProgress(points=60, max_points=80, energy_fraction=0.957, elapsed=120.0)
     assert p.fraction == pytest.approx(0.957) and p.by == "energy"
     assert p.rate_per_min == pytest.approx(30.0)
-    assert p.eta == pytest.approx(min(20 * 2.0, 120.0 * 0.043 / 0.957))
-    q = JobProgress(points=60, max_points=80, energy_fraction=0.3, elapsed=120.0)   # energy lags: by points
+    assert p.eta is None and "left" not in p.text()          # no estimate given: none said
+    q = JobProgress(points=60, max_points=80, energy_fraction=0.3, elapsed=120.0, left=TimeLeft(40.0, "points"))
     assert q.fraction == pytest.approx(0.75) and q.by == "points" and q.eta == pytest.approx(40.0)
     assert JobProgress(points=60, max_points=80, energy_fraction=0.957, elapsed=1.0, done=True).fraction == 1.0
-    assert JobProgress(points=1, max_points=80, energy_fraction=0.0, elapsed=3.0).eta is None
     text = q.text()
     assert "60 of at most 80 points" in text and "75 % (by points" in text and "30 points/min" in text
-    assert "about 40 s left" in text
+    assert "about 40 s left at the recent pace" in text
     # by energy: said once (it read "17 % (by energy; by energy 17 %)")
     assert "96 % (by energy)" in p.text() and p.text().count("by energy") == 1
     assert [duration_text(x) for x in (42, 185, 3720)] == ["42 s", "3 min 05 s", "1 h 02 min"]
@@ -719,7 +719,10 @@ def test_compute_tab_shows_elapsed_rate_eta_and_points_progress(server, demo_fil
     wait_for(lambda: abs(s.h_progress.value - 40.0) < 0.5)
     text = s.h_job.content
     assert "NNM 1 (in phase)" in text and "4 of at most 10 points" in text and "(by points" in text
-    assert "elapsed" in text and "points/min" in text and "left" in text
+    assert "elapsed" in text and "points/min" in text
+    # four points read in one poll, then none: no pace to go by, so no number, and the wait is said
+    wait_for(lambda: "no new point for" in s.h_job.content)
+    assert "time left unknown" in s.h_job.content and " left at" not in s.h_job.content
     fake.release(2)
     wait_for(lambda: abs(s.h_progress.value - 60.0) < 0.5)
     s._cb(s._on_stop)(None)
