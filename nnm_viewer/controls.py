@@ -22,7 +22,7 @@ from .fep_queries import FepQueries
 from .drawing import ALL_KINDS, Drawing
 from .fep import energy_to_s
 from .fep_view import branch_options
-from .layout import Layout
+from .layout import Layout, default_steps
 from .numbering import along_from_slider
 from .state import scaling_law_holds
 from .view_state import ViewHolder, ViewState
@@ -167,7 +167,7 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
                    h_stop=self._on_stop, h_save=self._on_save, h_dismiss=self._dismiss_error,
                    h_csv_fep=self._on_csv_fep, h_csv_orbit=self._on_csv_orbit, h_gif=self._on_gif,
                    h_view=self._on_view, h_show_linear=self._on_show_linear, h_method=self._on_method,
-                   h_compute_linear=self._on_compute_linear)
+                   h_integrator=self._on_integrator, h_compute_linear=self._on_compute_linear)
         return {name: self._cb(fn) for name, fn in cbs.items()}
 
     def _set_field(self, name):
@@ -186,6 +186,10 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
     def _on_method(self, _):
         """The Compute tab's method: its own options shown (time steps for shooting, harmonics for HB)."""
         self.request("controls")
+
+    def _on_integrator(self, _):
+        """The Compute tab's integrator: the steps per period become its default (the solver's)."""
+        self.layout.set(self.layout.h_spp, value=default_steps(self.layout.h_integrator.value))
 
     def _on_zoom(self, _):
         """The user's zoom choice, kept from now on (no more automatic zoom)."""

@@ -31,6 +31,21 @@ METHODS = {"shooting": ("shooting", False), "harmonic balance": ("hb", False),
            "condensed harmonic balance": ("hb", True)}
 
 
+def default_steps(integrator):
+    """The solver's default time steps per period with ``integrator`` (each integrator's own, written once in
+    nnm_solver/integrators/registry.py: e.g. gauss6 100, newmark 200)."""
+    from nnm_solver.integrators.registry import get_integrator
+
+    return int(get_integrator(str(integrator)).steps)
+
+
+def steps_hint():
+    """The Steps-per-period field's hint: every integrator's default, read from the solver."""
+    each = ", ".join(f"{name} {default_steps(name)}" for name in INTEGRATORS)
+    return (f"Time steps per period of the shooting. Choosing an integrator sets its default ({each}); more "
+            "for high-order tongues")
+
+
 def method_choice(method, condensed=False):
     """The Compute tab's method option of continue_nnm's ``method`` (and ``condensed``)."""
     return next(k for k, v in METHODS.items() if v == (("hb" if method == "harmonic_balance" else method),
@@ -214,8 +229,7 @@ class Layout:
                      "stages per step), or newmark (2nd order, the seed paper's)")
             self.h_spp = gui.add_number(
                 "Steps per period", initial_value=int(D["steps_per_period"]), min=8, max=20000, step=1,
-                hint=f"Time steps per period of the shooting: {D['steps_per_period']} by default ({D['integrator']}); "
-                     f"newmark needs about 200 (a gauss6 step costs ~3 Newmark steps); more for high-order tongues")
+                hint=steps_hint())
             self.h_harmonics = gui.add_number(
                 "Harmonics", initial_value=int(D["harmonics"]), min=1, max=99, step=1, visible=False,
                 hint="Harmonic balance: the highest harmonic of the Fourier series (more for strong higher "

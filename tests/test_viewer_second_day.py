@@ -94,6 +94,28 @@ def test_compute_tab_has_the_apis_defaults_and_starts_on_the_selected_nnm(server
     s.close()
 
 
+def test_steps_per_period_follow_the_chosen_integrator(server, demo_file):
+    """Issue 53: the steps field stayed at 100 when newmark was chosen; it takes each integrator's own default,
+    read from the solver's registry (never re-typed), and a value typed after choosing is what the job gets."""
+    from nnm_solver.integrators.registry import get_integrator
+
+    rec = Recorder(nnm.load_branches(demo_file)[0])
+    s = session_on(server, demo_file, start_job=rec)
+    assert s.h_spp.value == get_integrator(s.h_integrator.value).steps
+    seen = {}
+    for name in ("newmark", "gauss4", "gauss6", "newmark"):
+        s.h_integrator.value = name
+        seen[name] = s.h_spp.value
+        assert s.h_spp.value == get_integrator(name).steps
+    assert seen["newmark"] != seen["gauss6"]          # the two defaults differ, so the test can see a stale field
+    s.h_spp.value = 300
+    s._cb(s._on_start)(None)
+    assert (rec.calls[-1]["integrator"], rec.calls[-1]["steps_per_period"]) == ("newmark", 300)
+    s._cb(s._on_stop)(None)
+    s.last_runner.finished.wait(5)
+    s.close()
+
+
 def test_compute_tab_method_and_tongues_reach_the_job(server, demo_file, tmp_path):
     rec = Recorder(nnm.load_branches(demo_file)[0])
     s = session_on(server, demo_file, start_job=rec)

@@ -1284,9 +1284,9 @@ def test_compute_tab_integrator_reaches_the_job(server, demo_file, tmp_path):
     s, shared = make_session(server, demo_file, start_job=start_job)
     # the solver's defaults (gauss6, 100 steps: nnm_solver/driver/settings.py), then the seed paper's scheme chosen
     assert tuple(s.h_integrator.options) == tuple(nnm.INTEGRATORS) and s.h_integrator.value == "gauss6"
-    assert s.h_spp.value == 100 and "gauss6" in s.h_spp.hint and "200" in s.h_spp.hint
+    assert s.h_spp.value == 100 and "gauss6 100" in s.h_spp.hint and "newmark 200" in s.h_spp.hint
     s.h_integrator.value = "newmark"
-    s.h_spp.value = 200
+    assert s.h_spp.value == 200                               # the solver's default for newmark
     s._cb(s._on_start)(None)
     assert calls[-1]["integrator"] == "newmark" and calls[-1]["steps_per_period"] == 200
     s._cb(s._on_stop)(None)
