@@ -83,6 +83,9 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
             self.set_view(sel_uid=first.uid)
             self._mode_lists_on(first)
         shared.subscribe(self._on_shared)
+        camera = getattr(api, "camera", None)          # a tab (ClientHandle); tests use the server
+        if camera is not None:
+            camera.on_update(self._on_camera)
         self.drawing.start()
         self.request(*ALL_KINDS)
 
@@ -243,6 +246,22 @@ class Session(ViewHolder, ComputeActions, DownloadActions, FepQueries):
         energy = 10.0 ** float(self.layout.h_energy.value)
         self.change_view(lambda v: dict(s=energy_to_s(ser.energy, energy, v.s), linear_mode=None))
         self.request("fep", "sliders:along", "point")
+
+    def _on_camera(self, camera):
+        """A camera message of this tab: when its canvas changed size, the FEP board's spheres are drawn again.
+
+        viser 1.1 outlines the hovered instance of a clickable batched mesh in screen space
+        (BatchedMeshHoverOutlines) with the canvas size read once, when the mesh was added: after the canvas was
+        resized (a window or a panel resized) that outline was offset by different amounts across and along the
+        screen, a stretched translucent halo around the sphere under the pointer (the picked one, right after a
+        click).  The spheres are added again under a new name (scene.sphere_group: a mesh re-sent under its
+        old name keeps its outline and the old size), so the outline reads the canvas's size of now."""
+        size = (int(camera.image_width), int(camera.image_height))
+        if min(size) <= 0:
+            return
+        _, old = self.change_view(lambda v: dict(canvas=size))
+        if old.canvas != size and not self.drawing.closed:
+            self.request("board")
 
     def _on_reset_camera(self, _):
         cam = getattr(self.api, "camera", None)        # a tab (ClientHandle); tests use the server

@@ -47,9 +47,14 @@ class Drawing:
         if not self.sync:
             threading.Thread(target=self._loop, name="nnm-view-draw", daemon=True).start()
 
+    @property
+    def closed(self):
+        """True once the tab has closed (no more drawing)."""
+        return self._closed
+
     def request(self, *kinds):
-        """Ask for redraws: 'branches', 'controls', 'fep', 'sliders' (or 'sliders:energy' /
-        'sliders:along'), 'point', 'glb', 'info', 'readout', 'progress', 'error'."""
+        """Ask for redraws: 'branches', 'board' (the FEP board's spheres only), 'controls', 'fep', 'sliders'
+        (or 'sliders:energy' / 'sliders:along'), 'point', 'glb', 'info', 'readout', 'progress', 'error'."""
         with self.session.lock:
             self._dirty.update(kinds)
         if self.sync:
@@ -114,6 +119,7 @@ class Drawing:
             step(self.draw_ghost)
         if "branches" in kinds:
             step(self.fep.draw_branch_list)
+        if "branches" in kinds or "board" in kinds:     # 'board': the spheres again (a resized canvas)
             step(self.fep.draw_board)
         if "fep_series" in kinds:
             step(self.fep.draw_series)

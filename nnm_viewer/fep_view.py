@@ -142,6 +142,7 @@ class FepView:
         self.ui = session.layout
         self.board_handles = {}      # uid -> batched-sphere handle (None: hidden)
         self.board_points = {}       # uid -> world positions (N, 3) of its spheres on the board
+        self.board_group = None      # scene name of the spheres' group (scene.sphere_group)
         self.ranges = None           # axis ranges of the board
         self.renderer = FepRenderer(size=PANEL_FEP_SIZE)
 
@@ -189,8 +190,11 @@ class FepView:
         if not v.show_board:
             self.ui.set(self.ui.h_zoom, value=bool(s.zoomed(entries, series, v)))
             s.scene.remove_by_name("/fep")
-            self.board_handles, self.board_points = {}, {}
+            self.board_handles, self.board_points, self.board_group = {}, {}, None
             return
+        group, old_group = sc.sphere_group(v.canvas), self.board_group
+        if group != old_group:                        # a new canvas size: every sphere is added anew
+            self.board_handles, self.board_group = {}, group
         zoomed = s.zoomed(entries, series, v)
         self.ui.set(self.ui.h_zoom, value=bool(zoomed))
         sc.draw_board_frame(s.scene, board, ranges, series, ylabel=Y_LABELS[bool(v.relative)])
@@ -202,13 +206,15 @@ class FepView:
             live.add(uid)
             self.board_points[uid] = board.to_world(ser.energy, ser.frequency, ranges) if len(ser) else None
             self.board_handles[uid] = sc.draw_board_points(s.scene, board, ranges, ser, uid,
-                                                           on_click=self._click_handler(uid),
+                                                           on_click=self._click_handler(uid), name=group,
                                                            emphasized=(uid == v.sel_uid), color=branch_color(k))
         for uid in list(self.board_handles):
             if uid not in live:
-                s.scene.remove_by_name(f"/fep/b{uid}")
+                s.scene.remove_by_name(f"{group}/b{uid}")
                 del self.board_handles[uid]
                 self.board_points.pop(uid, None)
+        if old_group is not None and old_group != group:
+            s.scene.remove_by_name(old_group)
 
     def nearest_point(self, origin, direction):
         """(uid, index) of the board point seen nearest to the ray (origin, direction) of a click,

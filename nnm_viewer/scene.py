@@ -244,6 +244,13 @@ def draw_board_frame(scene, board, ranges, series=(), name="/fep", ylabel=None):
                            position=tuple(center))
 
 
+def sphere_group(canvas):
+    """Scene name of the board spheres' group for a canvas of ``canvas`` = (width, height) px (None: not known
+    yet).  viser 1.1 sizes the hover outline of a clickable sphere with the canvas size read when the spheres
+    are first added under a name (controls.Session._on_camera): a new size, a new name, a fresh outline."""
+    return "/fep/spheres" if canvas is None else f"/fep/spheres_{int(canvas[0])}x{int(canvas[1])}"
+
+
 def draw_board_points(scene, board, ranges, series, uid, on_click, emphasized=False, name="/fep", color=None):
     """One batched-sphere object for a branch: instance i = point i, in the branch's ``color``
     ('#rrggbb'; stable: that colour, unstable: paler), or blue/red by stability when None; the points off the

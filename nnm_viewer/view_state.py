@@ -22,7 +22,8 @@ class ViewState:
     amplification), speed (displayed cycles per second): the animation.  show_board, zoom, zoom_auto (zoom
     chosen by fep.should_zoom until the user ticks the box), relative (frequency axis in % of the linear
     frequency): the FEP.  dofs_text : the Point tab's DOFs.  show_ghost : the undeformed shape.
-    camera_preset : the last view preset.  linear_mode : k (1-based) when linear mode k is shown instead of
+    camera_preset : the last view preset.  canvas : (width, height) px of the tab's 3D canvas, as its last
+    camera message said (None before one; the board's spheres are drawn again when it changes).  linear_mode : k (1-based) when linear mode k is shown instead of
     the selected point.  message : the tab's last status line.  current_point, current_anim, current_uid,
     ratio : the point shown (PointData scaled to the view's k3, its OrbitAnimation, its branch's uid, the
     view's k3 factor over the branch's), written by the drawing.
@@ -43,6 +44,7 @@ class ViewState:
     dofs_text: str = "auto"
     show_ghost: bool = False
     camera_preset: str = "Iso"
+    canvas: object = None
     linear_mode: object = None
     message: str = ""
     current_point: object = None

@@ -261,3 +261,28 @@ def test_mode_names_say_the_models_label_and_the_papers(server, tmp_path):
     plain = tmp_path / "plain.h5"
     nnm.save_model(plain, nnm.Model(np.eye(2), np.array([[2.0, -1], [-1, 2]]), mode_labels=["in", "out"]))
     assert SharedState(nnm.load_model(plain), path=plain).reference_names == {}
+
+
+def test_a_resized_canvas_adds_the_board_spheres_anew(server, demo_file):
+    """Issue 53, finding 7: viser sizes a clickable sphere's hover outline with the canvas size read when the
+    spheres were added under their name; a camera message with a new canvas size adds them under a new name
+    (the old group removed), the same size does nothing (tests/test_browser_board.py measures the halo)."""
+    from types import SimpleNamespace
+
+    from nnm_viewer.scene import sphere_group
+
+    s = session_on(server, demo_file)
+    fep = s.drawing.fep
+    assert fep.board_group == sphere_group(None) and fep.board_handles
+    before = dict(fep.board_handles)
+    s._on_camera(SimpleNamespace(image_width=800, image_height=600))
+    assert fep.board_group == "/fep/spheres_800x600" and s.view.canvas == (800, 600)
+    assert set(fep.board_handles) == set(before)
+    assert all(fep.board_handles[u] is not before[u] for u in before)     # new handles, under the new name
+    assert all(h.name.startswith("/fep/spheres_800x600/") for h in fep.board_handles.values())
+    again = dict(fep.board_handles)
+    s._on_camera(SimpleNamespace(image_width=800, image_height=600))      # the camera turned: same canvas
+    assert all(fep.board_handles[u] is again[u] for u in again)
+    s._on_camera(SimpleNamespace(image_width=0, image_height=0))          # no canvas yet: ignored
+    assert s.view.canvas == (800, 600)
+    s.close()
