@@ -37,7 +37,7 @@ from nnm_solver.reduction import craig_bampton  # noqa: E402
 from paris_aircraft import ATTACHMENT_NAMES, BUILDER_VERSION, ParisParams, build_paris  # noqa: E402
 from paris_aircraft.fingerprint import build_fingerprint  # noqa: E402
 from paris_aircraft.labels import label_modes  # noqa: E402
-from paris_aircraft.tuning import TABLE2_HZ  # noqa: E402
+from paris_aircraft.tuning import PAPER_MODE_NAMES, TABLE2_HZ  # noqa: E402
 
 K3 = -1e13  # N/m^3, softening, per attachment (seed paper, section 4.1.3)
 #: relative accuracy of the Lanczos eigenvalues (ARPACK tol; 0 = machine precision costs more restarts)
@@ -170,7 +170,7 @@ def main(argv=None):
                           "fixed_interface_hz": fixed_hz, "full_labels": list(labels_full),
                           "band_hz": np.array([0.0, args.fmax]), "retained_dofs": b.astype(np.int64),
                           "seconds": np.float64(t_cb)},
-        "reference": {"table2_hz": TABLE2_HZ, "source": "seed paper Table 2"},
+        "reference": {"table2_hz": TABLE2_HZ, "source": "seed paper Table 2", "mode_names": list(PAPER_MODE_NAMES)},
         "provenance": {"builder_version": BUILDER_VERSION, "builder_fingerprint": fingerprint, "params": prov,
                        "build_seconds": np.float64(build_seconds), "eigen_tol": np.float64(EIG_TOL),
                        "stage_seconds": np.array([t_assembly, t_full, t_cb, build_seconds]),

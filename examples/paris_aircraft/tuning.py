@@ -36,8 +36,7 @@ TABLE2_HZ = np.array([0.0936, 0.7260, 0.9606, 1.2118, 1.2153, 1.7951, 2.1072, 2.
 #: the seed paper's names of its modes 1..24 (Table 2 and its text; '' where it names none): the model's own
 #: labels number each kind of mode by frequency ('wing torsion 2 (symmetric)' is the paper's first symmetric
 #: wing torsion), so a file of the model carries both (/extra/reference/mode_names, shown next to the labels).
-#: The shipped assets/paris.h5 has them; build_paris.py writes them at its next version (the line changes the
-#: builder's fingerprint, so it goes with a rebuild: "reference": {..., "mode_names": PAPER_MODE_NAMES})
+#: build_paris.py writes them, as the shipped assets/paris.h5 has them (tests/test_aircraft.py: SUPERSEDED_BUILDS)
 PAPER_MODE_NAMES = [""] * 9 + ["first wing bending", "", "", "first tail bending"] + [""] * 5 + [
     "first (symmetric) wing torsion", "second (anti-symmetric) wing torsion", "", "", "", ""]
 
