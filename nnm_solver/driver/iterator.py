@@ -27,6 +27,7 @@ from .candidate import record_candidate
 from .refinement import HarmonicRefinement, StepRefinement
 from ..orbits.hb_basis import harmonics_in
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
+from ..results.tongues import continue_hint
 from ..threads import blas_limited
 
 
@@ -257,10 +258,15 @@ class NNMIterator:
             self.tongues[index] = record
 
     def _apply(self, finish):
-        """Finish the branch as the policy decided."""
+        """Finish the branch as the policy decided; a tongue it ends in is named as a user follows it (the API's
+        0-based index into branch.tongues, nnm-solve's 1-based --tongue K: results/tongues.continue_hint)."""
+        message = finish.message
         if finish.record is not None:
             self._store(finish.record, finish.index)
-        self._finish(finish.status, finish.message)
+            if finish.status == "tongue":
+                index = finish.index if finish.index >= 0 else len(self.tongues) - 1
+                message += continue_hint(self.tongues, index, self.settings.method == "shooting")
+        self._finish(finish.status, message)
 
     def _locate(self, cp, cand, state):
         """Locate the events between the previous point and this one (events.py); cut the branch at

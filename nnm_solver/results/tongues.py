@@ -13,7 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-__all__ = ["TongueRecord"]
+__all__ = ["TongueRecord", "continue_hint"]
 
 
 @dataclass(frozen=True)
@@ -117,3 +117,15 @@ class TongueRecord:
             if key in kw and kw[key] is not None:
                 kw[key] = int(kw[key])
         return cls(**kw)
+
+
+def continue_hint(tongues, index, shooting=True):
+    """How a user follows tongue ``index`` (0-based in ``tongues``, a branch's records) as its own branch, in the API
+    and on the command line: ' (tongue K: continue_tongue(branch, index) or nnm-solve FILE --tongue K follows it)',
+    K 1-based among the records continue_tongue can start (not those where the family itself ends), as nnm-solve
+    lists and numbers them (cli/families.py); '' when it cannot be followed (a family's end; a branch not computed
+    by shooting, which continue_tongue refuses)."""
+    if not shooting or not 0 <= index < len(tongues) or tongues[index].get("family_end"):
+        return ""
+    k = 1 + sum(1 for t in tongues[:index] if not t.get("family_end"))
+    return f" (tongue {k}: continue_tongue(branch, {index}) or nnm-solve FILE --tongue {k} follows it)"
