@@ -85,7 +85,10 @@ class JobProgress:
         if self.rate_per_min is not None:
             parts.append(f"{self.rate_per_min:.3g} points/min")
         eta = self.eta
-        if eta is not None:
+        if eta is not None and self.left.by == "points":
+            parts.append(f"at most {self.max_points - self.points} more points, about {duration_text(eta)} at the "
+                         f"recent pace" + ("" if not self.left.bound else " (the energy is not growing)"))
+        elif eta is not None:
             parts.append(f"about {duration_text(eta)} left at the recent pace")
         elif not self.done and self.left.by == "stalled":
             parts.append(f"no new point for {duration_text(self.left.wait)}: time left unknown")

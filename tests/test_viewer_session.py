@@ -698,7 +698,7 @@ def test_job_progress_is_the_further_of_points_and_energy():
     assert JobProgress(points=60, max_points=80, energy_fraction=0.957, elapsed=1.0, done=True).fraction == 1.0
     text = q.text()
     assert "60 of at most 80 points" in text and "75 % (by points" in text and "30 points/min" in text
-    assert "about 40 s left at the recent pace" in text
+    assert "at most 20 more points, about 40 s at the recent pace" in text
     # by energy: said once (it read "17 % (by energy; by energy 17 %)")
     assert "96 % (by energy)" in p.text() and p.text().count("by energy") == 1
     assert [duration_text(x) for x in (42, 185, 3720)] == ["42 s", "3 min 05 s", "1 h 02 min"]
