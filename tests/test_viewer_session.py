@@ -784,7 +784,9 @@ class TabWithCamera:
         from types import SimpleNamespace
 
         self.gui, self.scene = server.gui, server.scene
-        self.camera = SimpleNamespace(position=(1.0, -1.0, 1.0), look_at=(0.0, 0.0, 0.0))
+        self.camera_callbacks = []          # the session's camera-message callback (its canvas size)
+        self.camera = SimpleNamespace(position=(1.0, -1.0, 1.0), look_at=(0.0, 0.0, 0.0),
+                                      on_update=self.camera_callbacks.append)
 
 
 def test_animation_gif_download(server, demo_file):
@@ -828,6 +830,7 @@ def test_view_presets_ghost_colour_bar_and_help(server, demo_file):
     shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file))
     tab = TabWithCamera(server)
     s = Session(tab, shared, sync=True)
+    assert tab.camera_callbacks == [s._on_camera]       # a tab's canvas size is followed (the board's spheres)
     v = s.mesh.vertices
     centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
     for name, axis, sign in (("Top", 2, 1), ("Side", 1, -1), ("Front", 0, -1)):
