@@ -192,6 +192,39 @@ def test_the_check_finds_a_newton_loop(tmp_path):
     assert _loops(p, _newton_loop) == []
 
 
+def _stepping_loop(names):
+    """An arclength stepping loop of its own: the engine's corrector (or its tangent) called inside a loop, i.e. a
+    loop doing what continuation/engine.pseudo_arclength does (single corrections, e.g. onto an energy level set,
+    and the root finder's trial points are not loops over it)."""
+    return bool({"correct", "correct_factored", "tangent", "tangent_factored"} & names)
+
+
+#: the places a stepping loop may live: the engine (pseudo-arclength) and the natural-parameter stepper
+#: (continuation/natural.py); the backbone and the driver iterate over these generators and steppers
+STEPPING_PLACES = ("continuation/",)
+
+
+def test_stepping_loops_live_in_the_continuation_engine():
+    root = _root("nnm_solver")
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        lines = _loops(path, _stepping_loop)
+        if lines and not rel.startswith(STEPPING_PLACES):
+            found[rel] = lines
+    assert not found, f"stepping loops outside continuation/: {found}"
+
+
+def test_the_check_finds_a_stepping_loop(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text("def f(prob, u, t, h):\n    for _ in range(9):\n        v = correct(prob, u + h * t, t, s, 1e-9)[0]\n"
+                 "        t, u = v - u, v\n    return u\n")
+    assert _loops(p, _stepping_loop) == [2]
+    p.write_text("def f(prob, u, t, s):\n    for point in pseudo_arclength(prob, u, t, s, 1e-9):\n        u = point.u\n"
+                 "    return u\n")
+    assert _loops(p, _stepping_loop) == []
+
+
 def _module_thresholds(path):
     """Module-level NAME = <number or tuple of numbers> assignments of a module (thresholds)."""
     import ast

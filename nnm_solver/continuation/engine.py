@@ -219,7 +219,8 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 
-def _scale(problem, u):
+def scale_of(problem, u):
+    """The problem's positive weights at u (problem.scale), or ones: steps are measured in |w * du|."""
     return problem.scale(u) if hasattr(problem, "scale") else np.ones(len(u))
 
 
@@ -233,13 +234,13 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     locate the events inside the step: it jumped over a feature of the branch).  When a step cannot be completed even at ``step_min`` the generator returns with
     a ``StopIteration`` value: the reason (str).  Step lengths are in the problem's scaled units.
     """
-    w = _scale(problem, u0)
+    w = scale_of(problem, u0)
     p0 = p0 / np.linalg.norm(w * p0)
     try:
         u, J, it, err, factor = correct_factored(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
-    w = _scale(problem, u)
+    w = scale_of(problem, u)
     p, factor = tangent_factored(J, p0, w, factor)
     problem.accept(u, J)
     s = settings.step
@@ -286,7 +287,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             s_clean = s
         failures = 0
         previous = (u, J, p, factor, w)
-        w = _scale(problem, u_new)
+        w = scale_of(problem, u_new)
         u, J, p, factor = u_new, J_new, p_new / np.linalg.norm(w * p_new), factor_new
         problem.accept(u, J)
         if (yield ContinuationPoint(u, p, J, it, s, err, factor)) == REFUSE:
