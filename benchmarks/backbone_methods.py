@@ -91,7 +91,7 @@ def main():
     args = ap.parse_args()
     model = nnm.load_model(ROOT / "assets" / "paris.h5")
     nnm.continue_nnm(model, 20, 1e-3, nnm.Shooting(steps_per_period=20, freq_tol=None),
-                     nnm.Continuation(max_points=3), floquet=False)      # compile the integrators first
+                     continuation=nnm.Continuation(max_points=3), floquet=False)      # compile the integrators first
     f_lin = None
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores)")
     print(f"{'row':>18} {'status':>8} {'end E (J)':>10} {'softening':>9} {'max est.':>9} {'points':>6} "

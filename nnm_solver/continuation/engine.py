@@ -123,16 +123,25 @@ class LeastSquares:
         self.rcond = d.min() / max(d.max(), 1e-300)
 
     def solve(self, b):
+        """x of A x = b (least squares for m > n).  An exactly singular A gives a non-finite x, as LU does (the
+        triangular solve's LinAlgError at a zero pivot is not raised): the corrector reports it as its own failure
+        (a singular corrector system) and the continuation halves its step (mode 20 of the aircraft with 13
+        condensed harmonics met one on its way into a tongue, 2026-12-07)."""
         if self._lu is not None:
             return sla.lu_solve(self._lu, b, check_finite=False)
         if self._Q is not None:
-            return sla.solve_triangular(self.R, self._Q.T @ b, check_finite=False)
+            return self._triangular(self._Q.T @ b)
         c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
                                    lwork=64 * max(1, np.ndim(b) and (1 if np.ndim(b) == 1 else np.shape(b)[1])))
         if info != 0:
             raise np.linalg.LinAlgError(f"ormqr failed (info {info})")
-        x = sla.solve_triangular(self.R, c[:self.n], check_finite=False)
+        x = self._triangular(c[:self.n])
         return x[:, 0] if np.ndim(b) == 1 else x
+
+    def _triangular(self, c):
+        if not np.all(np.diag(self.R)):
+            return np.full(np.shape(c), np.nan)
+        return sla.solve_triangular(self.R, c, check_finite=False)
 
 
 def tangent(J, previous, w=None):
@@ -242,6 +251,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         return f"the starting point did not converge: {exc}"
     w = scale_of(problem, u)
     p, factor = tangent_factored(J, p0, w, factor)
+    if not np.all(np.isfinite(p)):
+        return "the starting point has no tangent (a singular Jacobian)"
     problem.accept(u, J)
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
@@ -261,6 +272,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
                 if reason:
                     raise CorrectorFailure(reason)
             p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
+            if not np.all(np.isfinite(p_new)):
+                raise CorrectorFailure("no tangent at the new point (a singular Jacobian)")
             cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
