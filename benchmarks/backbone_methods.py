@@ -6,7 +6,7 @@ backbone point's frequency against the linear one), the largest estimated freque
 (branch.freq_error), the points and the wall time.  Then every pair of rows is compared where both have backbone
 points at the same energy (each branch interpolated in ln E between its backbone points, no jump between): the
 largest relative frequency difference against the sum of the two estimates + 2e-4 (the issue's check; jumps past
-tongues are not interpolated over: ``segments``), and the end energies (within 3 %).
+tongues are not interpolated over: nnm.analysis.compare_backbones), and the end energies (within 3 %).
 
     python benchmarks/backbone_methods.py [--energy-max 10] [--rows default,hb9c,...]
 
@@ -44,46 +44,6 @@ def backbone(b):
     return b.energy[on][o], b.frequency_hz[on][o], b.freq_error[on][o]
 
 
-def segments(b):
-    """The branch's backbone as pieces without a jump: runs of consecutive backbone points (by index) not
-    interrupted by a point off the backbone or a landing past a tongue (TongueRecord.landings); each (E, f, error)
-    sorted in energy."""
-    landings = {int(i) for t in (b.tongues or []) for i in (t.landings or ())}
-    on = np.flatnonzero(b.labels == "backbone")
-    pieces, run = [], []
-    for i in on:
-        if run and (i != run[-1] + 1 or i in landings):
-            pieces.append(run)
-            run = []
-        run.append(int(i))
-    pieces.append(run)
-    out = []
-    for run in pieces:
-        if len(run) >= 2:
-            idx = np.array(run)[np.argsort(b.energy[run])]
-            out.append((b.energy[idx], b.frequency_hz[idx], b.freq_error[idx]))
-    return out
-
-
-def compare(a, b):
-    """Largest |f_a / f_b - 1| - (err_a + err_b) over a's backbone points inside one of b's pieces without a jump
-    (segments), b interpolated there by a cubic in ln E through its 4 nearest points: (excess, |df/f|, E)."""
-    worst = (-np.inf, np.nan, np.nan)
-    Ea, fa, ea = backbone(a)
-    for Eb, fb, eb in segments(b):
-        for E, f, e in zip(Ea, fa, ea):
-            j = np.searchsorted(Eb, E)
-            if j == 0 or j == len(Eb):
-                continue
-            s = slice(max(j - 2, 0), min(j + 2, len(Eb)))
-            fi = np.polyval(np.polyfit(np.log(Eb[s] / E), fb[s], min(3, len(Eb[s]) - 1)), 0.0)
-            d = abs(f / fi - 1)
-            excess = d - (e + np.nanmax(eb[s]))
-            if excess > worst[0]:
-                worst = (excess, d, E)
-    return worst
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--energy-max", type=float, default=10.0)
@@ -109,7 +69,8 @@ def main():
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
     print("pairs: largest |df/f| beyond the sum of the estimates (check: < 2e-4), end energies")
     for x, y in itertools.combinations(done, 2):
-        excess, d, E = max(compare(done[x], done[y]), compare(done[y], done[x]))
+        c = nnm.analysis.compare_backbones(done[x], done[y])
+        excess, d, E = c.excess, c.difference, c.energy
         Ex, Ey = backbone(done[x])[0][-1], backbone(done[y])[0][-1]
         print(f"{x:>18} vs {y:<18} excess {excess:9.1e} (|df/f| {d:.1e} at {E:.3g} J)   ends {Ex:.4g} / {Ey:.4g} J "
               f"({100 * abs(Ex / Ey - 1):.1f} %), status {done[x].status} / {done[y].status}")
