@@ -54,7 +54,7 @@ def from_keywords(method=None, continuation=None, tongues=None, keywords=None):
     if not isinstance(c, Continuation):
         raise NNMInputError(f"continuation must be a Continuation(...), got {type(c).__name__}")
     t = _tongues_of(tongues)
-    own = {f.name for f in fields(m)}
+    own = {f.name for f in fields(m)} - set(m.record_fields)        # (the branch's record: not asked for)
     other = {f.name for f in fields(HarmonicBalance if isinstance(m, Shooting) else Shooting)} - own
     cont = {f.name for f in fields(Continuation)}
     mk, ck = {}, {}
@@ -138,8 +138,10 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     cs = ContinuationSettings(step=cont.step, step_min=cont.step_min, step_max=np.inf, max_angle=cont.max_angle,
                               max_correction=cont.max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
-    if freq_tol is not None:
-        settings = settings.replace(freq_tol=float(freq_tol))
+    # the branch's record: the request's own fields, with what the problem resolved (steps, basis, symmetry, ...)
+    settings = replace(method, **{f.name: getattr(settings, f.name) for f in fields(settings)
+                                  if f.name not in ("freq_tol", "error_estimate", "max_steps_per_period",
+                                                    "max_harmonics")}, freq_tol=freq_tol)
     # the skeleton (backbone/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
     # balance it has the branch's harmonics (at most the skeleton's): the same truncation
     sk_h = tongues.skeleton.harmonics if name == "shooting" else min(int(method.harmonics), tongues.skeleton.harmonics)
