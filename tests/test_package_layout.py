@@ -242,11 +242,12 @@ def _module_thresholds(path):
 
 
 def test_the_backbone_and_the_branch_iterator_keep_their_thresholds_in_settings_objects():
-    """Every threshold of the backbone (nnm_solver/backbone/) and of the branch's driver path is a field of a frozen
-    settings object (backbone/settings.py, driver/settings.py), written once."""
+    """Every threshold of the backbone (nnm_solver/backbone/), of the driver (driver/) and of the continuation engine
+    (continuation/) is a field of a frozen settings object (backbone/settings.py, driver/settings.py,
+    continuation/engine.ContinuationSettings and newton.NewtonSettings) or an argument with its default, written
+    once.  (The layers below still hold module-level constants of their own: orbits/, stability/, model/.)"""
     root = _root("nnm_solver")
-    places = sorted(root.glob("backbone/*.py")) + [root / "driver" / n for n in ("api.py", "iterator.py",
-                                                                                   "refinement.py", "settings.py")]
+    places = sorted(root.glob("backbone/*.py")) + sorted(root.glob("driver/*.py")) + sorted(root.glob("continuation/*.py"))
     found = {p.relative_to(root).as_posix(): _module_thresholds(p) for p in places}
     found = {k: v for k, v in found.items() if v}
     assert not found, f"module-level thresholds: {found}"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["SkeletonSettings", "LabelSettings", "Follow", "Skip", "TONGUE_MODES"]
+__all__ = ["SkeletonSettings", "LabelSettings", "TongueBranchSettings", "Follow", "Skip", "TONGUE_MODES"]
 
 
 @dataclass(frozen=True)
@@ -140,6 +140,17 @@ class LabelSettings:
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3
+
+
+@dataclass(frozen=True)
+class TongueBranchSettings:
+    """When ``continue_tongue`` (driver/tongue_branch.py) stops: after back_on_backbone consecutive points back on
+    the backbone below the tongue's entry (a tongue that is a loop off the backbone), a point lying on the
+    backbone's frequency-energy curve when within on_backbone_rtol of its frequency (the backbone's own accuracy
+    target, 1e-4)."""
+
+    back_on_backbone: int = 3
+    on_backbone_rtol: float = 1e-4
 
 
 @dataclass(frozen=True)

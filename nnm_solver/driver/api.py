@@ -27,8 +27,8 @@ from .iterator import NNMIterator
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
-from .problems import METHODS, RITZ_MIN_DOF, check_positive, hb_problem, modal_basis, shooting_problem, start_amplitude
-from .settings import Continuation, HarmonicBalance, Shooting, method_of
+from .problems import METHODS, check_positive, hb_problem, modal_basis, shooting_problem, start_amplitude
+from .settings import SIZES, Continuation, HarmonicBalance, Shooting, method_of
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS", "from_keywords"]
 
@@ -161,7 +161,7 @@ def _skeleton_system(model, mode, harmonics):
     """The modal system of the skeleton (backbone/skeleton.py) with ``harmonics``: every mode, or for a large model
     the Ritz basis for those harmonics (model/ritz.py; the one a harmonic-balance branch with as many harmonics
     built already, from its cache)."""
-    if model.n > RITZ_MIN_DOF:
+    if model.n > SIZES.ritz_min_dof:
         return ritz_system(model, mode, harmonics)
     return modal_system(model)
 
@@ -183,7 +183,7 @@ def continue_nnm(model, mode, energy_max, method=None, *, continuation=None, ton
         backbone/policy.py describes the algorithm, backbone/settings.py its settings.
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when the Hill matrix
-        has at most HILL_AUTO_SIZE rows).
+        has at most driver/settings.SIZES.hill_auto_size rows).
     locate_events : locate folds and stability changes between points (default True).
     on_point : optional callable(point: Point) called after each converged point.
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from ..errors import NNMInputError
 from ..results.settings import HarmonicBalance, Shooting
 
-__all__ = ["Shooting", "HarmonicBalance", "Continuation", "method_of"]
+__all__ = ["Shooting", "HarmonicBalance", "Continuation", "Sizes", "SIZES", "method_of"]
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,30 @@ class Continuation:
     max_period_step: float = 0.005
     max_points: int = 500
     max_refusals: int = 3
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """Where the driver changes its route with the model's size, and how small the first orbit is.
+
+    start_nonlinearity : fraction of the linear potential energy carried by the nonlinear elements at a branch's
+        first point (1e-5: the first point is linear to that order, far below any frequency accuracy asked);
+    hill_auto_size : largest Hill matrix (rows) for which harmonic balance computes the multipliers when
+        floquet=None (a dense eigenproblem of that size costs about 0.1 s here);
+    ritz_min_dof : harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs;
+    condense_ratio : a forced response with condensed=None is condensed when n_s * condense_ratio < n (few elements
+        in a large model); max_uncondensed : the largest uncondensed forced HB system (basis functions x n).
+    """
+
+    start_nonlinearity: float = 1e-5
+    hill_auto_size: int = 1000
+    ritz_min_dof: int = 2000
+    condense_ratio: int = 4
+    max_uncondensed: int = 20000
+
+
+#: the driver's sizes (the defaults above, written once)
+SIZES = Sizes()
 
 
 def method_of(method):

@@ -125,7 +125,7 @@ class HarmonicBalance(MethodSettings):
     harmonics : highest harmonic (on a branch: the most its accuracy target reached); samples : AFT time samples
     (None: enough for a cubic without aliasing); basis : "odd" / "full" (None: "odd" for odd forces); condensed :
     solve the equations condensed onto the elements' deformations (n_s (H + 1) / 2 + 2 unknowns whatever the model
-    size); modal_basis : "full" or "ritz" (None: Ritz above driver.problems.RITZ_MIN_DOF DOFs: the modes below
+    size); modal_basis : "full" or "ritz" (None: Ritz above driver/settings.SIZES.ritz_min_dof DOFs: the modes below
     ``cutoff_hz`` (Hz, recorded) plus the residual flexibility of the others, model/ritz.py); tol : relative
     residual; error_estimate : each point's truncation error (orbits/hb_error.py); freq_tol : where a point's
     estimated truncation error exceeds it, the branch goes on with two more harmonics from there (None: never), up
