@@ -54,12 +54,65 @@ def _matrices(path):
         else:
             from pyNastran.op4.op4 import read_op4
 
-            found = read_op4(str(path), precision="double", log=quiet)
+            with _fixed_width_op4(path) as readable:
+                found = read_op4(str(readable), precision="double", log=quiet)
+    except NNMFileError:
+        raise
     except Exception as exc:           # pyNastran raises many kinds on a damaged or foreign file
         kind = "OUTPUT2 (.op2)" if path.suffix.lower() == ".op2" else "OUTPUT4 (.op4)"
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise NNMFileError(f"{path}: not a readable Nastran {kind} file ({exc.__class__.__name__}: {msg[:120]})") from None
     return {str(k).strip().upper(): getattr(v, "data", v) for k, v in found.items()}
+
+
+#: a value of a FORMATTED OUTPUT4 file: mantissa, then an exponent with its E (E-05, E-306) or without it
+#: (Fortran's E23.16 drops the E of a three-digit exponent: 1.0000000000000000-305)
+_VALUE = re.compile(r"([+-]?\d\.\d+)(?:E([+-]\d{3})|([+-]\d{3}))", re.IGNORECASE)
+_SMALLEST = 1e-99
+
+
+def _three_digit(match, path):
+    """The 23-character field of a value with a three-digit exponent: 0 below 1e-99 (an entry that small is a
+    round-off zero of the matrix), else a one-line error."""
+    value = float(f"{match.group(1)}E{match.group(2) or match.group(3)}")
+    if abs(value) >= _SMALLEST:
+        raise NNMFileError(f"{path}: value {match.group(0)} is beyond the range of a FORMATTED OUTPUT4 field; "
+                           f"write the matrices UNFORMATTED (binary)")
+    return f"{0.0:23.16E}"
+
+
+class _fixed_width_op4:
+    """Context manager: the path of a FORMATTED .op4 pyNastran can read.  Values below 1e-99 have three-digit
+    exponents that overflow the 23-character fields of 1P,3E23.16 (Nastran writes 1.0000000000000000-305, some
+    writers 1.0000000000000000E-305, 24 characters); they are written as 0 into a temporary copy, read, and the
+    copy deleted.  Binary files and files without such values are read as they are."""
+
+    def __init__(self, path):
+        self.path, self.copy = path, None
+
+    def __enter__(self):
+        head = self.path.read_bytes()[:4096]
+        if b"\0" in head:
+            return self.path
+        try:
+            text = self.path.read_text()
+        except UnicodeDecodeError:
+            return self.path
+        if not _VALUE.search(text):
+            return self.path
+        import tempfile
+
+        fixed = _VALUE.sub(lambda m: _three_digit(m, self.path), text)
+        fd, name = tempfile.mkstemp(suffix=".op4")
+        with open(fd, "w") as fh:
+            fh.write(fixed)
+        self.copy = Path(name)
+        return self.copy
+
+    def __exit__(self, *exc):
+        if self.copy is not None:
+            self.copy.unlink(missing_ok=True)
+        return False
 
 
 def _square(A, name, path):
