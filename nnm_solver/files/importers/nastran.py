@@ -173,33 +173,49 @@ def _bulk_cards(text):
     return cards
 
 
+def _set_dofs(name, fields):
+    """{(id, component)} of an ASET/ASET1/QSET/QSET1 card; component 0 is a scalar point (SPOINT)."""
+    if name.endswith("1"):                                  # XSET1 C G1 G2 ... | C G1 THRU G2
+        comps, ids = fields[0], fields[1:]
+        if len(ids) == 3 and ids[1].upper() == "THRU":
+            ids = range(int(ids[0]), int(ids[2]) + 1)
+        return {(int(g), int(c)) for g in ids for c in comps}
+    return {(int(g), int(c)) for g, cs in zip(fields[::2], fields[1::2]) for c in cs}   # XSET G C [G C ...]
+
+
 def read_aset_map(path):
-    """DofMap of the a-set from the ASET/ASET1 cards of a bulk data file: (grid, direction) in Nastran's a-set
-    order (ascending grid, then component).  ASET1 C G1 G2 ... (or G1 THRU G2); ASET G C [G C ...]."""
+    """DofMap of the a-set from the bulk data's ASET/ASET1 and QSET/QSET1 cards, in Nastran's a-set order
+    (ascending grid or scalar point ID, then component).  ASET1 C G1 G2 ... (or G1 THRU G2); ASET G C [G C ...];
+    QSET/QSET1 alike for a superelement's modal coordinates (the q-set is part of the a-set).  A grid's
+    components 1..6 are ux..rz (in its displacement system CD); a scalar point (SPOINT, component 0 or blank) is
+    "modal" when it is in the q-set, else "scalar" (labels 'spoint 1001 modal')."""
     path = existing(path, "Nastran bulk data file")
     try:
         text = path.read_text(errors="strict")
     except UnicodeDecodeError:
         raise NNMFileError(f"{path}: not a text (bulk data) file") from None
-    dofs = set()
+    aset, qset = set(), set()
     try:
         for name, fields in _bulk_cards(text):
-            if name == "ASET1":
-                comps, grids = fields[0], fields[1:]
-                if len(grids) == 3 and grids[1].upper() == "THRU":
-                    grids = range(int(grids[0]), int(grids[2]) + 1)
-                dofs |= {(int(g), int(c)) for g in grids for c in comps}
-            elif name == "ASET":
-                dofs |= {(int(g), int(c)) for g, cs in zip(fields[::2], fields[1::2]) for c in cs}
+            if name in ("ASET", "ASET1", "QSET", "QSET1"):
+                if name.endswith("1") and len(fields) == 1:  # QSET1 0 1001 written with a blank component
+                    fields = ["0"] + fields
+                (qset if name.startswith("Q") else aset).update(_set_dofs(name, fields))
     except (ValueError, IndexError):
-        raise NNMFileError(f"{path}: an ASET/ASET1 card is not 'ASET1, components, grid, ...' or 'ASET, grid, "
+        raise NNMFileError(f"{path}: an ASET/QSET card is not 'ASET1, components, grid, ...' or 'ASET, grid, "
                            f"components, ...'") from None
-    if not dofs:
-        raise NNMFileError(f"{path}: no ASET or ASET1 card; the DOF map of KAA needs the a-set (or give a text "
-                           f"file of 'grid component' lines)")
-    if any(not 1 <= c <= 6 for _, c in dofs):
-        raise NNMFileError(f"{path}: ASET components must be digits 1..6")
-    return DofMap([(g, DIRECTIONS[c - 1]) for g, c in sorted(dofs)])
+    if not aset and not qset:
+        raise NNMFileError(f"{path}: no ASET, ASET1, QSET or QSET1 card; the DOF map of KAA needs the a-set (or "
+                           f"give a text file of 'grid component' lines)")
+    dofs = aset | qset
+    if any(not 0 <= c <= 6 for _, c in dofs):
+        raise NNMFileError(f"{path}: ASET/QSET components must be digits 1..6 (0 for a scalar point)")
+    scalar = {g for g, c in dofs if c == 0}
+    if scalar & {g for g, c in dofs if c != 0}:
+        g = min(scalar & {g for g, c in dofs if c != 0})
+        raise NNMFileError(f"{path}: ID {g} is given as a scalar point (component 0) and as a grid (components 1..6)")
+    return DofMap([(g, ("modal" if (g, c) in qset else "scalar") if c == 0 else DIRECTIONS[c - 1])
+                   for g, c in sorted(dofs)])
 
 
 def dof_map_of(path, n, where=""):
