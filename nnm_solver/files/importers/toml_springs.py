@@ -16,6 +16,7 @@ import numpy as np
 from ...errors import NNMInputError
 from ...model.elements import CubicSpring
 from .common import direction_name
+from .toml_coupled import build_polynomial_stiffness
 
 LOCATION_KEYS = {"type", "dof", "other", "node", "direction", "other_node", "other_direction"}
 
@@ -28,13 +29,16 @@ class SpringType:
     build(dof, other, params, scale) -> element, where scale(p) converts the coefficient of d^p
     of a force law to SI;
     parse(key, value, where) -> the parameter's value (default: a finite number);
-    optional : keys that may be given (passed to build only when present).
+    optional : keys that may be given (passed to build only when present);
+    table(row, n, dof_map, units, where) -> element: instead of the above, builds an element that is not on one
+    deformation (placement, parameters and units) from its whole table.
     """
 
     parameters: tuple
-    build: Callable
+    build: Callable | None = None
     parse: Callable | None = None
     optional: tuple = ()
+    table: Callable | None = None
 
 
 def _cubic(dof, other, params, scale):
@@ -100,7 +104,8 @@ def to_si(spring, scale):
 SPRING_TYPES = {"cubic": SpringType(("k3",), _cubic),
                 "polynomial": SpringType(("coefficients",), _polynomial, _law_table),
                 "piecewise_linear": SpringType(("stiffnesses", "breakpoints"), _piecewise, _pwl_parse,
-                                               ("eps", "stiffnesses_negative", "breakpoints_negative"))}
+                                               ("eps", "stiffnesses_negative", "breakpoints_negative")),
+                "polynomial_stiffness": SpringType(("exponents", "coefficients"), table=build_polynomial_stiffness)}
 
 
 def _unknown(table, allowed, where):
@@ -150,6 +155,9 @@ def build_springs(rows, n, dof_map, units, where):
         if kind not in SPRING_TYPES:
             raise NNMInputError(f"{w}: unknown type {row.get('type')!r}; known: {', '.join(SPRING_TYPES)}")
         st = SPRING_TYPES[kind]
+        if st.table is not None:
+            out.append(st.table(row, n, dof_map, units, w))
+            continue
         _unknown(row, LOCATION_KEYS | set(st.parameters) | set(st.optional), w)
         if "direction" in row:
             direction_name(row["direction"], f"{w}: ")
