@@ -67,7 +67,7 @@ def _matrices(path):
 
 #: a value of a FORMATTED OUTPUT4 file: mantissa, then an exponent with its E (E-05, E-306) or without it
 #: (Fortran's E23.16 drops the E of a three-digit exponent: 1.0000000000000000-305)
-_VALUE = re.compile(r"([+-]?\d\.\d+)(?:E([+-]\d{3})|([+-]\d{3}))", re.IGNORECASE)
+_VALUE = re.compile(r"([+-]?\d\.\d+)(?:E([+-]\d{3})|([+-]\d{3}))(?![\d.])", re.IGNORECASE)
 _SMALLEST = 1e-99
 
 
@@ -78,7 +78,9 @@ def _three_digit(match, path):
     if abs(value) >= _SMALLEST:
         raise NNMFileError(f"{path}: value {match.group(0)} is beyond the range of a FORMATTED OUTPUT4 field; "
                            f"write the matrices UNFORMATTED (binary)")
-    return f"{0.0:23.16E}"
+    # the field is 23 characters: ' 1.0000000000000000-305' (the match is 22 of them), '-1.0000000000000000-305'
+    # or '1.0000000000000000E-305' (23), '-1.0000000000000000E-305' (24: one too many)
+    return f"{0.0:23.16E}"[-min(len(match.group(0)), 23):]
 
 
 class _fixed_width_op4:
