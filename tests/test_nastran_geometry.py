@@ -183,3 +183,14 @@ def test_bad_descriptions_exit_2_and_write_nothing(bulk, tmp_path, capsys):
         out = tmp_path / "bad.h5"
         assert solve_main(["import", str(p), "--out", str(out)]) == 2
         assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_uff_shapes_leave_the_modal_scalar_points_out(tmp_path):
+    """A model with grids and modal scalar points: UFF 55 nodes are the grids only."""
+    labels = ["node 1 uz", "node 2 uz", "spoint 101 modal"]
+    model = nnm.Model(np.eye(3), np.diag([1.0, 2.0, 3.0]) * 1e4, [nnm.CubicSpring(dof=0, k3=1e9)], dof_labels=labels)
+    from nnm_solver.files.exports import uff_nodes
+
+    nums, k, values = uff_nodes(model)
+    assert list(nums) == [1, 2] and k == 3
+    np.testing.assert_array_equal(values(np.array([1.0, 2.0, 3.0])), [[0, 0, 1.0], [0, 0, 2.0]])
