@@ -117,6 +117,9 @@ def test_a_description_with_the_bulk_data_as_dof_map_and_mesh(bulk, tmp_path):
                                          'file = "model.bdf"\n[[springs]]\nnode = 5\ndirection = 1\nother_node = 2\n'
                                          'other_direction = 1\nk3 = 1e6\n')
     model = nnm.load_model(tmp_path / "model.toml")
+    import scipy.linalg
+    w2 = scipy.linalg.eigh(K, np.where(np.abs(M) < 1e-99, 0, M), eigvals_only=True)
+    np.testing.assert_allclose(model.linear_modes()[0][:6], np.sqrt(w2[:6]) / (2 * np.pi), rtol=1e-9)
     assert model.dof_labels[-1] == "spoint 103 modal"
     assert model.mesh is not None and model.mesh.vertices.shape == (9, 3)
     s = model.springs[0]
