@@ -1,6 +1,6 @@
-"""A display mesh from any mesh file meshio reads (Gmsh .msh, Abaqus .inp, VTK/VTU, ...); a Nastran bulk data file
-(.bdf, .dat, .nas) is read by pyNastran instead (nastran_mesh.py: grids by ID, bars as ribbons), or by meshio with
-``format = "nastran"``.
+"""A display mesh from any mesh file meshio reads (Gmsh .msh, Abaqus .inp, VTK/VTU, Nastran .bdf ...).  In a model
+description a Nastran bulk data file is read by pyNastran instead (nastran_mesh.py: grids by ID, bars as ribbons;
+toml.py's ``display_mesh`` chooses), or here with ``format = "nastran"``.
 
 meshio is an optional extra (``pip install "nnm[io]"``).  The viewer draws triangles: surface cells
 are split into triangles, and volume cells contribute their boundary faces (faces used by one cell
@@ -121,12 +121,6 @@ def read_display_mesh(path, n, dof_map=None, *, nodes=None, first_node=1, dofs_p
     format when the suffix is ambiguous (default: from the suffix).
     """
     path = existing(path, where + "display mesh" if where else "display mesh")
-    from .nastran_mesh import BULK_SUFFIXES, read_bdf_mesh
-    if path.suffix.lower() in BULK_SUFFIXES and file_format is None:     # grids by ID: pyNastran (nastran_mesh.py)
-        if nodes is not None or dofs_per_node is not None:
-            raise NNMInputError(f"{where}a Nastran bulk data mesh is placed by grid ID (the DOF map); nodes and "
-                                f"dofs_per_node are for other mesh files (or set format = \"nastran\" for meshio)")
-        return read_bdf_mesh(path, n, dof_map, recovery=recovery, scale=scale, where=where)
     try:
         import meshio
     except ImportError:

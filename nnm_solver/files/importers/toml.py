@@ -12,21 +12,23 @@
     # file = "beam.full"                 # ansys, matlab: one file (matlab: variables M, K [, springs])
     # dof_map = "beam_dofs.txt"          # node and direction of each DOF, for formats without one
     # nastran: file = "model.op4" (or .op2), stiffness = "KAA", mass = "MAA" (matrix names, these by default),
-    #          dof_map = "model.bdf" (its ASET/ASET1 cards) or a 'grid component' text file (nastran.py)
+    #          dof_map = "model.bdf" (its ASET/QSET cards) or a 'grid component' text file (nastran.py)
 
     [[springs]]                          # one table per nonlinear element
     type = "cubic"                       # default; the element type (see SPRING_TYPES); "polynomial" takes
                                          # coefficients = {2 = k2, 3 = k3, ...} (force sum k_p d^p);
                                          # "piecewise_linear" takes stiffnesses = [k0, k1, ...] (force /
                                          # length), breakpoints = [d1, ...] (length), optional eps and, for
-                                         # an asymmetric law, stiffnesses_negative + breakpoints_negative
+                                         # an asymmetric law, stiffnesses_negative + breakpoints_negative;
+                                         # "polynomial_stiffness" takes exponents, coefficients and dofs or
+                                         # nodes (toml_coupled.py); the springs are built in toml_springs.py
     node = 6                             # by node and direction (needs a DOF map) ...
     direction = "uz"
     k3 = 1e9                             # in the description's units (force / length^3)
     # dof = 33                           # ... or by 0-based DOF index; other / other_node (+ other_direction)
                                          # make a relative spring on x[dof] - x[other]
-    [mesh]                               # optional display mesh (any format meshio reads)
-    file = "beam.msh"
+    [mesh]                               # optional display mesh (any format meshio reads; a Nastran
+    file = "beam.msh"                    # .bdf by pyNastran: nastran_mesh.py)
     # first_node = 1 | nodes = [...] | dofs_per_node = 6 | recovery = "R.mtx"   (see meshfile.py)
     # format = "gmsh"                    # meshio's format name, when the suffix is ambiguous
 
@@ -36,7 +38,6 @@ SI.  Relative paths are relative to the description file.  Errors name the file 
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 import numpy as np
 
@@ -135,6 +136,23 @@ def read_matrices(mt, folder, where):
     return M, K, dof_map, fmt, springs
 
 
+def display_mesh(path, n, dof_map, *, nodes=None, first_node=1, dofs_per_node=None, recovery=None, scale=1.0,
+                 file_format=None, where=""):
+    """The [mesh]'s DisplayMesh: a Nastran bulk data file (no format given) by pyNastran, its grids by ID
+    (nastran_mesh.py); any other file by meshio (meshfile.py)."""
+    from .nastran_mesh import BULK_SUFFIXES, read_bdf_mesh
+
+    if Path(path).suffix.lower() in BULK_SUFFIXES and file_format is None:
+        if nodes is not None or dofs_per_node is not None:
+            raise NNMInputError(f"{where}a Nastran bulk data mesh is placed by grid ID (the DOF map); nodes and "
+                                f"dofs_per_node are for other mesh files (or set format = \"nastran\" for meshio)")
+        return read_bdf_mesh(path, n, dof_map, recovery=recovery, scale=scale, where=where)
+    from .meshfile import read_display_mesh
+
+    return read_display_mesh(path, n, dof_map, nodes=nodes, first_node=first_node, dofs_per_node=dofs_per_node,
+                             recovery=recovery, scale=scale, file_format=file_format, where=where)
+
+
 def read_description(path):
     """The parsed TOML of a description file (dict); one-line NNMFileError on a syntax error."""
     path = existing(path, "model description")
@@ -172,8 +190,7 @@ def load_toml_model(path, name=None):
             _unknown(ms, MESH_KEYS, f"{where} [mesh]")
             if "file" not in ms:
                 raise NNMInputError(f"{where} [mesh]: missing file (a mesh file meshio reads)")
-            from .meshfile import read_display_mesh
-            mesh = read_display_mesh(folder / str(ms["file"]), n, dof_map, nodes=ms.get("nodes"),
+            mesh = display_mesh(folder / str(ms["file"]), n, dof_map, nodes=ms.get("nodes"),
                                      first_node=ms.get("first_node", 1), dofs_per_node=ms.get("dofs_per_node"),
                                      recovery=None if "recovery" not in ms else folder / str(ms["recovery"]),
                                      scale=units.L, file_format=ms.get("format"), where=f"{where} [mesh]: ")
