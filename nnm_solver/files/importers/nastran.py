@@ -85,16 +85,17 @@ def _three_digit(match, path):
 
 class _fixed_width_op4:
     """Context manager: the path of a FORMATTED .op4 pyNastran can read.  Values below 1e-99 have three-digit
-    exponents that overflow the 23-character fields of 1P,3E23.16 (Nastran writes 1.0000000000000000-305, some
-    writers 1.0000000000000000E-305, 24 characters); they are written as 0 into a temporary copy, read, and the
-    copy deleted.  Binary files and files without such values are read as they are."""
+    exponents that do not fit the 23-character fields of 1P,3E23.16 (Nastran writes 1.0000000000000000-305, some
+    writers 1.0000000000000000E-305, which overflows the field when negative and confuses pyNastran's reader);
+    they are written as 0 into a temporary copy, read, and the copy deleted.  Binary files and files without such values are read as they are."""
 
     def __init__(self, path):
         self.path, self.copy = path, None
 
     def __enter__(self):
-        head = self.path.read_bytes()[:4096]
-        if b"\0" in head:
+        with open(self.path, "rb") as fh:
+            head = fh.read(4096)
+        if b"\0" in head:                                   # binary (UNFORMATTED): ints hold zero bytes
             return self.path
         try:
             text = self.path.read_text()
