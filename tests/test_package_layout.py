@@ -192,6 +192,39 @@ def test_the_check_finds_a_newton_loop(tmp_path):
     assert _loops(p, _newton_loop) == []
 
 
+def _stepping_loop(names):
+    """An arclength stepping loop of its own: the engine's corrector (or its tangent) called inside a loop, i.e. a
+    loop doing what continuation/engine.pseudo_arclength does (single corrections, e.g. onto an energy level set,
+    and the root finder's trial points are not loops over it)."""
+    return bool({"correct", "correct_factored", "tangent", "tangent_factored"} & names)
+
+
+#: the places a stepping loop may live: the engine (pseudo-arclength) and the natural-parameter stepper
+#: (continuation/natural.py); the backbone and the driver iterate over these generators and steppers
+STEPPING_PLACES = ("continuation/",)
+
+
+def test_stepping_loops_live_in_the_continuation_engine():
+    root = _root("nnm_solver")
+    found = {}
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        lines = _loops(path, _stepping_loop)
+        if lines and not rel.startswith(STEPPING_PLACES):
+            found[rel] = lines
+    assert not found, f"stepping loops outside continuation/: {found}"
+
+
+def test_the_check_finds_a_stepping_loop(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text("def f(prob, u, t, h):\n    for _ in range(9):\n        v = correct(prob, u + h * t, t, s, 1e-9)[0]\n"
+                 "        t, u = v - u, v\n    return u\n")
+    assert _loops(p, _stepping_loop) == [2]
+    p.write_text("def f(prob, u, t, s):\n    for point in pseudo_arclength(prob, u, t, s, 1e-9):\n        u = point.u\n"
+                 "    return u\n")
+    assert _loops(p, _stepping_loop) == []
+
+
 def _module_thresholds(path):
     """Module-level NAME = <number or tuple of numbers> assignments of a module (thresholds)."""
     import ast
@@ -209,11 +242,12 @@ def _module_thresholds(path):
 
 
 def test_the_backbone_and_the_branch_iterator_keep_their_thresholds_in_settings_objects():
-    """Every threshold of the backbone (nnm_solver/backbone/) and of the branch's driver path is a field of a frozen
-    settings object (backbone/settings.py, driver/settings.py), written once."""
+    """Every threshold of the backbone (nnm_solver/backbone/), of the driver (driver/) and of the continuation engine
+    (continuation/) is a field of a frozen settings object (backbone/settings.py, driver/settings.py,
+    continuation/engine.ContinuationSettings and newton.NewtonSettings) or an argument with its default, written
+    once.  (The layers below still hold module-level constants of their own: orbits/, stability/, model/.)"""
     root = _root("nnm_solver")
-    places = sorted(root.glob("backbone/*.py")) + [root / "driver" / n for n in ("api.py", "iterator.py",
-                                                                                   "refinement.py", "settings.py")]
+    places = sorted(root.glob("backbone/*.py")) + sorted(root.glob("driver/*.py")) + sorted(root.glob("continuation/*.py"))
     found = {p.relative_to(root).as_posix(): _module_thresholds(p) for p in places}
     found = {k: v for k, v in found.items() if v}
     assert not found, f"module-level thresholds: {found}"

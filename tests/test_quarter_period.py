@@ -127,3 +127,12 @@ def test_a_jump_onto_a_branch_alongside_is_caught_at_mid_step(monkeypatch):
         assert min(abs(f / E - 1) for f in folds) < 1e-4, E
     assert any("step lengths off" in c for c in calls)                    # the check refused a step
     assert sum(bool(c) for c in calls) <= 3
+
+
+def test_an_exactly_singular_least_squares_system_gives_a_non_finite_solution_not_an_exception():
+    """A zero pivot in the triangular solve (mode 20 of the aircraft with 13 condensed harmonics met one) must reach
+    the corrector as a non-finite step, which it reports as its own failure, as the LU route does."""
+    tall = np.array([[1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])             # a zero column: an exactly zero pivot
+    for A in (tall, np.hstack([np.vstack([tall] * 40), np.zeros((120, 70))])):
+        x = LeastSquares(np.array(A, order="F")).solve(np.ones(A.shape[0]))
+        assert not np.all(np.isfinite(x))

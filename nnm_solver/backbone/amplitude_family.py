@@ -18,11 +18,12 @@ slid onto a tongue's, halves the steps that jump away from the guide, and jumps 
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
-from ..continuation.engine import ContinuationSettings, CorrectorFailure, correct
+from ..continuation.engine import ContinuationSettings, pseudo_arclength, scale_of
 from ..continuation.natural import LogStepper, LogSteps
 from .amplitude_orbit import solve_at_amplitude, family_share, fundamental_shares
 from .family_guide import OneHarmonicGuide, nearer_sheet, sheet_start, guided_jump
@@ -73,54 +74,49 @@ def _null_direction(J, along):
 
 def _past_fold(prob, pts, s, tol=1e-10):
     """Where the stepping in a found no solution at a larger amplitude: read what the family does past that
-    fold in a by following it by pseudo-arclength in (orbit, a) from the last point (steps of the last
-    step's size, tangent from the Jacobian's null vector), with no partner harmonic growing (family_share
-    above s.peak_share, else None: a k:1 resonance, the caller's jumps).  The verdict is
+    fold in a by following it with the continuation engine (continuation/engine.pseudo_arclength, in the
+    problem's balanced norm) in (orbit, a) from the last point, steps at most the last step's length, first
+    tangent the Jacobian's null vector, with no partner harmonic growing (family_share above s.peak_share, else
+    None: a k:1 resonance, the caller's jumps).  The verdict is
 
     * ``("peak", points)``: the energy falls s.fold_probe_drop below the largest on the way while the followed
       mode keeps s.fund_share of the fundamental: the family's energy maximum (points: from the last one up to it);
     * ``("locked", (1, mode))``: the energy comes back above that maximum, or another mode takes more than
       1 - s.fund_share of the fundamental first (its energy folds and recovers as that mode's motion grows): a 1:1
       internal resonance with that mode (1-based), which ends the followed mode's family;
-    * None when the path cannot tell within s.fold_probe_steps steps or Newton fails."""
+    * None when the path cannot tell within s.fold_probe_steps steps or the engine stops (its step below
+      1e-3 of the first)."""
     nD = prob.nb * prob.ns
     (_, _, _, u1), (_, E0, _, u0) = pts[-2], pts[-1]
-    h = h0 = float(np.linalg.norm(u0 - u1))
-    if not h > 0:
+    h0 = float(np.linalg.norm(scale_of(prob, u0) * (u0 - u1)))
+    if not h0 > 0:
         return None
     share0 = fundamental_shares(prob, u0)
-    corrector = ContinuationSettings(step=h, step_min=0.0, step_max=np.inf, max_iter=s.fold_probe_iterations)
-    u, t = u0, _null_direction(prob.jacobian(u0)[1], u0 - u1)
+    settings = ContinuationSettings(step=h0, step_min=1e-3 * h0, step_max=h0, max_iter=s.fold_probe_iterations)
     path, E_top, fell = [], E0, False
-    for _ in range(s.fold_probe_steps):
-        try:                                     # the engine's corrector: on the arclength plane t . (v - pred) = 0
-            v, J, _, _ = correct(prob, u + h * t, t, corrector, tol)
-            v = v if v[-1] > 0 else None
-        except (CorrectorFailure, np.linalg.LinAlgError):
-            v = None
-        if v is None:
-            h /= 2
-            if h < 1e-3 * h0:
-                return None
-            continue
-        if family_share(prob, v) < s.peak_share:
-            return None                          # a partner harmonic grows: a k:1 resonance, not this fold
-        E = prob.energy(v)
-        path.append((v[nD] / prob.beta, E, v[-1] * prob.w_r / (2 * math.pi), v))
-        shares = fundamental_shares(prob, v)
-        if (fell and E > E_top * (1 + s.fold_energy_rtol)) or shares[prob.r] < s.fund_share:
-            grown = shares - share0
-            grown[prob.r] = -np.inf
-            return "locked", (1, int(np.argmax(grown)) + 1)
-        if E > E_top and not fell:
-            E_top = E
-        elif E < E_top:
-            fell = True
-            if E < E_top * (1 - s.fold_probe_drop):
-                top = int(np.argmax([p[1] for p in path]))
-                return "peak", (path[:top + 1] if path[top][1] > E0 else [])
-        t = _null_direction(J, v - u)
-        u = v
+    try:
+        steps = pseudo_arclength(prob, u0, _null_direction(prob.jacobian(u0)[1], u0 - u1), settings, tol)
+        next(steps, None)                                     # u0 itself
+        for point in itertools.islice(steps, s.fold_probe_steps):
+            v = point.u
+            if not v[-1] > 0 or family_share(prob, v) < s.peak_share:
+                return None                      # a partner harmonic grows: a k:1 resonance, not this fold
+            E = prob.energy(v)
+            path.append((v[nD] / prob.beta, E, v[-1] * prob.w_r / (2 * math.pi), v))
+            shares = fundamental_shares(prob, v)
+            if (fell and E > E_top * (1 + s.fold_energy_rtol)) or shares[prob.r] < s.fund_share:
+                grown = shares - share0
+                grown[prob.r] = -np.inf
+                return "locked", (1, int(np.argmax(grown)) + 1)
+            if E > E_top and not fell:
+                E_top = E
+            elif E < E_top:
+                fell = True
+                if E < E_top * (1 - s.fold_probe_drop):
+                    top = int(np.argmax([p[1] for p in path]))
+                    return "peak", (path[:top + 1] if path[top][1] > E0 else [])
+    except np.linalg.LinAlgError:
+        return None
     return None
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["SkeletonSettings", "LabelSettings", "Follow", "Skip", "TONGUE_MODES"]
+__all__ = ["SkeletonSettings", "LabelSettings", "TongueBranchSettings", "Follow", "Skip", "TONGUE_MODES"]
 
 
 @dataclass(frozen=True)
@@ -17,7 +17,13 @@ class SkeletonSettings:
     """How the skeleton (condensed HB stepped in the followed mode's modal amplitude a, skeleton.py) is computed.
 
     harmonics : odd harmonics of the skeleton's harmonic balance (9: the aircraft's mode 20 below 1e-6 of the
-        exact frequency at 1 J; its truncation error is estimated per point, Skeleton.truncation_at).
+        exact frequency at 1 J; its truncation error is estimated per point, Skeleton.truncation_at);
+    max_unknowns : where its condensed problem (n_s N_b + 2 unknowns) would be larger, it has fewer harmonics (two
+        fewer at a time, at least 3): a nonlinearity on every element (a von Karman beam: n_s = 64 deformations for
+        63 DOFs) makes the condensed problem as large as the full one, and with 9 harmonics (a full basis, N_b = 19)
+        each Newton step on its 1218 unknowns took 1-2 s here; the 16-element beam's skeleton had not finished
+        after 24 min.  At 3 harmonics (450 unknowns) it takes under 3 min; the labels then allow for the coarser
+        skeleton's own truncation estimate.
     reach, follow_reach : the skeleton is stepped up to this multiple of the branch's energy_max with tongues
         skipped (the jumps' targets lie beyond the tongues) or followed (only labels are asked, up to energy_max).
     start_shift : it starts where its frequency has moved from the linear mode's by about this much.
@@ -62,6 +68,7 @@ class SkeletonSettings:
     """
 
     harmonics: int = 9
+    max_unknowns: int = 500
     reach: float = 10.0
     follow_reach: float = 2.0
     start_shift: float = 1e-6
@@ -140,6 +147,17 @@ class LabelSettings:
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3
+
+
+@dataclass(frozen=True)
+class TongueBranchSettings:
+    """When ``continue_tongue`` (driver/tongue_branch.py) stops: after back_on_backbone consecutive points back on
+    the backbone below the tongue's entry (a tongue that is a loop off the backbone), a point lying on the
+    backbone's frequency-energy curve when within on_backbone_rtol of its frequency (the backbone's own accuracy
+    target, 1e-4)."""
+
+    back_on_backbone: int = 3
+    on_backbone_rtol: float = 1e-4
 
 
 @dataclass(frozen=True)

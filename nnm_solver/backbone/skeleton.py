@@ -270,12 +270,16 @@ class Skeleton:
 
 def compute_skeleton(system, mode, E_reach, settings=SkeletonSettings(), E_start=None):
     """The Skeleton of linear mode ``mode`` (1-based) of the ModalSystem ``system`` up to E_reach (J), with
-    settings.harmonics.  E_start (J, default E_reach): the reach its first amplitude is chosen for (below)."""
+    settings.harmonics (fewer where its condensed problem would exceed settings.max_unknowns).  E_start (J, default E_reach): the reach its first amplitude is chosen for (below)."""
     from ..orbits.condensed_hb import CondensedHBProblem
     from ..orbits.hb_basis import HBBasis
     s = settings
     r = int(mode) - 1
-    prob = CondensedHBProblem(system, r, HBBasis(s.harmonics, "odd" if system.elements.odd else "full"))
+    kind, H = "odd" if system.elements.odd else "full", s.harmonics
+    prob = CondensedHBProblem(system, r, HBBasis(H, kind))
+    while prob.nb * prob.ns + 2 > s.max_unknowns and H > 3:       # (settings.max_unknowns: a large condensed problem)
+        H -= 2
+        prob = CondensedHBProblem(system, r, HBBasis(H, kind))
     # start in the linear regime: at most 1e-6 of the reach (E = w^2 a^2 / 2 for the linear mode), lower until
     # the frequency is the linear one to 1e-8 (also where Newton finds no orbit there: a reach far above the
     # family's end, e.g. 1e6 x a tongue's entry energy on the 2-DOF benchmark, puts 1e-6 of it beyond the family)

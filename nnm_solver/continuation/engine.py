@@ -123,16 +123,25 @@ class LeastSquares:
         self.rcond = d.min() / max(d.max(), 1e-300)
 
     def solve(self, b):
+        """x of A x = b (least squares for m > n).  An exactly singular A gives a non-finite x, as LU does (the
+        triangular solve's LinAlgError at a zero pivot is not raised): the corrector reports it as its own failure
+        (a singular corrector system) and the continuation halves its step (mode 20 of the aircraft with 13
+        condensed harmonics met one on its way into a tongue, 2026-12-07)."""
         if self._lu is not None:
             return sla.lu_solve(self._lu, b, check_finite=False)
         if self._Q is not None:
-            return sla.solve_triangular(self.R, self._Q.T @ b, check_finite=False)
+            return self._triangular(self._Q.T @ b)
         c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
                                    lwork=64 * max(1, np.ndim(b) and (1 if np.ndim(b) == 1 else np.shape(b)[1])))
         if info != 0:
             raise np.linalg.LinAlgError(f"ormqr failed (info {info})")
-        x = sla.solve_triangular(self.R, c[:self.n], check_finite=False)
+        x = self._triangular(c[:self.n])
         return x[:, 0] if np.ndim(b) == 1 else x
+
+    def _triangular(self, c):
+        if not np.all(np.diag(self.R)):
+            return np.full(np.shape(c), np.nan)
+        return sla.solve_triangular(self.R, c, check_finite=False)
 
 
 def tangent(J, previous, w=None):
@@ -219,7 +228,8 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 
-def _scale(problem, u):
+def scale_of(problem, u):
+    """The problem's positive weights at u (problem.scale), or ones: steps are measured in |w * du|."""
     return problem.scale(u) if hasattr(problem, "scale") else np.ones(len(u))
 
 
@@ -233,14 +243,16 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     locate the events inside the step: it jumped over a feature of the branch).  When a step cannot be completed even at ``step_min`` the generator returns with
     a ``StopIteration`` value: the reason (str).  Step lengths are in the problem's scaled units.
     """
-    w = _scale(problem, u0)
+    w = scale_of(problem, u0)
     p0 = p0 / np.linalg.norm(w * p0)
     try:
         u, J, it, err, factor = correct_factored(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
         return f"the starting point did not converge: {exc}"
-    w = _scale(problem, u)
+    w = scale_of(problem, u)
     p, factor = tangent_factored(J, p0, w, factor)
+    if not np.all(np.isfinite(p)):
+        return "the starting point has no tangent (a singular Jacobian)"
     problem.accept(u, J)
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
@@ -260,6 +272,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
                 if reason:
                     raise CorrectorFailure(reason)
             p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
+            if not np.all(np.isfinite(p_new)):
+                raise CorrectorFailure("no tangent at the new point (a singular Jacobian)")
             cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
@@ -286,7 +300,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             s_clean = s
         failures = 0
         previous = (u, J, p, factor, w)
-        w = _scale(problem, u_new)
+        w = scale_of(problem, u_new)
         u, J, p, factor = u_new, J_new, p_new / np.linalg.norm(w * p_new), factor_new
         problem.accept(u, J)
         if (yield ContinuationPoint(u, p, J, it, s, err, factor)) == REFUSE:

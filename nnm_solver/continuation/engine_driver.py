@@ -2,7 +2,7 @@
 
 The engine (continuation.pseudo_arclength) is a generator of converged points; ``send(REFUSE)`` makes it go back
 and halve the step.  The iterator judges a point (its events located, for which its Floquet multipliers are
-needed) before it takes the next.  With ``ahead``, the driver computes the next AHEAD_POINTS points meanwhile, and
+needed) before it takes the next.  With ``ahead``, the driver computes the next ``ahead_points`` (2) meanwhile, and
 each point's multipliers are started in the worker threads as soon as the engine gives it (``launch``: the
 problem's state is then that point's; a 548-mode eigenproblem takes about as long as a step, so the two cores
 share the work).  A refusal of a point the engine has gone beyond restarts the engine at the point before the
@@ -15,21 +15,19 @@ from dataclasses import replace
 
 from .engine import REFUSE, pseudo_arclength
 
-__all__ = ["EngineDriver", "AHEAD_POINTS"]
-
-#: points computed ahead of the one being judged (with the multipliers in the background)
-AHEAD_POINTS = 2
-
+__all__ = ["EngineDriver"]
 
 class EngineDriver:
     """The engine of one branch: ``next(command, before)``, ``ahead()``, ``restart(engine)``, ``close()``.
 
     problem, settings, tol : the engine's (for a restart after a refusal).  launch : optional callable(cp) run on
     each point as the engine gives it, its result kept as ``cp.spectrum`` (the multipliers started in the
-    background, problem.multipliers_later)."""
+    background, problem.multipliers_later).  ahead_points : points computed ahead of the one being judged (2: the
+    multipliers of the next point run in the background while the engine steps; more only hold more memory)."""
 
-    def __init__(self, engine, problem, settings, tol, launch=None):
+    def __init__(self, engine, problem, settings, tol, launch=None, ahead_points=2):
         self.engine = engine
+        self.ahead_points = int(ahead_points)
         self.problem, self.settings, self.tol = problem, settings, tol
         self.launch = launch
         self.pending = deque()         # ("point", ContinuationPoint) or ("stop", reason): computed ahead
@@ -64,8 +62,10 @@ class EngineDriver:
             self.last_step = out[1].step
         return out
 
-    def ahead(self, points=AHEAD_POINTS):
-        """Compute the engine's next points now, up to ``points`` (given out by the next calls of ``next``)."""
+    def ahead(self, points=None):
+        """Compute the engine's next points now, up to ``points`` (default self.ahead_points; given out by the next
+        calls of ``next``)."""
+        points = self.ahead_points if points is None else points
         while len(self.pending) < points and not (self.pending and self.pending[-1][0] == "stop"):
             self.pending.append(self._step(None))
 

@@ -27,8 +27,8 @@ from .iterator import NNMIterator
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
 from ..model.model import Model
-from .problems import METHODS, RITZ_MIN_DOF, check_positive, hb_problem, modal_basis, shooting_problem, start_amplitude
-from .settings import Continuation, HarmonicBalance, Shooting, method_of
+from .problems import METHODS, check_positive, hb_problem, modal_basis, shooting_problem, start_amplitude
+from .settings import SIZES, Continuation, HarmonicBalance, Shooting, method_of
 
 __all__ = ["iter_nnm", "continue_nnm", "NNMIterator", "METHODS", "from_keywords"]
 
@@ -54,7 +54,7 @@ def from_keywords(method=None, continuation=None, tongues=None, keywords=None):
     if not isinstance(c, Continuation):
         raise NNMInputError(f"continuation must be a Continuation(...), got {type(c).__name__}")
     t = _tongues_of(tongues)
-    own = {f.name for f in fields(m)}
+    own = {f.name for f in fields(m)} - set(m.record_fields)        # (the branch's record: not asked for)
     other = {f.name for f in fields(HarmonicBalance if isinstance(m, Shooting) else Shooting)} - own
     cont = {f.name for f in fields(Continuation)}
     mk, ck = {}, {}
@@ -138,8 +138,10 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     cs = ContinuationSettings(step=cont.step, step_min=cont.step_min, step_max=np.inf, max_angle=cont.max_angle,
                               max_correction=cont.max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
-    if freq_tol is not None:
-        settings = settings.replace(freq_tol=float(freq_tol))
+    # the branch's record: the request's own fields, with what the problem resolved (steps, basis, symmetry, ...)
+    settings = replace(method, **{f.name: getattr(settings, f.name) for f in fields(settings)
+                                  if f.name not in ("freq_tol", "error_estimate", "max_steps_per_period",
+                                                    "max_harmonics")}, freq_tol=freq_tol)
     # the skeleton (backbone/skeleton.py) labels the points and guides the jumps over tongues; with harmonic
     # balance it has the branch's harmonics (at most the skeleton's): the same truncation
     sk_h = tongues.skeleton.harmonics if name == "shooting" else min(int(method.harmonics), tongues.skeleton.harmonics)
@@ -159,7 +161,7 @@ def _skeleton_system(model, mode, harmonics):
     """The modal system of the skeleton (backbone/skeleton.py) with ``harmonics``: every mode, or for a large model
     the Ritz basis for those harmonics (model/ritz.py; the one a harmonic-balance branch with as many harmonics
     built already, from its cache)."""
-    if model.n > RITZ_MIN_DOF:
+    if model.n > SIZES.ritz_min_dof:
         return ritz_system(model, mode, harmonics)
     return modal_system(model)
 
@@ -181,7 +183,7 @@ def continue_nnm(model, mode, energy_max, method=None, *, continuation=None, ton
         backbone/policy.py describes the algorithm, backbone/settings.py its settings.
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when the Hill matrix
-        has at most HILL_AUTO_SIZE rows).
+        has at most driver/settings.SIZES.hill_auto_size rows).
     locate_events : locate folds and stability changes between points (default True).
     on_point : optional callable(point: Point) called after each converged point.
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').

@@ -30,14 +30,11 @@ from ..orbits.forced_hill import damped_hill_multipliers
 from ..results.forced import STABILITY_METHODS, ForcedResponse
 from ..stability.floquet import is_stable
 from .forced_points import first_orbit, frequency_tangent, land_on_frequency, locate_fold
-from .problems import HILL_AUTO_SIZE, check_positive
+from .problems import check_positive
+from .settings import SIZES
 
-__all__ = ["forced_response", "CONDENSE_RATIO"]
+__all__ = ["forced_response"]
 
-#: condensed=None condenses when n_s * CONDENSE_RATIO < n (few elements in a large model)
-CONDENSE_RATIO = 4
-#: largest number of unknowns of the uncondensed problem (its Jacobian is dense)
-MAX_UNCONDENSED = 20000
 
 
 def _check_vector(name, value, n, what="entries"):
@@ -72,7 +69,7 @@ def _check_range(f_range_hz):
 
 def _stability_choice(stability, n, hill_H):
     if stability is None:
-        return "hill" if 2 * n * (2 * hill_H + 1) <= HILL_AUTO_SIZE else "fold"
+        return "hill" if 2 * n * (2 * hill_H + 1) <= SIZES.hill_auto_size else "fold"
     if stability is False:
         return "none"
     if stability not in STABILITY_METHODS:
@@ -161,7 +158,7 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
                             f"structure")
     ns = len(el)
     if condensed is None:
-        condensed = bool(ns > 0 and ns * CONDENSE_RATIO < n and c_modal is not None)
+        condensed = bool(ns > 0 and ns * SIZES.condense_ratio < n and c_modal is not None)
     elif not isinstance(condensed, (bool, np.bool_)):
         raise NNMInputError(f"condensed must be True, False or None (automatic), got {condensed!r}")
     condensed = bool(condensed)
@@ -171,7 +168,7 @@ def forced_response(model, force, f_range_hz, damping, harmonics=7, condensed=No
         raise NNMInputError("condensed=True needs modal damping, but damping_matrix couples the modes: "
                             "use condensed=False (or a damping matrix diagonal in the modal basis)")
     fb = ForcedBasis(H, basis, samples)
-    if not condensed and len(fb) * n > MAX_UNCONDENSED:
+    if not condensed and len(fb) * n > SIZES.max_uncondensed:
         raise NNMInputError(f"the uncondensed equations would have {len(fb) * n} unknowns (dense Jacobian); use "
                             f"condensed=True (with modal damping) or fewer harmonics")
     method = _stability_choice(stability, n, hill_H)

@@ -357,8 +357,13 @@ class NNMIterator:
             if steps:
                 message += (f"; {len(steps)} points exceed freq_tol = {self.freq_tol:g} (the finer step did not "
                             f"converge next to them, e.g. near a fold: see freq_error)")
-            if len(over) > len(steps):
-                message += (f"; {len(over) - len(steps)} points exceed freq_tol = {self.freq_tol:g} because of the "
+            rest = len(over) - len(steps)
+            if rest and self._harmonics.freq_tol and hasattr(self._problem, "basis"):
+                message += (f"; {rest} points exceed freq_tol = {self.freq_tol:g} (harmonic balance, "
+                            f"{self._problem.basis.harmonics} harmonics at the end, at most {self._harmonics.max_harmonics}: "
+                            f"more did not converge next to them or were not allowed; see freq_error)")
+            elif rest:
+                message += (f"; {rest} points exceed freq_tol = {self.freq_tol:g} because of the "
                             f"corrector's tolerance: lower tol (now {self._tol:g})")
         if not self.settings.floquet and self.points:
             message += ("; stability was not computed (floquet off: the points are not known to be stable, and "

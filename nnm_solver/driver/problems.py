@@ -17,21 +17,19 @@ from ..orbits.harmonic_balance import HBProblem
 from ..orbits.hb_basis import BASES, HBBasis
 from ..orbits.shooting import ShootingProblem
 from ..results.settings import HarmonicBalanceSettings, ShootingSettings
+from .settings import SIZES
 
 __all__ = ["METHODS", "START_NONLINEARITY", "HILL_AUTO_SIZE", "RITZ_MIN_DOF", "MODAL_BASES", "check_positive",
            "start_amplitude", "modal_basis", "shooting_problem", "hb_problem"]
 
-#: fraction of the linear potential energy carried by the springs at the first point
-START_NONLINEARITY = 1e-5
 
 #: method names accepted by iter_nnm / continue_nnm ("harmonic_balance" is an alias of "hb")
 METHODS = ("shooting", "hb")
 
-#: largest Hill matrix (rows) for which HB computes the multipliers when floquet=None
-HILL_AUTO_SIZE = 1000
+#: the names of earlier releases for the fields of driver/settings.SIZES
+START_NONLINEARITY, HILL_AUTO_SIZE, RITZ_MIN_DOF = SIZES.start_nonlinearity, SIZES.hill_auto_size, SIZES.ritz_min_dof
 
-#: harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs
-RITZ_MIN_DOF = 2000
+
 MODAL_BASES = ("full", "ritz")
 
 
@@ -46,7 +44,7 @@ def start_amplitude(system, k, energy_max, energy_min=None):
     """Modal amplitude a (sqrt(kg) m) of the first point along linear mode k (0-based).
 
     With energy_min: the linear amplitude of that energy.  Otherwise nearly linear: the springs hold
-    START_NONLINEARITY of the linear potential w^2 a^2 / 2, and the energy stays below 1 % of energy_max.
+    SIZES.start_nonlinearity (driver/settings.py) of the linear potential w^2 a^2 / 2, and the energy stays below 1 % of energy_max.
     """
     w2 = system.omega2[k]
     if energy_min is not None:
@@ -64,11 +62,11 @@ def start_amplitude(system, k, energy_max, energy_min=None):
             return float(np.sum(elements.abs_potential(b * a))) / (0.5 * w2 * a * a)
 
     lo, hi = 1e-30, a_cap
-    if share(hi) <= START_NONLINEARITY:
+    if share(hi) <= SIZES.start_nonlinearity:
         return a_cap
     for _ in range(200):  # bisection in log a
         mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if share(mid) < START_NONLINEARITY else (lo, mid)
+        lo, hi = (mid, hi) if share(mid) < SIZES.start_nonlinearity else (lo, mid)
         if hi / lo < 1 + 1e-12:
             break
     return hi
@@ -78,7 +76,7 @@ def modal_basis(model, opts):
     """The modal basis harmonic balance works in: "full" (every mode, exact) or "ritz" (model/ritz.py)."""
     basis = opts.get("modal_basis")
     if basis is None:
-        return "ritz" if model.n > RITZ_MIN_DOF else "full"
+        return "ritz" if model.n > SIZES.ritz_min_dof else "full"
     if basis not in MODAL_BASES:
         raise NNMInputError(f"modal_basis must be one of {MODAL_BASES} or None (automatic), got {basis!r}")
     return basis
@@ -144,7 +142,7 @@ def hb_problem(system, k, a0, opts, tol, energy_max, floquet):
         p0 = np.zeros_like(u0)
         p0[:-1] = A0.ravel() / a0
     if floquet is None:
-        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= HILL_AUTO_SIZE
+        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= SIZES.hill_auto_size
     cutoff = getattr(system, "cutoff_hz", None)
     settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
                                        energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed),

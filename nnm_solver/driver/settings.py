@@ -3,7 +3,9 @@ r"""What a user asks for, as typed frozen objects: the method and the continuati
     continue_nnm(model, mode, energy_max, method=Shooting(integrator="gauss6") | HarmonicBalance(harmonics=9),
                  continuation=Continuation(max_points=200), tongues=Follow() | Skip())
 
-Every default is written here once (the tongues' settings: backbone/settings.py).  The keywords of earlier releases
+Every default is written once: the methods' in results/settings.py (``Shooting``, ``HarmonicBalance``: the same
+objects are the branch's record, ``branch.settings``, with every None resolved), the continuation's here, the
+tongues' in backbone/settings.py.  The keywords of earlier releases
 (``integrator=``, ``steps_per_period=``, ``harmonics=``, ``max_points=``, ...) are mapped onto these objects by
 ``from_keywords`` (api.py), so old calls give the same objects.
 
@@ -24,69 +26,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import NNMInputError
+from ..results.settings import HarmonicBalance, Shooting
 
-__all__ = ["Shooting", "HarmonicBalance", "Continuation", "method_of"]
-
-
-@dataclass(frozen=True)
-class Shooting:
-    """Shooting (orbits/shooting.py) with the exact monodromy.
-
-    integrator : one of nnm.INTEGRATORS ("gauss6": order 6; "newmark": the seed paper's, order 2; "gauss4");
-    steps_per_period : time steps a period (None: the integrator's default, integrators/registry.py: gauss6 100,
-        Newmark 200); rounded up to a multiple of 4 for quarter-period shooting of symmetric orbits;
-    symmetric : half-period shooting (None: when every element's force is odd); reversible : orbits starting at
-        rest (None: with symmetric, or for even forces);
-    tol : relative periodicity tolerance ||H|| / ||z0|| (seed eq. 11);
-    freq_tol : raise the steps where a point's estimated frequency error exceeds it (None: never; the module
-        docstring says why 1e-4);
-    error_estimate : estimate each point's relative frequency error (branch.freq_error; step doubling);
-    max_steps_per_period : the most steps per period the freq_tol refinement goes to.
-    """
-
-    integrator: str = "gauss6"
-    steps_per_period: int | None = None
-    symmetric: bool | None = None
-    reversible: bool | None = None
-    tol: float = 1e-6
-    freq_tol: float | None = 1e-4
-    error_estimate: bool = True
-    max_steps_per_period: int = 20000
-    name = "shooting"
-
-    def options(self):
-        """The orbit problem's options (driver/problems.py)."""
-        return dict(steps_per_period=self.steps_per_period, symmetric=self.symmetric, reversible=self.reversible,
-                    integrator=self.integrator)
-
-
-@dataclass(frozen=True)
-class HarmonicBalance:
-    """Harmonic balance (orbits/harmonic_balance.py; condensed onto the nonlinear elements: condensed_hb.py).
-
-    harmonics : highest harmonic; samples : AFT time samples (None: enough for a cubic without aliasing);
-    basis : "odd" / "full" (None: "odd" for odd forces); condensed : solve the equations condensed onto the
-    elements' deformations (n_s (H + 1) / 2 + 2 unknowns whatever the model size); modal_basis : "full" or "ritz"
-    (None: Ritz above driver.problems.RITZ_MIN_DOF DOFs); tol : relative residual; error_estimate : each point's
-    truncation error (orbits/hb_error.py); freq_tol : where a point's estimated truncation error exceeds it, the
-    branch goes on with two more harmonics from there (None: never), up to max_harmonics
-    (driver/refinement.HarmonicRefinement; problems on every mode only, not a Ritz basis).
-    """
-
-    harmonics: int = 7
-    samples: int | None = None
-    basis: str | None = None
-    condensed: bool = False
-    modal_basis: str | None = None
-    tol: float = 1e-8
-    error_estimate: bool = True
-    freq_tol: float | None = 1e-4
-    max_harmonics: int = 31
-    name = "hb"
-
-    def options(self):
-        return dict(harmonics=self.harmonics, samples=self.samples, basis=self.basis, condensed=self.condensed,
-                    modal_basis=self.modal_basis)
+__all__ = ["Shooting", "HarmonicBalance", "Continuation", "Sizes", "SIZES", "method_of"]
 
 
 @dataclass(frozen=True)
@@ -113,6 +55,30 @@ class Continuation:
     max_period_step: float = 0.005
     max_points: int = 500
     max_refusals: int = 3
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """Where the driver changes its route with the model's size, and how small the first orbit is.
+
+    start_nonlinearity : fraction of the linear potential energy carried by the nonlinear elements at a branch's
+        first point (1e-5: the first point is linear to that order, far below any frequency accuracy asked);
+    hill_auto_size : largest Hill matrix (rows) for which harmonic balance computes the multipliers when
+        floquet=None (a dense eigenproblem of that size costs about 0.1 s here);
+    ritz_min_dof : harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs;
+    condense_ratio : a forced response with condensed=None is condensed when n_s * condense_ratio < n (few elements
+        in a large model); max_uncondensed : the largest uncondensed forced HB system (basis functions x n).
+    """
+
+    start_nonlinearity: float = 1e-5
+    hill_auto_size: int = 1000
+    ritz_min_dof: int = 2000
+    condense_ratio: int = 4
+    max_uncondensed: int = 20000
+
+
+#: the driver's sizes (the defaults above, written once)
+SIZES = Sizes()
 
 
 def method_of(method):

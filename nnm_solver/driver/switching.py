@@ -95,7 +95,7 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     cs = ContinuationSettings(step=float(step), step_min=1e-8, step_max=np.inf, max_angle=max_angle,
                               max_correction=max_correction)
     settings = ShootingSettings(steps_per_period=spp * factor, tol=tol, symmetric=False, reversible=False,
-                                energy_max=float(energy_max), floquet=bool(floquet), integrator=integrator)
+                                energy_max=float(energy_max), floquet=bool(floquet), integrator=integrator, freq_tol=None)
     engine = pseudo_arclength(problem, u_e + step * d, d, cs, tol)
     it = NNMIterator(model, branch.mode, problem, system, engine, settings, energy_max, max_points, cs, tol)
     others = [e for e in branch.events if e["kind"] in SWITCHABLE and "x0" in e]

@@ -7,21 +7,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..backbone.settings import TongueBranchSettings
 from ..errors import NNMInputError
 from ..results.branch import Point
 from .api import iter_nnm
 
-__all__ = ["continue_tongue", "BACK_ON_BACKBONE", "ON_BACKBONE_RTOL"]
+__all__ = ["continue_tongue"]
 
 
-#: continue_tongue stops after this many consecutive points back on the backbone below the tongue's entry
-BACK_ON_BACKBONE = 3
-#: relative frequency distance within which a point lies on the backbone's own curve (energy-frequency)
-ON_BACKBONE_RTOL = 1e-4
-
-
-def _on_backbone(branch, p):
-    """Does point ``p`` lie on the backbone ``branch``'s frequency-energy curve (within ON_BACKBONE_RTOL), inside
+def _on_backbone(branch, p, rtol):
+    """Does point ``p`` lie on the backbone ``branch``'s frequency-energy curve (within rtol, relative), inside
     the backbone's energy range?"""
     E, f = np.asarray(branch.energy, float), np.asarray(branch.frequency_hz, float)
     order = np.argsort(E)
@@ -29,19 +24,20 @@ def _on_backbone(branch, p):
     if not (E[0] <= p.energy <= E[-1]) or np.any(np.diff(E) <= 0):
         return False
     f_b = np.interp(np.log(p.energy), np.log(E), f)
-    return abs(p.frequency_hz - f_b) <= ON_BACKBONE_RTOL * f_b
+    return abs(p.frequency_hz - f_b) <= rtol * f_b
 
 
-def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
+def continue_tongue(branch, tongue, energy_max=None, max_points=500, *, settings=TongueBranchSettings(), **options):
     """The internal-resonance tongue ``tongue`` (one of ``branch.tongues``, or its index) as its own branch.
 
     branch : a backbone computed with ``continue_nnm(..., tongues="skip")`` (shooting).  The
     continuation restarts at the tongue's entry orbit, heads into the tongue and follows it through
     its turning points until it is back on the backbone above the entry energy (message: where), back on
-    it below the entry (BACK_ON_BACKBONE points descending: the tongue is a loop off the backbone), closes
+    it below the entry (settings.back_on_backbone points descending: the tongue is a loop off the backbone), closes
     a loop, or reaches energy_max (default: 100 x the entry energy).  Points are labelled by their
     harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
-    branch's own steps_per_period, symmetric and tol are the defaults).
+    branch's own steps_per_period, symmetric and tol are the defaults); settings : TongueBranchSettings
+    (backbone/settings.py).
     """
     tongue = branch.pick("tongues", tongue)
     if tongue.get("family_end"):
@@ -70,10 +66,10 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, **options):
                       f"tongue's entry at {E_in:.6g} J")
             break
         # a tongue that closes back onto the backbone below its entry: the continuation would retrace the backbone
-        # down to the linear mode; stop after BACK_ON_BACKBONE such points
+        # down to the linear mode; stop after settings.back_on_backbone such points
         below = below + 1 if (in_tongue and p.label == "backbone" and p.energy < E_in and p.energy < last
-                              and _on_backbone(branch, p)) else 0
-        if below >= BACK_ON_BACKBONE:
+                              and _on_backbone(branch, p, settings.on_backbone_rtol)) else 0
+        if below >= settings.back_on_backbone:
             it.cancel(f"the tongue closes back onto the backbone below its entry (at E = {p.energy:.6g} J, "
                       f"f = {p.frequency_hz:.6g} Hz; entry {E_in:.6g} J): a loop off the backbone")
             break

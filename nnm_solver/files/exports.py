@@ -195,10 +195,12 @@ def export_backbone_csv(path, branch, dof=None, kind="peak", samples=256, *, ver
 def uff_nodes(model):
     """How model coordinates become UFF nodes: (node numbers (N,), per-node values (N, k) from x (n,)), k = 3 or 6.
 
-    Returns (node_nums, k, fn) with fn(x) -> (N, k) values."""
+    Returns (node_nums, k, fn) with fn(x) -> (N, k) values.  Scalar points (a superelement's modal coordinates,
+    'spoint 1001 modal') are not nodes of the shape and are left out."""
     dmap = DofMap.from_labels(model.dof_labels)
     if dmap is not None and any(d in _UFF_DIR for _, d in dmap.entries):
-        nodes = dmap.nodes
+        physical = {nd for nd, d in dmap.entries if d in _UFF_DIR}
+        nodes = [nd for nd in dmap.nodes if nd in physical]
         ints = all(isinstance(nd, int) for nd in nodes)
         nums = np.array(nodes if ints else range(1, len(nodes) + 1), dtype=np.int64)
         row = {nd: r for r, nd in enumerate(nodes)}

@@ -19,7 +19,9 @@ Its derivative with respect to the state and to h (delta h = 1 on the extra colu
 Gauss (s stages, Nystrom form as in gauss.py): R_l = Q_l - q - c_l h v - h^2 sum_j Abar_lj f(Q_j) = 0,
     J = I + h^2 Abar (x) (Omega^2 + K_j);  J dQ = dq 1 + h c dv + dh (c v + 2 h Abar f(Q)),
     dq1 = dq + h dv + dh (v + 2 h bbar.f(Q)) + h^2 bbar.df,  dv1 = dv + dh b.f(Q) + h b.df,  df_l = -(Omega^2 + K_l) dQ_l.
-Tested against finite differences of the state sweeps (tests/test_polynomial_stiffness.py).
+Tested against finite differences of the state sweeps (tests/test_polynomial_stiffness.py).  A step whose Newton
+iteration meets a NaN or an infinity (an orbit that escapes, a NaN start) ends the sweep with ok = False, the failed
+orbit the corrector refuses, instead of the LinAlgError of the linear solve (tests/test_general_nan.py).
 """
 from __future__ import annotations
 
@@ -67,6 +69,17 @@ def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
                     acc += T[r0 + a, b] * Bq[r0 + b, i]
                 YT[i, r0 + a] = acc
     return f, matmul_t(BqT, YT)
+
+
+@_jit
+def _finite(nR, J):
+    """True when the residual norm and the Newton matrix are finite (NaN or inf: the step failed)."""
+    if not np.isfinite(nR):
+        return False
+    for v in J.ravel():
+        if not np.isfinite(v):
+            return False
+    return True
 
 
 @_jit
@@ -125,8 +138,8 @@ def _newmark(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, inde
             if nR <= NEWTON_RTOL * scale:
                 ok = True
                 break
-            if it == NEWTON_MAX:
-                ok = nR <= 1e-9 * scale
+            if it == NEWTON_MAX or not _finite(nR, J):     # a NaN/inf: a failed step, not a LinAlgError
+                ok = it == NEWTON_MAX and nR <= 1e-9 * scale
                 break
             q1 = q1 - lapack_solve(J, R)
         a1 = -omega2 * q1 - f
@@ -195,8 +208,8 @@ def _gauss(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index,
             if nR <= NEWTON_RTOL * scale:
                 ok = True
                 break
-            if it == NEWTON_MAX:
-                ok = nR <= 1e-9 * scale
+            if it == NEWTON_MAX or not _finite(nR, J):     # a NaN/inf: a failed step, not a LinAlgError
+                ok = it == NEWTON_MAX and nR <= 1e-9 * scale
                 break
             dX = lapack_solve(J, R)
             for l in range(s):

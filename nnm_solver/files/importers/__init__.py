@@ -2,9 +2,10 @@
 
 One module per format: ``matlab`` (.mat v5 and v7.3), ``matrixmarket`` (.mtx pairs), ``abaqus``
 (``*MATRIX OUTPUT`` files), ``ansys`` (.full, optional ``ansys-mapdl-reader``), ``nastran`` (.op4,
-.op2, optional ``pyNastran``), ``toml`` (the model
-description naming matrix files, springs, units and a display mesh), ``meshfile`` (display meshes
-through the optional ``meshio``); ``common`` holds the DOF map and units.  Measured signals (test data,
+.op2, optional ``pyNastran``; ``nastran_mesh``: a bulk data file's geometry as the display mesh), ``toml``
+(the model description naming matrix files, springs, units and a display mesh; its ``[[springs]]`` in
+``toml_springs``, ``polynomial_stiffness`` in ``toml_coupled``), ``meshfile`` (display meshes through the optional
+``meshio``); ``common`` holds the DOF map and units.  Measured signals (test data,
 not models): ``measured`` (the ``Measurement`` record, CSV and .mat), ``uff58`` (UFF 58 through ``pyuff``),
 ``measured_units`` (g, mm, lbf ... to SI); ``measured_read.read_measured`` picks the reader by suffix.  ``import_model`` picks
 the importer by file suffix; ``nnm_solver.load_model`` uses it for every suffix but HDF5.

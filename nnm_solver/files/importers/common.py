@@ -23,7 +23,11 @@ DIRECTIONS = ("ux", "uy", "uz", "rx", "ry", "rz")
 _ALIASES = {"x": "ux", "y": "uy", "z": "uz", "u1": "ux", "u2": "uy", "u3": "uz",
             "rotx": "rx", "roty": "ry", "rotz": "rz", "ur1": "rx", "ur2": "ry", "ur3": "rz"}
 
-_LABEL = re.compile(r"^node (\S+) (\S+)$")
+#: directions of a Nastran scalar point (SPOINT, component 0): "modal" for the modal coordinates of a superelement
+#: (its q-set: QSET/QSET1), "scalar" for any other; their labels read "spoint 1001 modal"
+SCALAR_DIRECTIONS = ("modal", "scalar")
+
+_LABEL = re.compile(r"^(node|spoint) (\S+) (\S+)$")
 
 
 def direction_name(d, where=""):
@@ -39,6 +43,8 @@ def direction_name(d, where=""):
             return s
         if s in _ALIASES:
             return _ALIASES[s]
+        if s in SCALAR_DIRECTIONS:
+            return s
         if s.isdigit():
             return direction_name(int(s), where)
         if re.fullmatch(r"dof\d+", s):
@@ -83,7 +89,8 @@ class DofMap:
         return len(self.entries)
 
     def labels(self):
-        return [f"node {n} {d}" for n, d in self.entries]
+        """'node 12 uz' for a node's DOF, 'spoint 1001 modal' for a scalar point (SCALAR_DIRECTIONS)."""
+        return [f"{'spoint' if d in SCALAR_DIRECTIONS else 'node'} {n} {d}" for n, d in self.entries]
 
     @property
     def nodes(self):
@@ -107,6 +114,10 @@ class DofMap:
     def get(self, node, direction):
         return self._index.get((node_key(node), direction))
 
+    def modal(self):
+        """Boolean (n,): True where the DOF is a modal coordinate (a superelement's q-set scalar point)."""
+        return np.array([d == "modal" for _, d in self.entries], dtype=bool)
+
     def rotations(self):
         """Boolean (n,): True where the DOF is a rotation."""
         return np.array([is_rotation(d) for _, d in self.entries], dtype=bool)
@@ -121,7 +132,9 @@ class DofMap:
             m = _LABEL.match(str(s))
             if not m:
                 return None
-            entries.append((m.group(1), m.group(2)))
+            if (m.group(1) == "spoint") != (m.group(3) in SCALAR_DIRECTIONS):
+                return None
+            entries.append((m.group(2), m.group(3)))
         try:
             return cls(entries)
         except NNMInputError:

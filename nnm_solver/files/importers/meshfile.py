@@ -1,4 +1,6 @@
-"""A display mesh from any mesh file meshio reads (Gmsh .msh, Nastran .bdf, Abaqus .inp, VTK/VTU, ...).
+"""A display mesh from any mesh file meshio reads (Gmsh .msh, Abaqus .inp, VTK/VTU, Nastran .bdf ...).  In a model
+description a Nastran bulk data file is read by pyNastran instead (nastran_mesh.py: grids by ID, bars as ribbons;
+toml.py's ``display_mesh`` chooses), or here with ``format = "nastran"``.
 
 meshio is an optional extra (``pip install "nnm[io]"``).  The viewer draws triangles: surface cells
 are split into triangles, and volume cells contribute their boundary faces (faces used by one cell

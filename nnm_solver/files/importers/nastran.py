@@ -54,12 +54,68 @@ def _matrices(path):
         else:
             from pyNastran.op4.op4 import read_op4
 
-            found = read_op4(str(path), precision="double", log=quiet)
+            with _fixed_width_op4(path) as readable:
+                found = read_op4(str(readable), precision="double", log=quiet)
+    except NNMFileError:
+        raise
     except Exception as exc:           # pyNastran raises many kinds on a damaged or foreign file
         kind = "OUTPUT2 (.op2)" if path.suffix.lower() == ".op2" else "OUTPUT4 (.op4)"
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise NNMFileError(f"{path}: not a readable Nastran {kind} file ({exc.__class__.__name__}: {msg[:120]})") from None
     return {str(k).strip().upper(): getattr(v, "data", v) for k, v in found.items()}
+
+
+#: a value of a FORMATTED OUTPUT4 file: mantissa, then an exponent with its E (E-05, E-306) or without it
+#: (Fortran's E23.16 drops the E of a three-digit exponent: 1.0000000000000000-305)
+_VALUE = re.compile(r"([+-]?\d\.\d+)(?:E([+-]\d{3})|([+-]\d{3}))(?![\d.])", re.IGNORECASE)
+_SMALLEST = 1e-99
+
+
+def _three_digit(match, path):
+    """The 23-character field of a value with a three-digit exponent: 0 below 1e-99 (an entry that small is a
+    round-off zero of the matrix), else a one-line error."""
+    value = float(f"{match.group(1)}E{match.group(2) or match.group(3)}")
+    if abs(value) >= _SMALLEST:
+        raise NNMFileError(f"{path}: value {match.group(0)} is beyond the range of a FORMATTED OUTPUT4 field; "
+                           f"write the matrices UNFORMATTED (binary)")
+    # the field is 23 characters: ' 1.0000000000000000-305' (the match is 22 of them), '-1.0000000000000000-305'
+    # or '1.0000000000000000E-305' (23), '-1.0000000000000000E-305' (24: one too many)
+    return f"{0.0:23.16E}"[-min(len(match.group(0)), 23):]
+
+
+class _fixed_width_op4:
+    """Context manager: the path of a FORMATTED .op4 pyNastran can read.  Values below 1e-99 have three-digit
+    exponents that do not fit the 23-character fields of 1P,3E23.16 (Nastran writes 1.0000000000000000-305, some
+    writers 1.0000000000000000E-305, which overflows the field when negative and confuses pyNastran's reader);
+    they are written as 0 into a temporary copy, read, and the copy deleted.  Binary files and files without such values are read as they are."""
+
+    def __init__(self, path):
+        self.path, self.copy = path, None
+
+    def __enter__(self):
+        with open(self.path, "rb") as fh:
+            head = fh.read(4096)
+        if b"\0" in head:                                   # binary (UNFORMATTED): ints hold zero bytes
+            return self.path
+        try:
+            text = self.path.read_text()
+        except UnicodeDecodeError:
+            return self.path
+        if not _VALUE.search(text):
+            return self.path
+        import tempfile
+
+        fixed = _VALUE.sub(lambda m: _three_digit(m, self.path), text)
+        fd, name = tempfile.mkstemp(suffix=".op4")
+        with open(fd, "w") as fh:
+            fh.write(fixed)
+        self.copy = Path(name)
+        return self.copy
+
+    def __exit__(self, *exc):
+        if self.copy is not None:
+            self.copy.unlink(missing_ok=True)
+        return False
 
 
 def _square(A, name, path):
@@ -120,33 +176,49 @@ def _bulk_cards(text):
     return cards
 
 
+def _set_dofs(name, fields):
+    """{(id, component)} of an ASET/ASET1/QSET/QSET1 card; component 0 is a scalar point (SPOINT)."""
+    if name.endswith("1"):                                  # XSET1 C G1 G2 ... | C G1 THRU G2
+        comps, ids = fields[0], fields[1:]
+        if len(ids) == 3 and ids[1].upper() == "THRU":
+            ids = range(int(ids[0]), int(ids[2]) + 1)
+        return {(int(g), int(c)) for g in ids for c in comps}
+    return {(int(g), int(c)) for g, cs in zip(fields[::2], fields[1::2]) for c in cs}   # XSET G C [G C ...]
+
+
 def read_aset_map(path):
-    """DofMap of the a-set from the ASET/ASET1 cards of a bulk data file: (grid, direction) in Nastran's a-set
-    order (ascending grid, then component).  ASET1 C G1 G2 ... (or G1 THRU G2); ASET G C [G C ...]."""
+    """DofMap of the a-set from the bulk data's ASET/ASET1 and QSET/QSET1 cards, in Nastran's a-set order
+    (ascending grid or scalar point ID, then component).  ASET1 C G1 G2 ... (or G1 THRU G2); ASET G C [G C ...];
+    QSET/QSET1 alike for a superelement's modal coordinates (the q-set is part of the a-set).  A grid's
+    components 1..6 are ux..rz (in its displacement system CD); a scalar point (SPOINT, component 0 or blank) is
+    "modal" when it is in the q-set, else "scalar" (labels 'spoint 1001 modal')."""
     path = existing(path, "Nastran bulk data file")
     try:
         text = path.read_text(errors="strict")
     except UnicodeDecodeError:
         raise NNMFileError(f"{path}: not a text (bulk data) file") from None
-    dofs = set()
+    aset, qset = set(), set()
     try:
         for name, fields in _bulk_cards(text):
-            if name == "ASET1":
-                comps, grids = fields[0], fields[1:]
-                if len(grids) == 3 and grids[1].upper() == "THRU":
-                    grids = range(int(grids[0]), int(grids[2]) + 1)
-                dofs |= {(int(g), int(c)) for g in grids for c in comps}
-            elif name == "ASET":
-                dofs |= {(int(g), int(c)) for g, cs in zip(fields[::2], fields[1::2]) for c in cs}
+            if name in ("ASET", "ASET1", "QSET", "QSET1"):
+                if name.endswith("1") and len(fields) == 1:  # QSET1 0 1001 written with a blank component
+                    fields = ["0"] + fields
+                (qset if name.startswith("Q") else aset).update(_set_dofs(name, fields))
     except (ValueError, IndexError):
-        raise NNMFileError(f"{path}: an ASET/ASET1 card is not 'ASET1, components, grid, ...' or 'ASET, grid, "
+        raise NNMFileError(f"{path}: an ASET/QSET card is not 'ASET1, components, grid, ...' or 'ASET, grid, "
                            f"components, ...'") from None
-    if not dofs:
-        raise NNMFileError(f"{path}: no ASET or ASET1 card; the DOF map of KAA needs the a-set (or give a text "
-                           f"file of 'grid component' lines)")
-    if any(not 1 <= c <= 6 for _, c in dofs):
-        raise NNMFileError(f"{path}: ASET components must be digits 1..6")
-    return DofMap([(g, DIRECTIONS[c - 1]) for g, c in sorted(dofs)])
+    if not aset and not qset:
+        raise NNMFileError(f"{path}: no ASET, ASET1, QSET or QSET1 card; the DOF map of KAA needs the a-set (or "
+                           f"give a text file of 'grid component' lines)")
+    dofs = aset | qset
+    if any(not 0 <= c <= 6 for _, c in dofs):
+        raise NNMFileError(f"{path}: ASET/QSET components must be digits 1..6 (0 for a scalar point)")
+    scalar = {g for g, c in dofs if c == 0}
+    if scalar & {g for g, c in dofs if c != 0}:
+        g = min(scalar & {g for g, c in dofs if c != 0})
+        raise NNMFileError(f"{path}: ID {g} is given as a scalar point (component 0) and as a grid (components 1..6)")
+    return DofMap([(g, ("modal" if (g, c) in qset else "scalar") if c == 0 else DIRECTIONS[c - 1])
+                   for g, c in sorted(dofs)])
 
 
 def dof_map_of(path, n, where=""):

@@ -12,21 +12,23 @@
     # file = "beam.full"                 # ansys, matlab: one file (matlab: variables M, K [, springs])
     # dof_map = "beam_dofs.txt"          # node and direction of each DOF, for formats without one
     # nastran: file = "model.op4" (or .op2), stiffness = "KAA", mass = "MAA" (matrix names, these by default),
-    #          dof_map = "model.bdf" (its ASET/ASET1 cards) or a 'grid component' text file (nastran.py)
+    #          dof_map = "model.bdf" (its ASET/QSET cards) or a 'grid component' text file (nastran.py)
 
     [[springs]]                          # one table per nonlinear element
     type = "cubic"                       # default; the element type (see SPRING_TYPES); "polynomial" takes
                                          # coefficients = {2 = k2, 3 = k3, ...} (force sum k_p d^p);
                                          # "piecewise_linear" takes stiffnesses = [k0, k1, ...] (force /
                                          # length), breakpoints = [d1, ...] (length), optional eps and, for
-                                         # an asymmetric law, stiffnesses_negative + breakpoints_negative
+                                         # an asymmetric law, stiffnesses_negative + breakpoints_negative;
+                                         # "polynomial_stiffness" takes exponents, coefficients and dofs or
+                                         # nodes (toml_coupled.py); the springs are built in toml_springs.py
     node = 6                             # by node and direction (needs a DOF map) ...
     direction = "uz"
     k3 = 1e9                             # in the description's units (force / length^3)
     # dof = 33                           # ... or by 0-based DOF index; other / other_node (+ other_direction)
                                          # make a relative spring on x[dof] - x[other]
-    [mesh]                               # optional display mesh (any format meshio reads)
-    file = "beam.msh"
+    [mesh]                               # optional display mesh (any format meshio reads; a Nastran
+    file = "beam.msh"                    # .bdf by pyNastran: nastran_mesh.py)
     # first_node = 1 | nodes = [...] | dofs_per_node = 6 | recovery = "R.mtx"   (see meshfile.py)
     # format = "gmsh"                    # meshio's format name, when the suffix is ambiguous
 
@@ -36,16 +38,13 @@ SI.  Relative paths are relative to the description file.  Errors name the file 
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
-
 import numpy as np
 
-from ...model.elements import CubicSpring
 from ...errors import NNMFileError, NNMInputError
 from ...model.model import Model
-from .common import Units, direction_name, existing, read_dof_map_file
+from .common import Units, existing, read_dof_map_file
+from .toml_springs import SPRING_TYPES, SpringType, _unknown, build_springs, to_si  # noqa: F401 (public here too)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -56,90 +55,6 @@ FORMATS = ("matrixmarket", "abaqus", "ansys", "matlab", "nastran")
 TOP_KEYS = {"name", "description", "units", "matrices", "springs", "mesh"}
 MATRIX_KEYS = {"format", "mass", "stiffness", "file", "dof_map"}
 MESH_KEYS = {"file", "format", "nodes", "first_node", "dofs_per_node", "recovery"}
-LOCATION_KEYS = {"type", "dof", "other", "node", "direction", "other_node", "other_direction"}
-
-
-@dataclass(frozen=True)
-class SpringType:
-    """A nonlinear element type of the ``[[springs]]`` tables.
-
-    parameters : its required keys (in the description's units);
-    build(dof, other, params, scale) -> element, where scale(p) converts the coefficient of d^p
-    of a force law to SI;
-    parse(key, value, where) -> the parameter's value (default: a finite number);
-    optional : keys that may be given (passed to build only when present).
-    """
-
-    parameters: tuple
-    build: Callable
-    parse: Callable | None = None
-    optional: tuple = ()
-
-
-def _cubic(dof, other, params, scale):
-    return CubicSpring(dof=dof, other=other, k3=params["k3"] * scale(3))
-
-
-def _law_table(key, value, where):
-    """{power: coefficient} from a TOML table such as {2 = 1e5, 3 = 1e9}."""
-    if not isinstance(value, dict) or not value:
-        raise NNMInputError(f"{where}: {key} must be a table of powers and coefficients, e.g. {{2 = 1e5, 3 = 1e9}}")
-    law = {}
-    for p, c in value.items():
-        if not str(p).isdigit() or int(p) < 2:
-            raise NNMInputError(f"{where}: {key}: power {p!r} is not an integer >= 2 (the linear stiffness is in K)")
-        law[int(p)] = _number(c, f"{key}.{p}", where)
-    return law
-
-
-def _polynomial(dof, other, params, scale):
-    from ...model.elements import PolynomialSpring
-    return PolynomialSpring(dof=dof, other=other, coefficients={p: c * scale(p) for p, c in
-                                                                params["coefficients"].items()})
-
-
-def _pwl_parse(key, value, where):
-    """A list of numbers (stiffnesses, breakpoints) or one number (eps)."""
-    if key == "eps":
-        return _number(value, key, where)
-    if not isinstance(value, list):
-        raise NNMInputError(f"{where}: {key} must be a list of numbers, e.g. {key} = [1e5, 2e4]")
-    return [_number(v, f"{key}[{i}]", where) for i, v in enumerate(value)]
-
-
-def _piecewise(dof, other, params, scale):
-    """PiecewiseLinearSpring: stiffnesses are coefficients of d^1 (force / length), breakpoints lengths."""
-    from ...model.elements import PiecewiseLinearSpring
-    law = {k: params[k] for k in ("stiffnesses", "breakpoints", "stiffnesses_negative", "breakpoints_negative", "eps")
-           if k in params}
-    return to_si(PiecewiseLinearSpring(dof=dof, other=other, **law), scale)
-
-
-def to_si(spring, scale):
-    """The element ``spring`` given in file units, in SI; scale(p) converts the coefficient of d^p (E / s^(p+1),
-    s the DOF's unit), so a stiffness scales by scale(1) and a length (breakpoint) by scale(0) / scale(1) = s."""
-    from ...model.elements import PiecewiseLinearSpring, PolynomialSpring
-    if isinstance(spring, CubicSpring):
-        return spring.scaled(scale(3))
-    if isinstance(spring, PolynomialSpring):
-        return PolynomialSpring(dof=spring.dof, other=spring.other,
-                                coefficients={p: c * scale(p) for p, c in spring.coefficients.items()})
-    if isinstance(spring, PiecewiseLinearSpring):
-        k, s = scale(1), scale(0) / scale(1)
-        if k == 1.0 and s == 1.0:
-            return spring
-        neg = {} if spring.symmetric else dict(stiffnesses_negative=[c * k for c in spring.stiffnesses_negative],
-                                               breakpoints_negative=[b * s for b in spring.breakpoints_negative])
-        return PiecewiseLinearSpring(dof=spring.dof, other=spring.other, stiffnesses=[c * k for c in spring.stiffnesses],
-                                     breakpoints=[b * s for b in spring.breakpoints], eps=spring.eps, **neg)
-    raise NNMInputError(f"no unit conversion for {type(spring).__name__}")
-
-
-#: element types by name; a new element type registers its builder here (``type = "<name>"``)
-SPRING_TYPES = {"cubic": SpringType(("k3",), _cubic),
-                "polynomial": SpringType(("coefficients",), _polynomial, _law_table),
-                "piecewise_linear": SpringType(("stiffnesses", "breakpoints"), _piecewise, _pwl_parse,
-                                               ("eps", "stiffnesses_negative", "breakpoints_negative"))}
 
 
 def _table(data, key, where, kind=dict, required=False):
@@ -151,12 +66,6 @@ def _table(data, key, where, kind=dict, required=False):
     if not isinstance(v, kind):
         raise NNMInputError(f"{where}: '{key}' must be a {'table' if kind is dict else 'list of tables'}")
     return v
-
-
-def _unknown(table, allowed, where):
-    extra = sorted(set(table) - set(allowed))
-    if extra:
-        raise NNMInputError(f"{where}: unknown key(s) {', '.join(extra)}; known: {', '.join(sorted(allowed))}")
 
 
 def _sniff(path):
@@ -227,68 +136,21 @@ def read_matrices(mt, folder, where):
     return M, K, dof_map, fmt, springs
 
 
-def _number(value, key, where):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise NNMInputError(f"{where}: {key} = {value!r} is not a number")
-    if not np.isfinite(value):
-        raise NNMInputError(f"{where}: {key} = {value} is not finite")
-    return float(value)
+def display_mesh(path, n, dof_map, *, nodes=None, first_node=1, dofs_per_node=None, recovery=None, scale=1.0,
+                 file_format=None, where=""):
+    """The [mesh]'s DisplayMesh: a Nastran bulk data file (no format given) by pyNastran, its grids by ID
+    (nastran_mesh.py); any other file by meshio (meshfile.py)."""
+    from .nastran_mesh import BULK_SUFFIXES, read_bdf_mesh
 
+    if Path(path).suffix.lower() in BULK_SUFFIXES and file_format is None:
+        if nodes is not None or dofs_per_node is not None:
+            raise NNMInputError(f"{where}a Nastran bulk data mesh is placed by grid ID (the DOF map); nodes and "
+                                f"dofs_per_node are for other mesh files (or set format = \"nastran\" for meshio)")
+        return read_bdf_mesh(path, n, dof_map, recovery=recovery, scale=scale, where=where)
+    from .meshfile import read_display_mesh
 
-def _dof(row, prefix, n, dof_map, where):
-    """0-based DOF of a spring end: '<prefix>' index or '<prefix>node' + direction; None if absent."""
-    idx_key = "dof" if prefix == "" else "other"
-    node_key = "node" if prefix == "" else "other_node"
-    if idx_key in row and node_key in row:
-        raise NNMInputError(f"{where}: give {idx_key} or {node_key}, not both")
-    if idx_key in row:
-        d = row[idx_key]
-        if isinstance(d, bool) or not isinstance(d, int) or not 0 <= d < n:
-            raise NNMInputError(f"{where}: {idx_key} = {d!r} is not a DOF of the model (0-based, 0..{n - 1})")
-        return d
-    if node_key in row:
-        if dof_map is None:
-            raise NNMInputError(f"{where}: springs by node need a DOF map; these matrix files have none: give "
-                                f"{idx_key} = <0-based index>, or [matrices] dof_map = <file>")
-        direction = row.get("other_direction", row.get("direction")) if prefix else row.get("direction")
-        if direction is None:
-            raise NNMInputError(f"{where}: {node_key} needs a direction (ux, uy, uz, rx, ry, rz)")
-        return dof_map.index(row[node_key], direction, f"{where}: ")
-    return None
-
-
-def build_springs(rows, n, dof_map, units, where):
-    rotations = dof_map.rotations() if dof_map is not None else np.zeros(n, bool)
-    out = []
-    for i, row in enumerate(rows, 1):
-        w = f"{where} [[springs]] #{i}"
-        if not isinstance(row, dict):
-            raise NNMInputError(f"{w}: must be a table")
-        kind = str(row.get("type", "cubic")).lower()
-        if kind not in SPRING_TYPES:
-            raise NNMInputError(f"{w}: unknown type {row.get('type')!r}; known: {', '.join(SPRING_TYPES)}")
-        st = SPRING_TYPES[kind]
-        _unknown(row, LOCATION_KEYS | set(st.parameters) | set(st.optional), w)
-        if "direction" in row:
-            direction_name(row["direction"], f"{w}: ")
-        dof = _dof(row, "", n, dof_map, w)
-        if dof is None:
-            raise NNMInputError(f"{w}: give dof = <0-based index> or node = <node> with direction = <ux..rz>")
-        other = _dof(row, "other", n, dof_map, w)
-        if other is not None and rotations[other] != rotations[dof]:
-            raise NNMInputError(f"{w}: a relative spring joins a rotation and a translation")
-        missing = [k for k in st.parameters if k not in row]
-        if missing:
-            raise NNMInputError(f"{w}: missing {', '.join(missing)} (a {kind} spring needs "
-                                f"{', '.join(st.parameters)})")
-        params = {k: st.parse(k, row[k], w) if st.parse else _number(row[k], k, w)
-                  for k in (*st.parameters, *st.optional) if k in row}
-        try:
-            element = st.build(dof, other, params, units.coefficient_scale(bool(rotations[dof])))
-        except (TypeError, ValueError) as exc:
-            raise NNMInputError(f"{w}: {exc}") from None
-        out.append(element)
-    return out
+    return read_display_mesh(path, n, dof_map, nodes=nodes, first_node=first_node, dofs_per_node=dofs_per_node,
+                             recovery=recovery, scale=scale, file_format=file_format, where=where)
 
 
 def read_description(path):
@@ -316,6 +178,9 @@ def load_toml_model(path, name=None):
         M, K, dof_map, fmt, springs = read_matrices(mt, folder, f"{where} [matrices]")
         n = M.shape[0]
         rotations = dof_map.rotations() if dof_map is not None else np.zeros(n, bool)
+        if not units.is_si and dof_map is not None and dof_map.modal().any():
+            raise NNMInputError(f"{where}: units {units}: a superelement's modal coordinates (QSET scalar points) "
+                                f"have no length unit to convert; give its matrices in SI")
         M, K = units.to_si(M, K, rotations)
         springs = [to_si(s, units.coefficient_scale(bool(rotations[s.dof]))) for s in springs]
         springs += build_springs(_table(data, "springs", where, list) or [], n, dof_map, units, where)
@@ -325,13 +190,14 @@ def load_toml_model(path, name=None):
             _unknown(ms, MESH_KEYS, f"{where} [mesh]")
             if "file" not in ms:
                 raise NNMInputError(f"{where} [mesh]: missing file (a mesh file meshio reads)")
-            from .meshfile import read_display_mesh
-            mesh = read_display_mesh(folder / str(ms["file"]), n, dof_map, nodes=ms.get("nodes"),
+            mesh = display_mesh(folder / str(ms["file"]), n, dof_map, nodes=ms.get("nodes"),
                                      first_node=ms.get("first_node", 1), dofs_per_node=ms.get("dofs_per_node"),
                                      recovery=None if "recovery" not in ms else folder / str(ms["recovery"]),
                                      scale=units.L, file_format=ms.get("format"), where=f"{where} [mesh]: ")
             if not units.is_si:  # map from SI model coordinates to vertex displacements in m
-                mesh.displacement_map = units.L * mesh.displacement_map / units.dof_scale(rotations)[None, :]
+                per_dof = units.L / units.dof_scale(rotations)[None, :]
+                D = mesh.displacement_map
+                mesh.displacement_map = D.multiply(per_dof).tocsr() if hasattr(D, "multiply") else D * per_dof
         info = {"source": path.name, "format": fmt, "units": str(units)}
         if isinstance(data.get("description"), str):
             info["description"] = data["description"]
