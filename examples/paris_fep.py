@@ -527,8 +527,9 @@ def write_file(target, source, branches, keep=None, thin_points=True, log=print)
 def fmt_tongue(t):
     if t.get("family_end"):
         return (f"**{t['label']}** with mode {t['partner_mode']}: the backbone family itself ends in it, at "
-                f"{t['end_energy']:.3g} J, {t['end_frequency_hz']:.4f} Hz (no backbone beyond; "
-                f"`continue_tongue` follows the tongue)")
+                f"{t['end_energy']:.3g} J, {t['end_frequency_hz']:.4f} Hz (no backbone beyond; no tongue branch "
+                f"starts from this record: the tongue met there is the one listed before it, or a branch of its own "
+                f"from `continue_nnm(..., tongues='follow')`)")
     folds = f"folds at {', '.join(f'{e:.3g}' for e in t['folds'])} J" if len(t["folds"]) else "no fold"
     how = "jumped over" if t["jumped"] else "traversed"
     lab = t["partner_label"] if not t["partner_label"].startswith("mode ") else t["partner_kind"]
