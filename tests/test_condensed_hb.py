@@ -269,7 +269,9 @@ def test_skip_backbone_does_not_crawl_at_a_tongue_it_keeps_re_entering():
     model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
     b = nnm.continue_nnm(model, 20, 40.0, method="hb", harmonics=3, condensed=True, floquet=False, tongues="skip")
     assert b.status == "tongue", b.message
-    assert any(f"with mode {p}" in b.message for p in (41, 42)) or "Skip.max_jumps" in b.message, b.message
+    # (the family's end at 5.197 J is read as the 3:1 with mode 42 or, by a skeleton started for this energy_max, as a
+    # 5:1 with mode 72 taking the orbit over: both resonances lie there)
+    assert any(f"with mode {p}" in b.message for p in (41, 42, 72)) or "Skip.max_jumps" in b.message, b.message
     assert len(b) < 80 and np.sum(np.isclose(b.energy, b.energy.max(), rtol=1e-9)) == 1
     assert all(t.attempts <= 2 * len(nnm.Skip().jumps) * (t.reentries + 1) + 2 for t in b.tongues)
     assert b.frequency_hz.min() / b.frequency_hz[0] - 1 < -0.04
