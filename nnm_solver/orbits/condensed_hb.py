@@ -44,6 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from .condensed_energy import condensed_energy, condensed_energy_gradient
 from .harmonic_balance import HBProblem
 from .hb_basis import harmonics_in
 from .hb_error import HBTruncationError
@@ -144,6 +145,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_step = max_rel_step
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
+        self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -153,7 +155,7 @@ class CondensedHBProblem(HBTruncationError):
         """(D (N_b, n_s) m, a sqrt(kg) m, omega rad/s)."""
         return u[:-2].reshape(self.nb, self.ns), u[-2] / self.beta, u[-1] * self.w_r
 
-    energy_gradient = HBProblem.energy_gradient_fd       # dE/du by central differences (it needs only energy)
+    energy_gradient_fd = HBProblem.energy_gradient_fd    # dE/du by central differences (a check of energy_gradient)
 
     def with_basis(self, basis):
         """The same branch's condensed equations with another HBBasis (the same LinearPart and step limits)."""
@@ -259,16 +261,34 @@ class CondensedHBProblem(HBTruncationError):
     check_step = HBProblem.check_step
 
     # --------------------------------------------------------------- the eliminated amplitudes
-    def amplitudes(self, u):
-        """The modal Fourier coefficients A (N_b, m) of the orbit u in the LinearPart's modes (the
-        eliminated amplitudes recovered exactly), and the frequency omega (rad/s)."""
+    def amplitude_parts(self, u):
+        """(A, W, F, Omega2, d) of the orbit u: the modal Fourier coefficients A (N_b, m) in the LinearPart's modes
+        (the eliminated amplitudes recovered exactly), the weights W (N_b, m), the element force coefficients F
+        (N_b, n_d), Omega2 = (h_j omega)^2 and the sampled deformations d (N, n_d).  The last orbit's are kept (its
+        state, coefficients, orbit, energy and energy gradient all start from them): read-only arrays."""
+        key = u.tobytes() if isinstance(u, np.ndarray) else None
+        last = self._last_parts
+        if key is not None and last is not None and last[0] == key:
+            return last[1]
         D, a, w = self.unpack(u)
         Omega2 = self.h2 * w * w
         W = self.lin.weights(Omega2, self.r, self.fund)
-        F = self._forces(D)[1]
+        d, F = self._forces(D)
         A = -W * (F @ self.lin.Bq)
         A[self.cos1, self.r] = a
-        return A, w, F, Omega2
+        parts = (A, W, F, Omega2, d)
+        for x in parts:
+            x.setflags(write=False)
+        if key is not None:
+            self._last_parts = (key, parts)
+        return parts
+
+    def amplitudes(self, u):
+        """The modal Fourier coefficients A (N_b, m) of the orbit u in the LinearPart's modes (the
+        eliminated amplitudes recovered exactly, read-only), the frequency omega (rad/s), the element force
+        coefficients F (N_b, n_d) and Omega2 (N_b,) (rad/s)^2."""
+        A, W, F, Omega2, d = self.amplitude_parts(u)
+        return A, self.unpack(u)[2], F, Omega2
 
     def coefficients(self, u):
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m), for a complete basis."""
@@ -288,20 +308,13 @@ class CondensedHBProblem(HBTruncationError):
 
     def energy(self, u):
         """Energy (J) of the orbit u: the modes' kinetic and linear potential energy at t = 0 plus the
-        element potentials (and the left-out modes' share through R0, R1 for a truncated basis)."""
-        A, w, F, Omega2 = self.amplitudes(u)
-        c0, s0 = self.basis.state_at_zero()
-        q0, v0 = c0 @ A, w * (s0 @ A)
-        E = 0.5 * v0 @ v0 + 0.5 * q0 @ (self.lin.omega2 * q0)
-        D = self.unpack(u)[0]
-        E += float(np.sum(self.sys.elements.potential(c0 @ D)))
-        if not self.lin.complete:
-            # left-out modes: q_k(0) = -sum_j c_j(0) b_k . F_j / (w_k^2 - Omega2_j) to first order in Omega2 / w_k^2
-            f0, f1 = c0 @ F, (c0 * Omega2) @ F
-            E += 0.5 * (f0 @ self.lin.R0 @ f0 + 2 * f0 @ self.lin.R1 @ f1)
-            g = w * (s0 @ F)
-            E += 0.5 * g @ self.lin.R1 @ g
-        return float(E)
+        element potentials (and the left-out modes' share through R0, R1 for a truncated basis;
+        condensed_energy.py)."""
+        return condensed_energy(self, u)
+
+    def energy_gradient(self, u):
+        """dE/du (J per unit of u) in closed form (condensed_energy.py)."""
+        return condensed_energy_gradient(self, u)
 
     def energy_spread(self, u):
         """max - min of the energy over one period (J), HBProblem.energy_spread of the reconstructed orbit (complete
