@@ -13,7 +13,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..backbone.content import content_of
-from ..results.branch import Point
+from ..results.point import ModalState, Point
 from ..results.stops import restoring_ratio
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 
@@ -54,7 +54,6 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     _settle waits for them."""
     sys_ = system
     q0, vq0, T = prob.state(cp.u)
-    x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
     collision = job = None
     if floquet and later:     # started when the engine gave the point (EngineDriver.launch)
         job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
@@ -71,10 +70,11 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
     content = content_of(Q, mode - 1)
-    energy = float(model.energy(x0, v0))
-    point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
-                  v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
-                  coefficients=None if A is None else sys_.to_physical(A), label=content.label)
+    # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
+    # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
+    point = Point(energy=sys_.energy(q0, vq0), frequency_hz=float(1.0 / T), period=float(T), x0=None, v0=None,
+                  floquet=mu, stable=stable, iterations=cp.iterations, label=content.label,
+                  modal=ModalState(sys_.Phi, q0, vq0, A))
     point.steps = int(getattr(prob, "spp", 0))
     point.fundamental_share = content.share
     cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
