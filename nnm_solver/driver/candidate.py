@@ -12,12 +12,17 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..analysis.hb_series import basis_fourier_coefficients
 from ..backbone.content import content_of
+from ..backbone.settings import LabelSettings
 from ..results.point import ModalState, Point
 from ..results.stops import restoring_ratio
 from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
 
 __all__ = ["Candidate", "record_candidate"]
+
+#: the harmonics a point's content is measured on (content_of's default)
+LABEL_HARMONICS = LabelSettings().label_harmonics
 
 
 @dataclass
@@ -69,7 +74,9 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
         mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-    content = content_of(Q, mode - 1)
+    basis = getattr(prob, "basis", None)         # harmonic balance: the content from its coefficients, not sampled
+    content = content_of(Q, mode - 1, coefficients=None if A is None or basis is None else
+                         basis_fourier_coefficients(basis, A, LABEL_HARMONICS))
     # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
     # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
     point = Point(energy=sys_.energy(q0, vq0), frequency_hz=float(1.0 / T), period=float(T), x0=None, v0=None,
