@@ -78,19 +78,29 @@ class LinearPart:
 
     def weights(self, Omega2, r, fundamental):
         """W[j, k] = 1 / (w_k^2 - Omega2_j) (N_b, m), zero for the followed mode r at the fundamental."""
-        with np.errstate(divide="ignore"):
-            W = 1.0 / (self.omega2[None, :] - Omega2[:, None])
+        den = self.omega2[None, :] - Omega2[:, None]
+        den[fundamental, r] = 1.0
+        if den.all():
+            W = 1.0 / den
+        else:                                      # an exact internal resonance: inf, as the equations' pole
+            with np.errstate(divide="ignore"):
+                W = 1.0 / den
         W[fundamental, r] = 0.0
         return W
 
+    def _weighted(self, V):
+        """Bq diag(V[j]) Bq^T (N_b, n_s, n_s) for the rows of V (N_b, m)."""
+        return (self.Bq[None] * V[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
+
     def flexibility(self, W, Omega2):
         """G_j = Bq diag(W[j]) Bq^T + R0 + Omega2_j R1: (N_b, n_s, n_s) m/N."""
-        G = (self.Bq[None] * W[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
-        return G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
+        G = self._weighted(W)
+        return G if self.complete else G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
 
     def flexibility_slope(self, W, Omega2):
         """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
-        return (self.Bq[None] * (W * W)[:, None, :]) @ self.Bq.T + self.R1[None]
+        G = self._weighted(W * W)
+        return G if self.complete else G + self.R1[None]
 
 
 def coupled_galerkin(basis, elements, d):
