@@ -17,7 +17,7 @@ Its gradient, by the chain rule (``energy_gradient``), with Lambda = dE/dA = c(0
     dE/da         = Lambda[cos 1, r]
     dE/domega     = omega |v1|^2 + sum_(j, k) Lambda[j, k] 2 h_j^2 omega W[j, k] A[j, k]   (+ left-out terms)
 
-with dF/dD the Galerkin blocks of the element tangents (condensed_hb.coupled_galerkin).  One evaluation costs
+with dF/dD the Galerkin blocks of the element tangents (CondensedHBProblem.galerkin_blocks).  One evaluation costs
 O(N_b n_s m + N_b^2 N n_d) like one energy, where the central differences it replaces (HBProblem.energy_gradient_fd)
 cost 2 (N_b n_s + 2) energies; the two agree to the differences' own error (tests/test_per_point.py).
 """
@@ -51,7 +51,6 @@ def condensed_energy(prob, u):
 
 def condensed_energy_gradient(prob, u):
     """dE/du (J per unit of u) of ``condensed_energy`` in closed form (module docstring)."""
-    from .condensed_hb import coupled_galerkin
     D, a, w = prob.unpack(u)
     A, W, F, Omega2, d = prob.amplitude_parts(u)
     lin, c0, s0 = prob.lin, *prob.basis.state_at_zero()
@@ -68,7 +67,7 @@ def condensed_energy_gradient(prob, u):
         gF += np.outer(c0, gf0) + np.outer(c0 * Omega2, gf1) + w * np.outer(s0, R1s @ g)
         gw += float(gf1 @ ((c0 * 2.0 * w * prob.h2) @ F)) + float(g @ R1s @ fs)
     gD = np.zeros_like(D)
-    for rows, cols, C in coupled_galerkin(prob.basis, prob.sys.elements, d):   # C[i, j, l] = dF[j, rows_i]/dD[l, cols_i]
+    for rows, cols, C in prob.galerkin_blocks(d):                 # C[i, j, l] = dF[j, rows_i] / dD[l, cols_i]
         gD[:, cols] += np.einsum("ji,ijl->li", gF[:, rows], C)
     gD += np.outer(c0, prob.sys.force((c0 @ D)[None])[0])                      # the element potentials at t = 0
     return np.concatenate([gD.ravel(), [Lam[prob.cos1, prob.r] / prob.beta, gw * prob.w_r]])

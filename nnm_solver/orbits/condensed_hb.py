@@ -287,10 +287,8 @@ class CondensedHBProblem(HBTruncationError):
         A = -W * (F @ self.lin.Bq)
         A[self.cos1, self.r] = a
         parts = (A, W, F, Omega2, d)
-        for x in parts:
-            x.setflags(write=False)
-        if key is not None:
-            self._last_parts = (key, parts)
+        [x.setflags(write=False) for x in parts]
+        self._last_parts = (key, parts) if key is not None else last
         return parts
 
     def amplitudes(self, u):
@@ -321,6 +319,9 @@ class CondensedHBProblem(HBTruncationError):
         element potentials (and the left-out modes' share through R0, R1 for a truncated basis;
         condensed_energy.py)."""
         return condensed_energy(self, u)
+
+    def galerkin_blocks(self, d):
+        return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
 
     def energy_gradient(self, u):
         """dE/du (J per unit of u) in closed form (condensed_energy.py)."""
