@@ -287,7 +287,8 @@ class CondensedHBProblem(HBTruncationError):
         A = -W * (F @ self.lin.Bq)
         A[self.cos1, self.r] = a
         parts = (A, W, F, Omega2, d)
-        [x.setflags(write=False) for x in parts]
+        for x in parts:
+            x.setflags(write=False)
         self._last_parts = (key, parts) if key is not None else last
         return parts
 
