@@ -146,6 +146,10 @@ def test_a_point_made_with_a_modal_state():
     assert np.array_equal(p.coefficients, np.ones((2, 5))) and np.allclose(p.x0, st.q0 @ phi1.T)
     p, st = make(phi2, coeffs=False)
     assert p["coefficients"] is None and np.allclose(p["x0"], st.q0 @ phi2.T)
+    p, st = make(phi2)
+    import pickle
+    q = pickle.loads(pickle.dumps(p))                          # pickled mapped (not with the shapes phi)
+    assert q.modal is None and np.array_equal(q.x0, p.x0) and np.array_equal(q.coefficients, p.coefficients)
     plain = Point(1.0, 2.0, 0.5, np.arange(3.0), np.zeros(3), np.full(6, np.nan), True)
     assert plain.modal is None and np.array_equal(plain.x0, np.arange(3.0)) and plain.coefficients is None
     pts = [make(phi1), make(phi2), make(phi1, coeffs=False), make(phi2)]

@@ -71,13 +71,18 @@ class Point:
         except AttributeError:
             raise KeyError(key) from None
 
+    def __getstate__(self):                  # pickled with its physical state, not the modal system's shapes
+        resolve_points([self])
+        return dict(self.__dict__)
+
     def resolve(self):
         """Compute x0, v0 and coefficients from the modal state (if not done yet)."""
         resolve_points([self])
         return self
 
-    def _set_physical(self, rows):
-        n_b = 0 if self.modal.coefficients is None else len(self.modal.coefficients)
+    def _set_physical(self, modal, rows):
+        """Store x0, v0 and coefficients mapped from ``modal`` (rows: its rows() times phi^T)."""
+        n_b = 0 if modal.coefficients is None else len(modal.coefficients)
         d = self.__dict__
         d["_x0"], d["_v0"] = rows[0], rows[1]
         d["_coefficients"] = rows[2:2 + n_b] if n_b else None
@@ -106,18 +111,18 @@ for _name in ("x0", "v0", "coefficients"):
 
 def resolve_points(points):
     """Compute the physical state of the points that still hold a ModalState, those of one modal system in one
-    matrix product (rows (N (2 + N_b), m) times phi^T)."""
+    matrix product (rows (N (2 + N_b), m) times phi^T).  Safe when two threads resolve the same point (each maps
+    the state it read; the numbers are the same)."""
     groups = {}
     for p in points:
         modal = p.__dict__.get("modal")
         if modal is not None:
-            groups.setdefault(id(modal.phi), []).append(p)
-    for pts in groups.values():
-        phi = pts[0].modal.phi
-        rows = [p.modal.rows() for p in pts]
-        x = np.concatenate(rows) @ phi.T
+            groups.setdefault(id(modal.phi), []).append((p, modal))
+    for pending in groups.values():
+        rows = [modal.rows() for _, modal in pending]
+        x = np.concatenate(rows) @ pending[0][1].phi.T
         start = 0
-        for p, r in zip(pts, rows):
-            p._set_physical(x[start:start + len(r)])
+        for (p, modal), r in zip(pending, rows):
+            p._set_physical(modal, x[start:start + len(r)])
             start += len(r)
     return points
