@@ -61,7 +61,8 @@ with blas_limited():
     t = time.perf_counter()
     b = nnm.continue_nnm(model, 20, E, **kw)
     dt = time.perf_counter() - t
-print(json.dumps(dict(seconds=dt, points=len(b), status=b.status, sections={k: v for k, v in acc.items()})))
+print(json.dumps(dict(seconds=dt, points=len(b), status=b.status, sections={k: v for k, v in acc.items()},
+                 source=nnm.__file__)))
 """
 
 
@@ -69,8 +70,11 @@ def run(tree, kw, energy, sections):
     env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     before = os.getloadavg()[0]
     out = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(kw), str(energy), "1" if sections else "0",
-                          str(ROOT / "assets" / "paris.h5")], env=env, capture_output=True, text=True, check=True)
+                          str(ROOT / "assets" / "paris.h5")], env=env, capture_output=True, text=True, check=True,
+                         cwd=tree)        # (the child's sys.path starts with its working directory)
     res = json.loads(out.stdout.strip().splitlines()[-1])
+    if not Path(res["source"]).resolve().is_relative_to(Path(tree).resolve()):
+        raise RuntimeError(f"the run of {tree} imported {res['source']}")
     res["load"] = (before, os.getloadavg()[0])
     return res
 

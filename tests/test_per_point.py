@@ -19,7 +19,8 @@ def chain(n=6, springs=None):
 MODELS = {
     "cubic": lambda: chain(springs=[nnm.CubicSpring(dof=0, k3=0.8), nnm.CubicSpring(dof=2, other=4, k3=-0.3)]),
     "polynomial": lambda: chain(springs=[nnm.PolynomialSpring(dof=1, coefficients={2: 0.4, 3: 0.9})]),
-    "piecewise": lambda: chain(springs=[nnm.PiecewiseLinearSpring(dof=3, stiffnesses=[0.5, 2.0], breakpoints=[0.2])]),
+    "piecewise": lambda: chain(springs=[nnm.PiecewiseLinearSpring(dof=3, stiffnesses=[0.5, 2.0],
+                                                                  breakpoints=[0.2])]),
     "coupled": lambda: chain(springs=[nnm.PolynomialStiffness([[1, 1, 0], [2, 0, 0], [0, 2, 1], [0, 3, 0], [3, 0, 0]],
                                                               [[2, 0, 0], [0, 1, 0], [0, 1.5, 0], [0, 0, .5], [1, 0, 0]],
                                                               dofs=[0, 2, 5])]),

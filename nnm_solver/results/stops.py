@@ -135,8 +135,8 @@ class LoopDetector:
 
 class _Rows:
     """The loop detector's points y (rows) in a growing buffer, and per segment j -> j+1 its vector ab, length L
-    (and L at least 1e-300, for the divisions), direction u and the turn angle between it and the segment before (computed once, when the point comes in:
-    the same numbers as from the whole array at once, row by row)."""
+    (and L at least 1e-300, for the divisions), direction u and the turn angle between it and the segment before
+    (computed once, when the point comes in: the same numbers as from the whole array at once, row by row)."""
 
     def __init__(self):
         self._y = self._ab = self._L = self._Lc = self._u = self._ang = None
