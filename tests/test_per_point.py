@@ -21,9 +21,9 @@ MODELS = {
     "polynomial": lambda: chain(springs=[nnm.PolynomialSpring(dof=1, coefficients={2: 0.4, 3: 0.9})]),
     "piecewise": lambda: chain(springs=[nnm.PiecewiseLinearSpring(dof=3, stiffnesses=[0.5, 2.0],
                                                                   breakpoints=[0.2])]),
-    "coupled": lambda: chain(springs=[nnm.PolynomialStiffness([[1, 1, 0], [2, 0, 0], [0, 2, 1], [0, 3, 0], [3, 0, 0]],
-                                                              [[2, 0, 0], [0, 1, 0], [0, 1.5, 0], [0, 0, .5], [1, 0, 0]],
-                                                              dofs=[0, 2, 5])]),
+    "coupled": lambda: chain(springs=[nnm.PolynomialStiffness(
+        [[1, 1, 0], [2, 0, 0], [0, 2, 1], [0, 3, 0], [3, 0, 0]],
+        [[2, 0, 0], [0, 1, 0], [0, 1.5, 0], [0, 0, .5], [1, 0, 0]], dofs=[0, 2, 5])]),
 }
 
 
