@@ -267,3 +267,29 @@ def test_the_loop_detector_with_cached_segments_finds_what_it_found_before():
             hits += ref.pending is not None
             found += want is not None
     assert hits > 20 and found > 5
+
+
+@pytest.mark.parametrize("kind", ["odd", "full"])
+def test_restoring_ratio_from_the_coefficients_is_that_of_the_sampled_orbit(kind):
+    """analysis/hb_series.series_restoring_ratio against results/stops.restoring_ratio of the sampled orbit, on the
+    chain's orbits (random content, r near 1) and on a softening oscillator's from nearly linear (r = 1) up to its
+    saddle at unit amplitude (r -> 0, where the escape test acts)."""
+    from nnm_solver.analysis.hb_series import series_restoring_ratio
+    from nnm_solver.results.stops import restoring_ratio
+    basis = HBBasis(7, kind)
+    rng = np.random.default_rng(9)
+    S = basis.functions(2 * np.pi * np.arange(32) / 32)
+    fund = list(basis.h).index(1)
+    seen = []
+    for model, scales, noise in ((MODELS["cubic"](), np.geomspace(1e-2, 3.0, 10), 0.05),
+                                 (nnm.Model(np.eye(2), np.diag([1.0, 4.0]), [nnm.CubicSpring(dof=0, k3=-1.0)]),
+                                  1 - np.geomspace(0.9, 1e-4, 20), 1e-4)):
+        system = modal_system(model)
+        for scale in scales:
+            A = noise * scale * rng.standard_normal((len(basis), system.n))
+            A[fund, 0] += scale
+            want = restoring_ratio(system, S @ A)
+            got = series_restoring_ratio(system, basis, A, 32)
+            assert abs(got - want) <= 1e-10 * want + 1e-15 / want, (scale, got, want)      # r^2 to 1e-15
+            seen.append(want)
+    assert min(seen) < 0.05 and max(seen) > 0.99

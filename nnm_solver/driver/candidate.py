@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..analysis.hb_series import basis_fourier_coefficients
+from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ratio
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
 from ..results.point import ModalState, Point
@@ -74,9 +74,13 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
         mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-    basis = getattr(prob, "basis", None)         # harmonic balance: the content from its coefficients, not sampled
-    content = content_of(Q, mode - 1, coefficients=None if A is None or basis is None else
-                         basis_fourier_coefficients(basis, A, LABEL_HARMONICS))
+    series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
+    content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
+                         if series else None)
+    if Q is None:
+        restoring = 1.0
+    else:
+        restoring = series_restoring_ratio(sys_, prob.basis, A, len(Q)) if series else restoring_ratio(sys_, Q)
     # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
     # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
     point = Point(energy=sys_.energy(q0, vq0), frequency_hz=float(1.0 / T), period=float(T), x0=None, v0=None,
@@ -85,6 +89,6 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     point.steps = int(getattr(prob, "spp", 0))
     point.fundamental_share = content.share
     cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
-                     restoring=restoring_ratio(sys_, Q) if Q is not None else 1.0, collision=collision,
+                     restoring=restoring, collision=collision,
                      spectrum=job)
     return cand, (q0, vq0, T)
