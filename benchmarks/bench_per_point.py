@@ -4,7 +4,8 @@ The case: ``continue_nnm(load_model("assets/paris.h5"), 20, 3.0, method="hb", co
 (548 modes, 4 springs: 22 unknowns), at the defaults and with the cheapest honest option (``error_estimate=False``:
 no truncation estimate, freq_error NaN), each run in its own process (BLAS 1 thread), trees in turn, ``--repeats``
 times, after one warm-up run per process (compiled kernels, the skeleton's cache).  Printed: the median milliseconds
-per point of each tree and variant with the load average before and after, the points and status; with
+per point of each tree and variant, wall and CPU time of the process (the CPU time is the steadier on a shared
+machine), with the load average before and after, the points and status; with
 ``--sections`` the time per point of each part of the driver's work (this tree only: wall time inside each
 method, nested parts included in their callers).  Usage::
 
@@ -58,10 +59,10 @@ model = nnm.load_model(sys.argv[4])
 with blas_limited():
     nnm.continue_nnm(model, 20, E, **kw)                 # warm-up
     acc.clear()
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     b = nnm.continue_nnm(model, 20, E, **kw)
-    dt = time.perf_counter() - t
-print(json.dumps(dict(seconds=dt, points=len(b), status=b.status, sections={k: v for k, v in acc.items()},
+    dt, dc = time.perf_counter() - t, time.process_time() - c
+print(json.dumps(dict(seconds=dt, cpu=dc, points=len(b), status=b.status, sections={k: v for k, v in acc.items()},
                  source=nnm.__file__)))
 """
 
@@ -97,9 +98,10 @@ def main(argv=None):
                 results.setdefault((vname, tname), []).append(run(tree, kw_all, args.energy_max, False))
     for (vname, tname), rs in results.items():
         ms = statistics.median(1e3 * r["seconds"] / r["points"] for r in rs)
+        cpu = statistics.median(1e3 * r["cpu"] / r["points"] for r in rs)
         loads = ", ".join(f"{a:.1f}->{b:.1f}" for a, b in (r["load"] for r in rs))
-        print(f"  {vname:12s} {tname:10s} {ms:7.2f} ms a point (median of {len(rs)}; {rs[0]['points']} points, "
-              f"{rs[0]['status']}; load {loads})")
+        print(f"  {vname:12s} {tname:10s} {ms:7.2f} ms a point wall, {cpu:7.2f} ms CPU (medians of {len(rs)}; "
+              f"{rs[0]['points']} points, {rs[0]['status']}; load {loads})")
     if args.sections:
         for vname, kw in VARIANTS.items():
             rs = [run(ROOT, dict(method="hb", condensed=True, harmonics=9, **kw), args.energy_max, True)
