@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..threads import BLAS_CONFIG
+
 __all__ = ["Point", "ModalState", "resolve_points"]
 
 
@@ -120,7 +122,9 @@ def resolve_points(points):
             groups.setdefault(id(modal.phi), []).append((p, modal))
     for pending in groups.values():
         rows = [modal.rows() for _, modal in pending]
-        x = np.concatenate(rows) @ pending[0][1].phi.T
+        stacked = np.concatenate(rows)
+        with BLAS_CONFIG:                    # (any thread: not while a branch's thread changes the BLAS threads)
+            x = stacked @ pending[0][1].phi.T
         start = 0
         for (p, modal), r in zip(pending, rows):
             p._set_physical(modal, x[start:start + len(r)])
