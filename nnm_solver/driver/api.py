@@ -163,9 +163,9 @@ def skeleton_harmonics(method, default, refined):
     mode 20 with 3 harmonics asked, raised to 7: against a 3-harmonic skeleton none of 12 landings past the 3:1 at
     3.49 J was accepted); harmonic balance at fixed harmonics has the branch's own, the same truncation (above 9 too:
     13 harmonics against a 9-harmonic skeleton found no landing past the 3:1 at 4.63 J)."""
-    if method.name == "shooting" or refined:
-        return max(default, int(method.harmonics)) if method.name != "shooting" else default
-    return int(method.harmonics)
+    if method.name == "shooting":
+        return default
+    return max(default, int(method.harmonics)) if refined else int(method.harmonics)
 
 
 def _skeleton_system(model, mode, harmonics):
