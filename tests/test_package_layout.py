@@ -169,14 +169,20 @@ def _newton_loop(names):
 #: events' bracketing root finder (stability/roots.py); every other module corrects with these (no exemption)
 NEWTON_PLACES = ("continuation/", "stability/roots.py")
 
-def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
+def _loops_outside(predicate, places):
+    """{module: line numbers} of the solver's loops satisfying predicate outside the allowed places."""
     root = _root("nnm_solver")
     found = {}
     for path in sorted(root.rglob("*.py")):
         rel = path.relative_to(root).as_posix()
-        lines = _loops(path, _newton_loop)
-        if lines and not rel.startswith(NEWTON_PLACES):
+        lines = _loops(path, predicate)
+        if lines and not rel.startswith(places):
             found[rel] = lines
+    return found
+
+
+def test_newton_loops_live_in_the_continuation_engine_and_the_root_finder():
+    found = _loops_outside(_newton_loop, NEWTON_PLACES)
     assert not found, f"Newton loops outside continuation/ and stability/roots.py: {found}"
 
 
@@ -205,13 +211,7 @@ STEPPING_PLACES = ("continuation/",)
 
 
 def test_stepping_loops_live_in_the_continuation_engine():
-    root = _root("nnm_solver")
-    found = {}
-    for path in sorted(root.rglob("*.py")):
-        rel = path.relative_to(root).as_posix()
-        lines = _loops(path, _stepping_loop)
-        if lines and not rel.startswith(STEPPING_PLACES):
-            found[rel] = lines
+    found = _loops_outside(_stepping_loop, STEPPING_PLACES)
     assert not found, f"stepping loops outside continuation/: {found}"
 
 

@@ -43,11 +43,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import warnings
 
 import numpy as np
-import scipy.linalg as sla
-from scipy.linalg import lapack
+
+from .linalg import LeastSquares, stacked
 
 
 @dataclass(frozen=True)
@@ -76,72 +75,6 @@ class ContinuationPoint:
     step: float
     error: float
     factor: object = None       # LeastSquares of [jacobian; previous tangent] (reusable for other solves)
-
-
-def stacked(J, row):
-    """[J; row^T] in Fortran order (what LAPACK's QR works on in place)."""
-    A = np.empty((J.shape[0] + 1, J.shape[1]), order="F")
-    A[:-1] = J
-    A[-1] = row
-    return A
-
-
-class LeastSquares:
-    """Moore-Penrose solve of A x = b for a full-column-rank A (m >= n), factorised once.  A is
-    overwritten (pass a temporary, e.g. ``stacked(J, row)``).
-
-    Over-determined A (m > n): QR, with Q kept as LAPACK's Householder reflectors and applied to each
-    right-hand side (ormqr), which halves the cost of the factorisation compared with forming Q explicitly.
-    Square A (e.g. quarter-period shooting, whose n equations in n + 1 unknowns have no redundant row): LU
-    with partial pivoting, a third of the QR's work; the solution of a nonsingular square system is its
-    Moore-Penrose solution."""
-
-    #: below this many columns Q is formed explicitly (cheaper than a LAPACK call per solve)
-    EXPLICIT_Q = 64
-
-    def __init__(self, A):
-        self.n = A.shape[1]
-        self._lu = None
-        if A.shape[0] == self.n and self.n >= self.EXPLICIT_Q:
-            # An exactly singular A (e.g. a tongue jump's level-set guess on the aircraft) makes scipy warn
-            # "LinAlgWarning: Diagonal number k is exactly zero. Singular matrix." and nothing else: the zero
-            # pivot shows in rcond (0) and gives a non-finite Newton step, which the corrector reports as its
-            # own failure (CorrectorFailure), and the caller tries another guess or a shorter step.  The
-            # warning is harmless and told the user nothing, so it is not shown.
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", sla.LinAlgWarning)
-                self._lu = sla.lu_factor(A, overwrite_a=True, check_finite=False)
-            d = np.abs(np.diag(self._lu[0]))
-            self.rcond = d.min() / max(d.max(), 1e-300)
-            return
-        if self.n < self.EXPLICIT_Q:
-            self._Q, self.R = sla.qr(A, mode="economic", check_finite=False)
-        else:
-            self._Q = None
-            (self._h, self._tau), self.R = sla.qr(A, mode="raw", overwrite_a=True, check_finite=False)
-        d = np.abs(np.diag(self.R))
-        self.rcond = d.min() / max(d.max(), 1e-300)
-
-    def solve(self, b):
-        """x of A x = b (least squares for m > n).  An exactly singular A gives a non-finite x, as LU does (the
-        triangular solve's LinAlgError at a zero pivot is not raised): the corrector reports it as its own failure
-        (a singular corrector system) and the continuation halves its step (mode 20 of the aircraft with 13
-        condensed harmonics met one on its way into a tongue, 2026-12-07)."""
-        if self._lu is not None:
-            return sla.lu_solve(self._lu, b, check_finite=False)
-        if self._Q is not None:
-            return self._triangular(self._Q.T @ b)
-        c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
-                                   lwork=64 * max(1, np.ndim(b) and (1 if np.ndim(b) == 1 else np.shape(b)[1])))
-        if info != 0:
-            raise np.linalg.LinAlgError(f"ormqr failed (info {info})")
-        x = self._triangular(c[:self.n])
-        return x[:, 0] if np.ndim(b) == 1 else x
-
-    def _triangular(self, c):
-        if not np.all(np.diag(self.R)):
-            return np.full(np.shape(c), np.nan)
-        return sla.solve_triangular(self.R, c, check_finite=False)
 
 
 def tangent(J, previous, w=None):
