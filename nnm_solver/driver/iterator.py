@@ -24,7 +24,7 @@ from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
 from .candidate import record_candidate
-from .refinement import HarmonicRefinement, StepRefinement
+from .refinement import HarmonicRefinement, StepRefinement, accuracy_note
 from ..orbits.hb_basis import harmonics_in
 from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
 from ..results.tongues import continue_hint
@@ -352,19 +352,9 @@ class NNMIterator:
             self._finish("stopped", f"stopped by the caller after {len(self.points)} points")
         message = self.message
         if self.freq_tol:
-            over = [i for i, p in enumerate(self.points) if p.freq_error > self.freq_tol]
-            steps = [i for i in over if self._disc_errors[i] > self.freq_tol]
-            if steps:
-                message += (f"; {len(steps)} points exceed freq_tol = {self.freq_tol:g} (the finer step did not "
-                            f"converge next to them, e.g. near a fold: see freq_error)")
-            rest = len(over) - len(steps)
-            if rest and self._harmonics.freq_tol and hasattr(self._problem, "basis"):
-                message += (f"; {rest} points exceed freq_tol = {self.freq_tol:g} (harmonic balance, "
-                            f"{self._problem.basis.harmonics} harmonics at the end, at most {self._harmonics.max_harmonics}: "
-                            f"more did not converge next to them or were not allowed; see freq_error)")
-            elif rest:
-                message += (f"; {rest} points exceed freq_tol = {self.freq_tol:g} because of the "
-                            f"corrector's tolerance: lower tol (now {self._tol:g})")
+            message += accuracy_note([p.freq_error for p in self.points], self._disc_errors, self.freq_tol, self._tol,
+                                     getattr(getattr(self._problem, "basis", None), "harmonics", None),
+                                     self._harmonics.max_harmonics if self._harmonics.freq_tol else None)
         if not self.settings.floquet and self.points:
             message += ("; stability was not computed (floquet off: the points are not known to be stable, and "
                         "stability changes and branch points are not detected; pass floquet=True)")

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..continuation.engine import CorrectorFailure, correct, pseudo_arclength
 
-__all__ = ["StepRefinement"]
+__all__ = ["StepRefinement", "HarmonicRefinement", "accuracy_note"]
 
 
 class StepRefinement:
@@ -107,3 +107,25 @@ class HarmonicRefinement:
             return None
         self.raised += 1
         return finer, pseudo_arclength(finer, u, t, settings, tol)
+
+
+def accuracy_note(errors, disc_errors, freq_tol, tol, harmonics=None, max_harmonics=None):
+    """What a branch's message says of its points above the accuracy target freq_tol: errors (each point's estimated
+    relative frequency error), disc_errors (the time discretisation's part; NaN for harmonic balance), tol (the
+    corrector's); harmonics / max_harmonics: a harmonic-balance branch's truncation at its end and its cap (None for
+    shooting, or without the target).  "" when every point meets the target."""
+    over = [i for i, e in enumerate(errors) if e > freq_tol]
+    steps = [i for i in over if disc_errors[i] > freq_tol]
+    note = ""
+    if steps:
+        note += (f"; {len(steps)} points exceed freq_tol = {freq_tol:g} (the finer step did not converge next to "
+                 f"them, e.g. near a fold: see freq_error)")
+    rest = len(over) - len(steps)
+    if rest and harmonics is not None and max_harmonics is not None:
+        note += (f"; {rest} points exceed freq_tol = {freq_tol:g} (harmonic balance, {harmonics} harmonics at the "
+                 f"end, at most {max_harmonics}: more did not converge next to them or were not allowed; see "
+                 f"freq_error)")
+    elif rest:
+        note += (f"; {rest} points exceed freq_tol = {freq_tol:g} because of the corrector's tolerance: lower tol "
+                 f"(now {tol:g})")
+    return note
