@@ -47,22 +47,19 @@ class Content:
         return self.partner_k if self.partner_k > 1 else max(self.k, 2)
 
 
-def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None):
-    """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None.
-    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q)."""
+def content_of(Q, r, n=_LABELS.label_harmonics):
+    """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None."""
     if Q is None:
         return Content()
-    c = fourier_coefficients(Q, n) if coefficients is None else coefficients
-    label, k, fraction, amps = harmonic_label(Q, n, c)
-    return Content(k, fraction, partner_harmonic(Q, r, n, c)[0], fundamental_share(amps), amps)
+    label, k, fraction, amps = harmonic_label(Q, n)
+    return Content(k, fraction, partner_harmonic(Q, r, n)[0], fundamental_share(amps), amps)
 
 
-def harmonic_label(Q, n=_LABELS.label_harmonics, c=None):
-    """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof) (c: its Fourier coefficients,
-    when known)."""
+def harmonic_label(Q, n=_LABELS.label_harmonics):
+    """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof)."""
     if Q is None:
         return "backbone", 1, 0.0, None
-    amps = np.linalg.norm(fourier_coefficients(Q, n) if c is None else c, axis=1)
+    amps = np.linalg.norm(fourier_coefficients(Q, n), axis=1)
     tot = float(np.sum(amps[1:]))
     if not tot > 0:
         return "backbone", 1, 0.0, amps
@@ -73,13 +70,12 @@ def harmonic_label(Q, n=_LABELS.label_harmonics, c=None):
     return "backbone", k, float(fr[k]), amps
 
 
-def partner_harmonic(Q, r, n=_LABELS.label_harmonics, c=None):
+def partner_harmonic(Q, r, n=_LABELS.label_harmonics):
     """The harmonic k >= 2 (and its fraction of the orbit's amplitude) that the modes other than the followed
-    one (0-based r) carry most: the order of the resonance a partner is in.  (1, 0) when there is none.  c: the
-    orbit's Fourier coefficients, when known (not changed)."""
+    one (0-based r) carry most: the order of the resonance a partner is in.  (1, 0) when there is none."""
     if Q is None or Q.shape[1] < 2:
         return 1, 0.0
-    c = fourier_coefficients(Q, n) if c is None else np.array(c)
+    c = fourier_coefficients(Q, n)
     tot = float(np.sum(np.linalg.norm(c, axis=1)[1:]))
     c[:, r] = 0.0
     amps = np.linalg.norm(c, axis=1)
