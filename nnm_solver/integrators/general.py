@@ -72,6 +72,18 @@ def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
 
 
 @_jit
+def _newton_end(it, nR, J, scale):
+    """(stop, ok) of a step's Newton iteration it with residual norm nR and Newton matrix J: converged (nR within
+    NEWTON_RTOL of scale), out of iterations (ok if nR is within 1e-9 of scale), or a NaN/inf (a failed step, not a
+    LinAlgError from the solve)."""
+    if nR <= NEWTON_RTOL * scale:
+        return True, True
+    if it == NEWTON_MAX or not _finite(nR, J):
+        return True, it == NEWTON_MAX and nR <= 1e-9 * scale
+    return False, False
+
+
+@_jit
 def _finite(nR, J):
     """True when the residual norm and the Newton matrix are finite (NaN or inf: the step failed)."""
     if not np.isfinite(nR):
@@ -135,11 +147,8 @@ def _newmark(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, inde
             J = K.copy()
             for i in range(n):
                 J[i, i] += S[i]
-            if nR <= NEWTON_RTOL * scale:
-                ok = True
-                break
-            if it == NEWTON_MAX or not _finite(nR, J):     # a NaN/inf: a failed step, not a LinAlgError
-                ok = it == NEWTON_MAX and nR <= 1e-9 * scale
+            stop, ok = _newton_end(it, nR, J, scale)
+            if stop:
                 break
             q1 = q1 - lapack_solve(J, R)
         a1 = -omega2 * q1 - f
@@ -205,11 +214,8 @@ def _gauss(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index,
                         for p in range(n):
                             J[l * n + i, j * n + p] += w * Ks[j, i, p]
                         J[l * n + i, j * n + i] += w * omega2[i]
-            if nR <= NEWTON_RTOL * scale:
-                ok = True
-                break
-            if it == NEWTON_MAX or not _finite(nR, J):     # a NaN/inf: a failed step, not a LinAlgError
-                ok = it == NEWTON_MAX and nR <= 1e-9 * scale
+            stop, ok = _newton_end(it, nR, J, scale)
+            if stop:
                 break
             dX = lapack_solve(J, R)
             for l in range(s):
