@@ -218,8 +218,10 @@ def fig_tongue(branch, tg, picks, path):
             label="unstable")
     for lab, i in picks.items():
         ax.plot(branch.energy[i], branch.frequency_hz[i], "s", color="k", ms=6)
-        ax.annotate(f"({lab})", (branch.energy[i], branch.frequency_hz[i]), xytext=(6, 4),
-                    textcoords="offset points", fontsize=10)
+        # (c), the tip, is the leftmost point and (b) often lies just beside it: (c) is written below-left
+        below = lab == "c"
+        ax.annotate(f"({lab})", (branch.energy[i], branch.frequency_hz[i]), xytext=(-4, -14) if below else (6, 4),
+                    textcoords="offset points", fontsize=10, ha="right" if below else "left")
     ax.set_xscale("log")
     ax.set_xlabel("energy (J)")
     ax.set_ylabel("frequency (Hz)")

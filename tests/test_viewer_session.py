@@ -495,13 +495,13 @@ def test_server_warms_the_solver_in_the_background(demo_file):
 
 
 def test_orbit_description_names_its_measure_and_single_dofs(server):
-    """Issue 14, item 7: inside the 3:1 tongue of the 2-DOF model (shipped two_dof.h5, NNM 1 point
-    130) the mass-weighted content is still 'fundamental' (harmonic 1: 89 %) while x1 moves mostly
+    """Issue 14, item 7: inside the 3:1 tongue of the 2-DOF model (shipped two_dof.h5, NNM 1 index 116, on the
+    way in at 3.8 kJ) the mass-weighted content is still 'fundamental' (harmonic 1: 89 %) while x1 moves mostly
     at 3 times the frequency: the Point tab says which measure it uses and names x1."""
     from nnm_viewer.examples import example_path
 
     s, shared = make_session(server, example_path("two_dof.h5"))
-    s.pick(shared.entries[0].uid, 130)
+    s.pick(shared.entries[0].uid, 116)
     h = s.current_point.harmonics
     assert h[3, 0] > 2 * h[1, 0]                                   # x1: 3rd harmonic > 1st
     text = s.h_info.content
