@@ -35,14 +35,29 @@ class _Job:
         return b
 
 
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
 def test_progress_shows_no_nan_before_the_first_point():
     model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)])
-    out = io.StringIO()
+    out = _Terminal()
     cli._progress(_Job(model), out, interval=0.0)
     lines = out.getvalue().split("\r")
     assert "nan" not in out.getvalue().lower()
     assert "waiting for the first point" in lines[1]
     assert "E = 1.500e+00 J" in lines[-1] and "f = 0.20000 Hz" in lines[-1]
+
+
+def test_progress_into_a_file_is_one_line_per_point_not_a_rewritten_line():
+    """Into a log file or a pipe the progress line is not rewritten with carriage returns several times a second
+    (a 2-minute run wrote 500 copies of it): each new point is one line."""
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)])
+    out = io.StringIO()
+    cli._progress(_Job(model), out, interval=0.0)
+    assert "\r" not in out.getvalue()
+    assert out.getvalue().splitlines() == ["point    1  E = 1.5000e+00 J  f = 0.200000 Hz"]
 
 
 def test_branch_on_a_shipped_example_goes_to_the_current_folder(tmp_path, monkeypatch, capsys):

@@ -126,3 +126,23 @@ def test_every_plot_marks_the_points_off_the_backbone(two_dof_nnm1):
                                       np.sort(b.energy[off]))
         ax = draw(b.subset(~off))
         assert not any("off the backbone" in t.get_text() for t in (ax.get_legend().get_texts()))
+
+
+def test_tongue_lines_say_what_the_branch_did_at_each_tongue():
+    """'jumped' (skip, landed beyond), 'not passed' (the last record of a branch that ended in it: the aircraft's
+    mode 19 to 10 J printed 'passed' for the 9:1 tongue it ended in), 'followed through' (follow)."""
+    from types import SimpleNamespace
+
+    from nnm_solver.cli.families import tongue_lines
+    from nnm_solver.results.tongues import TongueRecord
+
+    def record(skipped):
+        return TongueRecord(order=3, partner_mode=2, entry_energy=10.0, entry_frequency_hz=1.0, entry_x0=(1.0, 0.0),
+                            skipped=skipped, exit_energy=12.0 if skipped else None)
+
+    ended = SimpleNamespace(status="tongue", tongues=[record(True), record(False)])
+    lines = tongue_lines(ended)
+    assert "(jumped, back on the backbone at 12 J;" in lines[0]
+    assert "(not passed: the branch ends at its entry;" in lines[1]
+    followed = SimpleNamespace(status="done", tongues=[record(False)])
+    assert "(followed through;" in tongue_lines(followed)[0]

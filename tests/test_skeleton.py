@@ -336,3 +336,22 @@ def test_a_skeleton_with_no_point_says_why_instead_of_failing():
     from nnm_solver.backbone.skeleton import Skeleton
     s = Skeleton(None, [], [], [], [], "stuck", "no harmonic-balance solution at the linear mode", [], (1, 0), 1)
     assert len(s.energy) == 0 and s.sheet_starts == [] and s.end == "stuck"
+
+
+def test_aircraft_mode_19_skeleton_ends_where_its_family_ends_whatever_energy_max():
+    """The skeleton's first amplitude follows energy_max (a fraction of the reach), so its points, and the steps that
+    meet a resonance, change with it.  The aircraft's mode 19 folds in amplitude at 6.2 J, where its energy folds and
+    recovers as mode 18's motion grows (1:1).  Before, with energy_max 10 J the step past 6.11 J landed on a 9:1
+    tongue's sheet with mode 238 (an orbit of 9.6e5 J at the same frequency, a partner holding the whole orbit) and
+    the stepping read it as the reach: no end, and the backbone went on into that tongue; a step taken over by a
+    partner is now shortened first and its share read before the reach, and the family's own fold is looked for
+    past it.  Every energy_max gives the same end, energy and frequency."""
+    from pathlib import Path
+    model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "paris.h5")
+    ends = []
+    for energy_max in (3.0, 10.0, 200.0):
+        sk = skeleton(model, 19, energy_max, _skeleton_system)
+        assert sk.end == "locked" and sk.partner == (1, 18), (energy_max, sk.end, sk.partner, sk.message)
+        ends.append((sk.energy[-1], sk.frequency_hz[-1]))
+    E, f = np.array(ends).T
+    assert np.ptp(E) / E[0] < 1e-3 and np.ptp(f) / f[0] < 1e-6 and 6.1 < E[0] < 6.3, ends

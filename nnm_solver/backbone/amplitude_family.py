@@ -204,7 +204,10 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
             if landed is not None:             # the backbone's sheet beyond: where it begins, from there on
                 to_sheet(*landed)
                 return True
-        beyond = _past_fold(prob, pts, s) if v is None and len(pts) >= 2 else None
+        # no solution at a larger amplitude, or one a partner took over (the step may have passed the family's own
+        # fold in a and landed on a tongue's sheet: the aircraft's mode 19 at 6.2 J, by the reach): past the fold
+        past = v is None or share_of(v) < s.share_min
+        beyond = _past_fold(prob, pts, s) if past and len(pts) >= 2 else None
         if beyond is not None and beyond[0] == "peak":    # the family's own fold, its energy folding with a
             pts.extend(beyond[1])
             end = "peak"
@@ -260,6 +263,8 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
             if resonance(v, what, off_trend=v is not None and not jumps):
                 continue
             break
+        if share_of(v) < s.share_min and stepper.shorter():
+            continue                   # a partner took the orbit over: a shorter step may stay on the family
         E = prob.energy(v)
         pts.append((a, E, f0 * math.exp(dlnf), v))
         dlnf_prev, ddev_prev = dlnf, ddev
@@ -283,8 +288,8 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
         if falls >= s.peak_run:
             end, message = "peak", "the family's energy turns back: its maximum"
             break
-        if E > E_reach and falls == 0:
-            break
+        # (a partner taking the orbit over is read before the reach: such an orbit's energy is the partner's, e.g.
+        # 1e5 x the family's on the aircraft's mode 19 past 6.1 J, where a 9:1 partner, mode 238, holds it)
         if share < s.share_min:
             pts.pop()                  # a partner takes the orbit over: jump from the last point before
             landed = gaps[-1][2] if gaps else 0.0
@@ -295,6 +300,8 @@ def amplitude_family(prob, E_reach, a_start, s=SkeletonSettings()):
                 end, message = "locked", (f"the family passes into a {k}:1 internal resonance with mode {p} at E = "
                                           f"{pts[-1][1]:.4g} J, f = {pts[-1][2]:.5g} Hz: that mode takes over "
                                           f"more than {1 - s.share_min:.0%} of the orbit")
+            break
+        if E > E_reach and falls == 0:
             break
     a, E, f, us = (list(c) for c in zip(*pts))
     return a, E, f, us, end, message, gaps, partner

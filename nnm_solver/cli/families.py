@@ -24,13 +24,24 @@ def tongues_of(branch):
 def tongue_lines(branch):
     """One line per tongue of ``branch`` that --tongue K continues, numbered from 1; [] if none."""
     lines = []
-    for k, t in enumerate(tongues_of(branch), 1):
+    listed = tongues_of(branch)
+    for k, t in enumerate(listed, 1):
         partner = f" with mode {t['partner_mode']}" if t.get("partner_mode") else ""
-        how = "jumped" if t.get("skipped") else "passed"
+        how = _how(branch, t, last=k == len(listed))
         out = f", back on the backbone at {t['exit_energy']:.4g} J" if "exit_energy" in t else ""
         lines.append(f"  tongue {k}: {t.get('label', 'tongue')}{partner}, entered at E = {t['entry_energy']:.4g} J, "
                      f"f = {t['entry_frequency_hz']:.5f} Hz ({how}{out}; nnm-solve ... --tongue {k} continues it)")
     return lines
+
+
+def _how(branch, t, last):
+    """What the branch did at tongue record t: jumped it (skip), ended at its entry (the last record of a branch
+    that ended in a tongue, not jumped), or followed it through (follow)."""
+    if t.get("skipped"):
+        return "jumped"
+    if last and branch.status == "tongue":
+        return "not passed: the branch ends at its entry"
+    return "followed through"
 
 
 def switch_events(branch):

@@ -40,10 +40,22 @@ def _load(path):
 
 def _progress(job, stream, interval=0.2):
     """One progress line, rewritten in place until the job is done (the latest point's E and f once
-    there is one; before it, the time waited: the first run after installing compiles the solver)."""
+    there is one; before it, the time waited: the first run after installing compiles the solver).  Into a
+    file or a pipe (not a terminal): one line per new point, nothing rewritten."""
     width = 30
     t0 = time.perf_counter()
     last = 0
+    isatty = getattr(stream, "isatty", None)
+    if not (callable(isatty) and isatty()):
+        shown = 0
+        while not job.done:
+            pts = job.points()
+            for i in range(shown, len(pts)):
+                stream.write(f"point {i + 1:4d}  E = {pts.energy[i]:.4e} J  f = {pts.frequency_hz[i]:.6f} Hz\n")
+            shown = max(shown, len(pts))
+            stream.flush()
+            time.sleep(interval)
+        return
     while not job.done:
         f = job.progress
         pts = job.points()
