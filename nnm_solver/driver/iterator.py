@@ -17,7 +17,8 @@ from ..results.branch import Branch
 from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
-from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
+from ..stability.floquet import is_stable, sort_multipliers
+from ..stability.settings import STABILITY
 from ..stability.locator import event_rtol
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
@@ -183,7 +184,7 @@ class NNMIterator:
         if cand.spectrum is not None:
             mu, cand.collision = cand.spectrum()
             cand.point.floquet = sort_multipliers(mu)
-            cand.point.stable = is_stable(cand.point.floquet, STABILITY_TOL)
+            cand.point.stable = is_stable(cand.point.floquet, STABILITY.stability_tol)
             cand.spectrum = None
 
     def _turning_ratio(self, q0, v0):
