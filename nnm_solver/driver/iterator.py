@@ -27,7 +27,8 @@ from ..backbone.policy import Finish, FollowPolicy, Jump
 from .candidate import record_candidate
 from .refinement import HarmonicRefinement, StepRefinement, accuracy_note
 from ..orbits.hb_basis import harmonics_in
-from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
+from ..results.settings import RESULTS
+from ..results.stops import LoopDetector, escape_message, restoring_ratio
 from ..results.tongues import continue_hint
 from ..threads import blas_limited
 
@@ -149,7 +150,7 @@ class NNMIterator:
         self._disc_errors.append(cand.disc_error)
         E, E0 = point.energy, self.points[0].energy
         ratio = min(self._turning_ratio(q0, v0), cand.restoring)
-        if ratio < ESCAPE_RATIO:
+        if ratio < RESULTS.escape_ratio:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
             self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._policy.note(self.points))
@@ -197,7 +198,7 @@ class NNMIterator:
         N = len(self.points)
         restoring = self._last_kept[1].restoring if self._last_kept else 1.0
         ratio = min(self._turning_ratio(*self._last), restoring) if N else 1.0
-        if ratio < 0.1:
+        if ratio < RESULTS.escape_ratio_failed:
             self._finish("escape", escape_message(self.points[-1], ratio) +
                          f" (the continuation could not go further: {reason})")
             return
