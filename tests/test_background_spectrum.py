@@ -1,6 +1,8 @@
 """The Floquet multipliers computed in the worker thread while the engine computes the next point
 (ShootingStability.multipliers_later, EngineDriver.ahead, Locator.prefetch) give the branch that computing them
 in turn gives: the same points, flags and events, also when a step is refused after the engine went on."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -11,11 +13,17 @@ import nnm_solver.orbits.shooting_stability as shooting_stability
 from conftest import two_dof_model
 
 
+def _background_from(monkeypatch, n):
+    """The multipliers in the worker threads from n modes up (ORBITS.background_min_n of shooting_stability)."""
+    monkeypatch.setattr(shooting_stability, "ORBITS",
+                        dataclasses.replace(shooting_stability.ORBITS, background_min_n=n))
+
+
 def _run(monkeypatch, background, refuse=(), model=None, mode=1, energy=1e4, **kw):
     """The branch with the eigenproblems in the worker thread (background) or not; refuse : the calls of the
     mid-step check (Locator.jumped) that refuse their step whatever it finds.  Returns (branch, the number of
     points computed ahead, the number of engine restarts)."""
-    monkeypatch.setattr(shooting_stability, "BACKGROUND_MIN_N", 1 if background else 10 ** 9)
+    _background_from(monkeypatch, 1 if background else 10 ** 9)
     calls, ahead, restarts = [], [], []
     jumped, go_ahead = locator.Locator.jumped, engine_driver.EngineDriver.ahead
     restart = engine_driver.EngineDriver.restart
@@ -78,6 +86,6 @@ def test_spectrum_workers_from_the_environment(monkeypatch):
     monkeypatch.setenv("NNM_SPECTRUM_WORKERS", "two")
     with pytest.raises(ValueError, match="NNM_SPECTRUM_WORKERS must be a whole number"):
         threads._workers_from_environment()
-    monkeypatch.setattr(shooting_stability, "BACKGROUND_MIN_N", 1)
+    _background_from(monkeypatch, 1)
     monkeypatch.setattr(threads, "WORKERS", 0)
-    assert _run(monkeypatch, True, energy=10.0)[1] == 0       # (_run sets BACKGROUND_MIN_N = 1 itself)
+    assert _run(monkeypatch, True, energy=10.0)[1] == 0       # (_run sets background_min_n = 1 itself)

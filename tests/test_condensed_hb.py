@@ -207,6 +207,8 @@ def test_block_lanczos_finds_every_mode_below_the_cutoff_with_the_exact_eigenval
 def test_ritz_basis_falls_back_to_arpack_where_the_block_lanczos_cannot_converge(monkeypatch):
     """The 300-element cantilever (eigenvalues spanning 1e12) through the sparse path: the block Lanczos stalls at
     the round-off of K^-1 (LanczosStall) and ritz_basis takes ARPACK's modes instead, equal to the dense ones."""
+    import dataclasses
+
     import scipy.sparse as sp
     from nnm_solver.model import ritz
     from nnm_solver.model.sparse import SparseSolver
@@ -214,7 +216,7 @@ def test_ritz_basis_falls_back_to_arpack_where_the_block_lanczos_cannot_converge
     K, M = sp.csc_matrix(model.K_linear), sp.csc_matrix(model.M)
     with pytest.raises(ritz.LanczosStall):
         ritz.modes_below(K, M, SparseSolver(K), 10, lambda found: (2 * np.pi * 3000.0) ** 2)
-    monkeypatch.setattr(ritz, "MAX_DENSE_DOF", 100)            # the sparse path for this 600-DOF model
+    monkeypatch.setattr(ritz, "MODEL", dataclasses.replace(ritz.MODEL, max_dense_dof=100))   # the sparse path
     lam, Phi, m, cut = ritz.ritz_basis(model, mode=1, harmonics=5)
     dense = model.eigensolution[0]
     # to the round-off of this pencil (eigenvalues spanning 1e12, an error ~ eps lam_max / lam): 7e-6 on the first

@@ -1,5 +1,7 @@
 """The Krein locator's full-flag check (krein._flag_change_near) and the located points' continuity check
 (Locator._from_latest), on a synthetic spectrum and on the 2-DOF benchmark."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -54,7 +56,7 @@ def test_full_flag_bracketed_by_two_margin_spectra(monkeypatch, band):
     local root bracket the change within the round-off band (FLAG_BAND): two full evaluations besides the
     probes, and the bracket is within the energy tolerance.  Without the band the flag is bisected instead."""
     if not band:
-        monkeypatch.setattr(krein, "FLAG_BAND", 0.0)
+        monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, flag_band=0.0))
     loc, seen = _noisy_locator(2e-4)
     ends = [(loc.stable(x), loc.collision(x)) for x in (0.0, 1.0)]
     assert ends[0][0] and not ends[1][0]
@@ -65,10 +67,10 @@ def test_full_flag_bracketed_by_two_margin_spectra(monkeypatch, band):
     full_evaluations = len(set(seen))
     if band:
         assert abs(0.5 * (lo + hi) - threshold) < 1e-6
-        assert full_evaluations == 2 + krein.KREIN_PROBES
+        assert full_evaluations == 2 + krein.STABILITY.krein_probes
     else:                                   # bisection on the full flag: its own change, more spectra
         assert not loc.stable(max(lo, hi)) and loc.stable(min(lo, hi))
-        assert full_evaluations > 2 + krein.KREIN_PROBES + 5
+        assert full_evaluations > 2 + krein.STABILITY.krein_probes + 5
 
 
 def test_located_point_off_the_interpolant_is_computed_afresh(monkeypatch):
@@ -111,7 +113,7 @@ def test_a_pair_far_off_the_axis_in_a_dense_spectrum_is_followed(monkeypatch, co
     window) are all real there, so a real shift loses the pair and the flag is bisected (~20 full spectra); the
     pair's complex coordinate as the shift keeps it (the margin spectra and the probes only)."""
     if not complex_shift:
-        monkeypatch.setattr(krein, "LOCAL_CROWD", 10 ** 9)
+        monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, local_crowd=10 ** 9))
     dense = list(0.30 + 0.0006 * np.arange(300))
 
     def coords(sigma):
@@ -124,6 +126,6 @@ def test_a_pair_far_off_the_axis_in_a_dense_spectrum_is_followed(monkeypatch, co
     threshold = 0.3 + (1e-5 * np.sqrt(1 - 0.3903 ** 2)) ** 2 / 4e-4
     assert abs(0.5 * (lo + hi) - threshold) < 1e-6 and loc.stable(min(lo, hi)) and not loc.stable(max(lo, hi))
     if complex_shift:
-        assert len(set(seen)) == 2 + krein.KREIN_PROBES
+        assert len(set(seen)) == 2 + krein.STABILITY.krein_probes
     else:
-        assert len(set(seen)) > 2 + krein.KREIN_PROBES + 10
+        assert len(set(seen)) > 2 + krein.STABILITY.krein_probes + 10

@@ -3,6 +3,8 @@ synthetic spectra whose local solver sees only the 6 eigenvalues nearest its shi
 does): a pair that drifts out of that window before the followed collision, and a pair whose test function is far
 from linear (the secant stalls).  Each is checked against the full flag's own change (what a bisection of the
 flag finds) and by the number of full spectra used; the dense route's count is what bisection costs."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -39,7 +41,7 @@ def test_a_pair_that_drifted_out_of_the_window_is_found_at_the_margin(monkeypatc
     unstable, and B is complex there: B is followed from that point (a few full spectra) instead of bisecting the
     full flag over the step (~30).  Both find the flag's own change at B's collision."""
     if not earlier:
-        monkeypatch.setattr(krein, "KREIN_DEPTH", 0)
+        monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, krein_depth=0))
 
     def coords(sigma):
         centre = -0.4 - 0.5 * max(0.0, sigma - 0.8)
@@ -52,7 +54,7 @@ def test_a_pair_that_drifted_out_of_the_window_is_found_at_the_margin(monkeypatc
     assert abs(ref - 0.3) < 1e-3
     assert min(lo, hi) <= ref + 1e-9 and ref - 1e-9 <= max(lo, hi) and abs(hi - lo) <= loc.rtol * (1 + hi)
     if earlier:
-        assert full <= 2 * (2 + krein.KREIN_PROBES) + 2
+        assert full <= 2 * (2 + krein.STABILITY.krein_probes) + 2
     else:
         assert full > 25
 
@@ -67,7 +69,7 @@ def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
     the probes, without it by bisecting the full flag."""
     if not checked:
         monkeypatch.setattr(krein, "_root_within", lambda *a, **k: None)
-        monkeypatch.setattr(krein, "KREIN_DEPTH", 0)
+        monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, krein_depth=0))
 
     def coords(sigma):
         pair = ([0.5 + 2e-5j, 0.5 - 2e-5j] if sigma < 0.45 else _pair(0.5, 0.01 * (sigma - 0.45)))
@@ -80,7 +82,7 @@ def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
     assert abs(ref - 0.45) < 1e-9
     assert min(lo, hi) <= ref + 1e-9 and ref - 1e-9 <= max(lo, hi) and abs(hi - lo) <= loc.rtol * (1 + hi)
     if checked:
-        assert full <= 2 + krein.KREIN_PROBES
+        assert full <= 2 + krein.STABILITY.krein_probes
     else:
         assert full > 25
 

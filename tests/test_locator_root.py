@@ -1,5 +1,7 @@
 """Locator.root: the Illinois variant of regula falsi, safeguarded by bisection (RETAIN_LIMIT) -- few evaluations
 on a smooth g, a jump located at bisection's cost (not at max_iter unconverged)."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -35,7 +37,7 @@ def test_a_jump_is_bisected(monkeypatch, low, high):
     x, (a, b), n = _root(g, 0.0, 1.0, 1e-9)
     assert a <= jump <= b and b - a <= 1e-9
     assert n <= 40
-    monkeypatch.setattr(roots, "RETAIN_LIMIT", 10 ** 9)
+    monkeypatch.setattr(roots, "STABILITY", dataclasses.replace(roots.STABILITY, retain_limit=10 ** 9))
     x, (a, b), n = _root(g, 0.0, 1.0, 1e-9)
     assert b - a > 1e-9 and n > 60
 
@@ -47,6 +49,6 @@ def test_smooth_functions_keep_superlinear_convergence(monkeypatch, g, root):
     order: a 1e-12 bracket in <= 20 evaluations, within 5 of Illinois alone (bisection needs 40)."""
     x, (a, b), n = _root(g, 0.0, 1.0, 1e-12)
     assert a <= root <= b and b - a <= 1e-12
-    monkeypatch.setattr(roots, "RETAIN_LIMIT", 10 ** 9)
+    monkeypatch.setattr(roots, "STABILITY", dataclasses.replace(roots.STABILITY, retain_limit=10 ** 9))
     n_illinois = _root(g, 0.0, 1.0, 1e-12)[2]
     assert n <= 20 and n <= n_illinois + 5

@@ -1,5 +1,7 @@
 """The Newmark monodromy assembled with one triangular solve (newmark_monodromy.monodromy) against the step-by-step
 Volterra recursion (monodromy_recursive) and against finite differences of the state sweep."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -105,7 +107,7 @@ def monodromy_recursive(omega2, Bq, h, nsteps, Dseq, ncols):
 @pytest.mark.parametrize("block", [128, 7])        # one block; several blocks of unequal length (25 = 3 x 7 + 4)
 @pytest.mark.parametrize("n, ns, N", [(7, 1, 9), (12, 3, 16), (30, 4, 25)])
 def test_triangular_assembly_matches_the_recursion(n, ns, N, block, monkeypatch):
-    monkeypatch.setattr(newmark_monodromy, "VOLTERRA_BLOCK", block)
+    monkeypatch.setattr(newmark_monodromy, "KERNELS", dataclasses.replace(newmark_monodromy.KERNELS, volterra_block=block))
     rng = np.random.default_rng(n)
     omega2 = np.sort(rng.uniform(0.5, 400.0, n))
     Bq = rng.standard_normal((ns, n))

@@ -133,7 +133,7 @@ def test_softening_beam_with_tip_mass_escapes():
 def test_hardening_spring_between_masses_decades_apart_never_escapes():
     """A hardening relative cubic spring (k3 > 0: the potential is convex, x = 0 its only equilibrium) between
     a 1 t and a 1 g mass: mode 2's orbits carry a small component of the stiff light mode, whose linear force
-    dominates |Omega^2 q|; the modal restoring-force norm ratio then fell below ESCAPE_RATIO at 1.1 kJ and the
+    dominates |Omega^2 q|; the modal restoring-force norm ratio then fell below RESULTS.escape_ratio at 1.1 kJ and the
     branch was stopped as an escape.  The work ratio q . F / q . Omega^2 q (>= 1 when hardening) prevents it."""
     M = np.diag([1e3, 1e-3, 1e3])
     K = 1e9 * np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])

@@ -2,6 +2,7 @@
 branches point for point, a killed worker's branch is retried or reported, a cancelled sweep keeps its
 finished branches and a rerun skips them, bad scheduler addresses and bad input give one-line errors;
 model variants and the TOML sweep file."""
+import dataclasses
 import importlib
 import os
 import signal
@@ -106,7 +107,7 @@ def test_bad_input_fails_before_any_cluster(tmp_path):
 
 def test_bad_scheduler_address(monkeypatch):
     pytest.importorskip("distributed")
-    monkeypatch.setattr(sweeps, "CONNECT_TIMEOUT", 1.0)
+    monkeypatch.setattr(sweeps, "SWEEPS", dataclasses.replace(sweeps.SWEEPS, connect_timeout=1.0))
     for address in ("tcp://127.0.0.1:1", "nonsense://nowhere:x"):
         with pytest.raises(nnm.NNMInputError, match="cannot reach the Dask scheduler"):
             nnm.sweep(chain(), [1], 1.0, client=address, **SHORT)

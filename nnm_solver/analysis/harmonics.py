@@ -25,11 +25,12 @@ from ..errors import NNMInputError
 from ..fourier import fourier_coefficients
 from ..model.modal import modal_system
 from ..model.reduction import mass_mac
+from .settings import ANALYSIS
 
-#: a harmonic k > 1 carrying at least this fraction of the amplitude marks an internal resonance
-RESONANCE_FRACTION = 0.15
-#: below this, the higher harmonics are not mentioned in a description
-DISTORTION_FRACTION = 0.03
+#: an alias of settings.py's ANALYSIS.resonance_fraction (the code reads that)
+RESONANCE_FRACTION = ANALYSIS.resonance_fraction
+#: an alias of settings.py's ANALYSIS.distortion_fraction (the code reads that)
+DISTORTION_FRACTION = ANALYSIS.distortion_fraction
 
 
 class HarmonicContent(NamedTuple):
@@ -191,7 +192,7 @@ def describe_orbit(branch, i, dof=None, n=15, with_mode=True):
     hc = dominant_harmonic(branch, i, dof, n)
     f1 = hc.fractions[1]
     k2, f2 = hc.secondary, hc.secondary_fraction
-    if k2 and (f2 >= RESONANCE_FRACTION or hc.order != 1):
+    if k2 and (f2 >= ANALYSIS.resonance_fraction or hc.order != 1):
         p, q = _ratio(hc)
         kk = hc.order if hc.order != 1 else k2
         ff = hc.fractions[kk]
@@ -209,6 +210,6 @@ def describe_orbit(branch, i, dof=None, n=15, with_mode=True):
                 pass
         return text
     text = f"fundamental NNM motion (harmonic 1 carries {100 * f1:.0f} %"
-    if k2 and f2 >= DISTORTION_FRACTION:
+    if k2 and f2 >= ANALYSIS.distortion_fraction:
         text += f"; harmonic {k2}: {100 * f2:.0f} %"
     return text + ")"

@@ -14,10 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import NNMInputError
-from .harmonics import RESONANCE_FRACTION, check_branch, closest_mode, harmonic_fractions, harmonic_shape
+from .harmonics import check_branch, closest_mode, harmonic_fractions, harmonic_shape
+from .settings import ANALYSIS
 
-#: relative energy changes below this are flat when walking along a branch (stalled continuations)
-FLAT = 1e-6
 
 @dataclass
 class Tongue:
@@ -91,7 +90,7 @@ def _local_extrema(E):
     return mins, maxs
 
 
-def find_tongues(branch, min_fraction=RESONANCE_FRACTION, n=15, dof=None, fractions=None, with_mode=True):
+def find_tongues(branch, min_fraction=ANALYSIS.resonance_fraction, n=15, dof=None, fractions=None, with_mode=True):
     """Internal-resonance tongues along a branch: a list of Tongue, in the order met along the branch.
 
     A tongue is an excursion of the branch between folds, with a *tip* where a harmonic k >= 2 carries a
@@ -139,7 +138,7 @@ def _excursions(E, sec):
     cands = []
     for tip in mins:   # tongue towards lower energy
         i0 = tip
-        while i0 > 0 and E[i0 - 1] >= E[i0] * (1 - FLAT):
+        while i0 > 0 and E[i0 - 1] >= E[i0] * (1 - ANALYSIS.flat):
             i0 -= 1
         if i0 == tip:
             continue
@@ -149,7 +148,7 @@ def _excursions(E, sec):
         cands.append((i0, tip, i1, bool(E[i1] >= E[i0]), (float(E[tip]), float(E[i0])), "lower"))
     for tip in maxs:   # tongue towards higher energy
         i1 = tip
-        while i1 < N - 1 and E[i1 + 1] <= E[i1] * (1 + FLAT):
+        while i1 < N - 1 and E[i1 + 1] <= E[i1] * (1 + ANALYSIS.flat):
             i1 += 1
         i0 = tip
         while i0 > 0 and E[i0] > E[i1]:

@@ -105,8 +105,8 @@ def main_import(argv):
         raise NNMInputError(f"--out {args.out}: give an HDF5 path (.h5)")
     _folder_ok(args.out, "model")
     model = load_model(args.model)
-    from ..model.model import MAX_DENSE_DOF
-    if not args.no_check and model.n <= MAX_DENSE_DOF:
+    from ..model.settings import MODEL
+    if not args.no_check and model.n <= MODEL.max_dense_dof:
         freqs, _ = model.linear_modes()       # M positive definite, K positive semi-definite
     else:
         freqs = None

@@ -28,9 +28,10 @@ def label_with_reference(label, name):
 
 
 def list_modes(model, reference=None, count=30, out=sys.stdout):
-    from ..model import MAX_DENSE_DOF, sparse_modes
+    from ..model import sparse_modes
+    from ..model.settings import MODEL
     # a model too large for the dense eigensolution (a full FE model): its lowest modes by sparse Lanczos
-    freqs = sparse_modes(model, count)[0] if model.n > MAX_DENSE_DOF else model.linear_modes()[0]
+    freqs = sparse_modes(model, count)[0] if model.n > MODEL.max_dense_dof else model.linear_modes()[0]
     labels = model.mode_labels or []
     named = reference_mode_names(reference)
     table = None

@@ -185,11 +185,11 @@ def _check_arguments(model, args):
     """NNMInputError for a mode out of range, a non-positive --energy-max, --tol, --max-points or
     --energy-min (the checks continue_nnm makes, done before anything is printed or written)."""
     from ..driver.api import check_branch_arguments
-    from ..model import MAX_DENSE_DOF
+    from ..model.settings import MODEL
 
     check_branch_arguments(model, args.mode, args.energy_max, 1e-6 if args.tol is None else args.tol,
                            solver_defaults()["max_points"] if args.max_points is None else args.max_points,
-                           args.energy_min, modes_known=model.n <= MAX_DENSE_DOF)
+                           args.energy_min, modes_known=model.n <= MODEL.max_dense_dof)
 
 
 def _run_forced(args):

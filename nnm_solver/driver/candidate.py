@@ -15,7 +15,8 @@ import numpy as np
 from ..backbone.content import content_of
 from ..results.branch import Point
 from ..results.stops import restoring_ratio
-from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
+from ..stability.floquet import is_stable, sort_multipliers
+from ..stability.settings import STABILITY
 
 __all__ = ["Candidate", "record_candidate"]
 
@@ -61,10 +62,10 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
         mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
     elif floquet and known is not None:
         mu, collision = known
-        stable = is_stable(mu, STABILITY_TOL)
+        stable = is_stable(mu, STABILITY.stability_tol)
     elif floquet:
         mu = sort_multipliers(prob.multipliers(cp.u, cp.tangent))
-        stable = is_stable(mu, STABILITY_TOL)
+        stable = is_stable(mu, STABILITY.stability_tol)
         collision = getattr(prob, "collision", None)
     else:
         mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True

@@ -17,7 +17,8 @@ from ..results.branch import Branch
 from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
-from ..stability.floquet import STABILITY_TOL, is_stable, sort_multipliers
+from ..stability.floquet import is_stable, sort_multipliers
+from ..stability.settings import STABILITY
 from ..stability.locator import event_rtol
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
@@ -26,7 +27,8 @@ from ..backbone.policy import Finish, FollowPolicy, Jump
 from .candidate import record_candidate
 from .refinement import HarmonicRefinement, StepRefinement, accuracy_note
 from ..orbits.hb_basis import harmonics_in
-from ..results.stops import ESCAPE_RATIO, LoopDetector, escape_message, restoring_ratio
+from ..results.settings import RESULTS
+from ..results.stops import LoopDetector, escape_message, restoring_ratio
 from ..results.tongues import continue_hint
 from ..threads import blas_limited
 
@@ -148,7 +150,7 @@ class NNMIterator:
         self._disc_errors.append(cand.disc_error)
         E, E0 = point.energy, self.points[0].energy
         ratio = min(self._turning_ratio(q0, v0), cand.restoring)
-        if ratio < ESCAPE_RATIO:
+        if ratio < RESULTS.escape_ratio:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:
             self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._policy.note(self.points))
@@ -183,7 +185,7 @@ class NNMIterator:
         if cand.spectrum is not None:
             mu, cand.collision = cand.spectrum()
             cand.point.floquet = sort_multipliers(mu)
-            cand.point.stable = is_stable(cand.point.floquet, STABILITY_TOL)
+            cand.point.stable = is_stable(cand.point.floquet, STABILITY.stability_tol)
             cand.spectrum = None
 
     def _turning_ratio(self, q0, v0):
@@ -196,7 +198,7 @@ class NNMIterator:
         N = len(self.points)
         restoring = self._last_kept[1].restoring if self._last_kept else 1.0
         ratio = min(self._turning_ratio(*self._last), restoring) if N else 1.0
-        if ratio < 0.1:
+        if ratio < RESULTS.escape_ratio_failed:
             self._finish("escape", escape_message(self.points[-1], ratio) +
                          f" (the continuation could not go further: {reason})")
             return

@@ -22,6 +22,7 @@ from .h5file import STR, atomic_h5, open_nnm, read_matrix, strings
 from .sweep_groups import parse_branch_name, recorded_variants, with_variant_models
 from . import coupled_io
 from .io import BRANCH_COLUMNS, read_model_group, read_springs, spring_law_json, write_model_group
+from .settings import FILES
 
 __all__ = ["save_branch", "check_branch_file", "load_branches", "MODEL_RTOL"]
 
@@ -83,9 +84,8 @@ def save_branch(path, branch, name=None):
 
 
 # ---------------------------------------------------------------------- the model a branch is appended to
-#: relative tolerance of the model comparison (a model read back from a file is bit-identical; a model
-#: built again from the same description is too, up to rounding)
-MODEL_RTOL = 1e-10
+#: an alias of settings.py's FILES.model_rtol (the code reads that)
+MODEL_RTOL = FILES.model_rtol
 
 
 def check_branch_file(path, model, name=None):
@@ -144,13 +144,13 @@ def _joint(s):
 
 
 def _close(a, b):
-    """Equal force-law descriptions (spring_law_json), numbers to MODEL_RTOL."""
+    """Equal force-law descriptions (spring_law_json), numbers to FILES.model_rtol."""
     if isinstance(a, dict) and isinstance(b, dict):
         return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
         return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        return math.isclose(a, b, rel_tol=MODEL_RTOL, abs_tol=0.0)
+        return math.isclose(a, b, rel_tol=FILES.model_rtol, abs_tol=0.0)
     return a == b
 
 
@@ -178,7 +178,7 @@ def _spring_difference(file_springs, springs, free_k3=True, where=""):
 
 
 def _matrix_difference(label, A, B, where=""):
-    """'' when the matrices are equal to MODEL_RTOL (relative to their largest entry), else what differs."""
+    """'' when the matrices are equal to FILES.model_rtol (relative to their largest entry), else what differs."""
     if A.shape != B.shape:
         return (f"{label} is {A.shape[0]}x{A.shape[1]} in the file{where}, {B.shape[0]}x{B.shape[1]} in the "
                 f"branch's model")
@@ -193,7 +193,7 @@ def _matrix_difference(label, A, B, where=""):
         scale = float(max(np.max(np.abs(A)), np.max(np.abs(B)))) if A.size else 0.0
     if not math.isfinite(diff):
         return f"{label} differs (non-finite entries)"
-    if diff <= MODEL_RTOL * scale:
+    if diff <= FILES.model_rtol * scale:
         return ""
     against = " from the file" + where if where else ""
     return f"{label} differs{against} by up to {100 * diff / scale:.3g} % of its largest entry"

@@ -24,8 +24,9 @@ from ..errors import NNMFileError, NNMInputError
 from ..results.forced import ForcedResponse
 from .h5file import atomic_h5, open_nnm, read_matrix
 from .importers import is_import_path
-from .branch_io import MODEL_RTOL, _close, _jsonable      # the same model comparison and JSON as for branches
+from .branch_io import _close, _jsonable      # the same model comparison and JSON as for branches
 from .io import read_model_group, spring_law_json, write_model_group
+from .settings import FILES
 
 __all__ = ["save_forced_response", "load_forced_responses", "FORCED_GROUP"]
 
@@ -121,7 +122,7 @@ def load_forced_responses(path, model=None):
 
 # ---------------------------------------------------------------------- the file's model
 def _model_difference(f, path, model):
-    """'' when the file holds no model or ``model`` equals it (matrices to MODEL_RTOL, the same elements and
+    """'' when the file holds no model or ``model`` equals it (matrices to FILES.model_rtol, the same elements and
     force laws), else what differs (one line)."""
     if "model" not in f:
         return ""
@@ -150,9 +151,9 @@ def _model_difference(f, path, model):
 
 
 def _matrix_difference(A, B):
-    """Largest |A - B| relative to the largest entry, or 0 when within MODEL_RTOL (shapes equal)."""
+    """Largest |A - B| relative to the largest entry, or 0 when within FILES.model_rtol (shapes equal)."""
     A = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
     B = B.toarray() if sp.issparse(B) else np.asarray(B, dtype=float)
     scale = max(float(np.max(np.abs(A))) if A.size else 0.0, float(np.max(np.abs(B))) if B.size else 0.0, 1e-300)
     d = float(np.max(np.abs(A - B))) / scale if A.size else 0.0
-    return 0.0 if d <= MODEL_RTOL else d
+    return 0.0 if d <= FILES.model_rtol else d

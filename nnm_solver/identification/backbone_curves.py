@@ -6,9 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import NNMInputError
-
-#: points the backbone curve is resampled to (shape-preserving interpolation between branch points)
-CURVE_SAMPLES = 4000
+from .settings import IDENTIFICATION
 
 
 def scale_nonlinear(spring, factor):
@@ -39,7 +37,7 @@ def _curve(branch, dof):
         raise NNMInputError(f"fit_backbone: the model's backbone has {len(la)} usable point(s) (branch status "
                             f"{branch.status!r}); check the mode and the energy range")
     s = np.arange(len(la), dtype=float)
-    fine = np.linspace(0.0, s[-1], CURVE_SAMPLES)
+    fine = np.linspace(0.0, s[-1], IDENTIFICATION.curve_samples)
     return PchipInterpolator(s, la)(fine), PchipInterpolator(s, lf)(fine)
 
 

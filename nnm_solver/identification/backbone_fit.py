@@ -24,11 +24,9 @@ import numpy as np
 
 from ..errors import NNMInputError, finite_number
 from .backbone_curves import _curve, _distances, _minimise, scale_nonlinear
+from .settings import IDENTIFICATION
 
 __all__ = ["BackboneFit", "fit_backbone", "scale_nonlinear"]
-
-#: search range of the factor
-FACTOR_RANGE = (1e-4, 1e4)
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,7 +154,7 @@ def fit_backbone(model, mode, dof, amplitude, frequency_hz=None, *, energy_max=N
         raise NNMInputError("fit_backbone: further backbones (also=...) are fitted with groups=[...] only")
     exact = _pure_cubic(model)
     branches = 0
-    lo, hi = np.log(FACTOR_RANGE[0]), np.log(FACTOR_RANGE[1])
+    lo, hi = np.log(IDENTIFICATION.factor_range[0]), np.log(IDENTIFICATION.factor_range[1])
     if exact:
         for _ in range(4):                                  # extend the branch until it covers the points
             curve = _curve(continue_nnm(model, mode, energy_max, **kw), dof)

@@ -16,11 +16,9 @@ import numpy as np
 
 from ..errors import NNMInputError
 from .backbone_curves import _curve, _distances, scale_nonlinear
+from .settings import IDENTIFICATION
 
 __all__ = ["GroupFit", "check_groups", "fit_groups"]
-
-#: bounds of each factor
-GROUP_RANGE = (1e-3, 1e3)
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +87,7 @@ def fit_groups(model, groups, data, weights, solve):
             cache[key] = np.concatenate(parts)
         return cache[key]
 
-    lo, hi = np.log(GROUP_RANGE[0]), np.log(GROUP_RANGE[1])
+    lo, hi = np.log(IDENTIFICATION.group_range[0]), np.log(IDENTIFICATION.group_range[1])
     res = least_squares(residuals, np.zeros(len(groups)), bounds=(lo, hi), diff_step=1e-3, x_scale=1.0,
                         xtol=1e-8, ftol=1e-10, max_nfev=60)
     r = residuals(res.x)

@@ -28,13 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import NNMInputError, finite_number
+from .settings import IDENTIFICATION
 
 __all__ = ["RestoringForceSurface", "rfs", "integrate", "dominant_frequency", "HIGHPASS_FRACTION"]
 
-#: default high-pass cut-off, as a fraction of the relative velocity's dominant frequency
-HIGHPASS_FRACTION = 0.2
-#: fewest samples accepted
-MIN_SAMPLES = 64
+#: an alias of settings.py's IDENTIFICATION.highpass_fraction (the code reads that)
+HIGHPASS_FRACTION = IDENTIFICATION.highpass_fraction
 
 
 def _signal(name, values, n=None):
@@ -54,8 +53,9 @@ def _signal(name, values, n=None):
 
 def _time(t):
     t = _signal("t", t)
-    if len(t) < MIN_SAMPLES:
-        raise NNMInputError(f"rfs: {len(t)} samples are too few; give at least {MIN_SAMPLES} (a record of many cycles)")
+    if len(t) < IDENTIFICATION.min_samples:
+        raise NNMInputError(f"rfs: {len(t)} samples are too few; give at least {IDENTIFICATION.min_samples} "
+                            f"(a record of many cycles)")
     dt = np.diff(t)
     step = (t[-1] - t[0]) / (len(t) - 1)
     if not np.all(dt > 0):
@@ -213,7 +213,7 @@ def rfs(t, acceleration, acceleration_other, mass, force=None, *, highpass_hz=No
         fd = dominant_frequency(np.cumsum(rel) * dt, dt)
         if fd <= 0:
             raise NNMInputError("rfs: no dominant frequency in the relative motion; give highpass_hz")
-        highpass_hz = HIGHPASS_FRACTION * fd
+        highpass_hz = IDENTIFICATION.highpass_fraction * fd
     fc = finite_number(highpass_hz, "rfs: highpass_hz")
     duration = t[-1] - t[0]
     if fc < 0 or fc >= 0.5 / dt:

@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: largest number of points drawn on the surface (the record is thinned evenly beyond it)
-MAX_SURFACE_POINTS = 20000
+from .settings import IDENTIFICATION
 
 
 def plot_rfs(surface, law=None, path=None, band=0.05, title=None):
@@ -18,7 +17,7 @@ def plot_rfs(surface, law=None, path=None, band=0.05, title=None):
 
     v = surface.valid
     x, xd, f = surface.displacement[v], surface.velocity[v], surface.force[v]
-    step = max(1, len(x) // MAX_SURFACE_POINTS)
+    step = max(1, len(x) // IDENTIFICATION.max_surface_points)
     fig = plt.figure(figsize=(11, 4.5))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     ax.scatter(x[::step], xd[::step], f[::step], c=f[::step], s=1, cmap="viridis")

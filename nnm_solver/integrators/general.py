@@ -30,9 +30,11 @@ import numpy as np
 from ..jit import jit as _jit, lapack_solve, lapack_solve_many, matmul_t
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
+from .settings import KERNELS
 
-NEWTON_MAX = 40
-NEWTON_RTOL = 1e-13
+#: the step's Newton limits, compile-time constants of the kernels (settings.py: KERNELS)
+NEWTON_MAX = KERNELS.newton_max
+NEWTON_RTOL = KERNELS.newton_rtol
 
 
 @_jit

@@ -17,11 +17,10 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.sparse.linalg import LinearOperator
 
+from .settings import KERNELS
+
 __all__ = ["DiagonalPlusLowRank"]
 
-#: a shifted solve by Woodbury is refused (the caller takes another shift or route) when a diagonal entry lies
-#: within this distance (relative to the largest) of the shift: the identity's two terms would then cancel
-NEAR_DIAGONAL = 1e-10
 
 
 class DiagonalPlusLowRank:
@@ -68,10 +67,10 @@ class DiagonalPlusLowRank:
 
     def shift_invert(self, sigma):
         """LinearOperator x -> (A - sigma I)^-1 x by the Woodbury identity (module docstring), or None when a
-        diagonal entry is within NEAR_DIAGONAL of sigma (the identity would cancel; the caller takes another route)."""
+        diagonal entry is within KERNELS.near_diagonal of sigma (the identity would cancel; the caller takes another route)."""
         dtype = np.result_type(self.U.dtype, type(sigma))
         E = (self.d - sigma).astype(dtype)
-        if np.min(np.abs(E)) <= NEAR_DIAGONAL * max(1.0, float(np.max(np.abs(self.d)))):
+        if np.min(np.abs(E)) <= KERNELS.near_diagonal * max(1.0, float(np.max(np.abs(self.d)))):
             return None
         Z = self.U / E[:, None]
         Vt = self.Vt.astype(dtype)               # once: a real Vt would be cast for every complex solve

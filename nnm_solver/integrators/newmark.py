@@ -36,9 +36,11 @@ from ..model.laws import law_scalar
 from ..jit import jit as _jit, lapack_solve, matmul_t, matvec
 from .lowrank import DiagonalPlusLowRank
 from .newmark_monodromy import monodromy as _monodromy, monodromy_factors as _monodromy_factors, one_element
+from .settings import KERNELS
 
-NEWTON_MAX = 40
-NEWTON_RTOL = 1e-13
+#: the step's Newton limits, compile-time constants of the kernels (settings.py: KERNELS)
+NEWTON_MAX = KERNELS.newton_max
+NEWTON_RTOL = KERNELS.newton_rtol
 
 
 @_jit

@@ -8,7 +8,7 @@ impulse responses of the linear modes; the final state is then the block-diagona
 through every step.
 
 The Volterra recursion is one block lower-triangular system in the N n_s deformations with ncols right-hand
-sides (one per column of the monodromy), solved VOLTERRA_BLOCK steps at a time: the earlier steps enter a block
+sides (one per column of the monodromy), solved KERNELS.volterra_block steps at a time: the earlier steps enter a block
 by one matrix product and the block by a triangular solve, both BLAS-3 (O((N n_s)^2 ncols) in all, memory
 O(N n_s ncols)).  tests/test_newmark_monodromy.py checks it against the step-by-step recursion over all
 columns it replaced (about twice as fast at n = 548).
@@ -19,6 +19,7 @@ import numpy as np
 from scipy.linalg import blas
 
 from ..jit import jit as _jit, lapack_inv
+from .settings import KERNELS
 
 
 def one_element(Bq):
@@ -82,11 +83,6 @@ def _powers(omega2, h, N):
         p21[i] = p21_
         p22[i] = p22_
     return P11, P12, p21, p22, ge1, ge2
-
-
-#: time steps per block of the Volterra solve: one block (one triangular solve) for the usual 200 steps per period,
-#: bounded memory (O((block n_s)^2)) and (N / block)^2 / 2 matrix products for long sweeps
-VOLTERRA_BLOCK = 128
 
 
 @_jit
@@ -192,18 +188,20 @@ def _block_system(Kc, M, Dseq, k0, k1, ns, rhs):
 
 
 def _volterra(Bq, N, Dseq, ncols, P11, P12, ge1):
-    """w_k = D_k dd_k for k = 0..N, ((N + 1) n_s, ncols): the Volterra system solved block by block, VOLTERRA_BLOCK
-    steps at a time: each earlier block enters by a matrix product, the block itself by a triangular solve (BLAS-3)."""
+    """w_k = D_k dd_k for k = 0..N, ((N + 1) n_s, ncols): the Volterra system solved block by block,
+    KERNELS.volterra_block steps at a time: each earlier block enters by a matrix product, the block itself by a
+    triangular solve (BLAS-3)."""
     n = Bq.shape[1]
     ns = Bq.shape[0]
     Kc, M, F = _volterra_terms(Bq, N, Dseq, ncols, P11, P12, ge1, one_element(Bq))
     W = np.zeros(((N + 1) * ns, ncols))
     W[:ns, :n] = Bq * Dseq[0][:, None]
-    for k0 in range(1, N + 1, VOLTERRA_BLOCK):
-        k1 = min(k0 + VOLTERRA_BLOCK, N + 1)
+    block = KERNELS.volterra_block
+    for k0 in range(1, N + 1, block):
+        k1 = min(k0 + block, N + 1)
         rhs = F[(k0 - 1) * ns:(k1 - 1) * ns]
-        for j0 in range(1, k0, VOLTERRA_BLOCK):          # the earlier blocks
-            j1 = min(j0 + VOLTERRA_BLOCK, k0)
+        for j0 in range(1, k0, block):          # the earlier blocks
+            j1 = min(j0 + block, k0)
             rhs += _history(Kc, k0, k1, j0, j1, ns) @ W[j0 * ns:j1 * ns]
         L = _block_system(Kc, M, Dseq, k0, k1, ns, rhs)
         # L dd = rhs as dd^T L^T = rhs^T: L.T and rhs.T are Fortran-ordered views, solved in place by BLAS

@@ -27,11 +27,9 @@ import numpy as np
 from ..errors import NNMInputError
 from ..jit import jit_inline
 from .laws import _ipow
+from .settings import MODEL
 
 __all__ = ["PolynomialStiffness", "CoupledGroup", "coupled_groups", "coupled_table", "coupled_force_tangent"]
-
-#: relative asymmetry of the tangent dg/dd above which the force is refused as non-conservative
-SYMMETRY_TOL = 1e-8
 
 
 def _int_matrix(value, what):
@@ -134,9 +132,10 @@ class PolynomialStiffness:
         object.__setattr__(self, "dofs", dofs)
         object.__setattr__(self, "directions", D)
         asym = self.asymmetry()
-        if asym > SYMMETRY_TOL:
+        if asym > MODEL.symmetry_tol:
             raise NNMInputError(f"PolynomialStiffness is not conservative: its tangent dg/dd is not symmetric "
-                                f"(relative asymmetry {asym:.2g} > {SYMMETRY_TOL:g}); NNMs need a force with a potential")
+                                f"(relative asymmetry {asym:.2g} > {MODEL.symmetry_tol:g}); NNMs need a force "
+                                f"with a potential")
 
     @property
     def m(self):

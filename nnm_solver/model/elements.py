@@ -36,11 +36,12 @@ import numpy as np
 import math
 
 from ..errors import NNMInputError, finite_number
+from .settings import MODEL
 
 __all__ = ["CubicSpring", "PolynomialSpring", "PiecewiseLinearSpring", "element_law", "check_element", "PWL_EPS"]
 
-#: default regularisation of PiecewiseLinearSpring: kink width eps * d1
-PWL_EPS = 1e-3
+#: default regularisation of PiecewiseLinearSpring: kink width eps * d1 (an alias of settings.py's MODEL.pwl_eps)
+PWL_EPS = MODEL.pwl_eps
 
 
 @dataclass(frozen=True)
@@ -168,7 +169,7 @@ class PiecewiseLinearSpring:
     other: int | None = None
     stiffnesses: tuple = ()
     breakpoints: tuple = ()
-    eps: float = PWL_EPS
+    eps: float = MODEL.pwl_eps
     stiffnesses_negative: tuple | None = None
     breakpoints_negative: tuple | None = None
 

@@ -1,7 +1,7 @@
 r"""Linear modes of large sparse models: the lowest eigenpairs of K phi = lam M phi by shift-invert Lanczos.
 
-``modes_below``: a block Lanczos (blocks of BLOCK vectors, full re-orthogonalisation) on one sparse factorisation
-of K, grown until the modes up to one above a cutoff have converged (the Ritz basis's modes, ritz.py);
+``modes_below``: a block Lanczos (blocks of MODEL.lanczos_block vectors, full re-orthogonalisation) on one sparse
+factorisation of K, grown until the modes up to one above a cutoff have converged (the Ritz basis's modes, ritz.py);
 ``lowest_modes``: ARPACK's ``scipy.sparse.linalg.eigsh`` for a given count (where the block Lanczos cannot
 converge them within its vectors); ``sparse_modes``: a model's lowest linear modes about a small negative shift
 (rigid-body modes at ~0 Hz), for models too large for the dense eigensolution.  Every start vector is fixed, so
@@ -19,6 +19,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import NNMInputError
+from .settings import MODEL
 from .sparse import SparseSolver
 
 __all__ = ["BLOCK", "LANCZOS_TOL", "LanczosStall", "lowest_modes", "modes_below", "sparse_modes"]
@@ -61,15 +62,9 @@ def lowest_modes(K, M, count, solver=None, found=None):
     return lam[order], Phi[:, order]
 
 
-#: block size of the block Lanczos (modes_below): a sparse Cholesky solve of 32 right-hand sides costs about a quarter
-#: of 32 single solves (the factor is read once), and the re-orthogonalisation is matrix-matrix work
-BLOCK = 32
-#: convergence of a Ritz pair of K^-1 M: residual / value below this (what ARPACK's tol means)
-LANCZOS_TOL = 1e-10
-#: the block Lanczos keeps at most this many vectors (and at most LANCZOS_BYTES of them with their M-images) before
-#: ritz_basis falls back to ARPACK's restarted Lanczos (lowest_modes)
-LANCZOS_MAX_VECTORS = 4096
-LANCZOS_BYTES = 4e9
+#: the block Lanczos's block size and convergence tolerance (aliases of settings.py's MODEL.lanczos_block, lanczos_tol)
+BLOCK = MODEL.lanczos_block
+LANCZOS_TOL = MODEL.lanczos_tol
 
 
 class LanczosStall(RuntimeError):
@@ -86,7 +81,7 @@ def _m_orthonormal(W, M, scale):
     return W @ C, MW @ C, (V[:, keep] * np.sqrt(g[keep])).T
 
 
-def modes_below(K, M, solver, need, w2_of, block=BLOCK, tol=LANCZOS_TOL):
+def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.lanczos_tol):
     """(lam ascending, Phi M-orthonormal): the lowest eigenpairs of K phi = lam M phi, K positive definite, until one
     above the cutoff: at least ``need`` pairs, and every one with lam <= w2_of(lam found) plus 5 % and a block more
     (w2_of returns None while it cannot tell yet, e.g. before the followed mode is found).
@@ -98,10 +93,10 @@ def modes_below(K, M, solver, need, w2_of, block=BLOCK, tol=LANCZOS_TOL):
     the ones needed have residual / theta below ``tol``.  Against ARPACK's single-vector Lanczos (lowest_modes) the
     solves are block solves and the orthogonalisation is matrix-matrix work: the full aircraft's 612 modes below
     614 Hz (64,446 DOFs) in 1,888 vectors, 110 s instead of 425 s.  LanczosStall when the modes needed have not
-    converged within LANCZOS_MAX_VECTORS (a stiffness range so wide that the residuals stall at round-off)."""
+    converged within MODEL.lanczos_max_vectors (a stiffness range so wide that the residuals stall at round-off)."""
     n = K.shape[0]
     b = int(max(1, min(block, n // 8)))
-    j_max = int(min(n - b, LANCZOS_MAX_VECTORS, LANCZOS_BYTES / (16 * n)))
+    j_max = int(min(n - b, MODEL.lanczos_max_vectors, MODEL.lanczos_bytes / (16 * n)))
     X = np.random.default_rng(0).standard_normal((n, b))     # a fixed start: the same basis at every run
     scale0 = float(np.max(np.einsum("ij,ij->j", X, np.asarray(M @ X))))
     Qb, MQb, _ = _m_orthonormal(X, M, scale0)

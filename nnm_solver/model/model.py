@@ -16,9 +16,10 @@ from .element_set import ElementSet
 from .elements import CubicSpring, check_element  # noqa: F401 (CubicSpring: first-release import path)
 from ..errors import NNMInputError
 from .mesh import DisplayMesh  # noqa: F401 (first-release import path)
+from .settings import MODEL
 
-#: Largest model the shooting solver accepts (it works in the full modal basis).
-MAX_DENSE_DOF = 6000
+#: Largest model the shooting solver accepts (it works in the full modal basis): settings.py's MODEL.max_dense_dof
+MAX_DENSE_DOF = MODEL.max_dense_dof
 
 
 def _as_matrix(name, A):
@@ -171,10 +172,10 @@ class Model:
         """(lam (n,), Phi (n, n)): K_linear Phi = M Phi diag(lam), Phi^T M Phi = I, ascending (rad^2/s^2).
 
         Computed once; shared, do not modify (``linear_modes`` returns copies)."""
-        if self.n > MAX_DENSE_DOF:
+        if self.n > MODEL.max_dense_dof:
             raise NNMInputError(
                 f"the model has {self.n} DOFs; the NNM solver works in the full modal basis and accepts at most "
-                f"{MAX_DENSE_DOF}: reduce it first (nnm_solver.craig_bampton)")
+                f"{MODEL.max_dense_dof}: reduce it first (nnm_solver.craig_bampton)")
         Md, Kd = _dense(self.M), _dense(self.K_linear)
         try:
             lam, Phi = sla.eigh(Kd, Md)

@@ -1,7 +1,7 @@
 r"""A modal basis for large models whose nonlinearity is localized: the modes below a cutoff plus the
 residual flexibility of all the others at the nonlinear elements (a Ritz basis).
 
-For a model too large for the dense eigensolution (n above ``MAX_DENSE_DOF``), the modes with
+For a model too large for the dense eigensolution (n above ``MODEL.max_dense_dof``), the modes with
 w_k < w_cut are found by shift-invert Lanczos on the sparse (K, M) with one sparse factorisation of K
 (``modes_below``: a block Lanczos, blocks of 32 vectors, full re-orthogonalisation, grown until the modes
 up to one above the cutoff have converged; ARPACK's ``scipy.sparse.linalg.eigsh``, ``lowest_modes``, where
@@ -20,7 +20,7 @@ matches the model's exactly at Omega = 0 and in its first derivative in Omega^2 
 flexibility R0 = B K^-1 B^T - sum b b^T / w^2 and residual inertia R1 = B K^-1 M K^-1 B^T - sum b b^T / w^4
 of the left-out modes, since the Krylov space K^-1 B^T, (K^-1 M) K^-1 B^T is in the basis); a left-out
 mode k at the forcing frequency Omega is represented with the relative error of its term of order
-(Omega / w_k)^4 / (1 - (Omega / w_k)^2).  With the cutoff at ``CUTOFF_FACTOR`` times the highest
+(Omega / w_k)^4 / (1 - (Omega / w_k)^2).  With the cutoff at ``MODEL.cutoff_factor`` times the highest
 harmonic's frequency that is below 1e-2 of the left-out modes' (already quasi-static) share at the
 highest harmonic and below 1e-7 at the fundamental; docs/condensed_hb.md gives the measured effect.
 
@@ -48,15 +48,16 @@ import scipy.sparse as sp
 
 from ..errors import NNMInputError
 from .modal import ModalSystem
-from .model import MAX_DENSE_DOF
 from .lanczos import BLOCK, LANCZOS_TOL, LanczosStall, lowest_modes, modes_below, sparse_modes  # noqa: F401
+from .settings import MODEL
 from .sparse import SparseSolver
 
 __all__ = ["CUTOFF_FACTOR", "modes_below", "ritz_basis", "ritz_system", "cutoff_for", "linear_fingerprint",
            "register_stored_basis", "StoredBasis", "sparse_modes", "LanczosStall"]
 
-#: the basis keeps the modes below CUTOFF_FACTOR x (highest harmonic) x (the followed mode's frequency)
-CUTOFF_FACTOR = 2.0
+#: the basis keeps the modes below CUTOFF_FACTOR x (highest harmonic) x (the followed mode's frequency): an alias
+#: of settings.py's MODEL.cutoff_factor
+CUTOFF_FACTOR = MODEL.cutoff_factor
 
 _cache = weakref.WeakKeyDictionary()
 _lock = threading.Lock()
@@ -81,7 +82,7 @@ _stored = {}
 
 def cutoff_for(f_mode_hz, harmonics):
     """The basis cutoff (Hz) for a branch of a mode at f_mode_hz with harmonics up to ``harmonics``."""
-    return CUTOFF_FACTOR * max(int(harmonics), 1) * float(f_mode_hz)
+    return MODEL.cutoff_factor * max(int(harmonics), 1) * float(f_mode_hz)
 
 
 def ritz_basis(model, f_cut_hz=None, first=24, mode=None, harmonics=None):
@@ -98,7 +99,7 @@ def ritz_basis(model, f_cut_hz=None, first=24, mode=None, harmonics=None):
         raise NNMInputError(f"K is singular ({exc}): the model has rigid-body modes; ground the structure "
                             f"(a condensed basis needs K^-1)") from None
     count = max(int(first), 16, int(mode or 0) + 8)
-    if n <= MAX_DENSE_DOF:                            # small enough for the dense eigensolution: every mode at once
+    if n <= MODEL.max_dense_dof:                      # small enough for the dense eigensolution: every mode at once
         lam, Phi = (np.array(a) for a in model.eigensolution)
         count = n
     else:                                             # block Lanczos up to the cutoff (and past it)

@@ -23,9 +23,9 @@ harmonics decay slowly f_(H+2) is not much nearer and the estimate falls short: 
 Gauss-6 shooting on a 3-DOF chain at H = 9 whose frequency has risen 2.2-fold.  For non-smooth laws (a clearance)
 it is unreliable both ways (0.3-4 of the error against 31 harmonics).
 
-One Newton step is enough where it is short (ONE_STEP; a second one moves the estimate by 0.07 % of itself at the
-median on the ECL beam, at most 9 %); next to a new harmonic near a mode's frequency the larger problem is far from
-linear and the steps go on until the frequency settles (the ECL beam at H = 5: a first step gives 0.24 of the
+One Newton step is enough where it is short (ORBITS.error_one_step; a second one moves the estimate by 0.07 % of itself
+at the median on the ECL beam, at most 9 %); next to a new harmonic near a mode's frequency the larger problem is far
+from linear and the steps go on until the frequency settles (the ECL beam at H = 5: a first step gives 0.24 of the
 converged H + 2 change).  Where they do not settle, or end away from the point's energy, the larger problem has no
 solution near the orbit (inside a tongue the truncation does not resolve) and the estimate is inf.  What the
 estimate cannot see: a k:1 internal resonance with k above H + 2, whose narrow tongue the truncated orbit steps over
@@ -43,20 +43,12 @@ from ..continuation.engine import LeastSquares, stacked
 from ..continuation.newton import NOT_FINITE, SINGULAR, NewtonSettings, newton_solve
 from .fep_slope import at_energy_fold
 from .hb_basis import HBBasis, harmonics_in
+from .settings import ORBITS
 
 __all__ = ["HBTruncationError", "EXTRA_HARMONICS"]
 
-#: harmonics added for the estimate (H -> H + 2: the next odd harmonic, which odd laws excite)
-EXTRA_HARMONICS = 2
-#: a first Newton step shorter than this (balanced norm, relative to the orbit) is the estimate; a longer one (a
-#: new harmonic near a mode's frequency: the larger problem is far from linear there) is followed by more steps
-#: until the frequency moves by at most SETTLED of the estimate, MAX_STEPS in all
-ONE_STEP = 1e-3
-SETTLED = 0.05
-MAX_STEPS = 8
-#: steps that end farther than this from the point's energy (relative), or do not settle, found no solution of the
-#: larger problem near the orbit: the estimate is then inf (not resolved)
-UNSETTLED_ENERGY = 1e-3
+#: an alias of settings.py's ORBITS.error_extra_harmonics (the code reads that)
+EXTRA_HARMONICS = ORBITS.error_extra_harmonics
 
 
 class HBTruncationError:
@@ -66,12 +58,12 @@ class HBTruncationError:
     (columns of the coefficient block)."""
 
     def _larger(self):
-        """The same problem with EXTRA_HARMONICS more harmonics (made once), sampled at least as densely per
-        harmonic as this one (a user's ``samples`` against aliasing of non-polynomial laws)."""
+        """The same problem with ORBITS.error_extra_harmonics more harmonics (made once), sampled at least as densely
+        per harmonic as this one (a user's ``samples`` against aliasing of non-polynomial laws)."""
         big = getattr(self, "_larger_problem", None)
         if big is None:
             H, N = self.basis.harmonics, self.basis.samples
-            H2 = H + EXTRA_HARMONICS
+            H2 = H + ORBITS.error_extra_harmonics
             big = self.with_basis(HBBasis(H2, self.basis.kind, max(4 * H2 + 4, math.ceil(N * H2 / H))))
             self._larger_problem = big
         return big
@@ -113,7 +105,8 @@ class HBTruncationError:
         bordered = _AtTheEnergy(big, E0, t2)
         try:
             with np.errstate(all="ignore"):
-                res = newton_solve(bordered, u2, NewtonSettings(tol=0.0, max_iter=MAX_STEPS, positive_last=False),
+                res = newton_solve(bordered, u2,
+                                   NewtonSettings(tol=0.0, max_iter=ORBITS.error_max_steps, positive_last=False),
                                    stop=bordered.settled(u2), linear=_least_squares)
         except (np.linalg.LinAlgError, ValueError):      # (from the problem's own evaluations)
             return float("nan"), float("nan")
@@ -122,7 +115,8 @@ class HBTruncationError:
         err = abs(res.u[-1] / u2[-1] - 1.0)
         if not np.isfinite(err):
             return float("nan"), float("nan")
-        if not res.converged or (not bordered.fold and abs(big.energy(res.u) / E0 - 1.0) > UNSETTLED_ENERGY):
+        if not res.converged or (not bordered.fold
+                                 and abs(big.energy(res.u) / E0 - 1.0) > ORBITS.error_unsettled_energy):
             return float("inf"), float("nan")
         return float(err), float("nan")
 
@@ -161,15 +155,15 @@ class _AtTheEnergy:
         return self.big.error(v, r)
 
     def settled(self, u2):
-        """The stopping rule: after a step next to a fold (taken once), or a first step shorter than ONE_STEP (its
-        own error is of the order of its square), or a later step that moved the frequency by at most SETTLED of
-        its change from u2."""
+        """The stopping rule: after a step next to a fold (taken once), or a first step shorter than
+        ORBITS.error_one_step (its own error is of the order of its square), or a later step that moved the frequency by
+        at most ORBITS.error_settled of its change from u2."""
         def stop(k, v, du, v_new):
             if self.fold:
                 return "next to an energy fold: one step orthogonal to the branch"
-            if k == 0 and np.linalg.norm(self.w * du) < ONE_STEP:
+            if k == 0 and np.linalg.norm(self.w * du) < ORBITS.error_one_step:
                 return "a short first step"
-            if k > 0 and abs(v_new[-1] - v[-1]) <= SETTLED * abs(v_new[-1] - u2[-1]):
+            if k > 0 and abs(v_new[-1] - v[-1]) <= ORBITS.error_settled * abs(v_new[-1] - u2[-1]):
                 return "the frequency settled"
             return ""
         return stop

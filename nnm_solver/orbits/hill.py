@@ -38,7 +38,7 @@ Two routes to the same eigenvalues (``method=``):
   the previous orbit's), moved to its central copy, checked (Hill residual of the rebuilt eigenvector, mean
   harmonic, no overlap with the velocity's copies, distinct pairs) and kept with its Hamiltonian partner -nu.
   O(classes x N_b x n) a Newton iteration: ~5-15 ms for the 38-DOF beam at H = 5 (0.5-0.7 s dense).  Where an
-  exponent comes within SECULAR_LATTICE_GAP of the trivial pair's copies i k (internal resonances: tongues, their
+  exponent comes within ORBITS.secular_lattice_gap of the trivial pair's copies i k (internal resonances: tongues, their
   branch points) its copies at every i k are found by Newton and the kept ones chosen as the dense route chooses
   them (hill_copies.py: ~2 ms); next to a fold or a branch point, where the pair collides with the trivial one,
   the structured route decides (then the dense one).
@@ -46,7 +46,8 @@ Two routes to the same eigenvalues (``method=``):
   reversal makes the problem linear in lambda^2, half-wave symmetry splits it by the parity of the harmonics): the
   same eigenpairs from matrices of n (2H + 1) / 2 rows, ~1/30 of the dense route's work; the dense route where the
   orbit has no such symmetry.
-* ``"auto"`` (default): reversible up to DENSE_MAX_ROWS rows of the whole matrix, secular above (structured, then
+* ``"auto"`` (default): reversible up to ORBITS.hill_dense_max_rows rows of the whole matrix, secular above (structured,
+then
   reversible, then dense, where it cannot vouch for its answer).
 """
 from __future__ import annotations
@@ -60,6 +61,7 @@ from .hb_basis import HBBasis
 from .hill_reversible import reversible_multipliers
 from .hill_secular import _secular
 from .hill_structured import _structured
+from .settings import ORBITS
 
 __all__ = ["hill_multipliers", "derivative_matrix", "central_exponents", "HILL_METHODS", "DENSE_MAX_ROWS"]
 
@@ -67,8 +69,8 @@ __all__ = ["hill_multipliers", "derivative_matrix", "central_exponents", "HILL_M
 #: the routes of hill_multipliers(method=...)
 HILL_METHODS = ("auto", "dense", "structured", "secular", "reversible")
 
-#: method="auto" takes the dense route up to this many rows 2 n (2H + 1) of the Hill matrix
-DENSE_MAX_ROWS = 400
+#: an alias of settings.py's ORBITS.hill_dense_max_rows (the code reads that)
+DENSE_MAX_ROWS = ORBITS.hill_dense_max_rows
 
 
 def derivative_matrix(basis):
@@ -123,7 +125,7 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
         d = problem.basis.functions(theta) @ (A @ s.Bq.T)
         return _dense(problem, w, bp, C, bp.galerkin_matrix(s.coupled_stiffness(d)))
     if method == "auto":
-        method = "reversible" if 2 * problem.n * len(bp) <= DENSE_MAX_ROWS else "secular"
+        method = "reversible" if 2 * problem.n * len(bp) <= ORBITS.hill_dense_max_rows else "secular"
     if method == "secular":
         mu = _secular(problem, A, w, bp, C)
         if mu is not None:

@@ -14,7 +14,7 @@ found by Newton on p'/p from i k + {d, -d, conj d, -conj d} and from a ring arou
 trivial pair's double zero divided out: p'/p - 2 / nu), each checked by its Hill residual, and the kept ones are
 chosen as the dense route chooses them (hill_shared.central_pool).
 
-Declined (None; then the structured route decides, as before): a pair within COPY_CLUSTER of 0 (colliding with
+Declined (None; then the structured route decides, as before): a pair within ORBITS.copy_cluster of 0 (colliding with
 the trivial pair: next to a fold of the energy or a branch point, a cluster Newton cannot resolve; told by the
 count of zeros in that disc, (1 / 2 pi i) \oint p'/p dnu by the trapezoidal rule), a zero found on the orbit's
 velocity, a class's own exponent not among the zeros found, a count of zeros near 0 that the zeros found do not
@@ -23,25 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_shared import TRIVIAL_COS, central_pool, distinct
+from .hill_shared import central_pool, distinct
+from .settings import ORBITS
 
 __all__ = ["hard_copies"]
-
-#: how far from its lattice point a copy may lie (units of omega), and how close two candidates' |mean harmonic|
-#: may be at the cut of the kept ones (closer: declined)
-COPY_RADIUS = 0.3
-COPY_TIE = 1e-4
-#: the radius of the ring of extra starts around 0 and the hard classes' lattice points (units of omega)
-COPY_RING = 0.03
-#: Newton iterations for the copies (a start that has not converged by then is dropped), and their step tolerance
-#: (relative; Newton converges quadratically at a simple zero: the error after a step of 1e-10 is ~1e-20)
-COPY_ITER = 12
-COPY_TOL = 1e-10
-#: the discs around 0 whose zeros are counted (radii tried in turn until the count is an integer, units of
-#: omega), the nodes of the trapezoidal rule, and the disc where more than the trivial pair's two zeros decline
-COPY_COUNT_RADII = (0.02, 0.012, 0.03)
-COPY_COUNT_NODES = 32
-COPY_CLUSTER = 0.004
 
 
 def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
@@ -50,12 +35,12 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     nu_hard : the hard classes' secular exponents (each within the secular route's lattice gap of a point i k);
     logderiv(nu) : p'/p at the points nu (S,); vectors(nu) : (mean harmonic, Hill residual, |cos| with the orbit's
     velocity (S,), the eigenvectors (S, N_b, n)) at the zeros nu; tol : Newton's relative step tolerance (at least
-    COPY_TOL: after a step that small the error of a simple zero is its square); residual_tol : the largest relative
-    Hill residual of an accepted eigenpair; found : a list that receives (zeros, eigenvectors) of the accepted
+    ORBITS.copy_tol: after a step that small the error of a simple zero is its square); residual_tol : the largest
+    relative Hill residual of an accepted eigenpair; found : a list that receives (zeros, eigenvectors) of the accepted
     candidates when the answer is not None (for the structured route's warm start)."""
     # a pair colliding with the trivial pair (next to a fold of the energy, or a branch point): more than the
-    # trivial pair's two zeros within COPY_CLUSTER of 0; Newton is no tool for that cluster: the structured route
-    if not abs(_zeros_in(logderiv, COPY_CLUSTER) - 2) < 0.05:
+    # trivial pair's two zeros within ORBITS.copy_cluster of 0; Newton is no tool for that cluster: the structured route
+    if not abs(_zeros_in(logderiv, ORBITS.copy_cluster) - 2) < 0.05:
         return None
     nu_hard = np.asarray(nu_hard)
     k0 = np.round(nu_hard.imag)
@@ -67,11 +52,11 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     start = (lattice[:, None] + offsets[None, :]).ravel()
     home = np.repeat(lattice, len(offsets))
     # and a ring of starts around 0 and the classes' own lattice points (d itself may be the trivial pair's zero)
-    ring = COPY_RING * np.exp(0.25j * np.pi * np.array([1, 3, 5, 7]))          # off the axes: Newton on a real
+    ring = ORBITS.copy_ring * np.exp(0.25j * np.pi * np.array([1, 3, 5, 7]))          # off the axes: Newton on a real
     # function from a real start would stay on the real axis
     # (where the secular Newton ended on the trivial pair's zero at 0, the class's own exponent is unknown: a ring
     # around every lattice point)
-    at_trivial = np.abs(nu_hard) <= COPY_TOL ** 0.5
+    at_trivial = np.abs(nu_hard) <= ORBITS.copy_tol ** 0.5
     centres = lattice if np.any(at_trivial) else 1j * np.unique(np.concatenate([[0.0], np.abs(k0)]))
     start = np.concatenate([start, (centres[:, None] + ring[None, :]).ravel()])
     home = np.concatenate([home, np.repeat(centres, len(ring))])
@@ -80,7 +65,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     at0 = home == 0
     with np.errstate(all="ignore"):
         conv = np.zeros(len(z), dtype=bool)
-        for _ in range(COPY_ITER):
+        for _ in range(ORBITS.copy_iter):
             act = np.flatnonzero(~conv)
             if not len(act):
                 break
@@ -88,11 +73,11 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
             step = -1.0 / L
             step[~np.isfinite(step)] = np.nan
             z[act] += step
-            conv[act] |= ~(np.abs(step) > max(tol, COPY_TOL) * np.maximum(1.0, np.abs(z[act])))
-            lost = ~(np.abs(z[act] - home[act]) < COPY_RADIUS)          # wandered off (or not finite): dropped
+            conv[act] |= ~(np.abs(step) > max(tol, ORBITS.copy_tol) * np.maximum(1.0, np.abs(z[act])))
+            lost = ~(np.abs(z[act] - home[act]) < ORBITS.copy_radius)          # wandered off (or not finite): dropped
             z[act[lost]] = np.nan
             conv[act[lost]] = True
-        ok = conv & np.isfinite(z) & (np.abs(z - home) < COPY_RADIUS)
+        ok = conv & np.isfinite(z) & (np.abs(z - home) < ORBITS.copy_radius)
         z = z[ok]
         if not len(z):
             return None
@@ -105,11 +90,11 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
     if not np.all(np.min(np.abs(nu_hard[own, None] - z[ok][None, :]), axis=1, initial=np.inf)
                   <= 1e-8 * np.maximum(1.0, np.abs(nu_hard[own]))):
         return None
-    if np.any(ok & (triv0 > TRIVIAL_COS)):
+    if np.any(ok & (triv0 > ORBITS.trivial_cos)):
         return None         # a zero on the orbit's velocity: the trivial pair's, or a pair colliding with it
     # every zero near 0 found?  p has there the trivial pair's two and those found (with their images): the count
     # of zeros in |nu| < radius, (1 / 2 pi i) \oint p'/p dnu by the trapezoidal rule, must be that
-    for radius in COPY_COUNT_RADII:
+    for radius in ORBITS.copy_count_radii:
         inner = z[ok & (np.abs(z) < radius)]
         images = np.concatenate([inner, np.conj(inner), -inner, -np.conj(inner)])
         images = images[distinct(images, 1e-8)]
@@ -120,7 +105,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
         return None
     if np.round(count.real) != 2 + len(images):
         return None
-    kept = central_pool(z[ok], np.abs(cent[ok]), 2 * len(d), tie=COPY_TIE)
+    kept = central_pool(z[ok], np.abs(cent[ok]), 2 * len(d), tie=ORBITS.copy_tie)
     if kept is not None and found is not None:
         found.append((z[ok], vecs[ok]))
     return kept
@@ -128,7 +113,7 @@ def hard_copies(nu_hard, H, logderiv, vectors, tol, residual_tol, found=None):
 
 def _zeros_in(logderiv, radius):
     """The number of zeros of p in |nu| < radius, (1 / 2 pi i) \\oint p'/p dnu by the trapezoidal rule on
-    COPY_COUNT_NODES points (complex: an integer only when no zero lies near the circle)."""
-    circle = radius * np.exp(2j * np.pi * (np.arange(COPY_COUNT_NODES) + 0.5) / COPY_COUNT_NODES)
+    ORBITS.copy_count_nodes points (complex: an integer only when no zero lies near the circle)."""
+    circle = radius * np.exp(2j * np.pi * (np.arange(ORBITS.copy_count_nodes) + 0.5) / ORBITS.copy_count_nodes)
     with np.errstate(all="ignore"):
         return np.mean(circle * logderiv(circle))

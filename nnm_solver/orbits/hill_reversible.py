@@ -29,19 +29,20 @@ Eigenvalue costs go as the cube of the rows: 1/8 of the dense route's with time 
 same eigenvectors; lambda and -lambda have opposite mean harmonics, so each mu is kept or left with both its
 exponents (n values of mu).  Multipliers mu_F = exp(lambda T), T = 2 pi / omega (s).
 
-The symmetries are read off the Galerkin blocks C themselves: the entries that must vanish are below SYMMETRY_TOL
-of the largest (round-off); otherwise None (then the dense route on the whole matrix)."""
+The symmetries are read off the Galerkin blocks C themselves: the entries that must vanish are below
+ORBITS.reversible_symmetry_tol of the largest (round-off); otherwise None (then the dense route on the whole matrix)."""
 from __future__ import annotations
 
 import functools
 
 import numpy as np
 
+from .settings import ORBITS
+
 __all__ = ["reversible_multipliers", "SYMMETRY_TOL"]
 
-#: a symmetry holds when the entries of the springs' Galerkin blocks it sets to zero are below this fraction of the
-#: largest entry (the AFT round-off is ~1e-16)
-SYMMETRY_TOL = 1e-13
+#: an alias of settings.py's ORBITS.reversible_symmetry_tol (the code reads that)
+SYMMETRY_TOL = ORBITS.reversible_symmetry_tol
 
 
 @functools.lru_cache(maxsize=32)
@@ -62,7 +63,7 @@ def _symmetries(C, h, sine):
     big = np.abs(C).max(initial=0.0)
     if big == 0.0:
         return True, True
-    tol = SYMMETRY_TOL * big
+    tol = ORBITS.reversible_symmetry_tol * big
     cross = sine[:, None] != sine[None, :]
     odd = ((h[:, None] - h[None, :]) % 2) == 1
     rev = np.abs(C[:, cross]).max(initial=0.0) <= tol

@@ -9,19 +9,7 @@ import numpy as np
 from .hill_copies import hard_copies
 from .hill_shared import _classes, _exp_transform, _setup, set_warm_start, velocity_overlaps, warm_start
 from .hill_structured import _HillOperator, _iterate, warm_from_zeros
-
-#: the secular route: Newton iterations per pass, their relative step tolerance, the largest Hill residual of an
-#: accepted eigenpair, and the checks that send a point to the structured route: an exponent this close (units of
-#: omega) to a point i k, |k| <= 2H + 1, where the trivial pair's copies lie (internal resonances: a class's
-#: eigenvectors mix with those copies, the dense route may keep such a hybrid; branch points), two pairs of
-#: multipliers this close (a duplicate, or a collision)
-SECULAR_ITER = 30
-SECULAR_TOL = 1e-13
-SECULAR_RESIDUAL = 1e-9
-SECULAR_LATTICE_GAP = 0.05
-SECULAR_DISTINCT = 1e-6
-#: at most this many classes go to the structured route from the secular one (more: the whole structured route)
-SECULAR_MAX_HARD = 4
+from .settings import ORBITS
 
 
 def _secular(problem, A, w, bp, C):
@@ -119,7 +107,7 @@ def _secular(problem, A, w, bp, C):
             fresh = np.ones(S, dtype=bool)          # the classes whose exponent is not converged where it is
             for _ in range(4):                      # Newton, then move to the central copies and refine
                 conv = bad | ~fresh
-                for it in range(SECULAR_ITER):
+                for it in range(ORBITS.secular_iter):
                     act = np.flatnonzero(~conv)
                     if not len(act):
                         break
@@ -128,7 +116,7 @@ def _secular(problem, A, w, bp, C):
                     bad[act[broken]] = conv[act[broken]] = True
                     step[broken] = 0.0
                     nu[act] += step
-                    conv[act] |= np.abs(step) <= SECULAR_TOL * np.maximum(1.0, np.abs(nu[act]))
+                    conv[act] |= np.abs(step) <= ORBITS.secular_tol * np.maximum(1.0, np.abs(nu[act]))
                 bad |= ~conv
                 # the eigenvectors: z = null vector of I + W C~, c_kj = -(1 / q0_kj) sum_s Bq_sj (C~ z)_ks
                 nu[bad] = np.where(np.isfinite(nu[bad]), nu[bad], 1j)
@@ -144,16 +132,16 @@ def _secular(problem, A, w, bp, C):
             op = _HillOperator(omega2, Bq, Cexp, H, w)
             c = np.where(np.isfinite(c), c, 0.0)
             res = op.eigen_residual(c, nu) / np.maximum(1.0, np.abs(nu))          # of X = [c; nu c]
-            bad |= ~(res < SECULAR_RESIDUAL) | (np.abs(cent) > 0.5)
+            bad |= ~(res < ORBITS.secular_residual) | (np.abs(cent) > 0.5)
             bad |= velocity_overlaps(c, vel).max(axis=-1) > 0.5
             lat = np.round(nu.imag)
             # (a class whose Newton did not converge may sit there too: hill_copies then finds its own exponent, or
             # declines when that is not a zero)
-            near = (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < SECULAR_LATTICE_GAP)
+            near = (np.abs(lat) <= 2 * H + 1) & (np.abs(nu - 1j * lat) < ORBITS.secular_lattice_gap)
             bad |= near
             mu = np.exp(2 * np.pi * nu)
-            close = (np.abs(mu[:, None] - mu[None, :]) < SECULAR_DISTINCT) | \
-                (np.abs(mu[:, None] - 1.0 / mu[None, :]) < SECULAR_DISTINCT)
+            close = (np.abs(mu[:, None] - mu[None, :]) < ORBITS.secular_distinct) | \
+                (np.abs(mu[:, None] - 1.0 / mu[None, :]) < ORBITS.secular_distinct)
             close = np.triu(close, 1) & ~bad[:, None] & ~bad[None, :]
             bad |= close.any(axis=0) | close.any(axis=1)
         good = ~bad
@@ -161,7 +149,7 @@ def _secular(problem, A, w, bp, C):
             # the classes near the trivial pair's copies (internal resonances) by their copies, if all are; else (or
             # where the copies decline) the structured route on those classes alone (its blocks at the lattice i k
             # hold the hybrids the dense route may keep)
-            if bad.sum() > SECULAR_MAX_HARD:
+            if bad.sum() > ORBITS.secular_max_hard:
                 return None
 
             def vectors(z):
@@ -174,7 +162,7 @@ def _secular(problem, A, w, bp, C):
             found = None
             if np.all(near[bad]):
                 pairs = []
-                found = hard_copies(nu[bad], H, logderiv, vectors, SECULAR_TOL, SECULAR_RESIDUAL, pairs)
+                found = hard_copies(nu[bad], H, logderiv, vectors, ORBITS.secular_tol, ORBITS.secular_residual, pairs)
                 if found is not None:    # the structured route's warm start from this orbit, as if it had answered
                     warm_from_zeros(problem, op, tm, Vbar, beta2, hard, vel, nu[bad], *pairs[0])
             if found is None:
@@ -185,7 +173,7 @@ def _secular(problem, A, w, bp, C):
                 return None
             mf = np.exp(2 * np.pi * np.asarray(found))
             mg = mu[good]
-            if len(mg) and np.min(np.abs(mf[:, None] - mg[None, :])) < SECULAR_DISTINCT:
+            if len(mg) and np.min(np.abs(mf[:, None] - mg[None, :])) < ORBITS.secular_distinct:
                 return None                       # the structured blocks found a secular class's exponent again
             nu_kept += list(nu[good]) + list(-nu[good]) + list(found)
             last = warm_start(problem, "secular")

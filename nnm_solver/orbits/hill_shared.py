@@ -11,16 +11,17 @@ import weakref
 
 import numpy as np
 
+from .settings import ORBITS
+
 __all__ = ["CENTROID_MAX", "TRIVIAL_COS", "central_pool", "distinct", "velocity_overlaps", "warm_start",
            "set_warm_start", "forget_warm_starts"]
 
-#: largest |mean harmonic| of a kept eigenvector (0.5 for a pair at -1: it is centred between two harmonics)
-CENTROID_MAX = 0.6
+#: an alias of settings.py's ORBITS.centroid_max (the code reads that)
+CENTROID_MAX = ORBITS.centroid_max
 
 
-#: eigenvectors of the shifted blocks within this |cos| of the orbit's velocity are the trivial pair's, not kept
-#: (the trivial block's two nearest the velocity are; the trivial pair is reported as exactly 1, 1)
-TRIVIAL_COS = 0.999
+#: an alias of settings.py's ORBITS.trivial_cos (the code reads that)
+TRIVIAL_COS = ORBITS.trivial_cos
 
 
 def _exp_transform(H):
@@ -125,7 +126,7 @@ def central_pool(nu, cc, need, tie=0.0):
     """The ``need`` kept exponents among the eigenvalues nu (units of omega) whose eigenvectors have |mean harmonic|
     cc, as the dense route keeps them: with their conjugates and Hamiltonian partners -conj, -nu (exact eigenvalues
     too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic|, repeats dropped.  None when
-    fewer than ``need`` are central (|mean harmonic| <= CENTROID_MAX), or when the next one's |mean harmonic| is
+    fewer than ``need`` are central (|mean harmonic| <= ORBITS.centroid_max), or when the next one's |mean harmonic| is
     within ``tie`` of the last kept one's (an ordering too close to call)."""
     nu = np.concatenate([nu, np.conj(nu), -np.conj(nu), -nu])
     cc = np.tile(cc, 4)
@@ -133,7 +134,7 @@ def central_pool(nu, cc, need, tie=0.0):
     nu, cc = nu[order], cc[order]
     first = distinct(nu, 1e-8)                      # not a repeat of an earlier (more central) one
     pool, pool_c = nu[first], cc[first]
-    if len(pool) < need or pool_c[need - 1] > CENTROID_MAX:
+    if len(pool) < need or pool_c[need - 1] > ORBITS.centroid_max:
         return None
     if tie > 0 and len(pool) > need and pool_c[need] - pool_c[need - 1] < tie:
         return None

@@ -5,29 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hill_shared import (CENTROID_MAX, TRIVIAL_COS, _classes, _exp_transform, _setup, _trivial_pair, central_pool,
-                          set_warm_start, velocity_overlaps, warm_start)
-
-#: vectors per exponent in the structured route (a collision of two exponents needs 2, the trivial pair beside a
-#: real pair near +1 needs 4)
-BLOCK = 4
-
-#: relative residual ||L x - theta x|| / max(1, |theta|) (theta in units of omega) of an accepted eigenpair
-RESIDUAL_TOL = 1e-11
-
-#: iterations of the structured route before it gives up (and the dense route is taken)
-MAX_SWEEPS = 40
-
-#: shifts are kept this far (in units of omega) from i k omega, where the trivial pair's copies make Q singular
-LATTICE_GAP = 0.02
-
-#: largest |exponent| (units of omega) of the trivial pair as the block at 0 finds it (exactly 0 split by round-off
-#: into +-sqrt(eps)-sized values by its Jordan block; 1e-8 to 1e-5 measured)
-TRIVIAL_NU = 1e-4
-
-#: the shift of the block around the trivial pair (units of omega), and its largest number of sweeps
-ZERO_SHIFT = 0.03 + 0.03j
-ZERO_SWEEPS = 12
+from .hill_shared import (_classes, _exp_transform, _setup, _trivial_pair, central_pool, set_warm_start,
+                          velocity_overlaps, warm_start)
+from .settings import ORBITS
 
 
 class _HillOperator:
@@ -117,13 +97,14 @@ class _HillOperator:
 
 
 def _keep_off_lattice(sigma):
-    """Shifts moved to at least LATTICE_GAP from the points i k (the trivial pair's copies, where Q is singular)."""
+    """Shifts moved to at least ORBITS.structured_lattice_gap from the points i k (the trivial pair's copies, where Q is
+    singular)."""
     k = np.round(sigma.imag)
-    near = np.abs(sigma - 1j * k) < LATTICE_GAP
+    near = np.abs(sigma - 1j * k) < ORBITS.structured_lattice_gap
     if np.any(near):
         side = np.where(sigma.real[near] < 0, -1.0, 1.0)
         sigma = sigma.copy()
-        sigma[near] = 1j * k[near] + side * LATTICE_GAP
+        sigma[near] = 1j * k[near] + side * ORBITS.structured_lattice_gap
     return sigma
 
 
@@ -171,12 +152,13 @@ def _trivial_overlap(op, X, vel):
 
 
 def _cold_start(op, tm, Vbar, beta2, classes, vel):
-    """(shifts (S,), first halves of the start vectors (S, N_b, n, BLOCK)) of _iterate's blocks without a warm
-    start: one per class at the averaged stiffness' frequency, its mode on the fundamental and its neighbours; one
-    per point i k, k = 0..H, the trivial pair's copy there (the velocity moved by k harmonics)."""
-    nc, b, nb, n, H = len(classes), BLOCK, op.nb, op.n, op.H
+    """(shifts (S,), first halves of the start vectors (S, N_b, n, ORBITS.structured_block)) of _iterate's blocks
+    without a warm start: one per class at the averaged stiffness' frequency, its mode on the fundamental and its
+    neighbours; one per point i k, k = 0..H, the trivial pair's copy there (the velocity moved by k harmonics)."""
+    nc, b, nb, n, H = len(classes), ORBITS.structured_block, op.nb, op.n, op.H
     S = nc + H + 1
-    sigma = np.concatenate([1j * np.sqrt(np.maximum(beta2[classes], 0.0)) + 1e-9, 1j * np.arange(H + 1) + ZERO_SHIFT])
+    sigma = np.concatenate([1j * np.sqrt(np.maximum(beta2[classes], 0.0)) + 1e-9,
+                            1j * np.arange(H + 1) + ORBITS.zero_shift])
     c = np.zeros((S, nb, n, b), dtype=complex)
     rng = np.random.default_rng(12345)
     bell = np.exp(-0.5 * np.arange(-H, H + 1) ** 2)[:, None]
@@ -202,7 +184,7 @@ def warm_from_zeros(problem, op, tm, Vbar, beta2, classes, vel, nu_classes, zero
     eigenvectors of the zeros nearest its shift (the class's exponent nu_classes (units of omega), or i k), the cold
     start's vectors where fewer are known.  So the structured route, asked at a later orbit of the branch, starts
     from this orbit as it would from its own last answer.  zeros (Z,) and vectors (Z, N_b, n): the eigenpairs."""
-    nc, b, nb, n, H = len(classes), BLOCK, op.nb, op.n, op.H
+    nc, b, nb, n, H = len(classes), ORBITS.structured_block, op.nb, op.n, op.H
     S = nc + H + 1
     sigma, c = _cold_start(op, tm, Vbar, beta2, classes, vel)
     sigma[:nc] = nu_classes
@@ -217,7 +199,7 @@ def warm_from_zeros(problem, op, tm, Vbar, beta2, classes, vel, nu_classes, zero
         near = near[:b - first]
         c[i, :, :, first:first + len(near)] = np.moveaxis(vectors[near], 0, -1)
     shifts = sigma.copy()
-    shifts[nc:] = lattice + ZERO_SHIFT
+    shifts[nc:] = lattice + ORBITS.zero_shift
     X = op.lift(c, shifts)
     set_warm_start(problem, "structured", ((nb, n, S), (shifts + 1e-9j * np.maximum(1.0, np.abs(shifts))) * op.w, X))
 
@@ -230,9 +212,9 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     fundamental gather there (the hybrids of those copies and another mode's), which the dense route keeps when
     they are more central than a class's exponent; so they join the pool too."""
     nc = len(classes)
-    b, nb, n, H = BLOCK, op.nb, op.n, op.H
+    b, nb, n, H = ORBITS.structured_block, op.nb, op.n, op.H
     S = nc + H + 1
-    lattice = 1j * np.arange(H + 1) + ZERO_SHIFT                             # the last H + 1 blocks' shifts
+    lattice = 1j * np.arange(H + 1) + ORBITS.zero_shift                      # the last H + 1 blocks' shifts
     is_lat = np.arange(S) >= nc
     warm = warm_start(problem, "structured") if warm else None
     if warm is not None and warm[0] == (nb, n, S):
@@ -255,7 +237,7 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     gave_up = np.zeros(S, dtype=bool)         # lattice blocks stopped with central eigenpairs unconverged (the one at
     #                                          0 makes the route decline; at i k, k >= 1, their copies' hybrids)
     with np.errstate(all="ignore"):
-        for sweep in range(MAX_SWEEPS):
+        for sweep in range(ORBITS.structured_max_sweeps):
             act = np.flatnonzero(~done)
             if not len(act):
                 break
@@ -273,15 +255,16 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
                     # converged, _trivial_pair; excluded while iterating, the pairs nearest the velocity were
                     # whatever the first sweeps gave, and a block could stop before anything converged: from a
                     # cold start at example 09's unstable orbits past the 5:1 tongue, a real pair +-1.2e-4 missed)
-                    want = np.abs(ca[ii]) <= CENTROID_MAX
-                    if np.all(rel_all[ii][want] < RESIDUAL_TOL):
+                    want = np.abs(ca[ii]) <= ORBITS.centroid_max
+                    if np.all(rel_all[ii][want] < ORBITS.structured_residual_tol):
                         done[i] = True
-                    elif sweep >= ZERO_SWEEPS:
+                    elif sweep >= ORBITS.zero_sweeps:
                         done[i] = gave_up[i] = True
                     continue
                 cand = np.flatnonzero(tr[ii] <= 0.5)
                 if not len(cand):              # only the trivial pair's copies or hybrids of them: the lattice
-                    if np.all(rel_all[ii] < RESIDUAL_TOL) or sweep >= ZERO_SWEEPS:   # blocks hold those
+                    if (np.all(rel_all[ii] < ORBITS.structured_residual_tol)
+                            or sweep >= ORBITS.zero_sweeps):   # blocks hold those
                         done[i] = True
                     continue
                 t = cand[int(np.argmin(np.abs(th[ii, cand] - sigma[i])))]   # the block's eigenvalue nearest its shift
@@ -300,7 +283,7 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
                     frozen[i] = False
                     V[i] = op.lift(x1[None], np.array([sigma[i]]))[0]
                     continue
-                if rel < RESIDUAL_TOL:
+                if rel < ORBITS.structured_residual_tol:
                     done[i] = True
                 elif rel < 1e-8:
                     frozen[i] = True
@@ -317,19 +300,20 @@ def _iterate(problem, op, tm, Vbar, beta2, classes, vel, warm=True):
     # eigenvalues too: the Hill matrix is that of a gyroscopic system), ordered by |mean harmonic| as the dense route
     rel = res / np.maximum(1.0, np.abs(theta))
     # the trivial pair is left out of the pool: in the trivial block the two exponents nearest 0 among the vectors
-    # near the velocity; in the others the vectors on the velocity (TRIVIAL_COS) but, within LATTICE_GAP of 0,
-    # those that are not the two nearest 0 (next to a fold the pair through +1 lies on the velocity too)
-    ok = rel < 1e3 * RESIDUAL_TOL
-    on_vel = triv0 > TRIVIAL_COS
+    # near the velocity; in the others the vectors on the velocity (ORBITS.trivial_cos) but, within
+    # ORBITS.structured_lattice_gap of 0, those that are not the two nearest 0 (next to a fold the pair through +1 lies
+    # on the velocity too)
+    ok = rel < 1e3 * ORBITS.structured_residual_tol
+    on_vel = triv0 > ORBITS.trivial_cos
     trivial = _trivial_pair(triv0[nc], theta[nc])
-    if trivial.sum() != 2 or not np.all(ok[nc][trivial]) or np.any(np.abs(theta[nc][trivial]) > TRIVIAL_NU):
+    if trivial.sum() != 2 or not np.all(ok[nc][trivial]) or np.any(np.abs(theta[nc][trivial]) > ORBITS.trivial_nu):
         return None        # the block at 0 does not hold the trivial pair: what else it holds is not known either
     for i in range(S):
         if i == nc:
             ok[i] &= ~trivial
         elif np.any(on_vel[i]):
-            ok[i] &= ~on_vel[i] | ((np.abs(theta[i]) < LATTICE_GAP) & ~_trivial_pair(np.where(on_vel[i], 1.0, 0.0),
-                                                                                    theta[i]))
+            ok[i] &= ~on_vel[i] | ((np.abs(theta[i]) < ORBITS.structured_lattice_gap)
+                                   & ~_trivial_pair(np.where(on_vel[i], 1.0, 0.0), theta[i]))
     kept = central_pool(theta[ok], np.abs(cent[ok]), 2 * nc)
     if kept is None:
         return None

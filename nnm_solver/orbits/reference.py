@@ -26,19 +26,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import NNMInputError
+from .settings import ORBITS
 
 __all__ = ["reference_orbit", "reference_steps"]
-
-
-#: steps of DOP853 per unit of omega_max * t (its stability limit along the imaginary axis: h omega_max ~ 3.4)
-STEP_OMEGA = 3.0
 
 
 def reference_steps(system, duration):
     """Estimated DOP853 steps to integrate ``system`` over ``duration`` (s): duration * omega_max / 3, the
     stability limit of an explicit method (accuracy may ask for more on orbits with strong high harmonics)."""
     omega_max = float(np.sqrt(max(float(np.max(system.omega2, initial=0.0)), 0.0)))
-    return int(np.ceil(float(duration) * omega_max / STEP_OMEGA)) + 1
+    return int(np.ceil(float(duration) * omega_max / ORBITS.reference_step_omega)) + 1
 
 
 def reference_orbit(system, x0, v0, period, samples=256, symmetric=False, rtol=1e-9, max_steps=None):

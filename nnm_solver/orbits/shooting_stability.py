@@ -19,29 +19,13 @@ from ..stability.floquet import (collision_coordinates, coupled_modes, eigenvalu
 from .. import threads
 from ..integrators.lowrank import DiagonalPlusLowRank
 from ..threads import background
+from .settings import ORBITS
 
 __all__ = ["ShootingStability", "PendingSpectrum"]
 
-#: the fewest modes for which the multipliers' eigenproblem runs in the worker threads beside the next steps.  Below,
-#: the eigenproblem is too small a part of a point to pay for the hand-over and the points computed ahead in vain at
-#: the end (measured, 13-40 points, workers on / off: beam n = 70-300 0.14/0.12 .. 0.73/0.68 s, plate n = 300
-#: 0.55/0.47 s; plate n = 550 1.24/1.69 s, aircraft n = 548 4.63/7.21 s)
-BACKGROUND_MIN_N = 400
 
-#: the half-period map is kept as diagonal + low rank (lowrank.py) when its rank, n_s times the steps of half a
-#: period, is at most this share of n: the Krein follower's shifted solves then skip the n x n LU (setup
-#: O(n r^2) against O(n^3 / 3))
-LOW_RANK_SHARE = 1.0 / 3.0
-
-#: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
-#: (relative to max(1, max |diag A|)); above it the call counts as failed (local_collision: the shift's real part,
-#: then the full spectrum)
-RESIDUAL_TOL = 1e-9
-
-#: restarts of the Krein follower's shift-invert Arnoldi (ARPACK's maxiter; its default, 10 n, let a complex shift
-#: far from a dense real spectrum run for hours at n = 2,200: the k nearest eigenvalues all lie at nearly the same
-#: distance).  Converged calls take a few restarts, slow ones ~20 (measured at n = 2,200)
-ARPACK_RESTARTS = 50
+#: an alias of settings.py's ORBITS.arpack_restarts (the code reads that)
+ARPACK_RESTARTS = ORBITS.arpack_restarts
 
 
 class ShootingStability:
@@ -78,7 +62,7 @@ class ShootingStability:
             q0, v0, T = self.unpack(self.accepted_u)
             h, half = T / self.spp, self.spp // 2
             factored = getattr(self.integrator, "sensitivity_factors", None)
-            if not self.all_columns and factored and self.sys.Bq.shape[0] * half <= LOW_RANK_SHARE * self.n:
+            if not self.all_columns and factored and self.sys.Bq.shape[0] * half <= ORBITS.low_rank_share * self.n:
                 out = factored(self.sys, q0, v0, h, half)       # diagonal + low rank (lowrank.py)
             else:
                 out = None
@@ -155,9 +139,9 @@ class ShootingStability:
     @property
     def background_spectrum(self):
         """Does multipliers_later compute the eigenvalues in the worker thread (symmetric reversible orbits of
-        BACKGROUND_MIN_N or more modes; below, the thread's overhead exceeds the eigenproblem), with worker
+        ORBITS.background_min_n or more modes; below, the thread's overhead exceeds the eigenproblem), with worker
         threads allowed (threads.WORKERS)?"""
-        return bool(self.symmetric and self.reversible and self.n >= BACKGROUND_MIN_N and threads.WORKERS > 0)
+        return bool(self.symmetric and self.reversible and self.n >= ORBITS.background_min_n and threads.WORKERS > 0)
 
     def multipliers_later(self, u, tangent=None):
         """The Floquet multipliers of the accepted point u (as ``multipliers``) computed in a worker thread
@@ -207,25 +191,25 @@ class ShootingStability:
 
 
 def nearest_eigenvalues(A, sigma, k):
-    """The k eigenvalues of A nearest sigma by shift-invert Arnoldi (at most ARPACK_RESTARTS restarts), or None
+    """The k eigenvalues of A nearest sigma by shift-invert Arnoldi (at most ORBITS.arpack_restarts restarts), or None
     (the caller tries another shift or the full spectrum) when ARPACK fails or the shift sits on an eigenvalue.
     A is a dense matrix (an n x n LU, complex for a complex sigma) or a lowrank.DiagonalPlusLowRank (the
-    Woodbury solve, no n x n LU; its Ritz pairs are checked against A: residuals above RESIDUAL_TOL relative to
-    max(1, max |diag A|) give None)."""
+    Woodbury solve, no n x n LU; its Ritz pairs are checked against A: residuals above ORBITS.arnoldi_residual_tol
+    relative to max(1, max |diag A|) give None)."""
     low = isinstance(A, DiagonalPlusLowRank)
     try:
         if not low:
             A = A.astype(complex) if isinstance(sigma, complex) else A
-            return eigs(A, k=k, sigma=sigma, maxiter=ARPACK_RESTARTS, return_eigenvectors=False)
+            return eigs(A, k=k, sigma=sigma, maxiter=ORBITS.arpack_restarts, return_eigenvectors=False)
         OPinv = A.shift_invert(sigma)
         if OPinv is None:
             return None
-        c, X = eigs(A.operator(OPinv.dtype), k=k, sigma=sigma, OPinv=OPinv, maxiter=ARPACK_RESTARTS)
+        c, X = eigs(A.operator(OPinv.dtype), k=k, sigma=sigma, OPinv=OPinv, maxiter=ORBITS.arpack_restarts)
     except (ArpackNoConvergence, ArpackError, RuntimeError):      # e.g. a shift on an eigenvalue
         return None
     AX = np.column_stack([A.matvec(x) for x in X.T])
     residual = np.linalg.norm(AX - X * c[None, :], axis=0) / np.linalg.norm(X, axis=0)
-    if not np.all(residual <= RESIDUAL_TOL * max(1.0, float(np.max(np.abs(A.d))))):
+    if not np.all(residual <= ORBITS.arnoldi_residual_tol * max(1.0, float(np.max(np.abs(A.d))))):
         return None
     return c
 

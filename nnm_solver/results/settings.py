@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import NNMInputError
 
 __all__ = ["MethodSettings", "Shooting", "HarmonicBalance", "ShootingSettings", "HarmonicBalanceSettings",
-           "settings_from_dict"]
+           "settings_from_dict", "ResultSettings", "RESULTS"]
 
 
 @dataclass(frozen=True)
@@ -203,3 +203,18 @@ _NOT_NONE = ("tol", "energy_max", "k3_factor", "floquet", "integrator", "harmoni
 #: an odd Fourier basis on every mode)
 _BEFORE = {Shooting: dict(integrator="newmark", steps_per_period=200, symmetric=False, freq_tol=None),
            HarmonicBalance: dict(basis="odd", modal_basis="full", freq_tol=None)}
+
+
+@dataclass(frozen=True)
+class ResultSettings:
+    """Thresholds of the result layer's claims about a branch (results/stops.py)."""
+
+    #: restoring force at the turning point relative to the linear one below which the orbit has escaped (status
+    #: ``escape``; stops.py explains the ratio)
+    escape_ratio: float = 1e-2
+    #: ... and below which a branch whose continuation fails has escaped too (the failure is the escape's)
+    escape_ratio_failed: float = 0.1
+
+
+#: the result layer's settings (the defaults above, written once)
+RESULTS = ResultSettings()

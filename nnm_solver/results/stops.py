@@ -27,17 +27,15 @@ at an equilibrium.  In modal coordinates its size relative to the linear
 force, r = |Omega^2 q0 + Bq^T g(Bq q0)| / |Omega^2 q0|, is 1 for a linear motion and falls to 0 as the
 family approaches a saddle (a homoclinic orbit, whose period tends to infinity).  So does the work ratio
 q0 . (restoring force) / q0 . Omega^2 q0, which is >= 1 for hardening forces; the larger of the two is used
-(the norm ratio alone can be small far from any equilibrium when masses or stiffnesses are decades apart).  r < ESCAPE_RATIO
-stops the branch with status ``escape``; so does a failure of the continuation where r < 0.1.
+(the norm ratio alone can be small far from any equilibrium when masses or stiffnesses are decades apart).
+r < escape_ratio (1e-2, results/settings.py: RESULTS) stops the branch with status ``escape``; so does a failure of
+the continuation where r < escape_ratio_failed (0.1).
 """
 from __future__ import annotations
 
 import numpy as np
 
 STOP_STATUSES = ("done", "max_points", "escape", "closed_loop", "tongue", "failed", "cancelled", "stopped", "running")
-
-#: restoring force at the turning point relative to the linear one below which the orbit has escaped
-ESCAPE_RATIO = 1e-2
 
 
 def restoring_ratio(system, q0):

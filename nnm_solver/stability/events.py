@@ -28,17 +28,12 @@ from .floquet import instability_kind, real_crossing
 from .krein import candidates as krein_candidates
 from .krein import locate_collision
 from .locator import EVENT_RTOL, Locator
+from .settings import STABILITY
 
 __all__ = ["Locator", "classify_multipliers", "EVENT_KINDS", "EVENT_RTOL", "locate_between", "stability_changes"]
 
 EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 
-#: a stability change through +1 is a fold's when the flags on either side of the fold, this many steps from it,
-#: are those of the step's two ends
-FOLD_REACH = 1e-2
-
-#: ... and a located +1 crossing within this many steps of a fold (along the branch) is the fold's too
-FOLD_MERGE = 5e-2
 
 #: the kind of instability of a multiplier set (floquet.instability_kind)
 classify_multipliers = instability_kind
@@ -67,7 +62,7 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
     (pa, slope_a), (pb, slope_b) = a, b
     events, end = [], None
     if energy_max is not None and pa.energy < energy_max <= pb.energy:
-        target = energy_max * (1 + 2 * EVENT_RTOL)    # the end point is at or just above energy_max
+        target = energy_max * (1 + 2 * STABILITY.event_rtol)    # the end point is at or just above energy_max
         try:
             sig = loc.root(lambda x: loc.energy(x) - target, 0.0, s, pa.energy - target, pb.energy - target)
             end = (sig, record(sig))
@@ -118,7 +113,8 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             pe = record(sig)
         except CorrectorFailure:
             pe, located = pu, False
-        if located and fold is not None and kind == "branch_point" and abs(sig - fold[0]) <= FOLD_MERGE * abs(s):
+        if (located and fold is not None and kind == "branch_point"
+                and abs(sig - fold[0]) <= STABILITY.fold_merge * abs(s)):
             # the real-crossing test function is flat at a fold, so its root lands near it, not on it: the fold's
             # (by the distance along the branch, not by energy, which is flat there)
             events[-1]["stability_change"] = change
@@ -179,7 +175,7 @@ def _within_spread(loc, fold, s, stable_a, spread):
         return False
 
 
-def _changes_at(loc, sigma, s, stable_a, stable_b, reach=FOLD_REACH):
+def _changes_at(loc, sigma, s, stable_a, stable_b, reach=STABILITY.fold_reach):
     """Does the stability flag change at sigma (within reach x the step s): do points on its two sides within
     that distance (known ones, e.g. the root finder's last iterates, or new ones at that distance) have the
     flags of the step's ends a (sigma = 0) and b (sigma = s)?"""

@@ -11,7 +11,7 @@ first: the monodromy is restricted to the quotient by the invariant plane span{f
 to exactly 1.
 
 Stability is then judged on the non-trivial multipliers: stable when ``max |mu| <= 1 +
-STABILITY_TOL``.  Newmark's average-acceleration scheme is time-reversible, so the discrete map keeps
+STABILITY.stability_tol``.  Newmark's average-acceleration scheme is time-reversible, so the discrete map keeps
 every simple multiplier of a stable orbit exactly on the unit circle; the discretisation shifts where
 along the branch a multiplier leaves the circle (by O((2 pi / N)^2) in frequency), not the modulus of
 the stable ones.  The tolerance therefore covers round-off only, amplified near multiplier
@@ -24,8 +24,10 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg import lapack
 
-#: stability tolerance on the modulus of the non-trivial Floquet multipliers
-STABILITY_TOL = 1e-5
+from .settings import STABILITY
+
+#: an alias of settings.py's STABILITY.stability_tol (the code reads that)
+STABILITY_TOL = STABILITY.stability_tol
 
 
 def deflate(Phi, V):
@@ -53,16 +55,11 @@ def nontrivial_multipliers(monodromy, velocity, family):
     return np.concatenate([mu, [1.0, 1.0]])
 
 
-#: a mode whose column of the modal element matrix Bq (n_s, n) is at most this fraction of the largest column's norm
-#: does not see the nonlinear elements: its equation q_i'' + w_i^2 q_i = 0 is decoupled from the others, so its row and
-#: column of A11 = dq(T/2)/dq0 are zero but for the diagonal, which is an eigenvalue exactly (reversible_blocks).
-#: Dropping a coupling of relative size eps moves an eigenvalue by at most ~eps even where two coincide (the row's
-#: and the column's eps multiply), far below the stability tolerance (a pair's imaginary part at the tolerance:
-#: 4e-7 and more); the aircraft: 78 of its 548 modes at most 2e-13 of the largest (the next 1.5e-12, 7.5e-12, 1e-8)
-DECOUPLED_TOL = 1e-12
+#: an alias of settings.py's STABILITY.decoupled_tol (the code reads that)
+DECOUPLED_TOL = STABILITY.decoupled_tol
 
 
-def coupled_modes(Bq, tol=DECOUPLED_TOL):
+def coupled_modes(Bq, tol=STABILITY.decoupled_tol):
     """Indices of the modes that see the nonlinear elements (their Bq column above tol x the largest one's norm),
     or None when every mode does (nothing to drop).  Bq : (n_s, n) element deformations per modal coordinate."""
     Bq = np.asarray(Bq, dtype=float)
@@ -164,11 +161,11 @@ def sort_multipliers(mu):
     return mu[np.argsort(-np.abs(mu), kind="stable")]
 
 
-def is_stable(mu, tol=STABILITY_TOL):
+def is_stable(mu, tol=STABILITY.stability_tol):
     return bool(np.max(np.abs(mu)) <= 1.0 + tol)
 
 
-def instability_kind(mu, tol=STABILITY_TOL):
+def instability_kind(mu, tol=STABILITY.stability_tol):
     """How an orbit is unstable, from its largest multiplier: 'branch_point' (real > 1),
     'period_doubling' (real < -1), 'torus' (complex) or '' if stable."""
     mu = sort_multipliers(mu)
@@ -180,7 +177,7 @@ def instability_kind(mu, tol=STABILITY_TOL):
     return "torus"
 
 
-def krein_gap(rho, rho_star, per_modulus=1.0, tol=STABILITY_TOL, imag_tol=1e-12):
+def krein_gap(rho, rho_star, per_modulus=1.0, tol=STABILITY.stability_tol, imag_tol=1e-12):
     """Test function of a Krein collision near rho_star, positive while stable.
 
     For the complex coordinate a + ib nearest rho_star, if there is one: b_tol^2 - b^2, where b_tol is

@@ -7,8 +7,8 @@ discriminant of the colliding pair (floquet.krein_gap), linear in the branch par
 collision: a secant on it, with the pair followed by the problem's local eigen-solver where it has one
 (shift-invert Arnoldi, ShootingProblem.local_collision).  Several pairs can collide within one step; the
 stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
-neither end) is caught by probing the full flag at KREIN_PROBES points, when its window covers one of them.  A pair
-that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
+neither end) is caught by probing the full flag at STABILITY.krein_probes points, when its window covers one of them.  A
+pair that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
 found in the full spectrum of the margin point next to that collision, and followed from there.
 """
 from __future__ import annotations
@@ -16,26 +16,20 @@ from __future__ import annotations
 import numpy as np
 
 from ..continuation.engine import CorrectorFailure
-from .floquet import STABILITY_TOL, krein_gap
+from .floquet import krein_gap
+from .settings import STABILITY
 
 __all__ = ["locate_collision", "candidates"]
 
-#: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the stability)
-MAX_KREIN_PAIRS = 4
 
-#: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
-KREIN_PROBES = 3
+#: an alias of settings.py's STABILITY.krein_depth (the code reads that)
+KREIN_DEPTH = STABILITY.krein_depth
 
-#: nested Krein locations within one step (a pair found complex at a probe or at the stable-side margin point is
-#: followed on the shorter interval), beyond which the full flag is bisected
-KREIN_DEPTH = 3
-
-#: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
-#: with a complex shift (the local solver's window holds 6 eigenvalues)
-LOCAL_CROWD = 3
+#: an alias of settings.py's STABILITY.local_crowd (the code reads that)
+LOCAL_CROWD = STABILITY.local_crowd
 
 
-def candidates(rho, most=MAX_KREIN_PAIRS):
+def candidates(rho, most=STABILITY.max_krein_pairs):
     """Real parts of the complex collision coordinates rho (one per conjugate pair), the most unstable (largest
     imaginary part) first, at most ``most``."""
     rho = np.asarray(rho, dtype=complex)
@@ -93,12 +87,12 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     # a pair that collided and separated again inside the step is complex at neither end: probe the full flag
     # between the stable end and the collision; the first change found is the event
     start, stop = (lo, min(bracket)) if f_lo else (hi, max(bracket))
-    probes = start + (stop - start) * np.arange(1, KREIN_PROBES + 1) / (KREIN_PROBES + 1)
+    probes = start + (stop - start) * np.arange(1, STABILITY.krein_probes + 1) / (STABILITY.krein_probes + 1)
     loc.prefetch(probes)
     for x in probes:
         if not loc.stable(x):             # (the stable end's flag is True)
             r_x = loc.collision(x)
-            cands = candidates(r_x) if r_x is not None and depth < KREIN_DEPTH else []
+            cands = candidates(r_x) if r_x is not None and depth < STABILITY.krein_depth else []
             if not cands:
                 return loc.bisect(loc.stable, start, x)
             stable_end, unstable_x = (True, r_lo if f_lo else r_hi), (False, r_x)
@@ -123,12 +117,12 @@ def _spacing(rho, rho_star, count=8):
 def _shift_for(z, spacing):
     """The local solver's shift for a pair at the complex coordinate z: its real part, or z itself when the pair
     lies so far off the real axis that the real eigenvalues nearer to its real part could fill the local solver's
-    window of 6 (LOCAL_CROWD of them within |Im z|, at the local spacing).  A 1,100-mode plate: 0.0006 between
+    window of 6 (STABILITY.local_crowd of them within |Im z|, at the local spacing).  A 1,100-mode plate: 0.0006 between
     eigenvalues and a pair 0.01 off the axis, which the 6 eigenvalues nearest its real part missed.  A complex
     shift costs a complex LU (4x a real one) and more Arnoldi iterations, so near the collision the real part
     is used again."""
     b = abs(complex(z).imag)
-    return complex(complex(z).real, b) if 2 * b >= LOCAL_CROWD * spacing else float(complex(z).real)
+    return complex(complex(z).real, b) if 2 * b >= STABILITY.local_crowd * spacing else float(complex(z).real)
 
 
 def _shift(rho, rho_star):
@@ -150,25 +144,24 @@ def _per_modulus(loc):
     return getattr(loc.problem, "collision_per_modulus", 1.0)
 
 
-#: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
-#: tolerance (the two margin points of _flag_change_near)
-MARGIN = 0.8
+#: an alias of settings.py's STABILITY.krein_margin (the code reads that)
+MARGIN = STABILITY.krein_margin
 
-#: the flag's round-off band at the margin points: relative to STABILITY_TOL, the modulus excess |mu| - 1 that counts
-#: as at the threshold (two eigen-solvers' imaginary parts of a pair near its collision differ by ~1e-4 relative)
-FLAG_BAND = 1e-3
+#: an alias of settings.py's STABILITY.flag_band (the code reads that)
+FLAG_BAND = STABILITY.flag_band
 
 
 def _earlier_change(loc, lo, hi, f_lo, r_stable, x_s, depth):
     """The flag's change between the step's stable end and the stable-side margin point x_s of a followed
-    collision, where x_s is unstable beyond the round-off band (FLAG_BAND): another pair (or the followed one,
+    collision, where x_s is unstable beyond the round-off band (STABILITY.flag_band): another pair (or the followed one,
     where its secant stopped short of its root) changed the flag nearer the stable end.  The pairs complex at
     x_s, whose full spectrum is known, are followed on the shorter interval (locate_collision: local evaluations
     and a few full spectra, instead of a bisection of the full flag over the step).  r_stable : the collision
     coordinates at the stable end.  None when x_s is stable, has no complex coordinates or the nesting is
-    KREIN_DEPTH deep (the caller bisects the full flag)."""
+    STABILITY.krein_depth deep (the caller bisects the full flag)."""
     start = lo if f_lo else hi
-    if depth >= KREIN_DEPTH or x_s == start or loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)):
+    if (depth >= STABILITY.krein_depth or x_s == start
+            or loc.stable(x_s, STABILITY.stability_tol * (1 + STABILITY.flag_band))):
         return None
     r_s = loc.collision(x_s)
     cands = candidates(r_s) if r_s is not None else []
@@ -181,8 +174,8 @@ def _earlier_change(loc, lo, hi, f_lo, r_stable, x_s, depth):
 
 def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
     """The two margin points around a followed collision (blo, bhi) where the full flag is checked: (x_s, x_u, c,
-    width), x_s on the stable side, x_u on the unstable one, MARGIN x the energy tolerance apart around the centre
-    c (the secant's root when given: (centre, delta)); width: the bracket's (or 2 delta)."""
+    width), x_s on the stable side, x_u on the unstable one, STABILITY.krein_margin x the energy tolerance apart around
+    the centre c (the secant's root when given: (centre, delta)); width: the bracket's (or 2 delta)."""
     a, b = min(lo, hi), max(lo, hi)
     width = abs(bhi - blo)
     if root is not None:
@@ -195,7 +188,8 @@ def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
             E_lo = E_hi = None
         c, delta = 0.5 * (blo + bhi), 0.5 * width
         if E_lo is not None and width > 0 and E_hi != E_lo:
-            delta = max(delta, 0.5 * MARGIN * loc.rtol * max(abs(E_lo), abs(E_hi)) * width / abs(E_hi - E_lo))
+            delta = max(delta, 0.5 * STABILITY.krein_margin * loc.rtol * max(abs(E_lo), abs(E_hi)) * width
+                        / abs(E_hi - E_lo))
     delta = min(delta, 1e-2 * (b - a))
     sign = 1.0 if hi > lo else -1.0             # from lo's side (flag f_lo) towards hi's
     x_lo, x_hi = min(max(c - sign * delta, a), b), min(max(c + sign * delta, a), b)
@@ -210,16 +204,17 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     The tracked pair's threshold (its imaginary part at the stability tolerance) and the full flag's differ by
     round-off: there the imaginary part grows like the square root of the distance from the collision, so the
     two eigen-solvers' values, ~1e-4 apart relative, place the crossing up to ~1e-6 of the step apart.  The full
-    spectra are computed at two margin points around the collision, MARGIN x the energy tolerance apart
+    spectra are computed at two margin points around the collision, STABILITY.krein_margin x the energy tolerance apart
     (_margin_points): they bracket the change when the stable side's largest modulus excess |mu| - 1 is within
-    (1 + FLAG_BAND) x the tolerance and the unstable side's beyond (1 - FLAG_BAND) x it (two spectra).  Otherwise
-    (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or 1000 times the
-    bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin points (else
-    around the bracket)."""
+    (1 + STABILITY.flag_band) x the tolerance and the unstable side's beyond (1 - STABILITY.flag_band) x it (two
+    spectra).  Otherwise (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or
+    1000 times the bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin
+    points (else around the bracket)."""
     a, b = min(lo, hi), max(lo, hi)
     x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
     loc.prefetch([x_s, x_u])
-    if loc.stable(x_s, STABILITY_TOL * (1 + FLAG_BAND)) and not loc.stable(x_u, STABILITY_TOL * (1 - FLAG_BAND)):
+    tol = STABILITY.stability_tol
+    if loc.stable(x_s, tol * (1 + STABILITY.flag_band)) and not loc.stable(x_u, tol * (1 - STABILITY.flag_band)):
         return (x_s, x_u) if x_s < x_u else (x_u, x_s)
     if not windows:
         return None
@@ -236,7 +231,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
     flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
     its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
-    centre -+ delta are MARGIN x the energy tolerance apart)."""
+    centre -+ delta are STABILITY.krein_margin x the energy tolerance apart)."""
     pm = _per_modulus(loc)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
     r_u = r_hi if f_lo else r_lo
@@ -281,8 +276,8 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             # converged when the secant step moved the energy by less than a quarter of the margin: its root is
             # then within the margin points of _flag_change_near around c, which check the flag there
             E_c, E_2 = loc.energy(c), loc.energy(x2)
-            if abs(E_c - E_2) <= 0.25 * MARGIN * loc.rtol * abs(E_c) and E_c != E_2:
-                delta = 0.5 * MARGIN * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
+            if abs(E_c - E_2) <= 0.25 * STABILITY.krein_margin * loc.rtol * abs(E_c) and E_c != E_2:
+                delta = 0.5 * STABILITY.krein_margin * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
                 verdict = _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm)
                 if verdict is None:
                     return (lo, hi), local, (c, delta)

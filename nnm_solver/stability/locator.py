@@ -13,36 +13,24 @@ import copy
 import numpy as np
 
 from ..continuation.engine import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
-from .floquet import STABILITY_TOL, is_stable, real_crossing, sort_multipliers
+from .floquet import is_stable, real_crossing, sort_multipliers
 from .roots import BracketRoots
+from .settings import STABILITY
 
 __all__ = ["Locator", "EVENT_RTOL", "event_rtol"]
 
-#: relative energy tolerance of located events (the finest; see event_rtol)
-EVENT_RTOL = 1e-8
-#: ... the coarsest, where the time discretisation's error is large anyway
-EVENT_RTOL_MAX = 5e-7
+#: an alias of settings.py's STABILITY.event_rtol (the code reads that)
+EVENT_RTOL = STABILITY.event_rtol
 
 
 def event_rtol(freq_error):
     """Relative energy tolerance of the events of a step whose points have the estimated relative frequency error
     freq_error (the time discretisation's, ShootingProblem.frequency_error): a hundredth of it, within
-    [EVENT_RTOL, EVENT_RTOL_MAX] (EVENT_RTOL when there is no estimate).  Locating far below the discretisation
-    error would only cost corrector runs."""
+    [STABILITY.event_rtol, STABILITY.event_rtol_max] (STABILITY.event_rtol when there is no estimate).  Locating far
+    below the discretisation error would only cost corrector runs."""
     if not np.isfinite(freq_error):
-        return EVENT_RTOL
-    return float(min(max(0.01 * freq_error, EVENT_RTOL), EVENT_RTOL_MAX))
-
-#: a step whose mid-step point lies farther than this from the cubic interpolant of its ends (relative to the step,
-#: balanced norm) jumped onto another branch (Locator.jumped)
-JUMP_LIMIT = 0.05
-
-#: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
-CHORD_REACH = 1.0
-#: ... to a corrector tolerance this much tighter than the continuation's
-CHORD_TOL_FACTOR = 1e-2
-#: ... and must lie within this many times the pseudo-arclength difference from it (the same cut of the curve)
-CHORD_CONTINUITY = 3.0
+        return STABILITY.event_rtol
+    return float(min(max(0.01 * freq_error, STABILITY.event_rtol), STABILITY.event_rtol_max))
 
 
 class Locator(BracketRoots):
@@ -53,11 +41,11 @@ class Locator(BracketRoots):
     """
 
     #: relative energy tolerance of the located events (set per step: event_rtol)
-    rtol = EVENT_RTOL
+    rtol = STABILITY.event_rtol
 
-    def __init__(self, problem, settings, tol, u_a, p_a, step=None, rtol=EVENT_RTOL):
+    def __init__(self, problem, settings, tol, u_a, p_a, step=None, rtol=STABILITY.event_rtol):
         """step : the continuation's step from a to the next point (scaled units): located points closer
-        than CHORD_REACH x step to the latest one start from it (chord iterations with its factorisation).
+        than STABILITY.chord_reach x step to the latest one start from it (chord iterations with its factorisation).
         rtol : relative energy tolerance of the events (event_rtol)."""
         self.step = step
         self.rtol = rtol            # relative energy tolerance of located events (event_rtol)
@@ -78,7 +66,7 @@ class Locator(BracketRoots):
         self.cache[float(sigma)] = (u, J, tangent_factored(J, self.p_a, self.w, factor)[0])   # (the engine's J)
         self.factors[float(sigma)] = factor
 
-    def jumped(self, limit=JUMP_LIMIT):
+    def jumped(self, limit=STABILITY.jump_limit):
         """A reason (str) if the step from a to its seeded end point b did not follow one branch, else ''.
 
         The branch's point at mid-step (on the hyperplane sigma = step / 2) is found by chord iterations from the
@@ -166,31 +154,31 @@ class Locator(BracketRoots):
     def _from_latest(self, sigma, u_pred):
         """The point at sigma from the latest located point when it is close (the root finders' last
         iterations): chord iterations with that point's factorisation, from that point moved to sigma's hyperplane
-        (all the hyperplanes are parallel), to a tolerance CHORD_TOL_FACTOR tighter (chord iterations stop just
-        below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The result must
-        continue the branch: within CHORD_CONTINUITY x |d sigma| of that point, and within JUMP_LIMIT x the
-        distance to the nearest known point (plus the corrector's accuracy) of the prediction (the interpolant of
-        the known points).  Near a tongue a hyperplane can cut the solution curve twice within a step, and another
-        branch can run alongside a few millionths away: on the aircraft's NNM 20 at 37.6 J the chord iterations
-        converged there, 0.16 d sigma off the prediction (points on the branch: below 0.01).  Otherwise None
+        (all the hyperplanes are parallel), to a tolerance STABILITY.chord_tol_factor tighter (chord iterations stop
+        just below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The result must
+        continue the branch: within STABILITY.chord_continuity x |d sigma| of that point, and within
+        STABILITY.jump_limit x the distance to the nearest known point (plus the corrector's accuracy) of the prediction
+        (the interpolant of the known points).  Near a tongue a hyperplane can cut the solution curve twice within a
+        step, and another branch can run alongside a few millionths away: on the aircraft's NNM 20 at 37.6 J the chord
+        iterations converged there, 0.16 d sigma off the prediction (points on the branch: below 0.01).  Otherwise None
         (fresh Newton from the prediction).  (Starting the chord iterations at the prediction instead was tried:
         on the 2-DOF's 5:1 tongue it placed a branch point 14 % off and lost the tongue's inner loop.)"""
         if self.latest is None or self.step is None:
             return None
         s_l, u_l, factor = self.latest
         ds = abs(sigma - s_l)
-        if ds > CHORD_REACH * self.step:
+        if ds > STABILITY.chord_reach * self.step:
             return None
-        tol = CHORD_TOL_FACTOR * self.tol
+        tol = STABILITY.chord_tol_factor * self.tol
         try:
             result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
                                       start=(u_l + (sigma - s_l) * self.p_a, factor))
         except CorrectorFailure:
             return None
-        if np.linalg.norm(self.w * (result[0] - u_l)) > CHORD_CONTINUITY * ds + 10 * self.tol:
+        if np.linalg.norm(self.w * (result[0] - u_l)) > STABILITY.chord_continuity * ds + 10 * self.tol:
             return None
         nearest = min(abs(sigma - k) for k in self.cache) if self.cache else ds
-        if np.linalg.norm(self.w * (result[0] - u_pred)) > JUMP_LIMIT * nearest + 10 * tol:
+        if np.linalg.norm(self.w * (result[0] - u_pred)) > STABILITY.jump_limit * nearest + 10 * tol:
             return None
         return result
 
@@ -239,7 +227,7 @@ class Locator(BracketRoots):
             _, J = self.problem.jacobian(u)
         self.problem.accept(u, J)
 
-    def stable(self, sigma, tol=STABILITY_TOL):
+    def stable(self, sigma, tol=STABILITY.stability_tol):
         """The stability flag at sigma (floquet.is_stable; tol: on the multipliers' modulus excess)."""
         return is_stable(self.multipliers(sigma), tol)
 

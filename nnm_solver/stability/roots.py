@@ -5,14 +5,14 @@ their stop rules on the energy (the events' relative energy tolerance ``rtol``).
 from __future__ import annotations
 
 from ..continuation.engine import CorrectorFailure
+from .settings import STABILITY
 
 __all__ = ["BracketRoots", "RETAIN_LIMIT", "LINEAR_BAND"]
 
-#: Locator.root bisects once Illinois halved the same end's value this many times running (the iterates did
-#: not cross the root: g is far from linear there, e.g. a jump) ...
-RETAIN_LIMIT = 3
-#: ... until a midpoint's value lies within this fraction of |g(b) - g(a)| of the chord (g looks linear again)
-LINEAR_BAND = 0.1
+#: an alias of settings.py's STABILITY.retain_limit (the code reads that)
+RETAIN_LIMIT = STABILITY.retain_limit
+#: an alias of settings.py's STABILITY.linear_band (the code reads that)
+LINEAR_BAND = STABILITY.linear_band
 
 
 class BracketRoots:
@@ -24,11 +24,11 @@ class BracketRoots:
         rtol).
 
         Regula falsi keeps one end while the other creeps towards the root; Illinois halves the kept end's value
-        so that the next iterate lands on its other side.  Where RETAIN_LIMIT halvings running do not do it, g
+        so that the next iterate lands on its other side.  Where STABILITY.retain_limit halvings running do not do it, g
         is far from linear across the bracket -- typically a jump (a selected multiplier changing identity:
         Hill's truncated spectrum near a fold, where g goes from -1e-3 to +1e-10 in one step of sigma), where
         Illinois needs ~log2 of the ends' ratio in halvings per move.  The iterates are then midpoints until one
-        lies within LINEAR_BAND x |g(b) - g(a)| of the chord through the ends' true values (g looks linear
+        lies within STABILITY.linear_band x |g(b) - g(a)| of the chord through the ends' true values (g looks linear
         again: Illinois resumes).  A jump is located at bisection's cost; a smooth g keeps Illinois' order.
         Measured on NLvib's beam (example 09, HB H = 5) at its loss of stability next to the 5:1 tongue's fold:
         60 evaluations without convergence before (the event reported 0.0449549 J, unconverged), 26 after
@@ -42,12 +42,13 @@ class BracketRoots:
         for _ in range(max_iter):
             if fa == 0.0 or fb == 0.0 or converged(a, b, ta, tb):
                 break
-            bisecting = bisecting or kept >= RETAIN_LIMIT
+            bisecting = bisecting or kept >= STABILITY.retain_limit
             c = (a * fb - b * fa) / (fb - fa)
             if bisecting or not min(a, b) < c < max(a, b):
                 c = 0.5 * (a + b)
             fc = g(c)
-            linear = bisecting and abs(fc - (ta + (c - a) / (b - a) * (tb - ta))) <= LINEAR_BAND * abs(tb - ta)
+            linear = bisecting and (abs(fc - (ta + (c - a) / (b - a) * (tb - ta)))
+                                    <= STABILITY.linear_band * abs(tb - ta))
             if fc * fb > 0:
                 b, fb, tb = c, fc, fc
                 if side == -1:

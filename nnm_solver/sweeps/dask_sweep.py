@@ -47,6 +47,7 @@ from .progress import SweepProgress, reporter
 from ..files.sweep_groups import branch_name, parse_branch_name  # noqa: F401
 from .spec import as_variants, parse_modes
 from .sweep_files import load_sweep, prepare_file  # noqa: F401
+from .settings import SWEEPS
 
 __all__ = ["sweep", "load_sweep", "SweepProgress", "branch_name", "parse_branch_name", "WORKER_ENV"]
 
@@ -56,15 +57,12 @@ __all__ = ["sweep", "load_sweep", "SweepProgress", "branch_name", "parse_branch_
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
               "NUMBA_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": "65536", "NNM_SPECTRUM_WORKERS": "0"}
 
-#: least time (s) between two progress messages of one branch sent by a worker
-EVENT_INTERVAL = 0.25
+#: an alias of settings.py's SWEEPS.event_interval (the code reads that)
+EVENT_INTERVAL = SWEEPS.event_interval
 
-#: seconds to wait for a scheduler given by address
-CONNECT_TIMEOUT = 10.0
+#: an alias of settings.py's SWEEPS.connect_timeout (the code reads that)
+CONNECT_TIMEOUT = SWEEPS.connect_timeout
 
-#: a branch the cluster cancelled because its scattered model was lost (the worker holding its last copy died) is
-#: submitted again, with the model scattered anew, at most this many times
-LOST_RETRIES = 2
 
 def _compute(model, variant, mode, energy_max, options, topic):
     """One branch on a worker: continue_nnm, streamed progress, the columns sent back (not the model)."""
@@ -83,7 +81,7 @@ def _compute(model, variant, mode, energy_max, options, topic):
         nonlocal count, last
         count += 1
         now = time.perf_counter()
-        if worker is not None and topic and (count == 1 or now - last >= EVENT_INTERVAL):
+        if worker is not None and topic and (count == 1 or now - last >= SWEEPS.event_interval):
             last = now
             worker.log_event(topic, {"name": name, "points": count, "energy": float(point.energy), **info})
 
@@ -149,7 +147,7 @@ def _connect(client, n_tasks):
         return client, None
     if isinstance(client, str):
         try:
-            return dd.Client(client, timeout=CONNECT_TIMEOUT), "client"
+            return dd.Client(client, timeout=SWEEPS.connect_timeout), "client"
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             raise NNMInputError(
                 f"cannot reach the Dask scheduler at {client!r} ({type(exc).__name__}: {exc}); check the address "
@@ -269,7 +267,7 @@ def _run(client_arg, variants, models, tasks, todo, energy_max, options, out, re
         if fut.status in ("cancelled", "lost") and stop is not None and stop.is_set():
             futures[fut] = i                  # stopped: reported cancelled with the rest (below, finally)
             return
-        if fut.status in ("cancelled", "lost") and resubmitted[i] < LOST_RETRIES:
+        if fut.status in ("cancelled", "lost") and resubmitted[i] < SWEEPS.lost_retries:
             # the cluster cancelled the branch without an error of its own: the model scattered to the workers was
             # lost (Dask's memory manager drops the copies on workers that no running task needs, keeping one, and
             # the worker holding that one died), so the branch is submitted again with the model scattered anew

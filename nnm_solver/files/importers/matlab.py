@@ -26,7 +26,8 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-from ...model.elements import PWL_EPS, CubicSpring, PiecewiseLinearSpring, PolynomialSpring
+from ...model.elements import CubicSpring, PiecewiseLinearSpring, PolynomialSpring
+from ...model.settings import MODEL
 from ...errors import NNMFileError, NNMInputError
 from ...model.model import Model
 from .common import existing
@@ -180,7 +181,7 @@ def springs_from_mat(data, n, where):
             law[int(p)] = float(c)
         springs += [PolynomialSpring(dof=d, other=o, coefficients=law) for (d, o), law in terms.items()]
     if "piecewise_springs" in data:
-        eps = PWL_EPS
+        eps = MODEL.pwl_eps
         if "piecewise_eps" in data:
             e = np.asarray(data["piecewise_eps"], dtype=float).ravel()
             if e.size != 1:

@@ -11,7 +11,7 @@ still.
   themselves, split into triangles.
 * Line elements (CBAR, CBEAM, CROD, CTUBE, CONROD) are drawn as flat ribbons (the viewer draws triangles):
   four vertices per element, at offsets r = +-w/2 e from its two grids, e the element's orientation vector
-  made normal to its axis (CBAR/CBEAM x or G0; else a normal to the axis), w = ``RIBBON_WIDTH`` of the
+  made normal to its axis (CBAR/CBEAM x or G0; else a normal to the axis), w = ``FILES.ribbon_width`` of the
   model's size.  A ribbon vertex moves rigidly with its grid: u + theta x r (theta: the grid's rotations
   when the model has them), so a bending beam's ribbon twists and bends with it.
 
@@ -30,12 +30,13 @@ import scipy.sparse as sp
 from ...errors import NNMFileError, NNMInputError
 from ...model.mesh import DisplayMesh
 from .common import existing
+from ..settings import FILES
 
 EXTRA = 'pip install "nnm[nastran]" (pyNastran)'
 #: bulk data file suffixes whose [mesh] is read here (meshio with [mesh] format = "nastran")
 BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".bulk")
-#: ribbon width of line elements, as a fraction of the model's bounding box diagonal
-RIBBON_WIDTH = 0.02
+#: an alias of files/settings.py's FILES.ribbon_width (the code reads that)
+RIBBON_WIDTH = FILES.ribbon_width
 SHELLS = ("CQUAD4", "CQUAD8", "CQUADR", "CTRIA3", "CTRIA6", "CTRIAR", "CSHEAR")
 LINES = ("CBAR", "CBEAM", "CROD", "CTUBE", "CONROD")
 
@@ -137,7 +138,7 @@ def read_bdf_mesh(path, n, dof_map, *, recovery=None, scale=1.0, where=""):
     part_ids = [0] * len(faces)
     if lines:
         xyz = np.array([grids[g][0] for _, a, b, _ in lines for g in (a, b)] + points)
-        width = RIBBON_WIDTH * max(float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0))), 1e-300)
+        width = FILES.ribbon_width * max(float(np.linalg.norm(xyz.max(axis=0) - xyz.min(axis=0))), 1e-300)
         for _, a, b, orient in lines:
             axis = grids[b][0] - grids[a][0]
             if not np.linalg.norm(axis) > 0:

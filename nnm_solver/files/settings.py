@@ -1,0 +1,26 @@
+"""The file layer's settings: its tolerances and sizes, written once.
+
+``FILES`` is the instance the code reads (``FILES.model_rtol``); ``MODEL_RTOL`` (branch_io) and ``RIBBON_WIDTH``
+(importers/nastran_mesh) stay importable as aliases of its fields.  A file format's own numbers (versions, a field's
+range) are the format's, not settings: they stay beside their readers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["FileSettings", "FILES"]
+
+
+@dataclass(frozen=True)
+class FileSettings:
+    """Tolerances and sizes of the file readers and writers."""
+
+    #: relative tolerance of the comparison of a model with the one a file holds (a model read back from a file is
+    #: bit-identical; a model built again from the same description is too, up to rounding)
+    model_rtol: float = 1e-10
+    #: ribbon width of line elements of an imported display mesh, as a fraction of the model's bounding box diagonal
+    ribbon_width: float = 0.02
+
+
+#: the file layer's settings (the defaults above, written once)
+FILES = FileSettings()

@@ -1,0 +1,33 @@
+"""The time-stepping kernels' settings: every threshold of integrators/, written once, with its reason.
+
+``KERNELS`` is the instance the code reads (``KERNELS.volterra_block``).  The compiled kernels (newmark.py,
+general.py) read ``newton_max`` and ``newton_rtol`` as compile-time constants (numba freezes a module global when it
+compiles; they bind them to module names from ``KERNELS``); numba's disk cache is keyed on each kernel's own source
+file, so after changing them here touch newmark.py and general.py (jit.py says so for laws.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["KernelSettings", "KERNELS"]
+
+
+@dataclass(frozen=True)
+class KernelSettings:
+    """Thresholds and sizes of the time-stepping kernels."""
+
+    #: Newton iterations of an implicit step (the n_s spring deformations, or the n modal coordinates of the
+    #: general kernels) before the step is judged on its residual alone
+    newton_max: int = 40
+    #: an implicit step's Newton iteration has converged when its residual is within this of its scale (round-off)
+    newton_rtol: float = 1e-13
+    #: a shifted solve by Woodbury is refused (the caller takes another shift or route) when a diagonal entry lies
+    #: within this distance (relative to the largest) of the shift: the identity's two terms would then cancel
+    near_diagonal: float = 1e-10
+    #: time steps per block of the Volterra solve: one block (one triangular solve) for the usual 200 steps per
+    #: period, bounded memory (O((block n_s)^2)) and (N / block)^2 / 2 matrix products for long sweeps
+    volterra_block: int = 128
+
+
+#: the kernels' settings (the defaults above, written once)
+KERNELS = KernelSettings()

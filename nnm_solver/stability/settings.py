@@ -1,0 +1,77 @@
+"""The stability layer's settings: every threshold of stability/, written once, with the measurement behind it.
+
+``STABILITY`` is the instance the code reads (``STABILITY.stability_tol``); names of earlier releases that were public
+(``STABILITY_TOL``, ``DECOUPLED_TOL``, ``EVENT_RTOL``, ``RETAIN_LIMIT``, ``LINEAR_BAND``, krein's ``KREIN_DEPTH``,
+``LOCAL_CROWD``, ``MARGIN``, ``FLAG_BAND``) stay importable from their modules as aliases of its fields.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["StabilitySettings", "STABILITY"]
+
+
+@dataclass(frozen=True)
+class StabilitySettings:
+    """Thresholds of the Floquet multipliers and of the location of events along a step."""
+
+    # ------------------------------------------------------------------ the multipliers (floquet.py)
+    #: stability tolerance on the modulus of the non-trivial Floquet multipliers
+    stability_tol: float = 1e-5
+    #: a mode whose column of the modal element matrix Bq (n_s, n) is at most this fraction of the largest column's
+    #: norm does not see the nonlinear elements: its equation q_i'' + w_i^2 q_i = 0 is decoupled from the others, so
+    #: its row and column of A11 = dq(T/2)/dq0 are zero but for the diagonal, which is an eigenvalue exactly
+    #: (reversible_blocks).  Dropping a coupling of relative size eps moves an eigenvalue by at most ~eps even where
+    #: two coincide (the row's and the column's eps multiply), far below the stability tolerance (a pair's imaginary
+    #: part at the tolerance: 4e-7 and more); the aircraft: 78 of its 548 modes at most 2e-13 of the largest (the
+    #: next 1.5e-12, 7.5e-12, 1e-8)
+    decoupled_tol: float = 1e-12
+
+    # ------------------------------------------------------------------ events (events.py, locator.py)
+    #: a stability change through +1 is a fold's when the flags on either side of the fold, this many steps from
+    #: it, are those of the step's two ends
+    fold_reach: float = 1e-2
+    #: ... and a located +1 crossing within this many steps of a fold (along the branch) is the fold's too
+    fold_merge: float = 5e-2
+    #: relative energy tolerance of located events (the finest; see locator.event_rtol)
+    event_rtol: float = 1e-8
+    #: ... the coarsest, where the time discretisation's error is large anyway
+    event_rtol_max: float = 5e-7
+    #: a step whose mid-step point lies farther than this from the cubic interpolant of its ends (relative to the
+    #: step, balanced norm) jumped onto another branch (Locator.jumped)
+    jump_limit: float = 0.05
+    #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
+    chord_reach: float = 1.0
+    #: ... to a corrector tolerance this much tighter than the continuation's
+    chord_tol_factor: float = 1e-2
+    #: ... and must lie within this many times the pseudo-arclength difference from it (the same cut of the curve)
+    chord_continuity: float = 3.0
+    #: (roots.py) Locator.root bisects once Illinois halved the same end's value this many times running (the
+    #: iterates did not cross the root: g is far from linear there, e.g. a jump) ...
+    retain_limit: int = 3
+    #: ... until a midpoint's value lies within this fraction of |g(b) - g(a)| of the chord (g looks linear again)
+    linear_band: float = 0.1
+
+    # ------------------------------------------------------------------ Krein collisions (krein.py)
+    #: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the
+    #: stability)
+    max_krein_pairs: int = 4
+    #: full-flag probes between the stable end and a located Krein collision (collisions undone inside the step)
+    krein_probes: int = 3
+    #: nested Krein locations within one step (a pair found complex at a probe or at the stable-side margin point is
+    #: followed on the shorter interval), beyond which the full flag is bisected
+    krein_depth: int = 3
+    #: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
+    #: with a complex shift (the local solver's window holds 6 eigenvalues)
+    local_crowd: int = 3
+    #: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
+    #: tolerance (the two margin points of _flag_change_near)
+    krein_margin: float = 0.8
+    #: the flag's round-off band at the margin points: relative to stability_tol, the modulus excess |mu| - 1 that
+    #: counts as at the threshold (two eigen-solvers' imaginary parts of a pair near its collision differ by ~1e-4
+    #: relative)
+    flag_band: float = 1e-3
+
+
+#: the stability layer's settings (the defaults above, written once)
+STABILITY = StabilitySettings()
