@@ -20,16 +20,31 @@ _controller = None
 _lock = threading.Lock()
 
 
+#: held while the BLAS thread count changes (``blas_limited``) and by a call that may run BLAS in another thread than
+#: the branch's (results/point.py: the physical states mapped when a snapshot reads them): OpenBLAS can crash when
+#: its thread count changes during a call in another thread
+BLAS_CONFIG = threading.RLock()
+
+
+@contextlib.contextmanager
 def blas_limited():
-    """Context manager limiting the BLAS threads to BLAS_THREADS (no-op if None)."""
+    """Context manager limiting the BLAS threads to BLAS_THREADS (no-op if None); the limit set and restored under
+    BLAS_CONFIG."""
     global _controller
     if not BLAS_THREADS:
-        return contextlib.nullcontext()
+        yield None
+        return
     with _lock:
         if _controller is None:
             from threadpoolctl import ThreadpoolController
             _controller = ThreadpoolController()
-    return _controller.limit(limits=BLAS_THREADS, user_api="blas")
+    with BLAS_CONFIG:
+        limiter = _controller.limit(limits=BLAS_THREADS, user_api="blas")
+    try:
+        yield limiter
+    finally:
+        with BLAS_CONFIG:
+            limiter.restore_original_limits()
 
 
 #: worker threads of ``background`` (environment NNM_SPECTRUM_WORKERS; 0: the multipliers are computed in turn,
