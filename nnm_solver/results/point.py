@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..threads import BLAS_CONFIG
+from ..threads import blas_limited
 
 __all__ = ["Point", "ModalState", "resolve_points"]
 
@@ -123,7 +123,7 @@ def resolve_points(points):
     for pending in groups.values():
         rows = [modal.rows() for _, modal in pending]
         stacked = np.concatenate(rows)
-        with BLAS_CONFIG:                    # (any thread: not while a branch's thread changes the BLAS threads)
+        with blas_limited():                 # in any thread: a region, so no BLAS limit changes during the product
             x = stacked @ pending[0][1].phi.T
         start = 0
         for (p, modal), r in zip(pending, rows):
