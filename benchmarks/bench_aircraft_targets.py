@@ -11,7 +11,8 @@ the load average before and after each run:
   (the first energy fold) or the frequency has moved 5 % from the first point (bench_targets.py's rule; target
   <= 5 s);
 * ``hb``: condensed harmonic balance of mode 20 to 3 J (``method="hb", condensed=True, harmonics=9``): milliseconds
-  a point (target <= 1 ms).
+  a point (target <= 1 ms), the warm-up being the same run (its skeleton cached, as in bench_per_point.py: the
+  cost a point, not the skeleton's; the other two cases time their skeletons).
 
 ``--other TREE`` runs another solver tree beside this one (e.g. ``git worktree add /tmp/base main``);
 ``--dump DIR`` writes each branch's arrays (DIR/<tree>_<case>.npz: energy, frequency, stability, multipliers,
@@ -79,7 +80,7 @@ def run(case, warm=False):
                          last_energy=float(b.energy[-1]), stability_known=bool(np.all(np.isfinite(b.floquet)))))
         branches["mode20"] = b
     else:
-        b = nnm.continue_nnm(model, 20, 0.3 if warm else 3.0, method="hb", condensed=True, harmonics=9)
+        b = nnm.continue_nnm(model, 20, 3.0, method="hb", condensed=True, harmonics=9)   # (warm: its skeleton too)
         rows.append(dict(mode=20, points=len(b), status=b.status, events=len(b.events)))
         branches["mode20"] = b
     return time.perf_counter() - t, time.process_time() - c, rows, branches
