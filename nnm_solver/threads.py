@@ -77,8 +77,9 @@ def blas_limited():
     runs in any thread, as long as every such call runs inside a region.  The package's are: a branch's points
     (driver/iterator.py), a Job's whole run (driver/jobs.py), the multipliers computed in the worker threads
     (``background``: the region is held from the submission to the end of the call) and a Point's physical state
-    mapped from its modal one (results/point.py, in whichever thread reads it).  Changing OpenBLAS's thread count
-    during a call in another thread is what can crash it (it frees the thread buffers that call may still use)."""
+    mapped from its modal one (results/point.py, in whichever thread reads it).  (OpenBLAS's pthreads pool is one
+    per process: a count changed per point by one thread under another thread's running call is what this avoids;
+    a limit set per point and restored out of order by two threads left the count wrong.)"""
     if not BLAS_THREADS:
         yield None
         return

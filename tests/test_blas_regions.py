@@ -1,7 +1,8 @@
 """threads.blas_limited: BLAS-limited regions counted over all threads, so that the process's BLAS thread count
-changes only when no region is open (issue 52: OpenBLAS can crash when its thread count changes during a call in
-another thread; a lazy Point's physical state, mapped in whichever thread reads it, and the multipliers computed in
-the worker threads are the package's BLAS calls outside the branch's own thread)."""
+changes only when no region is open (issue 52: OpenBLAS's thread pool is one per process; a lazy Point's physical
+state, mapped in whichever thread reads it, and the multipliers computed in the worker threads are the package's BLAS
+calls outside the branch's own thread), and a region opened in any thread limits the BLAS threads (threadpoolctl 3.8
+lets one thread at a time change OpenBLAS's count and silently ignores the others)."""
 import threading
 
 import numpy as np
