@@ -16,6 +16,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
+#: every statement's captured output stream, kept alive for the whole process: CPython 3.11's print() holds a
+#: *borrowed* reference to sys.stdout while it formats its arguments, so a background thread printing (the README's
+#: ``start_branch(..., on_point=print)``) wrote into a freed StringIO once the next statement swapped sys.stdout and
+#: dropped the last reference to it: a segfault in the job's thread (issue 52; tests/test_doc_blocks_threads.py)
+_STREAMS = []
+
 
 def python_blocks(page):
     """The ```python blocks of ``page`` (a path relative to the repository), as source strings."""
@@ -65,6 +71,7 @@ def run_blocks(page, namespace=None, only=None):
             # running the line once per statement ran a(); b() twice (a queue.get() then waited forever)
             src = ast.get_source_segment(block, stmt)
             buf = io.StringIO()
+            _STREAMS.append(buf)
             t0 = time.perf_counter()
             with contextlib.redirect_stdout(buf):
                 exec(compile(src, f"<{page}>", "exec"), ns)

@@ -47,19 +47,22 @@ class Content:
         return self.partner_k if self.partner_k > 1 else max(self.k, 2)
 
 
-def content_of(Q, r, n=_LABELS.label_harmonics):
-    """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None."""
+def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None):
+    """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None.
+    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q)."""
     if Q is None:
         return Content()
-    label, k, fraction, amps = harmonic_label(Q, n)
-    return Content(k, fraction, partner_harmonic(Q, r, n)[0], fundamental_share(amps), amps)
+    c = fourier_coefficients(Q, n) if coefficients is None else coefficients
+    label, k, fraction, amps = harmonic_label(Q, n, c)
+    return Content(k, fraction, partner_harmonic(Q, r, n, c)[0], fundamental_share(amps), amps)
 
 
-def harmonic_label(Q, n=_LABELS.label_harmonics):
-    """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof)."""
+def harmonic_label(Q, n=_LABELS.label_harmonics, c=None):
+    """(label, k, fraction, amplitudes) of a periodic modal orbit Q (samples, n_dof) (c: its Fourier coefficients,
+    when known)."""
     if Q is None:
         return "backbone", 1, 0.0, None
-    amps = np.linalg.norm(fourier_coefficients(Q, n), axis=1)
+    amps = np.linalg.norm(fourier_coefficients(Q, n) if c is None else c, axis=1)
     tot = float(np.sum(amps[1:]))
     if not tot > 0:
         return "backbone", 1, 0.0, amps
@@ -70,12 +73,13 @@ def harmonic_label(Q, n=_LABELS.label_harmonics):
     return "backbone", k, float(fr[k]), amps
 
 
-def partner_harmonic(Q, r, n=_LABELS.label_harmonics):
+def partner_harmonic(Q, r, n=_LABELS.label_harmonics, c=None):
     """The harmonic k >= 2 (and its fraction of the orbit's amplitude) that the modes other than the followed
-    one (0-based r) carry most: the order of the resonance a partner is in.  (1, 0) when there is none."""
+    one (0-based r) carry most: the order of the resonance a partner is in.  (1, 0) when there is none.  c: the
+    orbit's Fourier coefficients, when known (not changed)."""
     if Q is None or Q.shape[1] < 2:
         return 1, 0.0
-    c = fourier_coefficients(Q, n)
+    c = fourier_coefficients(Q, n) if c is None else np.array(c)
     tot = float(np.sum(np.linalg.norm(c, axis=1)[1:]))
     c[:, r] = 0.0
     amps = np.linalg.norm(c, axis=1)

@@ -12,13 +12,18 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ratio
 from ..backbone.content import content_of
-from ..results.branch import Point
+from ..backbone.settings import LabelSettings
+from ..results.point import ModalState, Point
 from ..results.stops import restoring_ratio
 from ..stability.floquet import is_stable, sort_multipliers
 from ..stability.settings import STABILITY
 
 __all__ = ["Candidate", "record_candidate"]
+
+#: the harmonics a point's content is measured on (content_of's default)
+LABEL_HARMONICS = LabelSettings().label_harmonics
 
 
 @dataclass
@@ -55,7 +60,6 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     _settle waits for them."""
     sys_ = system
     q0, vq0, T = prob.state(cp.u)
-    x0, v0 = sys_.to_physical(q0), sys_.to_physical(vq0)
     collision = job = None
     if floquet and later:     # started when the engine gave the point (EngineDriver.launch)
         job = getattr(cp, "spectrum", None) or prob.multipliers_later(cp.u, cp.tangent)
@@ -71,14 +75,21 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
         mu, stable = np.full(2 * model.n, np.nan, dtype=complex), True
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
-    content = content_of(Q, mode - 1)
-    energy = float(model.energy(x0, v0))
-    point = Point(energy=energy, frequency_hz=float(1.0 / T), period=float(T), x0=x0,
-                  v0=v0, floquet=mu, stable=stable, iterations=cp.iterations,
-                  coefficients=None if A is None else sys_.to_physical(A), label=content.label)
+    series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
+    content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
+                         if series else None)
+    if Q is None:
+        restoring = 1.0
+    else:
+        restoring = series_restoring_ratio(sys_, prob.basis, A, len(Q)) if series else restoring_ratio(sys_, Q)
+    # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
+    # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
+    point = Point(energy=sys_.energy(q0, vq0), frequency_hz=float(1.0 / T), period=float(T), x0=None, v0=None,
+                  floquet=mu, stable=stable, iterations=cp.iterations, label=content.label,
+                  modal=ModalState(sys_.Phi, q0, vq0, A))
     point.steps = int(getattr(prob, "spp", 0))
     point.fundamental_share = content.share
     cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
-                     restoring=restoring_ratio(sys_, Q) if Q is not None else 1.0, collision=collision,
+                     restoring=restoring, collision=collision,
                      spectrum=job)
     return cand, (q0, vq0, T)

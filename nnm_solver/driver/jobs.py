@@ -14,6 +14,7 @@ import threading
 import numpy as np
 
 from ..results.branch import Branch
+from ..threads import blas_limited
 from .api import iter_nnm
 from ..errors import NNMInputError
 
@@ -45,23 +46,27 @@ class Job:
     def _run(self):
         it = self._it
         try:
-            while not self._stop.is_set():
-                with self._lock:
-                    try:
-                        point = next(it)
-                    except StopIteration:
-                        break
-                self.queue.put(point)
-                if self._on_point is not None:
-                    self._on_point(point)
-            with self._lock:
-                it.cancel()
-                self._result = it.branch()
+            with blas_limited():        # one region for the whole run: the BLAS limit changes at its start and end
+                self._iterate(it)       # only, not around each point while other threads may be in BLAS
         except BaseException as exc:  # kept for the caller; the thread must not die loudly
             self.error = exc
         finally:
             self._done.set()
             self.queue.put(None)
+
+    def _iterate(self, it):
+        while not self._stop.is_set():
+            with self._lock:
+                try:
+                    point = next(it)
+                except StopIteration:
+                    break
+            self.queue.put(point)
+            if self._on_point is not None:
+                self._on_point(point)
+        with self._lock:
+            it.cancel()
+            self._result = it.branch()
 
     # ------------------------------------------------------------------ public
     @property
@@ -109,7 +114,7 @@ def start_branch(model, mode, energy_max, on_point=None, **kwargs):
     """Start the branch ``continue_nnm(model, mode, energy_max, **kwargs)`` in a background thread.
 
     Returns a Job at once.  on_point : optional callable(Point), called in the job's thread after each
-    converged point (as in continue_nnm).  Arguments are checked before the thread starts, so bad input
+    converged point (as in continue_nnm; the job's thread runs in one BLAS-limited region, threads.blas_limited).  Arguments are checked before the thread starts, so bad input
     raises NNMInputError here.  Use ``job.cancel()`` instead of continue_nnm's ``stop``.
     """
     if "stop" in kwargs:

@@ -33,6 +33,7 @@ the (s, s) Pade approximant of exp, R(z) = P(z) / P(-z), so a step rotates a mod
 from __future__ import annotations
 
 import math
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -121,7 +122,29 @@ class GaussConstants:
 
 def constants(system, h, s):
     """GaussConstants of a ModalSystem for the step h (s) and s stages."""
-    return GaussConstants(system.omega2, system.Bq, h, s)
+    return _constants(system.omega2, system.Bq, h, s)
+
+
+#: GaussConstants kept for reuse: a shooting iterate's residual, its Jacobian and its point's stability maps use one
+#: step h (1/3 to 1/2 of the constructions of a run on the aircraft; ~10 % of its time); the same objects are read
+#: only, so a reuse gives the same numbers bit for bit
+_RECENT = 4
+_recent = []                   # (omega2, Bq, h, s, GaussConstants), most recent first
+_recent_lock = threading.Lock()
+
+
+def _constants(omega2, Bq, h, s):
+    """GaussConstants(omega2, Bq, h, s), the same object for the same arrays (identity) and h of a recent call."""
+    h = float(h)
+    with _recent_lock:
+        for entry in _recent:
+            if entry[0] is omega2 and entry[1] is Bq and entry[2] == h and entry[3] == s:
+                return entry[4]
+    k = GaussConstants(omega2, Bq, h, s)
+    with _recent_lock:
+        _recent.insert(0, (omega2, Bq, h, s, k))
+        del _recent[_RECENT:]
+    return k
 
 
 @_jit
@@ -270,7 +293,7 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
     sq_h = dq_N/dh, sv_h = dv_N/dh (n,).
     """
     omega2, Bq, powers, coeffs, kinks = system_kernel
-    k = GaussConstants(omega2, Bq, h, s)
+    k = _constants(omega2, Bq, h, s)
     n = q0.shape[0]
     ncols = 2 * n if all_columns else n
     q, v, sq, sv, Dseq, ok = _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, k.C1, k.Cc, k.F,

@@ -44,6 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from .condensed_energy import condensed_energy, condensed_energy_gradient
 from .harmonic_balance import HBProblem
 from .hb_basis import harmonics_in
 from .hb_error import HBTruncationError
@@ -77,19 +78,29 @@ class LinearPart:
 
     def weights(self, Omega2, r, fundamental):
         """W[j, k] = 1 / (w_k^2 - Omega2_j) (N_b, m), zero for the followed mode r at the fundamental."""
-        with np.errstate(divide="ignore"):
-            W = 1.0 / (self.omega2[None, :] - Omega2[:, None])
+        den = self.omega2[None, :] - Omega2[:, None]
+        den[fundamental, r] = 1.0
+        if den.all():
+            W = 1.0 / den
+        else:                                      # an exact internal resonance: inf, as the equations' pole
+            with np.errstate(divide="ignore"):
+                W = 1.0 / den
         W[fundamental, r] = 0.0
         return W
 
+    def _weighted(self, V):
+        """Bq diag(V[j]) Bq^T (N_b, n_s, n_s) for the rows of V (N_b, m)."""
+        return (self.Bq[None] * V[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
+
     def flexibility(self, W, Omega2):
         """G_j = Bq diag(W[j]) Bq^T + R0 + Omega2_j R1: (N_b, n_s, n_s) m/N."""
-        G = (self.Bq[None] * W[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
-        return G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
+        G = self._weighted(W)
+        return G if self.complete else G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
 
     def flexibility_slope(self, W, Omega2):
         """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
-        return (self.Bq[None] * (W * W)[:, None, :]) @ self.Bq.T + self.R1[None]
+        G = self._weighted(W * W)
+        return G if self.complete else G + self.R1[None]
 
 
 def coupled_galerkin(basis, elements, d):
@@ -144,6 +155,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_step = max_rel_step
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
+        self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -153,7 +165,7 @@ class CondensedHBProblem(HBTruncationError):
         """(D (N_b, n_s) m, a sqrt(kg) m, omega rad/s)."""
         return u[:-2].reshape(self.nb, self.ns), u[-2] / self.beta, u[-1] * self.w_r
 
-    energy_gradient = HBProblem.energy_gradient_fd       # dE/du by central differences (it needs only energy)
+    energy_gradient_fd = HBProblem.energy_gradient_fd    # dE/du by central differences (a check of energy_gradient)
 
     def with_basis(self, basis):
         """The same branch's condensed equations with another HBBasis (the same LinearPart and step limits)."""
@@ -259,16 +271,33 @@ class CondensedHBProblem(HBTruncationError):
     check_step = HBProblem.check_step
 
     # --------------------------------------------------------------- the eliminated amplitudes
-    def amplitudes(self, u):
-        """The modal Fourier coefficients A (N_b, m) of the orbit u in the LinearPart's modes (the
-        eliminated amplitudes recovered exactly), and the frequency omega (rad/s)."""
+    def amplitude_parts(self, u):
+        """(A, W, F, Omega2, d) of the orbit u: the modal Fourier coefficients A (N_b, m) in the LinearPart's modes
+        (the eliminated amplitudes recovered exactly), the weights W (N_b, m), the element force coefficients F
+        (N_b, n_d), Omega2 = (h_j omega)^2 and the sampled deformations d (N, n_d).  The last orbit's are kept (its
+        state, coefficients, orbit, energy and energy gradient all start from them): read-only arrays."""
+        key = u.tobytes() if isinstance(u, np.ndarray) else None
+        last = self._last_parts
+        if key is not None and last is not None and last[0] == key:
+            return last[1]
         D, a, w = self.unpack(u)
         Omega2 = self.h2 * w * w
         W = self.lin.weights(Omega2, self.r, self.fund)
-        F = self._forces(D)[1]
+        d, F = self._forces(D)
         A = -W * (F @ self.lin.Bq)
         A[self.cos1, self.r] = a
-        return A, w, F, Omega2
+        parts = (A, W, F, Omega2, d)
+        for x in parts:
+            x.setflags(write=False)
+        self._last_parts = (key, parts) if key is not None else last
+        return parts
+
+    def amplitudes(self, u):
+        """The modal Fourier coefficients A (N_b, m) of the orbit u in the LinearPart's modes (the
+        eliminated amplitudes recovered exactly, read-only), the frequency omega (rad/s), the element force
+        coefficients F (N_b, n_d) and Omega2 (N_b,) (rad/s)^2."""
+        A, W, F, Omega2, d = self.amplitude_parts(u)
+        return A, self.unpack(u)[2], F, Omega2
 
     def coefficients(self, u):
         """Fourier coefficients A (N_b, n) of the orbit u, modal (sqrt(kg) m), for a complete basis."""
@@ -288,20 +317,16 @@ class CondensedHBProblem(HBTruncationError):
 
     def energy(self, u):
         """Energy (J) of the orbit u: the modes' kinetic and linear potential energy at t = 0 plus the
-        element potentials (and the left-out modes' share through R0, R1 for a truncated basis)."""
-        A, w, F, Omega2 = self.amplitudes(u)
-        c0, s0 = self.basis.state_at_zero()
-        q0, v0 = c0 @ A, w * (s0 @ A)
-        E = 0.5 * v0 @ v0 + 0.5 * q0 @ (self.lin.omega2 * q0)
-        D = self.unpack(u)[0]
-        E += float(np.sum(self.sys.elements.potential(c0 @ D)))
-        if not self.lin.complete:
-            # left-out modes: q_k(0) = -sum_j c_j(0) b_k . F_j / (w_k^2 - Omega2_j) to first order in Omega2 / w_k^2
-            f0, f1 = c0 @ F, (c0 * Omega2) @ F
-            E += 0.5 * (f0 @ self.lin.R0 @ f0 + 2 * f0 @ self.lin.R1 @ f1)
-            g = w * (s0 @ F)
-            E += 0.5 * g @ self.lin.R1 @ g
-        return float(E)
+        element potentials (and the left-out modes' share through R0, R1 for a truncated basis;
+        condensed_energy.py)."""
+        return condensed_energy(self, u)
+
+    def galerkin_blocks(self, d):
+        return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
+
+    def energy_gradient(self, u):
+        """dE/du (J per unit of u) in closed form (condensed_energy.py)."""
+        return condensed_energy_gradient(self, u)
 
     def energy_spread(self, u):
         """max - min of the energy over one period (J), HBProblem.energy_spread of the reconstructed orbit (complete

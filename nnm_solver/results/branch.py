@@ -1,8 +1,6 @@
 """A computed NNM branch: one row per converged periodic orbit (a Point), plus tools to look at the orbits."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from ..errors import NNMInputError
@@ -11,6 +9,7 @@ from ..fourier import fourier_amplitudes
 from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
 from .multipliers import floquet_columns, multipliers_of
+from .point import Point, resolve_points
 from .settings import settings_from_dict
 from .stops import STOP_STATUSES
 from .tongues import TongueRecord
@@ -19,43 +18,6 @@ __all__ = ["Branch", "Point", "STATUSES"]
 
 #: why a branch stopped (stops.py documents each)
 STATUSES = STOP_STATUSES
-
-
-@dataclass
-class Point:
-    """One converged periodic orbit of a branch (a row of a Branch).
-
-    energy J; frequency_hz Hz; period s; x0, v0 (n,) initial state (m, m/s, t = 0 at the phase
-    condition); floquet (2n,) complex multipliers, largest modulus first (NaN if not computed);
-    stable bool; iterations: corrector iterations; coefficients: (N_b, n) Fourier coefficients (m)
-    for harmonic-balance points, else None; label: "backbone" or "tongue k:1" (tongue_skip.py);
-    freq_error: estimated relative error of frequency_hz from the discretisation (NaN: not estimated;
-    shooting: the time step, ShootingProblem.frequency_error; harmonic balance: the truncation of the harmonics,
-    orbits/hb_error.py); steps: time steps per period this point was computed with
-    (0: the branch settings' steps_per_period); fundamental_share: the fraction of the orbit's modal
-    amplitude in its fundamental harmonic (1: a single harmonic; NaN: not measured).  ``point["energy"]``
-    works too (first-release rows).
-    """
-
-    energy: float
-    frequency_hz: float
-    period: float
-    x0: np.ndarray
-    v0: np.ndarray
-    floquet: np.ndarray
-    stable: bool
-    iterations: int = 0
-    coefficients: np.ndarray | None = field(default=None, repr=False)
-    label: str = "backbone"
-    freq_error: float = float("nan")
-    steps: int = 0
-    fundamental_share: float = float("nan")
-
-    def __getitem__(self, key):
-        try:
-            return getattr(self, key)
-        except AttributeError:
-            raise KeyError(key) from None
 
 
 class Branch:
@@ -130,6 +92,7 @@ class Branch:
         points = list(points)
         if not points:
             return self
+        resolve_points(points)          # the physical states still held as modal ones, in one product
         n = self.model.n
 
         def col(key, shape=(), dtype=float):

@@ -79,8 +79,13 @@ class LoopDetector:
         self.skip = skip
         self.floor = floor
         self.mirror = mirror
-        self.Y = []
         self.pending = None
+        self._rows = _Rows()           # the points' y and, cached as they come, their segments (O(len y) a point)
+
+    @property
+    def Y(self):
+        """The points' scaled coordinates y so far (N, 2n + 2)."""
+        return self._rows.y()
 
     def add(self, q0, v0, w_r, T, T_r):
         """Record the next point; returns the index j of the earlier segment (j, j+1) that the
@@ -88,13 +93,13 @@ class LoopDetector:
         z = np.concatenate([q0, v0 / w_r])
         nz = max(np.linalg.norm(z), 1e-300)
         y = np.concatenate([z / nz, [T / T_r, np.log(nz)]])
-        move = y - self.Y[-1] if self.Y else None
+        move = y - self._rows.last() if len(self._rows) else None
         hit = self._near_segment(y, move)
         if hit is None and self.mirror and move is not None:
             flip = np.ones(len(y))
             flip[:-2] = -1.0
             hit = self._near_segment(y * flip, move * flip)
-        self.Y.append(y)
+        self._rows.append(y)
         if hit is None:
             self.pending = None
             return None
@@ -104,19 +109,15 @@ class LoopDetector:
         return None
 
     def _near_segment(self, y, move):
-        m = len(self.Y) - self.skip
+        rows = self._rows
+        m = len(rows) - self.skip
         if m < 3 or move is None:
             return None
-        Y = np.array(self.Y[:m])
-        ab = np.diff(Y, axis=0)                                   # segments j -> j+1
-        L = np.maximum(np.linalg.norm(ab, axis=1), 1e-300)
-        u = ab / L[:, None]
+        ab, L, u, ang = rows.segments(m - 1)                      # segments j -> j+1 of the first m points
         turn = np.zeros(len(ab))                                  # turn (rad) of the polyline at each end
-        cos = np.clip(np.einsum("ij,ij->i", u[1:], u[:-1]), -1.0, 1.0)
-        ang = np.arccos(cos)
         turn[1:] = np.maximum(turn[1:], ang)
         turn[:-1] = np.maximum(turn[:-1], ang)
-        a = Y[:-1]
+        a = rows.y()[:m - 1]
         t = np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300)
         inside = (t > 0.0) & (t < 1.0)
         t = np.clip(t, 0.0, 1.0)
@@ -124,7 +125,61 @@ class LoopDetector:
         same_way = u @ move >= 0.8 * max(np.linalg.norm(move), 1e-300)
         # the path travelled since the segment must be much longer than the segment: a lap, not a
         # continuation that merely crawls on from the segment's end
-        all_L = np.linalg.norm(np.diff(np.array(self.Y), axis=0), axis=1)
-        since = np.sum(all_L) - np.concatenate([[0.0], np.cumsum(all_L)])[1:m] + np.linalg.norm(y - self.Y[-1])
+        all_L = rows.lengths()
+        since = np.sum(all_L) - np.concatenate([[0.0], np.cumsum(all_L)])[1:m] + np.linalg.norm(y - rows.last())
         ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way & inside & (since > 3.0 * L))
         return int(ok[0]) if len(ok) else None
+
+
+class _Rows:
+    """The loop detector's points y (rows) in a growing buffer, and per segment j -> j+1 its vector ab, length L
+    (and L at least 1e-300, for the divisions), direction u and the turn angle between it and the segment before
+    (computed once, when the point comes in: the same numbers as from the whole array at once, row by row)."""
+
+    def __init__(self):
+        self._y = self._ab = self._L = self._Lc = self._u = self._ang = None
+        self._n = 0
+
+    def __len__(self):
+        return self._n
+
+    def y(self):
+        return self._y[:self._n] if self._n else np.zeros((0, 0))
+
+    def last(self):
+        return self._y[self._n - 1]
+
+    def lengths(self):
+        return self._L[:self._n - 1]
+
+    def segments(self, k):
+        """(ab, L, u, ang) of the first k segments (ang: the k - 1 angles between consecutive ones)."""
+        return self._ab[:k], self._Lc[:k], self._u[:k], self._ang[:k - 1]
+
+    def append(self, y):
+        n = self._n
+        if self._y is None or n == len(self._y):
+            self._grow(max(16, 2 * n), len(y))
+        self._y[n] = y
+        if n:
+            ab = np.diff(self._y[n - 1:n + 1], axis=0)
+            self._ab[n - 1] = ab[0]
+            L = np.linalg.norm(ab, axis=1)
+            self._L[n - 1] = L[0]
+            self._Lc[n - 1] = L = np.maximum(L, 1e-300)[0]
+            u = ab / np.array([L])[:, None]
+            self._u[n - 1] = u[0]
+            if n > 1:
+                cos = np.clip(np.einsum("ij,ij->i", u, self._u[n - 2:n - 1]), -1.0, 1.0)
+                self._ang[n - 2] = np.arccos(cos)[0]
+        self._n = n + 1
+
+    def _grow(self, size, dim):
+        def grown(old, shape):
+            new = np.zeros(shape)
+            if old is not None:
+                new[:len(old)] = old
+            return new
+        self._y = grown(self._y, (size, dim))
+        self._ab, self._u = grown(self._ab, (size, dim)), grown(self._u, (size, dim))
+        self._L, self._Lc, self._ang = grown(self._L, size), grown(self._Lc, size), grown(self._ang, size)

@@ -1,0 +1,118 @@
+"""Cost per converged point of condensed harmonic balance on the aircraft (issue 52: the lean per-point path).
+
+The case: ``continue_nnm(load_model("assets/paris.h5"), 20, 3.0, method="hb", condensed=True, harmonics=9)``
+(548 modes, 4 springs: 22 unknowns), at the defaults and with the cheapest honest option (``error_estimate=False``:
+no truncation estimate, freq_error NaN), each run in its own process (BLAS 1 thread), trees in turn, ``--repeats``
+times, after one warm-up run per process (compiled kernels, the skeleton's cache).  Printed: the median milliseconds
+per point of each tree and variant, wall and CPU time of the process (the CPU time is the steadier on a shared
+machine), with the load average before and after, the points and status; with
+``--sections`` the time per point of each part of the driver's work (this tree only: wall time inside each
+method, nested parts included in their callers).  Usage::
+
+    git archive e655183 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
+    python benchmarks/bench_per_point.py --before /tmp/base --repeats 5 --sections
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+VARIANTS = {"defaults": {}, "no estimate": {"error_estimate": False}}
+
+_CHILD = r"""
+import collections, json, sys, time
+kw, E, sections = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3] == "1"
+import nnm_solver as nnm
+from nnm_solver.threads import blas_limited
+acc = collections.Counter()
+if sections:
+    from nnm_solver.driver import iterator as it_, refinement as rf
+    from nnm_solver.continuation import engine_driver as ed
+    from nnm_solver.results import stops, branch as br
+    from nnm_solver.backbone import labels as lb
+    from nnm_solver.driver import candidate as cd
+    def wrap(obj, name, key):
+        f = getattr(obj, name)
+        def g(*a, **k):
+            t = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                acc[key] += time.perf_counter() - t
+        setattr(obj, name, g)
+    for obj, name, key in [(ed.EngineDriver, "next", "engine: predictor, corrector (continuation/)"),
+                           (it_.NNMIterator, "_record", "record the point (candidate.py)"),
+                           (rf.StepRefinement, "estimate", "truncation error estimate (hb_error.py)"),
+                           (it_.NNMIterator, "_decide", "label and policy (backbone/)"),
+                           (lb.FamilyLabels, "verdict", "  of which the skeleton's verdict"),
+                           (it_.NNMIterator, "_locate", "step check and events (stability/locator.py)"),
+                           (stops.LoopDetector, "add", "loop detector (stops.py)"),
+                           (br.Branch, "from_points", "the Branch (physical states, results/point.py)")]:
+        wrap(obj, name, key)
+model = nnm.load_model(sys.argv[4])
+with blas_limited():
+    nnm.continue_nnm(model, 20, E, **kw)                 # warm-up
+    acc.clear()
+    t, c = time.perf_counter(), time.process_time()
+    b = nnm.continue_nnm(model, 20, E, **kw)
+    dt, dc = time.perf_counter() - t, time.process_time() - c
+print(json.dumps(dict(seconds=dt, cpu=dc, points=len(b), status=b.status, sections={k: v for k, v in acc.items()},
+                 source=nnm.__file__)))
+"""
+
+
+def run(tree, kw, energy, sections):
+    env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    before = os.getloadavg()[0]
+    out = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(kw), str(energy), "1" if sections else "0",
+                          str(ROOT / "assets" / "paris.h5")], env=env, capture_output=True, text=True, check=True,
+                         cwd=tree)        # (the child's sys.path starts with its working directory)
+    res = json.loads(out.stdout.strip().splitlines()[-1])
+    if not Path(res["source"]).resolve().is_relative_to(Path(tree).resolve()):
+        raise RuntimeError(f"the run of {tree} imported {res['source']}")
+    res["load"] = (before, os.getloadavg()[0])
+    return res
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", help="another solver tree to run side by side (e.g. the commit before issue 52)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--energy-max", type=float, default=3.0)
+    ap.add_argument("--sections", action="store_true", help="time per point of each part of the work (this tree)")
+    args = ap.parse_args(argv)
+    trees = [("this tree", ROOT)] + ([("before", Path(args.before))] if args.before else [])
+    print(f"aircraft NNM 20 to {args.energy_max:g} J, condensed HB H = 9; load average at the start "
+          f"{tuple(round(x, 2) for x in os.getloadavg())}")
+    results = {}
+    for _ in range(args.repeats):
+        for vname, kw in VARIANTS.items():
+            for tname, tree in trees:
+                kw_all = dict(method="hb", condensed=True, harmonics=9, **kw)
+                results.setdefault((vname, tname), []).append(run(tree, kw_all, args.energy_max, False))
+    for (vname, tname), rs in results.items():
+        ms = statistics.median(1e3 * r["seconds"] / r["points"] for r in rs)
+        cpu = statistics.median(1e3 * r["cpu"] / r["points"] for r in rs)
+        loads = ", ".join(f"{a:.1f}->{b:.1f}" for a, b in (r["load"] for r in rs))
+        print(f"  {vname:12s} {tname:10s} {ms:7.2f} ms a point wall, {cpu:7.2f} ms CPU (medians of {len(rs)}; "
+              f"{rs[0]['points']} points, {rs[0]['status']}; load {loads})")
+    if args.sections:
+        for vname, kw in VARIANTS.items():
+            rs = [run(ROOT, dict(method="hb", condensed=True, harmonics=9, **kw), args.energy_max, True)
+                  for _ in range(args.repeats)]
+            N = rs[0]["points"]
+            print(f"\n  {vname}, this tree, per point (median of {len(rs)}; wall time in each part, "
+                  f"load {os.getloadavg()[0]:.1f}):")
+            print(f"    {'total':48s} {statistics.median(1e3 * r['seconds'] / N for r in rs):7.3f} ms")
+            for key in rs[0]["sections"]:
+                print(f"    {key:48s} {statistics.median(1e3 * r['sections'].get(key, 0) / N for r in rs):7.3f} ms")
+
+
+if __name__ == "__main__":
+    main()
