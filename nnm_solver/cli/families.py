@@ -10,10 +10,33 @@ from __future__ import annotations
 
 from ..errors import NNMInputError
 
-__all__ = ["SWITCHABLE", "tongue_lines", "switch_events", "switch_lines", "saved_branch", "compute_family"]
+__all__ = ["SWITCHABLE", "FAMILY_FLAGS", "unused_flags", "tongue_lines", "switch_events", "switch_lines",
+           "saved_branch", "compute_family"]
 
 #: events a family can be switched onto (driver/switching.py)
 SWITCHABLE = ("branch_point", "period_doubling")
+#: the options of a branch run that each family takes from the command line; the others are refused (they were
+#: silently ignored: --integrator gauss6 with --switch still gave newmark), with what the family uses instead
+FAMILY_FLAGS = {
+    "--tongue": (("--integrator", "--steps-per-period"),
+                 "the tongue is continued by shooting with its backbone's settings, of which --integrator and "
+                 "--steps-per-period can be changed"),
+    "--switch": ((), "the family is continued by shooting with its parent branch's integrator and steps per period "
+                     "(nnm.switch_branch)"),
+}
+
+
+def unused_flags(args):
+    """(the family's flag, the branch options given on the command line that it does not use, what it uses); the
+    list is empty when every option given is used.  --max-points, --tol and --energy-max go with both."""
+    from .defaults import solver_defaults
+
+    flag = "--tongue" if args.tongue is not None else "--switch"
+    given = {"--integrator": args.integrator, "--steps-per-period": args.steps_per_period, "--freq-tol": args.freq_tol,
+             "--method": args.method if args.method != solver_defaults()["method"] else None, "--harmonics": args.harmonics,
+             "--condensed": args.condensed or None, "--energy-min": args.energy_min, "--tongues": args.tongues}
+    used, why = FAMILY_FLAGS[flag]
+    return flag, [f for f, v in given.items() if v is not None and f not in used], why
 
 
 def tongues_of(branch):
