@@ -175,3 +175,20 @@ def test_the_accuracy_advice_names_the_options_that_apply():
     assert "--freq-tol" not in accuracy_line(coarse, "tongue")
     switch = accuracy_line(coarse, "switch")
     assert "parent" in switch and "--freq-tol" not in switch
+
+
+def test_the_tongue_and_switch_lists_give_the_command_with_the_file(backbone):
+    """The lists after a run name the file the branch was saved in (a command to copy, not 'nnm-solve ...');
+    --switch with the --energy-max it needs."""
+    from types import SimpleNamespace
+
+    from nnm_solver.cli.families import tongue_lines
+    from nnm_solver.results.tongues import TongueRecord
+
+    out, _, stdout = backbone
+    assert f"nnm-solve {out} --tongue 1 continues it" in stdout
+    assert f"nnm-solve {out} --switch 1 --energy-max E continues the family born there" in stdout
+    ended = SimpleNamespace(status="tongue", tongues=[TongueRecord(order=9, partner_mode=238, entry_energy=6.6,
+                                                                   entry_frequency_hz=31.5, entry_x0=(1.0, 0.0))])
+    assert "(not passed: the branch ends at its entry; nnm-solve 'my file.h5' --tongue 1 continues it)" in \
+        tongue_lines(ended, "my file.h5")[0]

@@ -65,7 +65,7 @@ def report_and_save(args, model, branch, out, what, title, dt):
     if off:
         print(f"  points off the backbone: {', '.join(off)} ({int(sum(str(x) != 'backbone' for x in branch.labels))} "
               f"of {len(branch)}; marked on the plot)")
-    for line in tongue_lines(branch) + switch_lines(branch):
+    for line in tongue_lines(branch, out) + switch_lines(branch, out):
         print(line)
     made_by = "tongue" if getattr(args, "tongue", None) is not None else \
         "switch" if getattr(args, "switch", None) is not None else "branch"
