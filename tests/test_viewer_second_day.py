@@ -372,3 +372,27 @@ def test_saves_at_once_write_one_after_the_other_and_say_so_at_once(server, demo
     assert seen and seen[0].startswith("**Saving**") and str(path) in seen[0]
     assert s.h_save_msg.content.startswith("**Saved:**")
     s.close()
+
+
+def test_a_harmonic_balance_job_that_raises_its_harmonics_streams_to_its_end(tmp_path):
+    """Found in the fresh-clone trial of issue 53: the Compute tab's condensed harmonic balance with tongues 'skip'
+    on the 2-DOF model to 1e4 J failed after 92 points ('solver job failed: all the input array dimensions ...
+    must match exactly ... size 4 ... size 5'): the accuracy target raised the harmonics 7 -> 9 mid-branch and
+    the next point's coefficients no longer fit the rows received.  Now the job runs to its end, and every row
+    streamed is the solver's own (the same as continue_nnm's branch, row for row)."""
+    from nnm_viewer.worker import JobRunner
+
+    from pathlib import Path
+
+    model = nnm.load_model(Path(__file__).resolve().parents[1] / "assets" / "two_dof.h5")
+    opts = dict(max_points=500, tongues="skip", method="hb", harmonics=7, condensed=True)
+    direct = nnm.continue_nnm(model, 1, 1e4, **opts)
+    assert direct.settings.harmonics > 7                      # the target raised them: the case of the finding
+    shared = SharedState(model)
+    runner = JobRunner(shared, 1, 1e4, poll=0.02, **opts)
+    runner.start()
+    assert runner.finished.wait(600)
+    e = runner.entry
+    assert e.source == "computed" and not shared.error, (e.source, shared.error)
+    assert len(e.branch) == len(direct) and e.branch.coefficients.shape == direct.coefficients.shape
+    np.testing.assert_allclose(e.branch.energy, direct.energy, rtol=1e-9)
