@@ -8,6 +8,7 @@ import threading
 import numpy as np
 
 from .layout import METHODS, SEE_COMPUTE_TAB
+from .examples import branch_output
 from .fep import energy_at, energy_to_s
 from .fep_view import sweep_key
 from .state import JobBusy, branch_label
@@ -243,6 +244,9 @@ class ComputeActions:
             raise ValueError("this branch is already in the file")
         name = branch_label(e.branch, e.k3_factor, source="file", model=self.model,
                             reference=self.shared.reference_names)
+        if self.shared.path is not None:         # said at once: writing a large model file takes seconds
+            self.layout.set(self.layout.h_save_msg, content=f"**Saving** {name}, {len(e)} points, to "
+                                                            f"{branch_output(self.shared.path)[0]} \u2026")
         target, reason = self.shared.save(e)
         return (f"saved {name}, {len(e)} points, to {target}"
                 + (f" ({reason}: it is left unchanged; open the new file with nnm-view {target})" if reason else ""))

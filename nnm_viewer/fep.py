@@ -14,26 +14,31 @@ import numpy as np
 STABLE_RGB = (40, 100, 220)
 UNSTABLE_RGB = (225, 70, 40)
 MARKER_RGB = (255, 200, 0)
-#: colours of the first branches (no red: failures, branch points; no grey: the file's branches
-#: behind a scaled FEP); the next ones get golden-angle hues (branch_color), never a repeat
-BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2", "#bcbd22"]
+#: colours of the first branches (no red: failures, branch points; no orange: the points off the backbone,
+#: OFF_BACKBONE_COLOR; no yellow: the picked orbit; no grey: the file's branches behind a scaled FEP); the next
+#: ones get golden-angle hues outside that red-orange-yellow band (branch_color), never a repeat
+BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#393b79", "#17becf", "#8c564b", "#e377c2", "#bcbd22"]
+#: the hues (0..1) the golden-angle colours keep to: red (0), orange (0.08) and yellow (0.14) mean something else
+BRANCH_HUES = (0.22, 0.92)
 #: how much of white an unstable point's colour is mixed with on the 3D board
 UNSTABLE_PALE = 0.6
 #: events (Branch.events) by kind: legend text
 EVENT_LABELS = {"fold": "fold (energy turns back)", "branch_point": "branch point (multiplier +1)",
                 "period_doubling": "period doubling (multiplier -1)", "torus": "torus (complex multipliers)"}
 #: how a branch ended (Branch.status), marked at its last point: (marker, colour, legend text)
-END_MARKERS = {"failed": ("X", "#d62728", "end: solver failed"), "escape": ("X", "#ff7f0e", "end: escape"),
+END_MARKERS = {"failed": ("X", "#d62728", "end: solver failed"), "escape": ("X", "#e7298a", "end: escape"),
                "closed_loop": ("P", "#9467bd", "end: closed loop"), "tongue": ("X", "#8c564b", "end: inside a tongue")}
 
 
 def branch_color(k):
     """Colour (hex) of the branch at position k (0-based) of the list: BRANCH_COLORS, then hues
-    spaced by the golden angle (distinct for every k)."""
+    spaced by the golden angle within BRANCH_HUES (distinct for every k; never the orange of the points off the
+    backbone, the red of failures or the yellow of the picked orbit)."""
     if k < len(BRANCH_COLORS):
         return BRANCH_COLORS[k]
     j = k - len(BRANCH_COLORS)
-    h = (0.05 + 0.6180339887498949 * j) % 1.0
+    lo, hi = BRANCH_HUES
+    h = lo + (hi - lo) * ((0.05 + 0.6180339887498949 * j) % 1.0)
     sat, val = ((0.8, 0.7), (0.55, 0.85), (0.9, 0.5))[j % 3]
     return "#{:02x}{:02x}{:02x}".format(*(int(round(255 * c)) for c in colorsys.hsv_to_rgb(h, sat, val)))
 

@@ -153,7 +153,8 @@ class SharedState:
     a listener that raises is logged and the others still run.
 
     Locks, always taken in this order (never the reverse): a tab's draw lock (drawing.py), the tab's
-    ``Session.lock``, then ``SharedState.lock``.  ``job`` is claimed atomically (``claim_job``): of two
+    ``Session.lock``, then ``SharedState.lock``; ``SharedState.save_lock`` (a branch being written to the file) is
+    taken with none of them held, before ``SharedState.lock``.  ``job`` is claimed atomically (``claim_job``): of two
     tabs pressing Start at once, one starts the job and the other is told one is running.
     """
 
@@ -164,6 +165,10 @@ class SharedState:
         #: changed: read without the lock
         self.measured = measured
         self.lock = threading.RLock()
+        #: held while a branch is written to the file: Saves at once (a second click while a large file is being
+        #: written, or two tabs) write one after the other, each appending to what the other wrote, and a branch
+        #: already written is refused (a lost or a doubled branch otherwise)
+        self.save_lock = threading.Lock()
         #: set once the solver's compiled kernels are ready (app.py warms them in the background);
         #: until then the sessions draw everything but the orbits
         self.solver_ready = threading.Event()
@@ -320,9 +325,14 @@ class SharedState:
                     "that maps it back to the file's springs holds for cubic springs only, so it cannot be saved "
                     "into this file (download its FEP as CSV instead)")
             branch = branch.scaled(1.0 / entry.k3_factor)
-        target, reason = branch_output(self.path)
-        nnm_solver.save_branch(target, branch)
-        with self.lock:
-            entry.saved = True
-        self.update(entry, source="saved")
+        with self.save_lock:
+            with self.lock:
+                if entry.saved:
+                    raise nnm_solver.NNMInputError("this branch is already in the file")
+            target, reason = branch_output(self.path)
+            nnm_solver.save_branch(target, branch)
+            with self.lock:
+                entry.saved = True
+            self.update(entry, source="saved", notify=False)
+        self.notify("branches")                  # outside save_lock: listeners take the tabs' locks
         return target, reason

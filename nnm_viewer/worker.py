@@ -100,7 +100,8 @@ class JobRunner:
     and streams points into a new entry of ``shared``.
 
     The job puts each converged ``Point`` in ``job.queue`` (then None once it has ended); the
-    runner drains the queue into its own Branch (``Branch.extend``) and gives the entry a
+    runner drains the queue into its own Branch (``Branch.extend``; ``_extend``: a harmonic-balance job's raised
+    harmonics) and gives the entry a
     snapshot of the rows so far (``subset``: views of the columns, no copy; ``extend`` replaces
     the columns, so the draw threads never see a half-extended branch).  At the end the entry
     gets ``job.result()``, the final Branch with its status, message and events.
@@ -194,6 +195,24 @@ class JobRunner:
             return f"{head}: {p.points} points in {duration_text(p.elapsed)}{rate}, {ended}"
         return f"{head}  \n{p.text()}"
 
+    def _extend(self, points):
+        """Append ``points`` to the rows received so far.  A harmonic-balance job that raises its harmonics (its
+        accuracy target) sends its next points with more Fourier coefficients than the earlier ones, and
+        re-expresses its own earlier points in the larger basis (their higher harmonics zero); ``Branch.extend``
+        cannot join the two (the job failed with 'all the input array dimensions ... must match'): the rows are then
+        the job's own snapshot (``job.points()``, the same orbits in one basis), as many as were received."""
+        shapes = {None if p.coefficients is None else p.coefficients.shape for p in points}
+        if self.branch.coefficients is not None and len(self.branch):
+            shapes.add(self.branch.coefficients.shape[1:])
+        if len(shapes) == 1:
+            self.branch.extend(points)
+            return
+        received = len(self.branch) + len(points)
+        snap = self.job.points()               # the job's points are in its newest basis
+        if len(snap) < received:
+            raise RuntimeError(f"the job's snapshot has {len(snap)} points, {received} were received")
+        self.branch = snap.subset(slice(0, received))
+
     def _snapshot(self):
         """The rows received so far, as a Branch of its own (no copy of the columns)."""
         return self.branch.subset(slice(None))
@@ -216,7 +235,7 @@ class JobRunner:
             while not ended:
                 points, ended = self._drain()
                 if points:
-                    self.branch.extend(points)
+                    self._extend(points)
                     self._arrivals.extend([time.monotonic() - self.t_start] * len(points))
                     self.shared.update(self.entry, branch=self._snapshot())
                 p = self.progress()

@@ -146,3 +146,49 @@ def test_tongue_lines_say_what_the_branch_did_at_each_tongue():
     assert "(not passed: the branch ends at its entry;" in lines[1]
     followed = SimpleNamespace(status="done", tongues=[record(False)])
     assert "(followed through;" in tongue_lines(followed)[0]
+
+
+def test_a_family_refuses_the_options_it_does_not_use(tmp_path):
+    """Found in the fresh-clone trial of issue 53: `--switch 1 --integrator gauss6 --steps-per-period 100` ran with
+    newmark at 200 steps (the parent's), the options silently dropped, and its accuracy line then advised exactly
+    those options.  Now an option a family does not use is one line (exit 2) before anything is computed or
+    written, and the advice names what the family takes."""
+    cases = ((("--switch", 1, "--energy-max", 10, "--integrator", "gauss6", "--steps-per-period", 100),
+              "--integrator, --steps-per-period: not used by --switch K"),
+             (("--switch", 1, "--energy-max", 10, "--freq-tol", 1e-6), "--freq-tol: not used by --switch K"),
+             (("--tongue", 1, "--method", "hb"), "--method: not used by --tongue K"),
+             (("--tongue", 1, "--tongues", "skip", "--freq-tol", 1e-6), "--freq-tol, --tongues: not used by --tongue"))
+    for args, words in cases:
+        out = tmp_path / "never.h5"
+        r = run(TWO_DOF, *args, "--out", out)
+        assert r.returncode == 2 and words in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
+        assert not out.exists()
+
+
+def test_the_accuracy_advice_names_the_options_that_apply():
+    from nnm_solver.cli.report import ACCURACY_ADVICE, accuracy_line
+
+    model = nnm.load_model(TWO_DOF)
+    coarse = nnm.continue_nnm(model, 1, 0.01, max_points=3, integrator="newmark", steps_per_period=16, freq_tol=None)
+    assert np.nanmax(coarse.freq_error) > 1e-4                     # newmark at 16 steps: about 1 % off
+    assert accuracy_line(coarse).endswith(f"({ACCURACY_ADVICE['branch']})")
+    assert "--freq-tol" not in accuracy_line(coarse, "tongue")
+    switch = accuracy_line(coarse, "switch")
+    assert "parent" in switch and "--freq-tol" not in switch
+
+
+def test_the_tongue_and_switch_lists_give_the_command_with_the_file(backbone):
+    """The lists after a run name the file the branch was saved in (a command to copy, not 'nnm-solve ...');
+    --switch with the --energy-max it needs."""
+    from types import SimpleNamespace
+
+    from nnm_solver.cli.families import tongue_lines
+    from nnm_solver.results.tongues import TongueRecord
+
+    out, _, stdout = backbone
+    assert f"nnm-solve {out} --tongue 1 continues it" in stdout
+    assert f"nnm-solve {out} --switch 1 --energy-max E continues the family born there" in stdout
+    ended = SimpleNamespace(status="tongue", tongues=[TongueRecord(order=9, partner_mode=238, entry_energy=6.6,
+                                                                   entry_frequency_hz=31.5, entry_x0=(1.0, 0.0))])
+    assert "(not passed: the branch ends at its entry; nnm-solve 'my file.h5' --tongue 1 continues it)" in \
+        tongue_lines(ended, "my file.h5")[0]

@@ -8,12 +8,38 @@ else the last branch of ``--mode N`` that has what is asked for.
 """
 from __future__ import annotations
 
+import shlex
+
 from ..errors import NNMInputError
 
-__all__ = ["SWITCHABLE", "tongue_lines", "switch_events", "switch_lines", "saved_branch", "compute_family"]
+__all__ = ["SWITCHABLE", "FAMILY_FLAGS", "unused_flags", "tongue_lines", "switch_events", "switch_lines",
+           "saved_branch", "compute_family"]
 
 #: events a family can be switched onto (driver/switching.py)
 SWITCHABLE = ("branch_point", "period_doubling")
+#: the options of a branch run that each family takes from the command line; the others are refused (they were
+#: silently ignored: --integrator gauss6 with --switch still gave newmark), with what the family uses instead
+FAMILY_FLAGS = {
+    "--tongue": (("--integrator", "--steps-per-period"),
+                 "the tongue is continued by shooting with its backbone's settings, of which --integrator and "
+                 "--steps-per-period can be changed"),
+    "--switch": ((), "the family is continued by shooting with its parent branch's integrator and steps per period "
+                     "(nnm.switch_branch)"),
+}
+
+
+def unused_flags(args):
+    """(the family's flag, the branch options given on the command line that it does not use, what it uses); the
+    list is empty when every option given is used.  --max-points, --tol and --energy-max go with both."""
+    from .defaults import solver_defaults
+
+    flag = "--tongue" if args.tongue is not None else "--switch"
+    given = {"--integrator": args.integrator, "--steps-per-period": args.steps_per_period, "--freq-tol": args.freq_tol,
+             "--method": args.method if args.method != solver_defaults()["method"] else None,
+             "--harmonics": args.harmonics, "--condensed": args.condensed or None, "--energy-min": args.energy_min,
+             "--tongues": args.tongues}
+    used, why = FAMILY_FLAGS[flag]
+    return flag, [f for f, v in given.items() if v is not None and f not in used], why
 
 
 def tongues_of(branch):
@@ -21,16 +47,18 @@ def tongues_of(branch):
     return [t for t in getattr(branch, "tongues", None) or [] if not t.get("family_end") and "entry_x0" in t]
 
 
-def tongue_lines(branch):
-    """One line per tongue of ``branch`` that --tongue K continues, numbered from 1; [] if none."""
+def tongue_lines(branch, out=None):
+    """One line per tongue of ``branch`` that --tongue K continues, numbered from 1, with the command that does
+    (``out``: the file the branch is saved in); [] if none."""
+    where = shlex.quote(str(out)) if out is not None else "..."
     lines = []
     listed = tongues_of(branch)
     for k, t in enumerate(listed, 1):
         partner = f" with mode {t['partner_mode']}" if t.get("partner_mode") else ""
         how = _how(branch, t, last=k == len(listed))
-        out = f", back on the backbone at {t['exit_energy']:.4g} J" if "exit_energy" in t else ""
+        back = f", back on the backbone at {t['exit_energy']:.4g} J" if "exit_energy" in t else ""
         lines.append(f"  tongue {k}: {t.get('label', 'tongue')}{partner}, entered at E = {t['entry_energy']:.4g} J, "
-                     f"f = {t['entry_frequency_hz']:.5f} Hz ({how}{out}; nnm-solve ... --tongue {k} continues it)")
+                     f"f = {t['entry_frequency_hz']:.5f} Hz ({how}{back}; nnm-solve {where} --tongue {k} continues it)")
     return lines
 
 
@@ -49,10 +77,13 @@ def switch_events(branch):
     return [e for e in branch.events if e.get("kind") in SWITCHABLE and "x0" in e]
 
 
-def switch_lines(branch):
-    """One line per event --switch K starts from, numbered from 1; [] if none."""
+def switch_lines(branch, out=None):
+    """One line per event --switch K starts from, numbered from 1, with the command that does (``out``: the file
+    the branch is saved in); [] if none."""
+    where = shlex.quote(str(out)) if out is not None else "..."
     return [f"  switch {k}: {e['kind'].replace('_', ' ')} near point {int(e['index']) + 1}, E = {e['energy']:.4g} J, "
-            f"f = {e['frequency_hz']:.5f} Hz (nnm-solve ... --switch {k} continues the family born there)"
+            f"f = {e['frequency_hz']:.5f} Hz (nnm-solve {where} --switch {k} --energy-max E continues the family "
+            f"born there)"
             for k, e in enumerate(switch_events(branch), 1)]
 
 

@@ -6,11 +6,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["accuracy_line", "report_and_save"]
+__all__ = ["ACCURACY_ADVICE", "accuracy_line", "report_and_save"]
 
 
-def accuracy_line(branch):
-    """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator."""
+#: what to change when a shooting branch's error exceeds 1e-4, by what computed it (the options it takes)
+ACCURACY_ADVICE = {"branch": "raise --steps-per-period, or use --integrator gauss6 or --freq-tol",
+                   "tongue": "raise --steps-per-period, or use --integrator gauss6",
+                   "switch": "the family takes its parent branch's time steps: recompute the parent with more "
+                             "--steps-per-period or --integrator gauss6"}
+
+
+def accuracy_line(branch, made_by="branch"):
+    """One line on the branch's estimated frequency errors (branch.freq_error) and its integrator; ``made_by``
+    ('branch', 'tongue' for --tongue K, 'switch' for --switch K) chooses the advice (ACCURACY_ADVICE)."""
     s = branch.settings
     err = np.asarray(getattr(branch, "freq_error", []), dtype=float)
     if np.isnan(err).all():
@@ -33,7 +41,7 @@ def accuracy_line(branch):
         return "  accuracy: no per-point error estimate"
     i = int(np.flatnonzero(ok)[np.argmax(err[ok])])
     steps = sorted({int(x) for x in getattr(branch, "steps", []) if x}) or [s.steps_per_period]
-    more = " (raise --steps-per-period, or use --integrator gauss6 or --freq-tol)" if err[i] > 1e-4 else ""
+    more = f" ({ACCURACY_ADVICE[made_by]})" if err[i] > 1e-4 else ""
     return (f"  accuracy: {s.integrator}, {'/'.join(map(str, steps))} steps per period; estimated frequency error "
             f"median {np.median(err[ok]):.1e}, max {err[i]:.1e} at point {i + 1} (E = {branch.energy[i]:.4g} J){more}")
 
@@ -57,9 +65,11 @@ def report_and_save(args, model, branch, out, what, title, dt):
     if off:
         print(f"  points off the backbone: {', '.join(off)} ({int(sum(str(x) != 'backbone' for x in branch.labels))} "
               f"of {len(branch)}; marked on the plot)")
-    for line in tongue_lines(branch) + switch_lines(branch):
+    for line in tongue_lines(branch, out) + switch_lines(branch, out):
         print(line)
-    print(accuracy_line(branch))
+    made_by = "tongue" if getattr(args, "tongue", None) is not None else \
+        "switch" if getattr(args, "switch", None) is not None else "branch"
+    print(accuracy_line(branch, made_by))
     if len(branch):
         name = save_branch(out, branch)
         print(f"saved as /branches/{name} in {out}")

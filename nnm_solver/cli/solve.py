@@ -262,10 +262,14 @@ def _run_family(args):
     """nnm-solve FILE --tongue K / --switch K: a family started on a saved branch of FILE (families.py)."""
     from . import exchange as cli_exchange
     from ..files.branch_io import check_branch_file
-    from .families import compute_family
+    from .families import compute_family, unused_flags
 
     if args.list_modes:
         raise NNMInputError("--list-modes does not go with --tongue / --switch")
+    flag, unused, why = unused_flags(args)
+    if unused:
+        them = "it" if len(unused) == 1 else "them"
+        raise NNMInputError(f"{', '.join(unused)}: not used by {flag} K ({why}); leave {them} out")
     model, _ = _load(args.file)
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
         raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
