@@ -16,7 +16,7 @@ from ..fourier import fourier_coefficients
 from .settings import LabelSettings
 
 __all__ = ["Content", "content_of", "harmonic_label", "partner_harmonic", "fundamental_share", "partner_mode",
-           "is_fold"]
+           "is_fold", "grown_harmonic"]
 
 _LABELS = LabelSettings()
 
@@ -25,13 +25,16 @@ _LABELS = LabelSettings()
 class Content:
     """The harmonic content of a modal orbit: k (strongest harmonic >= 2), fraction (its share of the orbit's
     amplitude), partner_k (the harmonic >= 2 the other modes carry most: the order of a partner's resonance),
-    share (the fundamental's share), amplitudes (per harmonic, or None when unknown)."""
+    share (the fundamental's share), amplitudes (per harmonic, or None when unknown), partners ((harmonics + 1,
+    modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed mode's column zero; None
+    when unknown: ``grown_harmonic``)."""
 
     k: int = 1
     fraction: float = 0.0
     partner_k: int = 1
     share: float = 1.0
     amplitudes: np.ndarray | None = None
+    partners: np.ndarray | None = None
 
     @property
     def label(self):
@@ -52,7 +55,38 @@ def content_of(Q, r, n=_LABELS.label_harmonics):
     if Q is None:
         return Content()
     label, k, fraction, amps = harmonic_label(Q, n)
-    return Content(k, fraction, partner_harmonic(Q, r, n)[0], fundamental_share(amps), amps)
+    c = np.abs(fourier_coefficients(Q, n))
+    c[:, r] = 0.0
+    tot = float(np.sum(amps[1:]))
+    return Content(k, fraction, partner_harmonic(Q, r, n)[0], fundamental_share(amps), amps,
+                   c / tot if tot > 0 else None)
+
+
+def grown_harmonic(content, reference, harmonics, floor=_LABELS.growth_floor):
+    """(k, j): the harmonic k >= 2 and mode j (0-based) of the other modes that grew most from ``reference`` (the
+    Content of the backbone family's orbit at the same energy, which resolves harmonics up to ``harmonics``) to
+    ``content``: the resonance a point off the family is in.  Each share a of the orbit is scored by
+    a ln(a / (a_ref + floor x the largest share)): large and risen.  A harmonic the other modes carry on the family as
+    much (a clamped beam's mode 3 carries NNM 1's third harmonic, forced by the cubic coupling, everywhere) does not
+    name the tongue, the one that rose does: that beam's 9:1 with mode 5 at 7.15 J (mode 5's 9th harmonic 1.5e-3 of
+    the orbit on the family, 2.5e-3 at the tongue's first point; mode 3's third 1.9e-2 in both) and its 7:1 with
+    mode 5 at 38 J (7th: 1.8e-2 -> 2.6e-2).  None (no score above 0) where none rose: next to a tongue the family's
+    own orbit can carry more of the resonant harmonic than the point (the soft 2-DOF chain's 3:1 at 0.068 J: 0.10
+    against 0.07), and the strongest partner harmonic (content.order) names it.  None too when either table is
+    unknown or they do not match (another modal basis).  Harmonics above ``harmonics`` are not compared."""
+    a = None if content is None else content.partners
+    b = None if reference is None else reference.partners
+    top_k = min(int(harmonics), a.shape[0] - 1, b.shape[0] - 1) if a is not None and b is not None else 0
+    if top_k < 2 or a.shape[1] != b.shape[1]:
+        return None
+    a, b = a[2:top_k + 1], b[2:top_k + 1]
+    top = float(a.max())
+    if not top > 0:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        score = np.where(a > 0, a * np.log(a / (b + floor * top)), 0.0)
+    k, j = np.unravel_index(int(np.argmax(score)), score.shape)
+    return (int(k) + 2, int(j)) if score[k, j] > 0 else None
 
 
 def harmonic_label(Q, n=_LABELS.label_harmonics):

@@ -136,6 +136,8 @@ class LabelSettings:
         k >= 2 is a fold of the family, not a k:1 tongue).
     peak_content : a departure near the family's energy maximum with less than this fraction in any harmonic
         k >= 2 has no partner harmonic: the fold of the family itself.
+    growth_floor : a point off the family is in the tongue of the partner harmonic that rose most from the family's
+        orbit at its energy (content.grown_harmonic); shares are compared above this fraction of the point's largest.
     """
 
     on_family: float = 1e-4
@@ -147,6 +149,7 @@ class LabelSettings:
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3
+    growth_floor: float = 1e-3
 
 
 @dataclass(frozen=True)
