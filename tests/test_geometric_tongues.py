@@ -9,7 +9,6 @@ from scipy.integrate import solve_ivp
 
 import nnm_solver as nnm
 import nnm_fem
-from nnm_solver.backbone.content import Content, grown_harmonic
 
 L, H, B, E, RHO = 1.0, 0.01, 0.02, 70e9, 2700.0
 
@@ -32,23 +31,22 @@ def averaged_frequencies(model, x):
     return np.sqrt(w2) / (2 * np.pi)
 
 
-def _content(table):
-    t = np.zeros((6, 3))
-    for (k, j), v in table.items():
-        t[k, j] = v
-    return Content(partners=t)
-
-
-def test_grown_harmonic_names_the_harmonic_that_rose():
-    # the third harmonic of mode 2 is as large on the family (forced), the fifth of mode 3 rose: 5:1 with mode 3
-    point = _content({(3, 1): 2e-2, (5, 2): 3e-3})
-    family = _content({(3, 1): 2e-2, (5, 2): 1e-3})
-    assert grown_harmonic(point, family, 5) == (5, 2)
-    # nothing rose (the family carries more of it next to the tongue): no claim, the strongest harmonic decides
-    assert grown_harmonic(_content({(3, 1): 7e-2}), _content({(3, 1): 1e-1}), 5) is None
-    # harmonics beyond the family's truncation are not compared; other bases are not compared
-    assert grown_harmonic(_content({(5, 2): 3e-3, (3, 1): 1e-3}), _content({(3, 1): 1e-3}), 3) is None
-    assert grown_harmonic(point, Content(partners=np.zeros((6, 4))), 5) is None
+def test_tongue_partner_names_the_harmonic_at_the_partners_frequency():
+    """Mode 2 carries harmonics 3 (the larger share: forced) and 5 of an orbit at f = f2 / 5: the 5:1 is named; at
+    f = f2 / 3 the 3:1; at f = f2 / 4 (no harmonic there within 8 %) none."""
+    from nnm_solver.backbone.content import content_of, tongue_partner
+    from nnm_solver.model.modal import modal_system
+    model = nnm.Model(np.eye(2), np.diag([1.0, 30.0]), springs=[nnm.CubicSpring(dof=0, k3=1e-12)])
+    system = modal_system(model)
+    f2 = np.sqrt(30.0) / (2 * np.pi)
+    t = np.arange(64) / 64
+    Q = np.column_stack([np.cos(2 * np.pi * t), 0.02 * np.cos(6 * np.pi * t) + 0.005 * np.cos(10 * np.pi * t)])
+    c = content_of(Q, 0)
+    assert c.order == 3                                             # the largest partner harmonic
+    assert tongue_partner(c, f2 / 5, system) == (5, 1)
+    assert tongue_partner(c, f2 / 3, system) == (3, 1)
+    assert tongue_partner(c, f2 / 4, system) is None
+    assert tongue_partner(c, f2 / 5, modal_system(nnm.Model(np.eye(3), np.eye(3), springs=[]))) is None
 
 
 def test_clamped_rom_tongues_are_named_by_their_resonance():

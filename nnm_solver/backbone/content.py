@@ -7,7 +7,7 @@ label of points where no skeleton says more (labels.py).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -16,7 +16,7 @@ from ..fourier import fourier_coefficients
 from .settings import LabelSettings
 
 __all__ = ["Content", "content_of", "harmonic_label", "partner_harmonic", "fundamental_share", "partner_mode",
-           "is_fold", "grown_harmonic"]
+           "is_fold", "tongue_partner"]
 
 _LABELS = LabelSettings()
 
@@ -27,14 +27,15 @@ class Content:
     amplitude), partner_k (the harmonic >= 2 the other modes carry most: the order of a partner's resonance),
     share (the fundamental's share), amplitudes (per harmonic, or None when unknown), partners ((harmonics + 1,
     modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed mode's column zero; None
-    when unknown: ``grown_harmonic``)."""
+    when unknown), orbit (the modal orbit's samples (S, modes), or None: ``tongue_partner``)."""
 
     k: int = 1
     fraction: float = 0.0
     partner_k: int = 1
     share: float = 1.0
     amplitudes: np.ndarray | None = None
-    partners: np.ndarray | None = None
+    partners: np.ndarray | None = field(default=None, repr=False)
+    orbit: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def label(self):
@@ -59,34 +60,46 @@ def content_of(Q, r, n=_LABELS.label_harmonics):
     c[:, r] = 0.0
     tot = float(np.sum(amps[1:]))
     return Content(k, fraction, partner_harmonic(Q, r, n)[0], fundamental_share(amps), amps,
-                   c / tot if tot > 0 else None)
+                   c / tot if tot > 0 else None, np.asarray(Q, dtype=float))
 
 
-def grown_harmonic(content, reference, harmonics, floor=_LABELS.growth_floor):
-    """(k, j): the harmonic k >= 2 and mode j (0-based) of the other modes that grew most from ``reference`` (the
-    Content of the backbone family's orbit at the same energy, which resolves harmonics up to ``harmonics``) to
-    ``content``: the resonance a point off the family is in.  Each share a of the orbit is scored by
-    a ln(a / (a_ref + floor x the largest share)): large and risen.  A harmonic the other modes carry on the family as
-    much (a clamped beam's mode 3 carries NNM 1's third harmonic, forced by the cubic coupling, everywhere) does not
-    name the tongue, the one that rose does: that beam's 9:1 with mode 5 at 7.15 J (mode 5's 9th harmonic 1.5e-3 of
-    the orbit on the family, 2.5e-3 at the tongue's first point; mode 3's third 1.9e-2 in both) and its 7:1 with
-    mode 5 at 38 J (7th: 1.8e-2 -> 2.6e-2).  None (no score above 0) where none rose: next to a tongue the family's
-    own orbit can carry more of the resonant harmonic than the point (the soft 2-DOF chain's 3:1 at 0.068 J: 0.10
-    against 0.07), and the strongest partner harmonic (content.order) names it.  None too when either table is
-    unknown or they do not match (another modal basis).  Harmonics above ``harmonics`` are not compared."""
-    a = None if content is None else content.partners
-    b = None if reference is None else reference.partners
-    top_k = min(int(harmonics), a.shape[0] - 1, b.shape[0] - 1) if a is not None and b is not None else 0
-    if top_k < 2 or a.shape[1] != b.shape[1]:
+def tongue_partner(content, frequency_hz, system, share=_LABELS.partner_share, mismatch=_LABELS.partner_mismatch):
+    """(k, j): the harmonic k >= 2 and mode j (0-based) of the k:1 resonance a point off the family is in, from its
+    Content (its orbit and partner shares), its frequency (Hz) and the ModalSystem of its orbit's modal coordinates.
+
+    A k:1 internal resonance is where k f meets a partner's frequency, which the orbit itself raises (a beam's membrane
+    tension): each partner mode j holding a harmonic k with at least ``share`` of the largest partner share gets its
+    frequency averaged along the orbit, f_j^2 = (w_j^2 + mean_t d^2 V_nl / dq_j^2 (q(t))) / (2 pi)^2 (a Mathieu
+    average: it put a clamped beam ROM's 5:1, 9:1 and 7:1 within 1-3 % of where the branch meets them), and the pair
+    with k f nearest f_j, within ``mismatch``, names it.  The largest partner harmonic can be a forced one far from
+    any resonance: a clamped beam's mode 3 carries NNM 1's third harmonic everywhere (the cubic coupling), and its
+    9:1 with mode 5 at 7.15 J (f_5 = 9.04 f; mode 3 at 3.94 f) had been labelled 3:1.  None when the orbit or the
+    system is unknown, they do not match (another modal basis) or no pair is within ``mismatch``."""
+    Q = content.orbit
+    a = content.partners
+    if Q is None or a is None or system is None or getattr(system, "n", -1) != Q.shape[1] or a.shape[0] < 3:
         return None
-    a, b = a[2:top_k + 1], b[2:top_k + 1]
+    a = a[2:]
     top = float(a.max())
-    if not top > 0:
+    if not (top > 0 and frequency_hz > 0):
         return None
-    with np.errstate(divide="ignore", invalid="ignore"):
-        score = np.where(a > 0, a * np.log(a / (b + floor * top)), 0.0)
-    k, j = np.unravel_index(int(np.argmax(score)), score.shape)
-    return (int(k) + 2, int(j)) if score[k, j] > 0 else None
+    pairs = np.argwhere(a >= share * top)
+    modes = sorted({int(j) for _, j in pairs})
+    q = Q[:: max(1, len(Q) // 32)]                      # 32 samples of the orbit are enough for a mean
+    eps = 1e-6 * max(float(np.abs(q).max()), 1e-300)
+    f_eff = {}
+    for j in modes:
+        e = np.zeros(Q.shape[1])
+        e[j] = eps
+        curv = (system.nonlinear_force(q + e)[:, j] - system.nonlinear_force(q - e)[:, j]) / (2 * eps)
+        w2 = float(system.omega2[j] + np.mean(curv))
+        f_eff[j] = np.sqrt(w2) / (2 * np.pi) if w2 > 0 else np.nan
+    best, best_m = None, mismatch
+    for k, j in pairs:
+        m = abs((k + 2) * frequency_hz / f_eff[int(j)] - 1.0)
+        if m <= best_m:
+            best, best_m = (int(k) + 2, int(j)), m
+    return best
 
 
 def harmonic_label(Q, n=_LABELS.label_harmonics):

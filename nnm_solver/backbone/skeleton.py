@@ -201,15 +201,6 @@ class Skeleton:
                 self._shares[i] = fundamental_share(harmonic_label(self.problem.modal_orbit(self.orbits[i]))[3])
         return float((1 - t) * self._shares[j] + t * self._shares[j + 1])
 
-    def content_at(self, E, n):
-        """The harmonic content (content.Content, harmonics up to n) of the family's orbit at energy E (J), its
-        neighbours' orbits interpolated (content.grown_harmonic compares a point off the family with it); None outside
-        its range."""
-        from .content import content_of
-        if not self.covers(E):
-            return None
-        return content_of(self.problem.modal_orbit(self._interpolated(E), max(4 * n + 4, 64)), self.mode - 1, n)
-
     def interpolation_error(self, E):
         """Estimated relative error of ``frequency_at`` at energy E (J) from the spacing of the skeleton's points: the
         change of the secant slope d ln f / d ln E between the interval holding E and its neighbours, times the
