@@ -26,8 +26,8 @@ class Content:
     """The harmonic content of a modal orbit: k (strongest harmonic >= 2), fraction (its share of the orbit's
     amplitude), partner_k (the harmonic >= 2 the other modes carry most: the order of a partner's resonance),
     share (the fundamental's share), amplitudes (per harmonic, or None when unknown), partners ((harmonics + 1,
-    modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed mode's column zero; None
-    when unknown), orbit (the modal orbit's samples (S, modes), or None: ``tongue_partner``)."""
+    modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed mode's column zero;
+    None when unknown), orbit (the modal orbit's samples (S, modes), or None: ``tongue_partner``)."""
 
     k: int = 1
     fraction: float = 0.0
@@ -73,8 +73,11 @@ def tongue_partner(content, frequency_hz, system, share=_LABELS.partner_share, m
     average: it put a clamped beam ROM's 5:1, 9:1 and 7:1 within 1-3 % of where the branch meets them), and the pair
     with k f nearest f_j, within ``mismatch``, names it.  The largest partner harmonic can be a forced one far from
     any resonance: a clamped beam's mode 3 carries NNM 1's third harmonic everywhere (the cubic coupling), and its
-    9:1 with mode 5 at 7.15 J (f_5 = 9.04 f; mode 3 at 3.94 f) had been labelled 3:1.  None when the orbit or the
-    system is unknown, they do not match (another modal basis) or no pair is within ``mismatch``."""
+    9:1 with mode 5 at 7.15 J (f_5 = 9.04 f; mode 3 at 3.94 f) had been labelled 3:1.  On a full FE beam, whose modal
+    basis holds the axial modes, the average along a transverse mode keeps the membrane coupling unrelaxed: mode 3
+    comes out 16 % high at the hinged beam's 5:1 and nothing is named (the strongest partner harmonic is, rightly).
+    None when the orbit or the system is unknown, they do not match (another modal basis) or no pair is within
+    ``mismatch``."""
     Q = content.orbit
     a = content.partners
     if Q is None or a is None or system is None or getattr(system, "n", -1) != Q.shape[1] or a.shape[0] < 3:
