@@ -32,8 +32,9 @@ def averaged_frequencies(model, x):
 
 
 def test_tongue_partner_names_the_harmonic_at_the_partners_frequency():
-    """Mode 2 carries harmonics 3 (the larger share: forced) and 5 of an orbit at f = f2 / 5: the 5:1 is named; at
-    f = f2 / 3 the 3:1; at f = f2 / 4 (no harmonic there within 8 %) none."""
+    """Mode 2 carries harmonics 3 (the larger share) and 5 of an orbit.  At f = f2 / 5 the third is forced, 40 % off
+    resonance, and the 5:1 is named; at f = f2 / 3 the strongest is resonant and names it (None: content.order); at
+    f = f2 / 4 no harmonic lies within 3 % of resonance (None)."""
     from nnm_solver.backbone.content import content_of, tongue_partner
     from nnm_solver.model.modal import modal_system
     model = nnm.Model(np.eye(2), np.diag([1.0, 30.0]), springs=[nnm.CubicSpring(dof=0, k3=1e-12)])
@@ -44,7 +45,7 @@ def test_tongue_partner_names_the_harmonic_at_the_partners_frequency():
     c = content_of(Q, 0)
     assert c.order == 3                                             # the largest partner harmonic
     assert tongue_partner(c, f2 / 5, system) == (5, 1)
-    assert tongue_partner(c, f2 / 3, system) == (3, 1)
+    assert tongue_partner(c, f2 / 3, system) is None
     assert tongue_partner(c, f2 / 4, system) is None
     assert tongue_partner(c, f2 / 5, modal_system(nnm.Model(np.eye(3), np.eye(3), springs=[]))) is None
 

@@ -27,8 +27,8 @@ lock_window (the skeleton's secant slope, labels.Verdict), its own moved by at l
 tongue the frequency locks to the partner's (k f = f_p) while the energy grows: on the aircraft's mode 20 between
 3 and 5 J such plateaus (f constant to 1e-5 over 10-15 % in energy, where the family moves 0.3-0.5 %) lie within the
 skeleton's own truncation estimate there (4e-3), so the distance alone cannot tell them.  Otherwise it is labelled
-``"tongue k:1"``, k the partner harmonic whose k f meets that partner's frequency averaged along the orbit
-(content.tongue_partner; where none does, the harmonic the partner modes carry most, content.py).  The largest one can be a harmonic the family carries anyway: a clamped beam's mode 3 carries NNM 1's
+``"tongue k:1"``, k the harmonic the partner modes carry most (content.py), unless that one is forced far from
+resonance and another meets its partner's frequency averaged along the orbit (content.tongue_partner).  The largest one can be a harmonic the family carries anyway: a clamped beam's mode 3 carries NNM 1's
 third harmonic everywhere, and its 9:1 tongue with mode 5 was labelled 3:1.  Above the family's energy maximum (a
 softening family's saddle) or above where the family ends in a k:1 resonance (the skeleton ended ``locked`` or
 ``stuck``) every point is off the family (dev = inf).  Where no skeleton covers the energy (no nonlinear elements,
@@ -148,13 +148,13 @@ class FamilyLabels:
         return Verdict(f"tongue {k}:1", dev, tol, order=k)
 
     def tongue_order(self, frequency_hz, content):
-        """The k of the k:1 tongue a point of frequency (Hz) and Content off the family is in: the partner harmonic
-        whose k f meets that partner's frequency along the orbit (content.tongue_partner, on the skeleton's modal
-        system), else content.order."""
+        """The k of the k:1 tongue a point of frequency (Hz) and Content off the family is in: content.order, the
+        harmonic the partners carry most, unless content.tongue_partner (on the skeleton's modal system) names
+        another."""
         sk = self.skeleton
         s = self.settings
-        found = (tongue_partner(content, frequency_hz, sk.problem.sys, s.partner_share, s.partner_mismatch)
-                 if sk is not None else None)
+        found = (tongue_partner(content, frequency_hz, sk.problem.sys, s.partner_share, s.partner_mismatch,
+                                s.partner_match) if sk is not None and content.orbit is not None else None)
         return found[0] if found is not None else content.order
 
     @staticmethod
