@@ -80,14 +80,15 @@ def tongue_partner(content, frequency_hz, system, share=_LABELS.partner_share, m
     nearest its mode's, within ``match``, names the tongue.  (On a full FE beam, whose modal basis holds the axial
     modes, the average along a transverse mode keeps the membrane coupling unrelaxed: 16 % high for mode 3 at the
     hinged beam's 5:1, where no other pair matches and the strongest names it, rightly.)  None too when the orbit or
-    the system is unknown or they do not match (another modal basis)."""
+    the system is unknown or they do not match (another modal basis), and where the partners hold no harmonic k >= 2
+    (below fold_content: round-off, e.g. a one-harmonic orbit; content.order is 1 there)."""
     Q = content.orbit
     a = content.partners
     if Q is None or a is None or system is None or getattr(system, "n", -1) != Q.shape[1] or a.shape[0] < 3:
         return None
     a = a[2:]
     top = float(a.max())
-    if not (top > 0 and frequency_hz > 0):
+    if not (top >= _LABELS.fold_content and frequency_hz > 0):   # no harmonic k >= 2 (an HB orbit at H = 1): none
         return None
     q = Q[:: max(1, len(Q) // 32)]                      # 32 samples of the orbit are enough for a mean
     eps = 1e-6 * max(float(np.abs(q).max()), 1e-300)
