@@ -2,7 +2,8 @@
 
 * hinged-hinged: the FE backbone of NNM 1 against its closed form (w = a(t) sin(pi x / L) reduces the
   continuum exactly to a'' + w0^2 (a + a^3 / (4 r^2)) = 0; ``nnm_fem.vk_beam.hinged_backbone``);
-* clamped-clamped: NNM 1 hardens and meets mode 3 at its 5th (58 Hz) and 3rd (~97 Hz) harmonics; condensed ROMs
+* clamped-clamped: NNM 1 hardens and meets mode 3 at its 5th harmonic (58 Hz, 0.56 J; with mode 5 in the ROM also
+  mode 5 at its 9th, 7.2 J, and 7th, 38 J; the 3:1 with mode 3 lies far above, near 680 J); condensed ROMs
   (``nnm_fem.condensed_rom``, membrane condensation) on modes 1, 3 and 1, 3, 5 give its backbone and, compared,
   the convergence check in the number of modes.
 
@@ -36,10 +37,10 @@ import nnm_fem  # noqa: E402
 from nnm_fem.vk_beam import hinged_backbone  # noqa: E402
 
 LENGTH, THICKNESS, WIDTH, E, RHO = 1.0, 0.01, 0.02, 70e9, 2700.0      # m, m, m, Pa, kg/m^3
-#: energy (J) of the clamped beam's runs: past the 5:1 (58 Hz) and 3:1 (~97 Hz) resonances with mode 3
+#: energy (J) of the clamped beam's runs: past the 5:1 resonance with mode 3 (58 Hz), to about 2.6 thicknesses
 CLAMPED_ENERGY_MAX = 40.0
-#: tongue policy of the clamped runs: "follow" (the solver's default) until the backbone skeleton handles these
-#: models (with "skip" it ends the clamped ROM's family at 0.31 J, wrongly; docs/geometric.md)
+#: tongue policy of the clamped runs: the solver's default, "follow" ("skip" gives the backbone past each tongue:
+#: 40 J with one tongue skipped on modes 1, 3, three on modes 1, 3, 5; tests/test_geometric_tongues.py)
 TONGUES = "follow"
 
 

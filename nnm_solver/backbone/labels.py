@@ -27,7 +27,9 @@ lock_window (the skeleton's secant slope, labels.Verdict), its own moved by at l
 tongue the frequency locks to the partner's (k f = f_p) while the energy grows: on the aircraft's mode 20 between
 3 and 5 J such plateaus (f constant to 1e-5 over 10-15 % in energy, where the family moves 0.3-0.5 %) lie within the
 skeleton's own truncation estimate there (4e-3), so the distance alone cannot tell them.  Otherwise it is labelled
-``"tongue k:1"`` (k: the harmonic the partner modes carry, content.py).  Above the family's energy maximum (a
+``"tongue k:1"``, k the harmonic the partner modes carry most (content.py), unless that one is forced far from
+resonance and another meets its partner's frequency averaged along the orbit (content.tongue_partner).  The largest one can be a harmonic the family carries anyway: a clamped beam's mode 3 carries NNM 1's
+third harmonic everywhere, and its 9:1 tongue with mode 5 was labelled 3:1.  Above the family's energy maximum (a
 softening family's saddle) or above where the family ends in a k:1 resonance (the skeleton ended ``locked`` or
 ``stuck``) every point is off the family (dev = inf).  Where no skeleton covers the energy (no nonlinear elements,
 below the skeleton's first point) the harmonic content alone decides (dev None).
@@ -39,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .content import tongue_partner
 from .settings import LabelSettings
 
 __all__ = ["Verdict", "FamilyLabels"]
@@ -47,13 +50,14 @@ __all__ = ["Verdict", "FamilyLabels"]
 @dataclass(frozen=True)
 class Verdict:
     """A point's label: text ('backbone' or 'tongue k:1'), dev (relative frequency distance from the family; None
-    where not measured, inf beyond the family's end), tolerance (the dev below which it is on the family) and
-    on_family."""
+    where not measured, inf beyond the family's end), tolerance (the dev below which it is on the family),
+    on_family, and order (the k of 'tongue k:1'; 0 on the family)."""
 
     text: str
     dev: float | None = None
     tolerance: float = 0.0
     beyond_end: bool = False
+    order: int = 0
 
     @property
     def on_family(self):
@@ -107,23 +111,23 @@ class FamilyLabels:
         instead of its interpolated one; falling : its energy is below the branch's point before it (the backbone
         continued in energy has no fold: past one the branch is off the family, e.g. in a 1:1 resonance)."""
         s, sk = self.settings, self.skeleton
-        tongue = f"tongue {content.order}:1"
         shift = frequency_hz / self.f_linear - 1.0
         if content.fraction < s.linear_regime and abs(shift - self._bias) < s.linear_regime and (
                 sk is None or not len(sk.energy) or energy <= sk.energy[-1]):
-            return Verdict(content.label)
+            return self._by_content(content)
         if sk is None:
-            return Verdict(content.label)
+            return self._by_content(content)
         if sk.energy_peak is not None and energy > sk.energy_peak:
-            return Verdict(tongue, math.inf, beyond_end=True)        # above the family's energy maximum
+            k = content.order                                        # above the family's energy maximum
+            return Verdict(f"tongue {k}:1", math.inf, beyond_end=True, order=k)
         if sk.end in ("stuck", "locked") and len(sk.energy) and energy > sk.energy[-1]:
             # beyond where the family passes into (or stops at) a k:1 resonance: its orbits there are that
             # resonance's, not the backbone family's
             k_end = sk.partner[0] if sk.partner[1] else content.order
-            return Verdict(f"tongue {k_end}:1", math.inf, beyond_end=True)
+            return Verdict(f"tongue {k_end}:1", math.inf, beyond_end=True, order=k_end)
         dev = self.deviation(energy, frequency_hz, content.amplitudes)
         if dev is None or not math.isfinite(dev):
-            return Verdict(content.label)
+            return self._by_content(content)
         err = error if math.isfinite(error) else 0.0
         strict = s.on_family + 2 * err
         if reference_hz is None and dev > strict:
@@ -138,4 +142,22 @@ class FamilyLabels:
         drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0
         on = (dev <= strict or (dev <= tol and not drop > s.share_drop)) and not falling and not (
             run and self.locked(energy, frequency_hz, run))
-        return Verdict("backbone" if on else tongue, dev, tol)
+        if on:
+            return Verdict("backbone", dev, tol)
+        k = self.tongue_order(frequency_hz, content)
+        return Verdict(f"tongue {k}:1", dev, tol, order=k)
+
+    def tongue_order(self, frequency_hz, content):
+        """The k of the k:1 tongue a point of frequency (Hz) and Content off the family is in: content.order, the
+        harmonic the partners carry most, unless content.tongue_partner (on the skeleton's modal system) names
+        another."""
+        sk = self.skeleton
+        s = self.settings
+        found = (tongue_partner(content, frequency_hz, sk.problem.sys, s.partner_share, s.partner_mismatch,
+                                s.partner_match) if sk is not None and content.orbit is not None else None)
+        return found[0] if found is not None else content.order
+
+    @staticmethod
+    def _by_content(content):
+        """The Verdict where no skeleton says more: the content label (content.py)."""
+        return Verdict(content.label, order=content.k if content.label != "backbone" else 0)

@@ -99,8 +99,10 @@ class FollowPolicy:
         while i > 0 and points[i - 1].label != "backbone":
             i -= 1
         p = points[i]
-        return (f", inside a {points[-1].label.split()[-1]} tongue: the points from {_at(p)} on are off the backbone "
-                f"family (tongues='skip' follows the backbone)")
+        # the tongue it entered (where it left the family); a resonance met inside it is the last points' label
+        last = "" if points[-1].label == p.label else f", its last points labelled '{points[-1].label}'"
+        return (f", inside a {p.label.split()[-1]} tongue: the points from {_at(p)} on are off the backbone "
+                f"family{last} (tongues='skip' follows the backbone)")
 
 
 class SkipPolicy:
@@ -122,7 +124,7 @@ class SkipPolicy:
         (or None), index its would-be index, tongues the records so far."""
         if last is None or (verdict.on_family and point.energy >= last.energy * (1 - 1e-12)):
             return Keep()
-        record = self._record(point, content, Q, last, index)
+        record = self._record(point, verdict, content, Q, last, index)
         sk = self.skeleton
         previous = tongues[-1] if tongues else None
         again = (previous is not None and previous.order == record.order
@@ -207,9 +209,9 @@ class SkipPolicy:
                           record.replace(family_end=True, note=sk.message), index)
         return Finish("tongue", f"{what}; the points on the backbone below are kept", record, index)
 
-    def _record(self, point, content, Q, last, index):
-        """The TongueRecord of a departure from ``last`` (index - 1) into ``point``."""
-        k = content.order
+    def _record(self, point, verdict, content, Q, last, index):
+        """The TongueRecord of a departure from ``last`` (index - 1) into ``point`` (its Verdict names the order)."""
+        k = verdict.order or content.order
         mode, mac = partner_mode(Q, k, self.mode - 1) if Q is not None and k >= 2 else (0, math.nan)
         return TongueRecord(order=k, partner_mode=mode, partner_mac=mac, entry_index=index - 1,
                             entry_energy=float(last.energy), entry_frequency_hz=float(last.frequency_hz),

@@ -136,6 +136,11 @@ class LabelSettings:
         k >= 2 is a fold of the family, not a k:1 tongue).
     peak_content : a departure near the family's energy maximum with less than this fraction in any harmonic
         k >= 2 has no partner harmonic: the fold of the family itself.
+    partner_share, partner_mismatch, partner_match : where the strongest partner harmonic k of mode j lies more than
+        partner_mismatch from resonance (k f against j's frequency averaged along the orbit), the pair holding at
+        least partner_share of its share whose k f lies nearest its mode's, within partner_match, names the tongue
+        (content.tongue_partner; a clamped beam ROM's forced third harmonic of mode 3 lies 10-24 % off, the 5:1,
+        9:1 and 7:1 it met 0.4-1 %).
     """
 
     on_family: float = 1e-4
@@ -147,6 +152,9 @@ class LabelSettings:
     label_harmonics: int = 25
     fold_content: float = 1e-6
     peak_content: float = 1e-3
+    partner_share: float = 0.1
+    partner_mismatch: float = 0.08
+    partner_match: float = 0.03
 
 
 @dataclass(frozen=True)

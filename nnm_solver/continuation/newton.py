@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Callable, Optional
 
 import numpy as np
+import scipy.linalg
 
 __all__ = ["newton", "newton_solve", "NewtonSettings", "NewtonResult", "CONVERGED", "MAX_ITER", "SINGULAR",
            "NOT_FINITE", "NON_POSITIVE"]
@@ -60,10 +61,16 @@ class NewtonResult:
 
 
 def square_or_least_squares(J, b):
-    """du of J du = b: LU for a square J (np.linalg.LinAlgError when singular), least squares otherwise."""
+    """du of J du = b: LU for a square J (np.linalg.LinAlgError when singular), least squares otherwise: the
+    minimum-norm solution by LAPACK's gelsy (a complete orthogonal factorisation with column pivoting; measured on a
+    481 x 480 system of the skeleton's full-basis Newton, one BLAS thread: 14 ms against 40 ms for numpy's SVD-based
+    gelsd, the same solution)."""
     if J.shape[0] == J.shape[1]:
         return np.linalg.solve(J, b)
-    return np.linalg.lstsq(J, b, rcond=None)[0]
+    try:
+        return scipy.linalg.lstsq(J, b, lapack_driver="gelsy", check_finite=False)[0]
+    except (ValueError, scipy.linalg.LinAlgError) as exc:
+        raise np.linalg.LinAlgError(str(exc)) from None
 
 
 def newton_solve(problem, u, settings: NewtonSettings = NewtonSettings(), free=None,

@@ -23,6 +23,7 @@ from ..backbone.settings import TONGUE_MODES, Follow, Skip
 from ..backbone.skeleton import skeleton_of
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
 from ..errors import NNMInputError
+from ..threads import blas_limited
 from .iterator import NNMIterator
 from ..model.modal import modal_system
 from ..model.ritz import ritz_system
@@ -145,8 +146,11 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     # the skeleton (backbone/skeleton.py) labels the points and guides the jumps over tongues (its harmonics:
     # skeleton_harmonics)
     sk_h = skeleton_harmonics(method, tongues.skeleton.harmonics, refined=freq_tol is not None and not ritz)
-    sk, failure = (skeleton_of(model, mode, energy_max, _skeleton_system, replace(tongues.skeleton, harmonics=sk_h),
-                               tongues.reach) if model.springs else (None, "the model has no nonlinear element"))
+    # (under the branch's BLAS thread limit, as its points are: its dense least-squares Newton steps on a shared
+    # machine took 9x longer with OpenBLAS's threads, threads.py)
+    with blas_limited():
+        sk, failure = (skeleton_of(model, mode, energy_max, _skeleton_system, replace(tongues.skeleton, harmonics=sk_h),
+                                   tongues.reach) if model.springs else (None, "the model has no nonlinear element"))
     labels = FamilyLabels(sk, math.sqrt(system.omega2[k]) / (2 * math.pi), f_method,
                           getattr(getattr(problem, "integrator", None), "order", 0), tongues.labels)
     return NNMIterator(model, mode, problem, system, engine, settings, energy_max, cont.max_points, cs, tol,
