@@ -25,7 +25,8 @@ from .problems import check_positive
 from ..errors import NNMInputError
 from ..model.modal import modal_system
 from ..orbits.shooting import ShootingProblem
-from ..results.settings import ShootingSettings
+from ..integrators.registry import get_integrator
+from ..results.settings import Shooting, ShootingSettings
 
 __all__ = ["switch_branch"]
 
@@ -70,13 +71,15 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     if direction not in (1, -1):
         raise NNMInputError(f"direction must be +1 or -1, got {direction!r}")
     s = branch.settings
-    spp = int(getattr(s, "steps_per_period", 200))
+    # a shooting parent's own integrator and steps; a harmonic-balance parent's family is shot with the defaults
+    # (Shooting(): gauss6 at its registry's steps), not the first release's Newmark at 200
+    integrator = getattr(s, "integrator", None) or Shooting().integrator
+    spp = int(getattr(s, "steps_per_period", None) or get_integrator(integrator).steps)
     tol = float(s.tol if tol is None and s.method == "shooting" else (1e-6 if tol is None else tol))
     factor = 2 if event["kind"] == "period_doubling" else 1
     model = branch.model
     system = modal_system(model)
     k = branch.mode - 1
-    integrator = getattr(s, "integrator", "newmark")
     problem = ShootingProblem(system, k, spp * factor, symmetric=False, reversible=False, max_rel_step=max_rel_step,
                               max_rel_period_step=max_period_step, integrator=integrator)
     q0 = system.to_modal(np.asarray(event["x0"], dtype=float))

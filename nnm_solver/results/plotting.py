@@ -11,6 +11,9 @@ EVENT_MARKERS = {"fold": ("x", "k"), "branch_point": ("s", "tab:red"), "period_d
 OFF_BACKBONE_MARKERS = ("*", "P", "X", "h")
 #: their colour: another than the branch's, the same in every plot and in the viewer
 OFF_BACKBONE_COLOR = "tab:orange"
+#: branch colours in order: none of the colours that mean something on the plot (the orange of the points off the
+#: backbone, the black / red / purple / green of the event markers; matplotlib's default cycle drew the second branch orange)
+BRANCH_COLORS = ("tab:blue", "tab:brown", "tab:cyan", "tab:pink", "tab:olive", "navy", "tab:gray", "teal")
 
 
 def off_backbone(branch):
@@ -54,7 +57,7 @@ def plot_fep(branches, ax=None, path=None, title=None):
         branches = [branches]
     if ax is None:
         fig, ax = plt.subplots(figsize=(7, 4.5))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colors = BRANCH_COLORS
     seen = set()
     for j, b in enumerate(branches):
         c = colors[j % len(colors)]
