@@ -1,6 +1,8 @@
 """integrators/gauss: the step's constants reused for the same system and h (a shooting iterate's residual, its
 Jacobian and its point's stability maps share h; issue 52): the same object, and sweeps with it equal to sweeps with
 freshly built constants bit for bit."""
+import dataclasses
+
 import numpy as np
 
 import nnm_solver as nnm
@@ -34,7 +36,7 @@ def test_sweeps_with_reused_constants_equal_fresh_ones_bit_for_bit(monkeypatch):
     gauss._recent.clear()
     first = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)
     again = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)        # the cached constants
-    monkeypatch.setattr(gauss, "_RECENT", 0)                                # no reuse: built afresh
+    monkeypatch.setattr(gauss, "KERNELS", dataclasses.replace(gauss.KERNELS, gauss_constants_kept=0))  # no reuse
     gauss._recent.clear()
     fresh = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)
     assert not gauss._recent

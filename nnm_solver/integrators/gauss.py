@@ -42,6 +42,7 @@ from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
 from .gauss_monodromy import monodromy as _monodromy
 from .newmark import solve_stages
+from .settings import KERNELS
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
            "sweep_sensitivity"]
@@ -125,10 +126,8 @@ def constants(system, h, s):
     return _constants(system.omega2, system.Bq, h, s)
 
 
-#: GaussConstants kept for reuse: a shooting iterate's residual, its Jacobian and its point's stability maps use one
-#: step h (1/3 to 1/2 of the constructions of a run on the aircraft; ~10 % of its time); the same objects are read
-#: only, so a reuse gives the same numbers bit for bit
-_RECENT = 4
+#: GaussConstants kept for reuse (KERNELS.gauss_constants_kept of them); the same objects are read only, so a reuse
+#: gives the same numbers bit for bit
 _recent = []                   # (omega2, Bq, h, s, GaussConstants), most recent first
 _recent_lock = threading.Lock()
 
@@ -143,7 +142,7 @@ def _constants(omega2, Bq, h, s):
     k = GaussConstants(omega2, Bq, h, s)
     with _recent_lock:
         _recent.insert(0, (omega2, Bq, h, s, k))
-        del _recent[_RECENT:]
+        del _recent[KERNELS.gauss_constants_kept:]
     return k
 
 

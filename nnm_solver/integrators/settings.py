@@ -27,6 +27,9 @@ class KernelSettings:
     #: time steps per block of the Volterra solve: one block (one triangular solve) for the usual 200 steps per
     #: period, bounded memory (O((block n_s)^2)) and (N / block)^2 / 2 matrix products for long sweeps
     volterra_block: int = 128
+    #: Gauss step constants kept for reuse (gauss.py): a shooting iterate's residual, its Jacobian and its point's
+    #: stability maps use one step h (1/3 to 1/2 of the constructions of a run on the aircraft; ~10 % of its time)
+    gauss_constants_kept: int = 4
 
 
 #: the kernels' settings (the defaults above, written once)
