@@ -26,8 +26,9 @@ unstable points); in the Point tab the k-th harmonic of some DOFs grows, up to e
 
 **Point labels.** The solver labels every point: **backbone** (the fundamental NNM family) or
 **tongue k:1** (inside the k:1 internal-resonance tongue), marked in orange on both FEPs (stars in the
-panel, orange spheres on the board). Branches computed with tongue skipping
-jump over the tongues and stay on the backbone. When the file has it, the Point tab also gives each
+panel, orange spheres on the board). By default a branch follows the tongues up to 3:1 and jumps
+those of higher order (Tongues: follow-all follows every one); branches computed with tongue skipping
+jump over all tongues and stay on the backbone. When the file has it, the Point tab also gives each
 point's estimated relative frequency error (the accuracy of the orbit's frequency).
 
 **Colours.** In the 3D view the colour of a vertex is its peak displacement over the period, from

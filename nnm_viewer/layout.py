@@ -221,8 +221,9 @@ class Layout:
                      "whose nonlinearity is localized)")
             self.h_tongues = gui.add_dropdown(
                 "Tongues", options=TONGUE_CHOICES, initial_value=str(D["tongues"]),
-                hint="At an internal-resonance tongue: follow the branch through it, or skip it and compute the "
-                     "backbone (the tongues jumped are listed with the branch; nnm-solve --tongue K continues one)")
+                hint="At an internal-resonance tongue: follow the branch through it (follow: tongues up to 3:1, "
+                     "higher orders jumped; follow-all: every tongue), or skip it and compute the backbone (the "
+                     "tongues jumped are listed with the branch; nnm-solve --tongue K continues one)")
             self.h_integrator = gui.add_dropdown(
                 "Integrator", options=tuple(INTEGRATORS), initial_value=str(D["integrator"]),
                 hint="Time integrator of the shooting: gauss6 or gauss4 (Gauss-Legendre, 6th / 4th order, 3 / 2 "

@@ -15,7 +15,8 @@ The algorithm (``tongues=Skip()``), for each point the continuation gives, in en
 4. No target lands (``no_landing``), or the continuation cannot go on (``stopped``): where the skeleton ends within
    reach, that is the family's end (its status, its message); else ``tongue``, saying that no landing was found.
 
-``tongues=Follow()`` keeps every point with its label.  A policy only reads values and returns decisions; the
+``tongues=Follow()`` keeps every point with its label, except a departure from the backbone into a tongue of order
+above ``Follow.max_order`` (3 by default): that one is jumped as above, and the branch goes on along the backbone.  A policy only reads values and returns decisions; the
 iterator (driver/iterator.py) does what they say.
 """
 from __future__ import annotations
@@ -28,7 +29,8 @@ from .content import partner_mode
 from .jumps import candidates
 from .settings import Follow, Skip
 
-__all__ = ["Keep", "Jump", "Finish", "FollowPolicy", "SkipPolicy", "policy_for", "family_end_status"]
+__all__ = ["Keep", "Jump", "Finish", "FollowPolicy", "SkipPolicy", "policy_for", "family_end_status",
+           "jumped_in_follow"]
 
 
 @dataclass(frozen=True)
@@ -79,13 +81,31 @@ def _resonance(record):
 
 
 class FollowPolicy:
-    """tongues=Follow(): every point is kept (its label says where it is)."""
+    """tongues=Follow(): every point is kept (its label says where it is), except a departure from the backbone
+    into a tongue of order above ``settings.max_order``: that one is jumped by a SkipPolicy with Skip's defaults
+    (composition: its landing test, its records and its end decisions), so the branch goes on along the backbone.
+    With no skeleton (none could be computed, or no nonlinear element) nothing can be jumped: every point is kept."""
 
-    def __init__(self, settings=Follow(), skeleton=None):
+    def __init__(self, settings=Follow(), skeleton=None, skeleton_failure="", mode=1):
         self.settings, self.skeleton = settings, skeleton
+        self.mode = int(mode)
+        self.jumper = (SkipPolicy(Skip(skeleton=settings.skeleton, labels=settings.labels), skeleton,
+                                  skeleton_failure, mode)
+                       if settings.max_order is not None and skeleton is not None else None)
 
     def decide(self, point, verdict, content, Q, last, index, tongues):
-        return Keep()
+        if not jumped_in_follow(self.settings, self.jumper is not None, verdict, content, last):
+            return Keep()
+        return self.jumper.decide(point, verdict, content, Q, last, index, tongues)
+
+    def landed(self, verdict, energy, base):
+        return self.jumper.landed(verdict, energy, base)
+
+    def recorded(self, record):
+        return self.jumper.recorded(record)
+
+    def no_landing(self, last, record, tried, index=-1):
+        return self.jumper.no_landing(last, record, tried, index)
 
     def stopped(self, last, reason, index):
         return None
@@ -220,8 +240,17 @@ class SkipPolicy:
                             inside_v0=tuple(map(float, point.v0)), inside_period=float(point.period))
 
 
+def jumped_in_follow(settings, can_jump, verdict, content, last):
+    """Follow(): is the departure into ``verdict``'s tongue one to jump?  Only a departure from a backbone point
+    (``last``: the last kept point; inside a followed tongue every point is kept) into a tongue whose order (the
+    label's k, else the orbit's Content) exceeds settings.max_order, when there is a skeleton to jump from."""
+    if not can_jump or last is None or verdict.on_family or last.label != "backbone":
+        return False
+    return (verdict.order or content.order) > settings.max_order
+
+
 def policy_for(settings, skeleton, skeleton_failure="", mode=1):
     """The policy object of a tongues setting (Follow or Skip) for the followed mode (1-based)."""
     if isinstance(settings, Skip):
         return SkipPolicy(settings, skeleton, skeleton_failure, mode)
-    return FollowPolicy(settings, skeleton)
+    return FollowPolicy(settings, skeleton, skeleton_failure, mode)

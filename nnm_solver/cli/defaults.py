@@ -9,7 +9,7 @@ from dataclasses import fields
 __all__ = ["solver_defaults", "TONGUE_CHOICES"]
 
 #: what a continuation does at an internal-resonance tongue (continue_nnm's ``tongues``)
-TONGUE_CHOICES = ("follow", "skip")
+TONGUE_CHOICES = ("follow", "follow-all", "skip")
 
 
 def solver_defaults():

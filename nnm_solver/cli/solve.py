@@ -114,9 +114,10 @@ def main(argv=None):
                         help=f"largest number of points of the branch (default {D['max_points']}); the continuation "
                         f"stops there if --energy-max is not reached first (status max_points)")
     parser.add_argument("--tongues", choices=TONGUE_CHOICES, default=None,
-                        help=f"at an internal-resonance tongue: follow the branch through it, or skip it and return "
-                        f"the backbone (the tongues jumped are listed with the branch and saved with it; --tongue K "
-                        f"continues one); default {D['tongues']}")
+                        help=f"at an internal-resonance tongue: follow the branch through it (follow: tongues up to "
+                        f"3:1, higher orders jumped; follow-all: every tongue), or skip it and return the backbone "
+                        f"(the tongues jumped are listed with the branch and saved with it; --tongue K continues "
+                        f"one); default {D['tongues']}")
     family = parser.add_mutually_exclusive_group()
     family.add_argument("--tongue", type=int, metavar="K", help="continue the K-th tongue (1-based, as listed after "
                         "a --tongues skip run) of a saved branch of FILE as its own branch (nnm.continue_tongue); "

@@ -41,7 +41,8 @@ def _tongues_of(tongues):
         return Follow()
     if tongues in TONGUE_MODES:
         return TONGUE_MODES[tongues]()
-    raise NNMInputError(f"tongues must be Follow(), Skip(), 'follow' or 'skip', got {tongues!r}")
+    raise NNMInputError(f"tongues must be Follow(), Skip() or one of {', '.join(map(repr, TONGUE_MODES))}, got "
+                        f"{tongues!r}")
 
 
 def from_keywords(method=None, continuation=None, tongues=None, keywords=None):
@@ -192,9 +193,11 @@ def continue_nnm(model, mode, energy_max, method=None, *, continuation=None, ton
         samples, basis, ``condensed=True``: the equations condensed onto the nonlinear elements, whatever the model
         size); or their names "shooting" / "hb".  driver/settings.py documents every field and default.
     continuation : ``Continuation(...)``: step control and max_points (driver/settings.py).
-    tongues : ``Follow()`` (default: the continuation follows the internal-resonance tongues it meets, points
-        labelled against the backbone family) or ``Skip()`` (the backbone: tongues jumped from the skeleton, each
-        listed in branch.tongues and computable with ``continue_tongue``); or "follow" / "skip".
+    tongues : ``Follow()`` (default: the continuation follows the internal-resonance tongues of order up to 3 it
+        meets, points labelled against the backbone family, and jumps those of higher order as Skip does;
+        ``Follow(max_order=None)`` follows every tongue) or ``Skip()`` (the backbone: tongues jumped from the
+        skeleton, each listed in branch.tongues and computable with ``continue_tongue``); or "follow" / "follow-all"
+        / "skip".
         backbone/policy.py describes the algorithm, backbone/settings.py its settings.
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when the Hill matrix
