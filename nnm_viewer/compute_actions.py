@@ -10,7 +10,7 @@ import numpy as np
 from .layout import METHODS, SEE_COMPUTE_TAB
 from .examples import branch_output
 from .fep import energy_at, energy_to_s
-from .fep_view import sweep_key
+from .fep_text import sweep_key
 from .state import JobBusy, branch_label
 from .worker import JobRunner, one_line
 

@@ -21,7 +21,7 @@ from .downloads import DownloadActions
 from .fep_queries import FepQueries
 from .drawing import ALL_KINDS, Drawing
 from .fep import energy_to_s
-from .fep_view import branch_options
+from .fep_text import branch_options
 from .layout import Layout, default_steps
 from .numbering import along_from_slider
 from .state import scaling_law_holds

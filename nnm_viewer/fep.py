@@ -1,83 +1,26 @@
-"""Frequency-energy plot (FEP): the panel image, the clickable copy in the 3D scene (placed by board.py), and
-the mapping between an energy and a position along a branch.
+"""Frequency-energy plot (FEP): the panel image and the clickable copy in the 3D scene (placed by board.py); its
+colours and markers are in fep_style.py, the mapping between an energy and a position along a branch in
+fep_along.py.
 
 Axes follow the literature (seed paper Figs. 8-11): x = energy (J, log scale), y =
 frequency (Hz).  Stable points are filled, unstable points hollow/red.
 """
 from __future__ import annotations
 
-import colorsys
 from dataclasses import dataclass, field
 
 import numpy as np
 
-STABLE_RGB = (40, 100, 220)
-UNSTABLE_RGB = (225, 70, 40)
-MARKER_RGB = (255, 200, 0)
-#: colours of the first branches (no red: failures, branch points; no orange: the points off the backbone,
-#: OFF_BACKBONE_COLOR; no yellow: the picked orbit; no grey: the file's branches behind a scaled FEP); the next
-#: ones get golden-angle hues outside that red-orange-yellow band (branch_color), never a repeat
-BRANCH_COLORS = ["#1f77b4", "#2ca02c", "#9467bd", "#393b79", "#17becf", "#8c564b", "#e377c2", "#bcbd22"]
-#: the hues (0..1) the golden-angle colours keep to: red (0), orange (0.08) and yellow (0.14) mean something else
-BRANCH_HUES = (0.22, 0.92)
-#: how much of white an unstable point's colour is mixed with on the 3D board
-UNSTABLE_PALE = 0.6
-#: events (Branch.events) by kind: legend text
-EVENT_LABELS = {"fold": "fold (energy turns back)", "branch_point": "branch point (multiplier +1)",
-                "period_doubling": "period doubling (multiplier -1)", "torus": "torus (complex multipliers)"}
-#: how a branch ended (Branch.status), marked at its last point: (marker, colour, legend text)
-END_MARKERS = {"failed": ("X", "#d62728", "end: solver failed"), "escape": ("X", "#e7298a", "end: escape"),
-               "closed_loop": ("P", "#9467bd", "end: closed loop"), "tongue": ("X", "#8c564b", "end: inside a tongue")}
+from .fep_along import energy_at, energy_to_s, interp_at
+from .fep_style import (BRANCH_COLORS, BRANCH_HUES, END_MARKERS, EVENT_LABELS, MARKER_RGB, STABLE_RGB, UNSTABLE_PALE,
+                        UNSTABLE_RGB, branch_color, event_kind, event_style, off_backbone_style, pale, rgb)
 
-
-def branch_color(k):
-    """Colour (hex) of the branch at position k (0-based) of the list: BRANCH_COLORS, then hues
-    spaced by the golden angle within BRANCH_HUES (distinct for every k; never the orange of the points off the
-    backbone, the red of failures or the yellow of the picked orbit)."""
-    if k < len(BRANCH_COLORS):
-        return BRANCH_COLORS[k]
-    j = k - len(BRANCH_COLORS)
-    lo, hi = BRANCH_HUES
-    h = lo + (hi - lo) * ((0.05 + 0.6180339887498949 * j) % 1.0)
-    sat, val = ((0.8, 0.7), (0.55, 0.85), (0.9, 0.5))[j % 3]
-    return "#{:02x}{:02x}{:02x}".format(*(int(round(255 * c)) for c in colorsys.hsv_to_rgb(h, sat, val)))
-
-
-def rgb(color):
-    """(r, g, b) 0..255 of a '#rrggbb' colour."""
-    return tuple(int(color[i:i + 2], 16) for i in (1, 3, 5))
-
-
-def pale(color, amount=UNSTABLE_PALE):
-    """'#rrggbb' mixed with white (amount 0: unchanged, 1: white)."""
-    return "#{:02x}{:02x}{:02x}".format(*(int(round(c + amount * (255 - c))) for c in rgb(color)))
-
-
-def event_kind(event):
-    """Kind of an event dict: 'fold', 'branch_point', 'period_doubling', 'torus' (older files say
-    'bifurcation' and name the critical multiplier in the detail)."""
-    kind = str(event.get("kind", ""))
-    if kind == "bifurcation":
-        detail = str(event.get("detail", ""))
-        return "period_doubling" if "through -1" in detail else "torus" if "complex" in detail else "branch_point"
-    return kind
-
-
-def event_style(kind):
-    """(matplotlib marker, colour) of an event kind, as in the solver's FEP plots."""
-    try:
-        from nnm_solver.results import EVENT_MARKERS
-    except ImportError:  # pragma: no cover
-        EVENT_MARKERS = {}
-    return EVENT_MARKERS.get(kind, ("o", "k"))
-
-
-def off_backbone_style():
-    """(markers, colour) of the points off the backbone, as in the solver's plots (results/plotting.py)."""
-    from nnm_solver.results.plotting import OFF_BACKBONE_COLOR, OFF_BACKBONE_MARKERS
-    import matplotlib.colors as mcolors
-
-    return OFF_BACKBONE_MARKERS, mcolors.to_hex(OFF_BACKBONE_COLOR)
+__all__ = ["FepSeries", "FepRenderer", "render_fep", "plot_branches", "set_fep_axes", "axis_ranges", "should_zoom",
+           "Y_LABELS", "LEGEND_MAX", "trim_legend", "wrap_title",
+           # re-exported from fep_style.py and fep_along.py, where they are written
+           "BRANCH_COLORS", "BRANCH_HUES", "END_MARKERS", "EVENT_LABELS", "MARKER_RGB", "STABLE_RGB", "UNSTABLE_PALE",
+           "UNSTABLE_RGB", "branch_color", "event_kind", "event_style", "off_backbone_style", "pale", "rgb",
+           "energy_at", "energy_to_s", "interp_at"]
 
 
 @dataclass
@@ -232,53 +175,6 @@ def trim_legend(ax, handles, labels, n_branches, limit):
     h = handles[:keep] + [more] + handles[n_branches:]
     lab = labels[:keep] + [f"\u2026 and {n_branches - keep} more branches"] + labels[n_branches:]
     return h[:limit], lab[:limit]
-
-
-def energy_to_s(energy, target, s_current=0.0):
-    """Fractional index along a branch where its energy equals ``target`` (J).
-
-    Energies need not be monotonic (folds, tongues): among all crossings of the level
-    the one nearest to ``s_current`` wins, so a slider never jumps to a far part of the
-    branch.  Interpolation is linear in energy, as ``Branch.interpolate`` makes it (the
-    interpolated orbit's energy is the linear interpolation of its neighbours'), so the orbit
-    shown at the returned index has energy ``target``.  Outside the range: nearest end.
-    """
-    e = np.asarray(energy, dtype=float)
-    if len(e) <= 1:
-        return 0.0
-    y = float(target)
-    lo, hi = e[:-1], e[1:]
-    inside = (np.minimum(lo, hi) <= y) & (y <= np.maximum(lo, hi))
-    cands = []
-    for i in np.flatnonzero(inside):
-        d = hi[i] - lo[i]
-        cands.append(i + (0.0 if d == 0 else (y - lo[i]) / d))
-    if not cands:
-        # out of range: the nearest point in log energy (ties broken by distance in s)
-        dist = np.abs(np.log10(np.maximum(e, 1e-300)) - np.log10(max(y, 1e-300)))
-        best = np.flatnonzero(dist <= dist.min() + 1e-12)
-        return float(best[np.argmin(np.abs(best - s_current))])
-    cands = np.array(cands)
-    return float(cands[np.argmin(np.abs(cands - s_current))])
-
-
-def interp_at(values, s):
-    """Linear interpolation of values (N,) at fractional index s."""
-    values = np.asarray(values, dtype=float)
-    if len(values) == 1:
-        return float(values[0])
-    i = int(np.clip(np.floor(s), 0, len(values) - 2))
-    a = float(s) - i
-    return float((1 - a) * values[i] + a * values[i + 1])
-
-
-def energy_at(energy, s):
-    """Energy (J) of the orbit shown at fractional index s of a branch whose points have energies
-    ``energy`` (J): linear in energy between neighbouring points, the energy ``Branch.interpolate``
-    gives the interpolated orbit (it rescales the interpolated initial state to it).  Every place
-    of the viewer that prints or plots the selection's energy uses this, so that the readout, the
-    selection text, the FEP marker and the Point tab agree."""
-    return interp_at(energy, s)
 
 
 #: padding of the FEP's axis ranges (fraction of the span, each side)

@@ -241,7 +241,7 @@ def test_fep_series_of_a_branch_without_multipliers_says_so():
 def test_point_facts_and_info_say_when_the_harmonics_do_not_resolve_a_point(two_dof_nnm1):
     """A harmonic-balance point whose truncation estimate is inf (orbits/hb_error.py: no orbit with two harmonics
     more near it) is shown as not resolved, not as an error of 'inf'; a finite estimate is shown as a number."""
-    from nnm_viewer.fep_view import point_facts
+    from nnm_viewer.fep_text import point_facts
     from nnm_viewer.info import info_markdown, point_data
     from nnm_viewer.state import BranchEntry
     b = two_dof_nnm1

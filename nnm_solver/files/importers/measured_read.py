@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ...errors import NNMFileError, NNMInputError
-from .measured import read_csv_measurement, read_mat_measurement
+from .measured_tables import read_csv_measurement, read_mat_measurement
 from .uff58 import read_uff58
 
 __all__ = ["read_measured", "MEASURED_SUFFIXES"]
