@@ -2,7 +2,8 @@
 
     x1'' + (2 x1 - x2) + 0.5 x1^3 = 0,     x2'' + (2 x2 - x1) = 0
 
-Computes the NNM1 and NNM2 backbones, follows NNM1 through its 3:1 and 5:1 tongues (shooting; in the full
+Computes the NNM1 and NNM2 backbones, follows NNM1 through its 3:1 and 5:1 tongues (tongues="follow-all": the
+default follows tongues up to 3:1 and jumps higher orders) (shooting; in the full
 run also by harmonic balance, as a check), draws the frequency-energy plots and the motions at the beginning, middle and end of
 the 3:1 tongue (time series, configuration space, Fourier coefficients), and saves everything, with a
 small 3D scene (two masses, springs, walls), to an nnm file that ``nnm-view`` animates.
@@ -136,14 +137,15 @@ def compute(model, fast, log=print):
     spp, tol = (80, 1e-6) if fast else (200, 1e-6)
     out, times = {}, {}
     t = time.perf_counter()
-    out["nnm1"] = nnm.continue_nnm(model, 1, energy_max=3e5, steps_per_period=spp, tol=tol)
+    out["nnm1"] = nnm.continue_nnm(model, 1, energy_max=3e5, steps_per_period=spp, tol=tol, tongues="follow-all")
     times["nnm1"] = time.perf_counter() - t
     log(f"NNM1 (shooting, {spp} steps/period): {len(out['nnm1'])} points in {times['nnm1']:.1f} s; "
         f"{out['nnm1'].message}")
     t = time.perf_counter()
     # NNM2's period changes fast with energy and the continuation limits the period change per step:
     # many small steps
-    out["nnm2"] = nnm.continue_nnm(model, 2, energy_max=3e5, steps_per_period=spp, tol=tol, max_points=1200)
+    out["nnm2"] = nnm.continue_nnm(model, 2, energy_max=3e5, steps_per_period=spp, tol=tol, max_points=1200,
+                                   tongues="follow-all")
     times["nnm2"] = time.perf_counter() - t
     log(f"NNM2 (shooting): {len(out['nnm2'])} points in {times['nnm2']:.1f} s; {out['nnm2'].message}")
     out["nnm1"].name, out["nnm2"].name = "NNM1", "NNM2"
@@ -152,7 +154,8 @@ def compute(model, fast, log=print):
         # method): an independent check of the tongues
         t = time.perf_counter()
         H = 15
-        out["nnm1_hb"] = nnm.hb.continue_nnm_hb(model, 1, energy_max=3e5, harmonics=H, max_points=600)
+        out["nnm1_hb"] = nnm.hb.continue_nnm_hb(model, 1, energy_max=3e5, harmonics=H, max_points=600,
+                                                tongues="follow-all")
         times["nnm1_hb"] = time.perf_counter() - t
         out["nnm1_hb"].name = f"NNM1 harmonic balance H{H}"
         log(f"NNM1 (harmonic balance, odd harmonics <= {H}): {len(out['nnm1_hb'])} points in "

@@ -46,7 +46,7 @@ __all__ = ["continue_nnm_hb", "hb_coefficients", "hb_motion", "HILL_AUTO_SIZE"]
 
 def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8, max_points=500, on_point=None,
                     stop=None, energy_min=None, basis=None, step=None, max_angle=0.35, max_correction=0.5,
-                    max_rel_step=0.4, floquet=None):
+                    max_rel_step=0.4, floquet=None, tongues=None):
     """NNM branch of linear mode ``mode`` (1-based) by harmonic balance, from low energy to ``energy_max`` (J).
 
     The same as ``continue_nnm(..., method="hb")``.
@@ -58,7 +58,7 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     tol : relative residual tolerance of the harmonic-balance equations.
     basis : ``"odd"`` (cosines of odd harmonics, symmetric NNMs) or ``"full"`` (see module doc);
         default: "odd" when every element's force is odd, else "full".
-    max_points, on_point, stop, energy_min, step, max_angle, max_correction : as ``continue_nnm``.
+    max_points, on_point, stop, energy_min, step, max_angle, max_correction, tongues : as ``continue_nnm``.
     floquet : Floquet multipliers by Hill's method (True), not (False: NaN, all stable), or when the
         Hill matrix 2 n (2 harmonics + 1) has at most HILL_AUTO_SIZE rows (None); cost O(size^3) a point.
 
@@ -68,7 +68,7 @@ def continue_nnm_hb(model, mode, energy_max, harmonics=7, samples=None, tol=1e-8
     return continue_nnm(model, mode, energy_max, tol=tol, max_points=max_points, on_point=on_point, stop=stop,
                         energy_min=energy_min, floquet=floquet, step=step, max_angle=max_angle,
                         max_correction=max_correction, max_rel_step=max_rel_step, method="hb",
-                        harmonics=harmonics, samples=samples, basis=basis)
+                        harmonics=harmonics, samples=samples, basis=basis, tongues=tongues)
 
 
 def _hb_settings(branch):

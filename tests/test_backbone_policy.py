@@ -128,6 +128,32 @@ def test_follow_keeps_every_point_and_notes_where_the_last_ones_are():
     assert "off the backbone family" in pol.note([a, b]) and pol.note([a]) == ""
 
 
+def test_follow_jumps_a_departure_into_a_tongue_above_its_order_and_keeps_the_rest():
+    """Follow() (max_order 3): a departure from the backbone into a 5:1 is jumped as Skip jumps it; into a 3:1 it is
+    kept; inside a followed tongue every point is kept, whatever its label; Follow(max_order=None) keeps all."""
+    sk = CannedSkeleton()
+    lab = labels(sk)
+    last = P(1.0, sk.frequency_at(1.0))
+    last.label = "backbone"
+    off = P(1.1, sk.frequency_at(1.1) * (1 + 3e-4))
+    five = Content(k=5, fraction=1e-2, partner_k=5, share=0.99)
+    v3, v5 = lab.verdict(off.energy, off.frequency_hz, ON), lab.verdict(off.energy, off.frequency_hz, five)
+    assert v3.order == 3 and v5.order == 5
+    pol = FollowPolicy(nnm.Follow(), sk, mode=1)
+    assert isinstance(pol.decide(off, v3, ON, None, last, 5, []), Keep)
+    d = pol.decide(off, v5, five, None, last, 5, [])
+    assert isinstance(d, Jump) and d.record.order == 5 and d.base == 1.0
+    assert d.targets == SkipPolicy(nnm.Skip(), sk, mode=1).decide(off, v5, five, None, last, 5, []).targets
+    inside = P(1.0, sk.frequency_at(1.0) * 1.001)
+    inside.label = "tongue 3:1"                          # the last kept point is inside a followed 3:1 tongue
+    assert isinstance(pol.decide(off, v5, five, None, inside, 9, []), Keep)
+    assert isinstance(FollowPolicy(nnm.Follow(max_order=None), sk).decide(off, v5, five, None, last, 5, []), Keep)
+    assert isinstance(FollowPolicy(nnm.Follow(), None).decide(off, v5, five, None, last, 5, []), Keep)  # no skeleton
+    assert isinstance(FollowPolicy(nnm.Follow(max_order=5), sk).decide(off, v5, five, None, last, 5, []), Keep)
+    with pytest.raises(nnm.NNMInputError, match="max_order"):
+        nnm.Follow(max_order=0)
+
+
 def test_a_frequency_locked_while_the_family_moves_is_a_tongue():
     """Within the distance tolerance but locked (the frequency stays while the family's falls): off the family."""
     sk = CannedSkeleton(c=0.05)
