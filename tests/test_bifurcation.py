@@ -89,7 +89,7 @@ def test_switch_branch_at_the_first_loss_of_stability(located):
 
 def test_skip_mode_returns_the_backbone_and_tongues_match_follow():
     m = two_dof_model()
-    follow = nnm.continue_nnm(m, 1, 3e5)
+    follow = nnm.continue_nnm(m, 1, 3e5, tongues="follow-all")
     skip = nnm.continue_nnm(m, 1, 3e5, tongues="skip")
     assert skip.status == "done" and np.all(np.diff(skip.energy) > 0)     # a backbone, no excursion
     assert set(skip.labels) == {"backbone"}
@@ -179,7 +179,7 @@ def test_located_folds_lie_on_their_step():
     import sys
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
     from reference_models import cantilever_beam
-    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=150)
+    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=150, tongues="follow-all")
     E = np.asarray(b.energy)
     folds = [e for e in b.events if e["kind"] == "fold" and e["located"]]
     assert folds
@@ -199,7 +199,7 @@ def test_beam_tongue_both_folds_located_and_passed():
     import sys
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
     from reference_models import cantilever_beam
-    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=160)   # gauss6-100: 150 points to 5e-3 J
+    b = nnm.continue_nnm(cantilever_beam(n_el=30), 1, 0.05, max_points=160, tongues="follow-all")   # gauss6-100: 150 points to 5e-3 J
     assert b.status == "max_points", b.message
     folds = [e for e in b.events if e["kind"] == "fold"]
     assert [e["detail"] for e in folds] == ["energy maximum", "energy minimum"]

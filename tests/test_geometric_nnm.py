@@ -64,7 +64,8 @@ def test_rom_backbone_follows_the_closed_form_to_two_thicknesses():
 
 def test_geometric_beams_example_fast(tmp_path):
     """examples/geometric_beams.py --fast: the hinged ROM on the closed form; the clamped ROM (modes 1, 3) hardens
-    past its 5:1 resonance with mode 3 (a tongue: the energy turns back where 5 f meets mode 3) to 40 J."""
+    past its 5:1 resonance with mode 3 (a tongue where 5 f meets mode 3: the default jumps tongues above 3:1 and
+    lists it) to 40 J."""
     import importlib.util
     from pathlib import Path
     path = Path(__file__).resolve().parents[1] / "examples" / "geometric_beams.py"
@@ -77,7 +78,9 @@ def test_geometric_beams_example_fast(tmp_path):
     rom, branch = clamped_runs[(1, 3)]
     assert branch.status == "done" and branch.energy[-1] == pytest.approx(ex.CLAMPED_ENERGY_MAX, rel=1e-6)
     f3 = np.sqrt(rom.omega2[1]) / (2 * np.pi)
-    back = np.flatnonzero(np.diff(branch.energy) < 0)           # the tongue: energy turning back
-    assert back.size and np.all(np.abs(5 * branch.frequency_hz[back] / f3 - 1) < 0.06)
+    five = [t for t in branch.tongues if t.order == 5]           # the tongue, jumped and listed
+    assert five and five[0].partner_mode == 2 and five[0].skipped
+    assert abs(5 * five[0].entry_frequency_hz / f3 - 1) < 0.06
+    assert set(map(str, branch.labels)) == {"backbone"}
     assert branch.frequency_hz[-1] > 2 * branch.frequency_hz[0]
     assert (tmp_path / "geometric_beams_fep.png").exists()

@@ -43,7 +43,8 @@ def _with_route(monkeypatch, route, *args, **kw):
 def beam_tongue():
     """A 20-DOF cantilever's NNM 1 by HB (H = 5) through its 5:1 tongue (energy maximum 0.0141 J, minimum 0.0012 J)."""
     m = cantilever_beam(n_el=10)
-    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=5, floquet=False, max_points=300)
+    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=5, floquet=False, max_points=300,
+                         tongues="follow-all")
     assert [e["kind"] for e in b.events].count("fold") == 2
     return m, b
 

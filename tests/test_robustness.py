@@ -87,7 +87,7 @@ def test_two_dof_multipliers_match_ivp_monodromy(energy):
 # ---------------------------------------------------------------------- step control, folds
 @pytest.mark.parametrize("spp", [200, 1000])
 def test_two_dof_reports_the_3_to_1_and_5_to_1_folds(spp):
-    b = nnm.continue_nnm(two_dof_model(), 1, 3e5, steps_per_period=spp, max_points=2000)
+    b = nnm.continue_nnm(two_dof_model(), 1, 3e5, steps_per_period=spp, max_points=2000, tongues="follow-all")
     assert b.status == "done"
     folds = [(e["energy"], e["frequency_hz"]) for e in b.events if e["kind"] == "fold"]
     # entry folds of the tongues: 3:1 near 4.7 kJ, 5:1 near 1.1e5 J (both at ~0.2235-0.2243 Hz)
@@ -127,7 +127,7 @@ def test_softening_beam_with_tip_mass_escapes():
     b = nnm.continue_nnm(beam, 1, 1.0, max_points=2000)
     assert b.status == "escape", b.message
     assert 0.99 * E_saddle < b.energy.max() <= E_saddle * (1 + 1e-6)
-    assert f"{b.energy[-1]:.6g}" in b.message
+    assert f"{b.energy[-1]:.4g}" in b.message
 
 
 def test_hardening_spring_between_masses_decades_apart_never_escapes():

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..backbone.settings import TongueBranchSettings
+from ..backbone.settings import Follow, TongueBranchSettings
 from ..errors import NNMInputError
 from ..results.branch import Point
 from .api import iter_nnm
@@ -55,8 +55,9 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, *, settings
     start = ((np.asarray(tongue["entry_x0"]), np.asarray(tongue["entry_v0"]), tongue["entry_period"]),
              (np.asarray(tongue["inside_x0"]), np.asarray(tongue["inside_v0"]), tongue["inside_period"]))
     tol = options.pop("tol")
+    # the tongue is followed whatever its order (Follow's max_order applies to departures from a backbone)
     it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
-                  _start=start, **options)
+                  tongues=Follow(max_order=None), _start=start, **options)
     last, inside, in_tongue, below = E_in, False, False, 0
     for p in it:
         inside = inside or p.label != "backbone" or p.energy < 0.99 * E_in
