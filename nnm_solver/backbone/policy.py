@@ -122,7 +122,7 @@ class FollowPolicy:
         # the tongue it entered (where it left the family); a resonance met inside it is the last points' label
         last = "" if points[-1].label == p.label else f", its last points labelled '{points[-1].label}'"
         return (f", inside a {p.label.split()[-1]} tongue: the points from {_at(p)} on are off the backbone "
-                f"family{last} (tongues='skip' follows the backbone)")
+                f"family{last} (tongues='skip', nnm-solve --tongues skip, follows the backbone)")
 
 
 class SkipPolicy:
