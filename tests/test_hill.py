@@ -143,8 +143,8 @@ def test_secular_events_equal_dense_through_a_tongue(monkeypatch, beam_tongue):
     the vectors nearest the velocity, which next to a fold include the pair through +1) the secular route put that
     crossing at 0.0141042 J, the dense one at 0.0141099 J.  (~1 min)"""
     m, _ = beam_tongue
-    ref = _with_route(monkeypatch, "dense", m, 1, 0.05, harmonics=5, max_points=300)
-    auto = _with_route(monkeypatch, "auto", m, 1, 0.05, harmonics=5, max_points=300)
+    ref = _with_route(monkeypatch, "dense", m, 1, 0.05, harmonics=5, max_points=300, tongues="follow-all")
+    auto = _with_route(monkeypatch, "auto", m, 1, 0.05, harmonics=5, max_points=300, tongues="follow-all")
     assert len(auto.energy) == len(ref.energy) and np.array_equal(auto.stable, ref.stable)
     assert [e["kind"] for e in auto.events] == [e["kind"] for e in ref.events] == ["fold", "fold"]
     assert [e.get("stability_change") for e in auto.events] == [e.get("stability_change") for e in ref.events]
@@ -252,7 +252,8 @@ def test_copies_of_a_class_beyond_the_hill_harmonics():
     fix: 2.2e-3 off at one orbit, the copy at 2.02 i kept instead of 5.02 i)."""
     from nnm_solver.orbits import hill_secular
     m = cantilever_beam(n_el=10)
-    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=3, floquet=False, max_points=300)
+    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=3, floquet=False, max_points=300,
+                         tongues="follow-all")
     problem, us = _orbits(m, b, 3, every=2)
     beyond = []
     copies = hill_secular.hard_copies
