@@ -37,7 +37,8 @@ from nnm_solver.errors import NNMInputError
 from .geometric import _structure
 from .polynomial import force_law
 
-__all__ = ["ReducedModel", "condensed_rom", "constrained_static", "membrane_static", "linear_modes"]
+__all__ = ["ReducedModel", "condensed_rom", "constrained_static", "membrane_static", "linear_modes",
+           "fit_condensed", "step_samples"]
 
 
 def linear_modes(structure, modes):
@@ -100,8 +101,9 @@ def _potential_monomials(m):
     return np.array(out, dtype=np.int64)
 
 
-def _samples(m):
-    """STEP-like sample points in scaled modal coordinates (each |q_i| <= 1)."""
+def step_samples(m):
+    """STEP-like sample points in scaled modal coordinates (each |q_i| <= 1): each mode at +-1 and +-1/2, pairs,
+    triples and quadruples at +-1 (S, m)."""
     pts = []
     for i in range(m):
         for a in (1.0, -1.0, 0.5, -0.5):
@@ -172,6 +174,41 @@ class ReducedModel:
                          info=dict(self.info or {}))
 
 
+def fit_condensed(omega2, Phi, q, mu, x, q0):
+    """The condensed potential's fit from static samples: q (S, m) modal coordinates, mu (S, m) the condensed
+    energy's gradient there (the modal load Phi^T F of the equilibrium; linear part omega2 q included), x (S, n)
+    the physical equilibria, q0 (m,) the modal scale of the samples.  Least squares on the cubic and quartic
+    monomials of V in the scaled coordinates q / q0 (conditioning), the membrane expansion x - Phi q on the
+    products q_i q_j.  Returns (exponents F, coefficients C: grad V = C^T z(q); Y, pairs; the relative misfit of
+    the modal forces)."""
+    m = Phi.shape[1]
+    E = _potential_monomials(m)
+    pairs = np.array([(i, j) for i in range(m) for j in range(i, m)])
+    rows, rhs, quad = [], [], []
+    for qk, muk in zip(q, mu):
+        p = qk / q0
+        for j in range(m):              # gradient of each monomial of the scaled potential V(p) at p: dV/dp_j
+            e = E.copy()
+            coef = e[:, j].astype(float)
+            e[:, j] = np.maximum(e[:, j] - 1, 0)
+            rows.append(coef * np.prod(p[None, :] ** e, axis=1))
+            rhs.append((muk[j] - omega2[j] * qk[j]) * q0[j])       # dV/dp_j = q0_j dV/dq_j
+        quad.append(p[pairs[:, 0]] * p[pairs[:, 1]])
+    A, bvec = np.array(rows), np.array(rhs)
+    if np.linalg.matrix_rank(A) < A.shape[1]:
+        raise NNMInputError(f"{len(q)} static solutions in {m} modes do not determine the {A.shape[1]} cubic and "
+                            f"quartic terms of the potential: add load cases combining the modes (the STEP set: "
+                            f"each mode at +-1 and +-1/2, pairs, triples and quadruples at +-1 of the scale)")
+    c, *_ = np.linalg.lstsq(A, bvec, rcond=None)
+    resid = float(np.linalg.norm(A @ c - bvec) / max(np.linalg.norm(bvec), 1e-300))
+    c_q = c / np.prod(q0[None, :] ** E, axis=1)                  # back to unscaled q
+    Yp, *_ = np.linalg.lstsq(np.array(quad), np.asarray(x) - np.asarray(q) @ Phi.T, rcond=None)
+    Y = Yp.T / (q0[pairs[:, 0]] * q0[pairs[:, 1]])
+    keep = np.abs(c) > 1e-12 * np.max(np.abs(c))
+    F, C = force_law(E[keep], c_q[keep])
+    return F, C, Y, pairs, resid
+
+
 def condensed_rom(structure, modes, scale, *, relax="membrane", steps=4):
     """Condensed ROM of a GeometricStructure (or an nnm.Model built from one) on its 1-based linear ``modes``.
 
@@ -194,10 +231,8 @@ def condensed_rom(structure, modes, scale, *, relax="membrane", steps=4):
     m = Phi.shape[1]
     trans = [k for k, lab in enumerate(s.labels) if lab.endswith((" ux", " uy", " uz"))] or list(range(s.n))
     q0 = scale / np.max(np.abs(Phi[trans]), axis=0)              # modal amplitude: largest translation = scale
-    pts = _samples(m)
-    E = _potential_monomials(m)
-    pairs = np.array([(i, j) for i in range(m) for j in range(i, m)])
-    rows, rhs, quad, ys = [], [], [], []
+    pts = step_samples(m)
+    qs, mus, xs = [], [], []
     for p in pts:
         q = p * q0
         if relax == "membrane":
@@ -207,23 +242,10 @@ def condensed_rom(structure, modes, scale, *, relax="membrane", steps=4):
         if not ok:
             raise NNMInputError(f"condensed_rom: no static solution at modal amplitudes {q} (scale {scale} m); "
                                 f"lower the scale")
-        # gradient of each monomial of the scaled potential V(p) at p: dV/dp_j
-        for j in range(m):
-            e = E.copy()
-            coef = e[:, j].astype(float)
-            e[:, j] = np.maximum(e[:, j] - 1, 0)
-            rows.append(coef * np.prod(p[None, :] ** e, axis=1))
-            rhs.append((mu[j] - omega2[j] * q[j]) * q0[j])         # dV/dp_j = q0_j dV/dq_j
-        quad.append(p[pairs[:, 0]] * p[pairs[:, 1]])
-        ys.append(x - Phi @ q)
-    A, bvec = np.array(rows), np.array(rhs)
-    c, *_ = np.linalg.lstsq(A, bvec, rcond=None)
-    resid = float(np.linalg.norm(A @ c - bvec) / max(np.linalg.norm(bvec), 1e-300))
-    c_q = c / np.prod(q0[None, :] ** E, axis=1)                  # back to unscaled q
-    Yp, *_ = np.linalg.lstsq(np.array(quad), np.array(ys), rcond=None)
-    Y = Yp.T / (q0[pairs[:, 0]] * q0[pairs[:, 1]])
-    keep = np.abs(c) > 1e-12 * np.max(np.abs(c))
-    F, C = force_law(E[keep], c_q[keep])
+        qs.append(q)
+        mus.append(mu)
+        xs.append(x)
+    F, C, Y, pairs, resid = fit_condensed(omega2, Phi, np.array(qs), np.array(mus), np.array(xs), q0)
     mesh = None
     if s.mesh is not None:
         import nnm_solver as nnm
