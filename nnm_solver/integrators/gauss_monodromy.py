@@ -24,7 +24,7 @@ from scipy.linalg import blas
 from ..jit import jit as _jit
 from .settings import KERNELS
 
-__all__ = ["monodromy"]
+__all__ = ["monodromy", "monodromy_factors"]
 
 
 @_jit
@@ -129,6 +129,19 @@ def _volterra(Hom, HomV, H, G, Dseq, ncols):
         dd[k0 * m:k1 * m] = blas.dtrsm(1.0, L.T, np.ascontiguousarray(b).T, side=1, lower=0, trans_a=0, diag=1,
                                        overwrite_b=1).T
     return dd * Dflat[:, None]
+
+
+def monodromy_factors(k, Bq, nsteps, Dseq):
+    """dq_N / dq0 as (d (n,), U (n, r), Vt (r, n)) with dq_N / dq0 = diag(d) + U @ Vt, r = nsteps s n_s: the diagonal
+    is the linear modes' map (A^N)[0, 0], the low-rank term the stages' (lowrank.DiagonalPlusLowRank); the same map as
+    monodromy's Sq with ncols = n, without its n x r by r x n product."""
+    n = Bq.shape[1]
+    N = int(nsteps)
+    PN, Hom, HomV, CAE, Uq, _ = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N, False)
+    if Bq.shape[0] == 0 or N == 0:
+        return PN[:, 0, 0].copy(), np.zeros((n, 0)), np.zeros((0, n))
+    W = _volterra(Hom, HomV, _kernel(CAE, k.BB, k.s, Bq.shape[0]), k.G, Dseq, n)
+    return PN[:, 0, 0].copy(), -Uq, W
 
 
 def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):

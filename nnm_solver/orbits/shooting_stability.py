@@ -62,7 +62,8 @@ class ShootingStability:
             q0, v0, T = self.unpack(self.accepted_u)
             h, half = T / self.spp, self.spp // 2
             factored = getattr(self.integrator, "sensitivity_factors", None)
-            if not self.all_columns and factored and self.sys.Bq.shape[0] * half <= ORBITS.low_rank_share * self.n:
+            rank = self.sys.Bq.shape[0] * self.integrator.stages * half        # n_s s N: the stages' deformations
+            if not self.all_columns and factored and rank <= ORBITS.low_rank_share * self.n:
                 out = factored(self.sys, q0, v0, h, half)       # diagonal + low rank (lowrank.py)
             else:
                 out = None
