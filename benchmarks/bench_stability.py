@@ -8,7 +8,7 @@ Routes, each run in its own process (BLAS 1 thread, the solver's worker threads 
   at the margin points (krein._earlier_change), the multipliers' eigenproblem of the coupled modes only
   (floquet.coupled_modes);
 * ``dense``: this tree with every Krein collision located by bisection on the full (dense) stability flag and the
-  eigenproblem of all modes: the reference.
+  eigenproblem of all modes: the reference (``stability.settings.STABILITY.krein_route = "dense"``).
 
 Cases: ``m20`` the aircraft's NNM 20 with the defaults until its first energy fold (as bench_targets.py's ``paris``);
 ``m13`` its NNM 13 to 26 J (the torus near 22.5 J); ``2dof`` the 2-DOF benchmark's NNM 1 to 100 J (the pitchfork at
@@ -68,10 +68,15 @@ def worker(case, route):
     if hasattr(ss, "eigenvalues"):
         ss.eigenvalues = counted
     if route == "dense":
-        import nnm_solver.stability.events as ev
-        ev.locate_collision = lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi)
-        if hasattr(ss.ShootingStability, "coupled_modes"):
-            ss.ShootingStability.coupled_modes = property(lambda self: None)
+        import dataclasses
+        import nnm_solver.stability.settings as st
+        if hasattr(st.STABILITY, "krein_route"):         # the reference route, a setting since issue 52
+            st.STABILITY = dataclasses.replace(st.STABILITY, krein_route="dense")
+        else:
+            import nnm_solver.stability.events as ev
+            ev.locate_collision = lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi)
+            if hasattr(ss.ShootingStability, "coupled_modes"):
+                ss.ShootingStability.coupled_modes = property(lambda self: None)
     for integrator in ("newmark", "gauss6"):          # warm-up: numba kernels compiled (or loaded) outside the time
         nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0,
                          integrator=integrator)

@@ -17,6 +17,7 @@ from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 from ..stability.floquet import (collision_coordinates, coupled_modes, eigenvalues, nontrivial_multipliers,
                        reversible_blocks, reversible_from_eigenvalues, reversible_spectrum)
 from .. import threads
+from ..stability import settings as _stability_settings
 from ..integrators.lowrank import DiagonalPlusLowRank
 from ..threads import background
 from .settings import ORBITS
@@ -134,8 +135,9 @@ class ShootingStability:
     @property
     def coupled_modes(self):
         """Indices of the modes that see the nonlinear elements (floquet.coupled_modes), or None when all do: the
-        multipliers' eigenproblem is of their size, the others' eigenvalues are their diagonal entries of A11."""
-        return coupled_modes(self.sys.Bq)
+        multipliers' eigenproblem is of their size, the others' eigenvalues are their diagonal entries of A11.  All
+        modes (None) on the dense reference route (stability.settings: STABILITY.krein_route)."""
+        return None if _stability_settings.STABILITY.krein_route == "dense" else coupled_modes(self.sys.Bq)
 
     @property
     def background_spectrum(self):
