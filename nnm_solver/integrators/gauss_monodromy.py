@@ -9,9 +9,10 @@ C, E, F, G of a step size.
 Cost (issue 52).  The parts that depend on the step h, N and the system only (the per-mode powers A^r, Bq C A^k,
 the kernel H(r) = sum_m (C A^r E)_m (x) b_m b_m^T, the final map's factor A^(N-1-j) E Bq^T) are built by one
 compiled loop (``_linear_parts``, O(N n s (s + n_s))) instead of numpy's batched 2 x 2 products; the Volterra
-recursion takes the history of step k in one matrix product (m x k m by k m x ncols, BLAS-3); what remains is the
-final (n x N m) @ (N m x ncols) product.  On the aircraft (n = 548, 4 springs, gauss6) 51 -> ~14 ms for a half
-period (N = 50) and 22 -> ~7 ms for a quarter (N = 25), the same numbers to round-off (tests/
+recursion is one unit lower triangular solve (``_volterra``: BLAS-3); what remains is that solve and the final
+(n x N m) @ (N m x ncols) product.  On the aircraft (n = 548, 4 springs, gauss6; CPU time of one call,
+benchmarks/README.md) a quarter period (N = 25) 21 -> 8 ms and a half period (N = 50) 39 -> 32 ms at load 4 (at load 9:
+21 -> 17 and 41 -> 33 ms), the same numbers to round-off (tests/
 test_gauss_monodromy.py: within 1e-13 of the assembly it replaced, and finite differences).  The orbit-independent
 parts are not kept between calls: a run repeats a step h and N for 2 % of its sweeps (each Newton iterate has its
 own period).
