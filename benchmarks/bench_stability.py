@@ -8,14 +8,15 @@ Routes, each run in its own process (BLAS 1 thread, the solver's worker threads 
   at the margin points (krein._earlier_change), the multipliers' eigenproblem of the coupled modes only
   (floquet.coupled_modes);
 * ``dense``: this tree with every Krein collision located by bisection on the full (dense) stability flag and the
-  eigenproblem of all modes: the reference.
+  eigenproblem of all modes: the reference (``stability.settings.STABILITY.krein_route = "dense"``).
 
 Cases: ``m20`` the aircraft's NNM 20 with the defaults until its first energy fold (as bench_targets.py's ``paris``);
 ``m13`` its NNM 13 to 26 J (the torus near 22.5 J); ``2dof`` the 2-DOF benchmark's NNM 1 to 100 J (the pitchfork at
 40.97 J); ``3dof`` a 3-DOF chain's combination resonance (two Krein collisions; tests/test_bifurcation.py), gauss6.
 Printed per case and route: the median time, the load average before and after each run, the dense eigenproblems
 (floquet.eigenvalues calls; on the main thread: during event location), the events, and each event's relative
-energy difference from the dense route's.  Usage::
+energy difference from the dense route's; the CPU time of the process (all its threads) beside the wall time (the
+steadier number on a shared machine).  Usage::
 
     git archive b28e431 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
     python benchmarks/bench_stability.py --before /tmp/base --cases m20 --repeats 3
@@ -68,16 +69,21 @@ def worker(case, route):
     if hasattr(ss, "eigenvalues"):
         ss.eigenvalues = counted
     if route == "dense":
-        import nnm_solver.stability.events as ev
-        ev.locate_collision = lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi)
-        if hasattr(ss.ShootingStability, "coupled_modes"):
-            ss.ShootingStability.coupled_modes = property(lambda self: None)
+        import dataclasses
+        import nnm_solver.stability.settings as st
+        if hasattr(st.STABILITY, "krein_route"):         # the reference route, a setting since issue 52
+            st.STABILITY = dataclasses.replace(st.STABILITY, krein_route="dense")
+        else:
+            import nnm_solver.stability.events as ev
+            ev.locate_collision = lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi)
+            if hasattr(ss.ShootingStability, "coupled_modes"):
+                ss.ShootingStability.coupled_modes = property(lambda self: None)
     for integrator in ("newmark", "gauss6"):          # warm-up: numba kernels compiled (or loaded) outside the time
         nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0,
                          integrator=integrator)
     model = _model(case)
     counts.update(all=0, main=0)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     if case == "m20":
         stop, E = threading.Event(), []
 
@@ -92,8 +98,8 @@ def worker(case, route):
         b = nnm.continue_nnm(model, mode=1, energy_max=100.0)
     else:
         b = nnm.continue_nnm(model, 1, 3.0, integrator="gauss6", steps_per_period=100)
-    t = time.perf_counter() - t0
-    print(json.dumps(dict(seconds=t, points=len(b.energy), eig_all=counts["all"], eig_main=counts["main"],
+    t, cpu = time.perf_counter() - t0, time.process_time() - c0
+    print(json.dumps(dict(seconds=t, cpu=cpu, points=len(b.energy), eig_all=counts["all"], eig_main=counts["main"],
                           stable=np.asarray(b.stable).astype(int).tolist(),
                           events=[(e["kind"], float(e["energy"]), e.get("stability_change")) for e in b.events],
                           solver=nnm.__file__)))
@@ -138,7 +144,9 @@ def main(argv=None):
                 if len(last["stable"]) == len(ref["stable"]) else f"{len(last['stable'])} vs {len(ref['stable'])} points")
             times = ", ".join("%.2f" % r["seconds"] for r in rs)
             loads = ", ".join("%.1f->%.1f" % tuple(r["load"]) for r in rs)
-            print(f"  {name:7s} median {np.median([r['seconds'] for r in rs]):7.2f} s  ({times}; load {loads})  "
+            cpus = ", ".join("%.2f" % r.get("cpu", np.nan) for r in rs)
+            print(f"  {name:7s} median {np.median([r['seconds'] for r in rs]):7.2f} s wall ({times}; load {loads}), "
+                  f"CPU {np.median([r.get('cpu', np.nan) for r in rs]):.2f} s ({cpus})  "
                   f"{last['points']} points, flags {flags}; dense eigenproblems {last['eig_all']} "
                   f"({last['eig_main']} on the main thread)")
             for kind, energy, change in last["events"]:

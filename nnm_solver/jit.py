@@ -206,3 +206,45 @@ else:
     @jit
     def matmul_t(A, B):
         return A @ B.T
+
+
+_GEEV = None
+if _LAPACK_ROUTINES is not None:
+    try:   # numba's dgeev entry point (as its np.linalg.eigvals calls it)
+        _GEEV = _LAPACK().numba_ez_rgeev(_types.float64)
+    except Exception:  # pragma: no cover - another numba version
+        _GEEV = None
+
+if _GEEV is not None:
+    _NOVECTORS = ord("N")
+
+    @jit
+    def _geev_values(A):
+        """(wr, wi, info) of LAPACK dgeev on a real square A, no eigenvectors (numba's np.linalg.eigvals, without its
+        refusal of complex eigenvalues for real input)."""
+        n = A.shape[0]
+        acpy = _fortran_copy(A)
+        wr = np.empty(n)
+        wi = np.empty(n)
+        vl = np.empty(1)
+        vr = np.empty(1)
+        info = 0
+        if n > 0:
+            info = _GEEV(_KIND, _NOVECTORS, _NOVECTORS, n, acpy.ctypes, n, wr.ctypes, wi.ctypes, vl.ctypes, 1,
+                         vr.ctypes, 1)
+        # (the copies used after the call: alive until LAPACK has returned)
+        info += 0 * (acpy.shape[0] + vl.shape[0] + vr.shape[0])
+        return wr, wi, info
+
+
+def eigvals_nogil(A):
+    """Eigenvalues (complex (n,)) of a real square float64 matrix A by LAPACK dgeev, called from compiled code that
+    releases the GIL: a worker thread's eigenproblem then runs beside the main thread (numpy 1.26's eigvals holds the
+    GIL; issue 52).  None where numba's LAPACK is not available (the caller uses numpy); NaN when dgeev does not
+    converge (numpy raises LinAlgError there)."""
+    if _GEEV is None:
+        return None
+    wr, wi, info = _geev_values(np.ascontiguousarray(A, dtype=float))
+    if info != 0:
+        return np.full(A.shape[0], np.nan, dtype=complex)
+    return wr + 1j * wi

@@ -98,15 +98,13 @@ def test_aircraft_mode_20_events_and_flags_equal_the_dense_route(monkeypatch):
     error (the two routes place it 5.4e-6 and 2.7e-6 apart)."""
     from pathlib import Path
     import nnm_solver as nnm
-    import nnm_solver.stability.events as ev
-    from nnm_solver.orbits import shooting_stability as ss
+    import nnm_solver.stability.settings as st
     from test_decoupled_modes import _matched
     model = nnm.load_model(str(Path(__file__).resolve().parent.parent / "assets" / "paris.h5"))
     local = nnm.continue_nnm(model, 20, 10.0, integrator="newmark", freq_tol=None)   # the routes measured with
                                                                                       # Newmark-200, fixed steps
     with monkeypatch.context() as m:
-        m.setattr(ev, "locate_collision", lambda loc, lo, hi, rho_stars, ends=None: loc.bisect(loc.stable, lo, hi))
-        m.setattr(ss.ShootingStability, "coupled_modes", property(lambda self: None))
+        m.setattr(st, "STABILITY", dataclasses.replace(st.STABILITY, krein_route="dense"))
         dense = nnm.continue_nnm(model, 20, 10.0, integrator="newmark", freq_tol=None)
     assert len(local.energy) == len(dense.energy) > 15
     assert np.allclose(local.energy, dense.energy, rtol=1e-9)
@@ -116,3 +114,35 @@ def test_aircraft_mode_20_events_and_flags_equal_the_dense_route(monkeypatch):
     assert kinds == [("torus", "loss"), ("torus", "gain")]
     assert [(e["kind"], e.get("stability_change")) for e in local.events] == kinds
     assert np.allclose([e["energy"] for e in local.events], [e["energy"] for e in dense.events], rtol=1e-5, atol=0)
+
+
+def test_the_dense_route_is_a_setting(monkeypatch):
+    """STABILITY.krein_route = "dense" (the reference) locates the 3-DOF combination resonance's two Krein collisions
+    by bisection on the full flag (no local evaluation) and gives the default route's flags and events (gauss6, 100
+    steps); any other value is refused."""
+    import nnm_solver as nnm
+    import nnm_solver.stability.settings as st
+    import nnm_solver.stability.locator as locator
+    from test_bifurcation import _combination_resonance_model
+    m = _combination_resonance_model()
+    calls = []
+    local_collision = locator.Locator.local_collision
+
+    def counted(self, sigma, shift):
+        calls.append(sigma)
+        return local_collision(self, sigma, shift)
+
+    monkeypatch.setattr(locator.Locator, "local_collision", counted)
+    local = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100, freq_tol=None)
+    n_local = len(calls)
+    monkeypatch.setattr(st, "STABILITY", dataclasses.replace(st.STABILITY, krein_route="dense"))
+    calls.clear()
+    dense = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100, freq_tol=None)
+    assert n_local > 0 and not calls
+    assert np.array_equal(np.asarray(local.stable), np.asarray(dense.stable))
+    kinds = [(e["kind"], e.get("stability_change")) for e in dense.events]
+    assert [(e["kind"], e.get("stability_change")) for e in local.events] == kinds
+    assert [k for k in kinds if k[0] == "torus"] == [("torus", "loss"), ("torus", "gain")]
+    assert np.allclose([e["energy"] for e in local.events], [e["energy"] for e in dense.events], rtol=2e-6, atol=0)
+    with pytest.raises(ValueError, match="krein_route"):
+        dataclasses.replace(st.STABILITY, krein_route="secular")

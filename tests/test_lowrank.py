@@ -138,3 +138,64 @@ def test_a_stalled_complex_shift_is_not_tried_again(monkeypatch):
         c = point.local_collision(tangent, 0.1 + 0.08j)
         assert _same_set(c, _nearest(A.deflated(tangent[:n]).dense(), 0.1, 6), 1e-9)
     assert [isinstance(s, complex) for s in asked] == [True, False, False, False]
+
+
+@pytest.mark.parametrize("stages", [2, 3])
+def test_gauss_factors_are_the_sensitivity_map(stages):
+    """gauss.sweep_factors' diagonal + low rank (rank N s n_s) is gauss.sweep_sensitivity's dq_N/dq0, to round-off;
+    the shooting problem keeps this form for its multipliers where the rank is at most ORBITS.low_rank_share n."""
+    from nnm_solver.integrators import gauss
+    rng = np.random.default_rng(6)
+    n, ns, N, h = 60, 2, 8, 0.01
+    omega2 = np.sort(rng.uniform(1.0, 4e3, n))
+    Bq = rng.standard_normal((ns, n))
+    kern = (omega2, Bq, np.array([3], dtype=np.int64), np.array([[80.0], [5.0]]), np.zeros((ns, 0, 3)))
+    q0, v0 = 0.2 * rng.standard_normal(n), np.zeros(n)
+    q, v, Sq, _, _, _, ok = gauss.sweep_sensitivity(q0, v0, h, N, kern, stages, False, False)
+    q1, v1, F, ok1 = gauss.sweep_factors(q0, v0, h, N, kern, stages)
+    assert ok and ok1 and F.rank == ns * stages * N
+    assert np.array_equal(q, q1) and np.array_equal(v, v1)
+    assert np.abs(F.dense() - Sq).max() <= 1e-13 * np.abs(Sq).max()
+    assert np.abs(Sq - np.diag(np.diag(Sq))).max() > 1e-3 * np.abs(Sq).max()      # (the springs matter)
+
+
+def test_gauss_shooting_keeps_the_factored_map_and_its_multipliers():
+    """A chain of 150 modes with one cubic spring, quarter-period shooting with gauss6 at 24 steps a period: the
+    half-period map's rank 1 x 3 x 12 = 36 is below n / 3, so stability_maps keeps it as diagonal + low rank; the
+    multipliers and the Krein follower's local coordinates are those of the dense map (the route above the share)."""
+    import dataclasses
+    import nnm_solver as nnm
+    import nnm_solver.orbits.shooting_stability as ss_module
+    from nnm_solver.model.modal import ModalSystem
+    from nnm_solver.orbits.shooting import ShootingProblem
+    n = 150
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    s = ModalSystem(nnm.Model(np.eye(n), K * 1e4, [nnm.CubicSpring(dof=3, k3=5e9)]))
+
+    def point(share):
+        ss_module.ORBITS = dataclasses.replace(ss_module.ORBITS, low_rank_share=share)
+        prob = ShootingProblem(s, 0, 24, integrator="gauss6")
+        q0 = np.zeros(n)
+        q0[0] = 0.02
+        u = prob.pack(q0, np.zeros(n), prob.T_r)
+        _, J = prob.jacobian(u)
+        prob.accept(u, J)
+        tangent = np.zeros(len(u))
+        tangent[0] = 1.0
+        mu = prob.multipliers(u, tangent)
+        return prob, tangent, mu
+
+    kept = ss_module.ORBITS
+    try:
+        low, tangent, mu_low = point(1.0 / 3.0)
+        dense, _, mu_dense = point(0.0)
+    finally:
+        ss_module.ORBITS = kept
+    assert low._low_rank_a11(low.stability_maps()) is not None and dense._low_rank_a11(dense.stability_maps()) is None
+    assert low._low_rank_a11(low.stability_maps()).rank == 36
+    assert np.abs(low.stability_maps()[0] - dense.stability_maps()[0]).max() <= 1e-12
+    assert _same_set(mu_low, mu_dense, 1e-10)
+    F = low._low_rank_a11(low.stability_maps())
+    assert np.abs(F.U @ F.Vt).max() > 1e-3 * np.abs(F.d).max()          # (the spring matters)
+    for shift in (-0.5, 0.3):
+        assert _same_set(low.local_collision(tangent, shift), dense.local_collision(tangent, shift), 1e-9)

@@ -40,12 +40,13 @@ import numpy as np
 
 from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
-from .gauss_monodromy import monodromy as _monodromy
+from .gauss_monodromy import monodromy as _monodromy, monodromy_factors as _monodromy_factors
+from .lowrank import DiagonalPlusLowRank
 from .newmark import solve_stages
 from .settings import KERNELS
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
-           "sweep_sensitivity"]
+           "sweep_sensitivity", "sweep_factors"]
 
 
 @lru_cache(maxsize=None)
@@ -301,3 +302,16 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
         return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False
     Sq, Sv = _monodromy(k, Bq, nsteps, Dseq, ncols, velocities)
     return q, v, Sq, Sv, sq, sv, True
+
+
+def sweep_factors(q0, v0, h, nsteps, system_kernel, s):
+    """Integrate with dq_N/dq0 kept as a diagonal plus a low-rank term of rank nsteps s n_s: (q, v,
+    DiagonalPlusLowRank, ok), the same map as sweep_sensitivity's Sq with all_columns=False (lowrank.py; None when
+    the sweep fails)."""
+    omega2, Bq, powers, coeffs, kinks = system_kernel
+    k = _constants(omega2, Bq, h, s)
+    q, v, _, _, Dseq, ok = _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, k.C1, k.Cc, k.F, k.G,
+                                         k.b, k.bbar, k.c, k.Abar, k.Minv)
+    if not ok:
+        return q, v, None, False
+    return q, v, DiagonalPlusLowRank(*_monodromy_factors(k, Bq, nsteps, Dseq)), True

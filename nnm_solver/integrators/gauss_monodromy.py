@@ -5,36 +5,144 @@ p_k = -Bq^T w_k, w_k = Dg_k dd_k the stage force perturbations (s n_s).  Only th
 propagated, by a discrete Volterra recursion (``_volterra``); the final state is the block-diagonal linear map
 A^N plus one matrix product, as for Newmark (newmark_monodromy.py).  ``GaussConstants`` (gauss.py) carries A,
 C, E, F, G of a step size.
+
+Cost (issue 52).  The parts that depend on the step h, N and the system only (the per-mode powers A^r, Bq C A^k,
+the kernel H(r) = sum_m (C A^r E)_m (x) b_m b_m^T, the final map's factor A^(N-1-j) E Bq^T) are built by one
+compiled loop (``_linear_parts``, O(N n s (s + n_s))) instead of numpy's batched 2 x 2 products; the Volterra
+recursion is one unit lower triangular solve (``_volterra``: BLAS-3); what remains is that solve and the final
+(n x N m) @ (N m x ncols) product.  On the aircraft (n = 548, 4 springs, gauss6; CPU time of one call,
+benchmarks/README.md) a quarter period (N = 25) 21 -> 8 ms and a half period (N = 50) 39 -> 32 ms at load 4 (at load 9:
+21 -> 17 and 41 -> 33 ms), the same numbers to round-off (tests/
+test_gauss_monodromy.py: within 1e-13 of the assembly it replaced, and finite differences).  The orbit-independent
+parts are not kept between calls: a run repeats a step h and N for 2 % of its sweeps (each Newton iterate has its
+own period).
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import blas
 
-from ..jit import jit as _jit, lapack_solve_many
+from ..jit import jit as _jit
+from .settings import KERNELS
 
-__all__ = ["monodromy"]
+__all__ = ["monodromy", "monodromy_factors"]
 
 
 @_jit
-def _volterra(Hom, H, G, Dseq, ncols):
-    """The stage force perturbations W (N, m, ncols), m = s n_s, of the monodromy's columns:
-    (I + G Dg_k) dd_k = Hom_k - sum_{j<k} H(k-1-j) w_j,  w_k = Dg_k dd_k (see _monodromy)."""
-    N = Hom.shape[0]
-    m = Hom.shape[1]
-    n = Hom.shape[3]
-    W = np.zeros((N, m, ncols))
-    eye = np.eye(m)
+def _linear_parts(A_lin, C, E, Bq, N, velocities):
+    """The orbit-independent parts of the monodromy of N steps: (PN (n, 2, 2) = A^N per mode, Hom (N, m, n) the
+    stage deformations' response to dq0 = Bq C A^k e_1 and, when velocities, HomV (N, m, n) to dv0 (Bq C A^k e_2; else
+    an empty array), CAE (N - 1, s, s, n) = C A^r E, Uq (n, N m) with Uq[:, j m + (l, r)] = (A^(N-1-j) E)[0, l]
+    Bq[r] (the final dq's factor) and Uv the same for dv (empty unless velocities)).  m = s n_s, rows (l, r)."""
+    n = A_lin.shape[0]
+    s = C.shape[1]
+    ns = Bq.shape[0]
+    m = s * ns
+    R = max(N - 1, 0)
+    P = np.empty((N + 1, n, 2, 2))
+    for i in range(n):
+        P[0, i, 0, 0] = 1.0
+        P[0, i, 0, 1] = 0.0
+        P[0, i, 1, 0] = 0.0
+        P[0, i, 1, 1] = 1.0
+    for r in range(N):
+        for i in range(n):
+            for t in range(2):
+                for c in range(2):
+                    P[r + 1, i, t, c] = A_lin[i, t, 0] * P[r, i, 0, c] + A_lin[i, t, 1] * P[r, i, 1, c]
+    nv = n if velocities else 0
+    CA = np.empty((N, s, 2, n))             # C A^k per mode (columns: dq0, dv0)
     for k in range(N):
-        acc = np.empty((m, ncols))
-        acc[:, :n] = Hom[k, :, 0, :]
-        if ncols > n:
-            acc[:, n:] = Hom[k, :, 1, :]
-        for j in range(k):
-            acc -= H[k - 1 - j] @ W[j]
-        Jk = eye + G * Dseq[k][None, :]
-        dd = lapack_solve_many(Jk, acc)
-        W[k] = dd * Dseq[k][:, None]
-    return W
+        for l in range(s):
+            for i in range(n):
+                CA[k, l, 0, i] = C[i, l, 0] * P[k, i, 0, 0] + C[i, l, 1] * P[k, i, 1, 0]
+                CA[k, l, 1, i] = C[i, l, 0] * P[k, i, 0, 1] + C[i, l, 1] * P[k, i, 1, 1]
+    Hom = np.empty((N, m, n))
+    HomV = np.empty((N if velocities else 0, m, nv))
+    CAE = np.empty((R, s, s, n))
+    for k in range(N):
+        for l in range(s):
+            for r in range(ns):
+                for i in range(n):
+                    Hom[k, l * ns + r, i] = CA[k, l, 0, i] * Bq[r, i]
+                if velocities:
+                    for i in range(n):
+                        HomV[k, l * ns + r, i] = CA[k, l, 1, i] * Bq[r, i]
+            if k < R:
+                for j in range(s):
+                    for i in range(n):
+                        CAE[k, l, j, i] = CA[k, l, 0, i] * E[i, 0, j] + CA[k, l, 1, i] * E[i, 1, j]
+    Uq = np.empty((n, N * m))
+    Uv = np.empty((nv, N * m))
+    for i in range(n):
+        for k in range(N):          # the final state's factor A^(N-1-k) E Bq^T (column block k)
+            Pk = N - 1 - k
+            for l in range(s):
+                ae0 = P[Pk, i, 0, 0] * E[i, 0, l] + P[Pk, i, 0, 1] * E[i, 1, l]
+                for r in range(ns):
+                    Uq[i, k * m + l * ns + r] = ae0 * Bq[r, i]
+                if velocities:
+                    ae1 = P[Pk, i, 1, 0] * E[i, 0, l] + P[Pk, i, 1, 1] * E[i, 1, l]
+                    for r in range(ns):
+                        Uv[i, k * m + l * ns + r] = ae1 * Bq[r, i]
+    return P[N].copy(), Hom, HomV, CAE, Uq, Uv
+
+
+def _kernel(CAE, BB, s, ns):
+    """H (R, m, m): H(r)[(l, x), (j, y)] = sum_m (C A^r E)_m[l, j] Bq[x, m] Bq[y, m]."""
+    R = CAE.shape[0]
+    m = s * ns
+    if R == 0:
+        return np.zeros((0, m, m))
+    return (CAE.reshape(R * s * s, -1) @ BB.T).reshape(R, s, s, ns, ns).transpose(0, 1, 3, 2, 4).reshape(R, m, m)
+
+
+def _volterra(Hom, HomV, H, G, Dseq, ncols):
+    """The stage force perturbations W (N m, ncols), m = s n_s, of the monodromy's columns:
+    (I + G Dg_k) dd_k = Hom_k - sum_{j<k} H(k-1-j) w_j,  w_k = Dg_k dd_k (see monodromy); columns n.. (ncols = 2n)
+    from HomV.
+
+    Each block row multiplied by J_k^-1 = (I + G Dg_k)^-1 (m x m inverses, one batched product), the system in dd is unit lower
+    triangular: dd_k + sum_{j<k} J_k^-1 H(k-1-j) Dg_j dd_j = J_k^-1 Hom_k, solved KERNELS.volterra_block steps at
+    a time as newmark_monodromy.py's: the earlier blocks by one matrix product, the block by a triangular solve
+    (BLAS-3; O((N m)^2 ncols) in all, memory O(block m N m))."""
+    N, m, n = Hom.shape
+    R = N - 1
+    Dflat = Dseq.reshape(-1)
+    J = np.eye(m)[None] + G[None] * Dseq[:, None, :]                       # (N, m, m)
+    Hext = np.concatenate([H, np.zeros((1, m, m))])                        # Hext[R] = 0: the upper blocks
+    dd = np.empty((N * m, ncols))
+    block = max(1, KERNELS.volterra_block)
+    for k0 in range(0, N, block):
+        k1 = min(k0 + block, N)
+        kk = np.arange(k0, k1)[:, None]
+        jj = np.arange(k1)[None, :]
+        idx = np.where(jj < kk, kk - 1 - jj, R)                            # (b, k1): H(k-1-j), 0 for j >= k
+        rows = Hext[idx].transpose(0, 2, 1, 3).reshape(k1 - k0, m, k1 * m) * Dflat[None, None, :k1 * m]
+        rhs = np.concatenate([Hom[k0:k1]] + ([HomV[k0:k1]] if ncols > n else []) + [rows], axis=2)
+        X = np.linalg.inv(J[k0:k1]) @ rhs                                   # J_k^-1 [Hom_k, H(k-1-j) Dg_j]
+        b = X[:, :, :ncols].reshape((k1 - k0) * m, ncols)
+        Lk = X[:, :, ncols:].reshape((k1 - k0) * m, k1 * m)
+        if k0:
+            b -= Lk[:, :k0 * m] @ dd[:k0 * m]
+        # L dd = b as dd^T L^T = b^T: Fortran-ordered views, solved in place by BLAS (unit lower triangular)
+        L = np.ascontiguousarray(Lk[:, k0 * m:])
+        dd[k0 * m:k1 * m] = blas.dtrsm(1.0, L.T, np.ascontiguousarray(b).T, side=1, lower=0, trans_a=0, diag=1,
+                                       overwrite_b=1).T
+    return dd * Dflat[:, None]
+
+
+def monodromy_factors(k, Bq, nsteps, Dseq):
+    """dq_N / dq0 as (d (n,), U (n, r), Vt (r, n)) with dq_N / dq0 = diag(d) + U @ Vt, r = nsteps s n_s: the diagonal
+    is the linear modes' map (A^N)[0, 0], the low-rank term the stages' (lowrank.DiagonalPlusLowRank); the same map as
+    monodromy's Sq with ncols = n, without its n x r by r x n product."""
+    n = Bq.shape[1]
+    N = int(nsteps)
+    PN, Hom, HomV, CAE, Uq, _ = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N, False)
+    if Bq.shape[0] == 0 or N == 0:
+        return PN[:, 0, 0].copy(), np.zeros((n, 0)), np.zeros((0, n))
+    W = _volterra(Hom, HomV, _kernel(CAE, k.BB, k.s, Bq.shape[0]), k.G, Dseq, n)
+    return PN[:, 0, 0].copy(), -Uq, W
 
 
 def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
@@ -49,39 +157,20 @@ def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
     n = Bq.shape[1]
     ns = Bq.shape[0]
     s = k.s
-    N = nsteps
-    m = s * ns
-    # per-mode powers A^r, r = 0..N
-    P = np.empty((N + 1, n, 2, 2))
-    P[0] = np.eye(2)[None]
-    a = k.A_lin
-    for r in range(N):
-        P[r + 1, :, :, 0] = a[:, :, 0] * P[r, :, 0, 0][:, None] + a[:, :, 1] * P[r, :, 1, 0][:, None]
-        P[r + 1, :, :, 1] = a[:, :, 0] * P[r, :, 0, 1][:, None] + a[:, :, 1] * P[r, :, 1, 1][:, None]
-    diag_q = P[N, :, 0, :]   # (n, 2): dq_N / (dq0_m, dv0_m)
-    diag_v = P[N, :, 1, :]
+    N = int(nsteps)
+    PN, Hom, HomV, CAE, Uq, Uv = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N,
+                                               bool(ncols > n or velocities))
     cols = np.arange(n)
     Sq, Sv = np.zeros((n, ncols)), (np.zeros((n, ncols)) if velocities else None)
-    for S, diag in ((Sq, diag_q), (Sv, diag_v)):
+    for S, row in ((Sq, 0), (Sv, 1)):
         if S is not None:
-            S[cols, cols] = diag[:, 0]
+            S[cols, cols] = PN[:, row, 0]
             if ncols > n:
-                S[cols, n + cols] = diag[:, 1]
-    if ns == 0:
+                S[cols, n + cols] = PN[:, row, 1]
+    if ns == 0 or N == 0:
         return Sq, Sv
-    CA = k.C[None] @ P[:N]                                # (N, n, s, 2): C A^r
-    R = max(N - 1, 0)
-    CAE = CA[:R] @ k.E[None]                              # (N-1, n, s, s): C A^r E
-    BB = k.BB                                             # (ns^2, n)
-    H = (np.ascontiguousarray(CAE.transpose(0, 2, 3, 1)).reshape(R * s * s, n) @ BB.T)   # (r, l, j, x, y)
-    H = H.reshape(R, s, s, ns, ns).transpose(0, 1, 3, 2, 4).reshape(R, m, m)
-    Hom = np.ascontiguousarray((CA.transpose(0, 2, 3, 1)[:, :, None, :, :] * Bq[None, None, :, None, :])
-                               .reshape(N, m, 2, n))                  # Bq C A^k per mode, rows (l, r)
-    W = _volterra(Hom, np.ascontiguousarray(H), k.G, Dseq, ncols).reshape(N * m, ncols)
-    # final state: - sum_j A^(N-1-j) E Bq^T w_j
-    AE = P[:N][::-1] @ k.E[None]                          # AE[j] = A^(N-1-j) E, (N, n, 2, s)
-    Uq = (AE[:, :, 0, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m)
-    Sq -= Uq @ W
+    W = _volterra(Hom, HomV, _kernel(CAE, k.BB, s, ns), k.G, Dseq, ncols)
+    Sq -= Uq @ W                                          # - sum_j A^(N-1-j) E Bq^T w_j
     if velocities:
-        Sv -= (AE[:, :, 1, :].transpose(1, 0, 2)[:, :, :, None] * Bq.T[:, None, None, :]).reshape(n, N * m) @ W
+        Sv -= Uv @ W
     return Sq, Sv

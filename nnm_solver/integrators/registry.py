@@ -136,6 +136,11 @@ class _Gauss(Integrator):
             return general.sensitivity(system, self.stages, q0, v0, h, nsteps, all_columns, velocities)
         return gauss.sweep_sensitivity(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
 
+    def sensitivity_factors(self, system, q0, v0, h, nsteps):
+        if _general(system):
+            return None
+        return gauss.sweep_factors(q0, v0, h, nsteps, system.kernel, self.stages)
+
 
 #: Default steps per period: Newmark 200 (a fundamental-dominated orbit's frequency to 8e-5, the seed paper's
 #: choice; the aircraft's mode 20 near its 3:1 tongue only to 1e-2, issue 51), gauss4 and gauss6 100 (gauss6:

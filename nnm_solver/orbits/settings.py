@@ -103,7 +103,7 @@ class OrbitSettings:
     #: in vain at the end (measured, 13-40 points, workers on / off: beam n = 70-300 0.14/0.12 .. 0.73/0.68 s, plate
     #: n = 300 0.55/0.47 s; plate n = 550 1.24/1.69 s, aircraft n = 548 4.63/7.21 s)
     background_min_n: int = 400
-    #: the half-period map is kept as diagonal + low rank (lowrank.py) when its rank, n_s times the steps of half a
+    #: the half-period map is kept as diagonal + low rank (lowrank.py) when its rank, n_s x the stages x the steps of half a
     #: period, is at most this share of n: the Krein follower's shifted solves then skip the n x n LU (setup
     #: O(n r^2) against O(n^3 / 3))
     low_rank_share: float = 1.0 / 3.0

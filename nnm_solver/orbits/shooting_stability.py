@@ -17,6 +17,7 @@ from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigs
 from ..stability.floquet import (collision_coordinates, coupled_modes, eigenvalues, nontrivial_multipliers,
                        reversible_blocks, reversible_from_eigenvalues, reversible_spectrum)
 from .. import threads
+from ..stability import settings as _stability_settings
 from ..integrators.lowrank import DiagonalPlusLowRank
 from ..threads import background
 from .settings import ORBITS
@@ -62,7 +63,8 @@ class ShootingStability:
             q0, v0, T = self.unpack(self.accepted_u)
             h, half = T / self.spp, self.spp // 2
             factored = getattr(self.integrator, "sensitivity_factors", None)
-            if not self.all_columns and factored and self.sys.Bq.shape[0] * half <= ORBITS.low_rank_share * self.n:
+            rank = self.sys.Bq.shape[0] * self.integrator.stages * half        # n_s s N: the stages' deformations
+            if not self.all_columns and factored and rank <= ORBITS.low_rank_share * self.n:
                 out = factored(self.sys, q0, v0, h, half)       # diagonal + low rank (lowrank.py)
             else:
                 out = None
@@ -133,8 +135,9 @@ class ShootingStability:
     @property
     def coupled_modes(self):
         """Indices of the modes that see the nonlinear elements (floquet.coupled_modes), or None when all do: the
-        multipliers' eigenproblem is of their size, the others' eigenvalues are their diagonal entries of A11."""
-        return coupled_modes(self.sys.Bq)
+        multipliers' eigenproblem is of their size, the others' eigenvalues are their diagonal entries of A11.  All
+        modes (None) on the dense reference route (stability.settings: STABILITY.krein_route)."""
+        return None if _stability_settings.STABILITY.krein_route == "dense" else coupled_modes(self.sys.Bq)
 
     @property
     def background_spectrum(self):

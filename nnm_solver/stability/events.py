@@ -29,6 +29,7 @@ from .krein import candidates as krein_candidates
 from .krein import locate_collision
 from .locator import EVENT_RTOL, Locator
 from .settings import STABILITY
+from . import settings as _settings         # (the Krein route read at each call: a reference run swaps STABILITY)
 
 __all__ = ["Locator", "classify_multipliers", "EVENT_KINDS", "EVENT_RTOL", "locate_between", "stability_changes"]
 
@@ -102,10 +103,11 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                 # the Krein locator's coordinates at the two ends: kept with their multipliers (loc.spectra)
                 rho_a, rho_b = (loc.spectra.get(float(x), (None, None))[1] for x in (0.0, s))
                 rho_u = rho_b if pu is pb else rho_a
-                if rho_u is not None and np.any(np.abs(np.imag(rho_u)) > 1e-9):
+                if (_settings.STABILITY.krein_route == "local" and rho_u is not None
+                        and np.any(np.abs(np.imag(rho_u)) > 1e-9)):
                     lo, hi = locate_collision(loc, 0.0, s, krein_candidates(rho_u),
                                               ends=[(pa.stable, rho_a), (pb.stable, rho_b)])
-                else:                                # no coordinates (e.g. Hill's method): bisection on the flag
+                else:           # the dense route, or no coordinates (e.g. Hill's method): bisection on the flag
                     lo, hi = loc.bisect(loc.stable, 0.0, s)
                 # the bracket's end towards the step's unstable end (its spectrum is known, so the event's point
                 # costs no eigenproblem), within the energy tolerance of the flag's change

@@ -24,6 +24,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg import lapack
 
+from ..jit import eigvals_nogil
 from .settings import STABILITY
 
 #: an alias of settings.py's STABILITY.stability_tol (the code reads that)
@@ -126,9 +127,15 @@ def reversible_from_eigenvalues(c_nontrivial, deflated):
 
 
 def eigenvalues(C):
-    """Eigenvalues of a real square matrix (LAPACK geev through numpy, which releases the GIL: the multipliers of
-    one point are computed in a worker thread beside the continuation's next step); NaN if C is not finite or
-    the QR iterations fail."""
+    """Eigenvalues of a real square matrix by LAPACK dgeev, called from compiled code that releases the GIL
+    (jit.eigvals_nogil: the multipliers of one point are computed in a worker thread beside the continuation's next
+    step; numpy 1.26's eigvals holds the GIL), else numpy's; NaN if C is not finite or the QR iterations fail."""
+    C = np.asarray(C, dtype=float)
+    if not np.all(np.isfinite(C)):
+        return np.full(C.shape[0], np.nan, dtype=complex)
+    c = eigvals_nogil(C)
+    if c is not None:
+        return c
     try:
         return np.linalg.eigvals(C).astype(complex)
     except np.linalg.LinAlgError:

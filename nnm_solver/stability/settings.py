@@ -53,6 +53,13 @@ class StabilitySettings:
     linear_band: float = 0.1
 
     # ------------------------------------------------------------------ Krein collisions (krein.py)
+    #: how a stability change through a complex pair (a Krein collision) is located inside a step: "local" (the
+    #: default: krein.locate_collision, the colliding pair followed by the problem's local eigen-solver, the full
+    #: spectrum at a few points; the multipliers' eigenproblem of the modes that see the elements) or "dense" (the
+    #: reference: bisection on the full stability flag, every eigenproblem of all modes).  Both give the same flags
+    #: and the events to the event tolerance (tests/test_krein_routes.py; benchmarks/bench_stability.py on the
+    #: aircraft)
+    krein_route: str = "local"
     #: complex pairs at a step's unstable end followed to their Krein collisions (the first one changes the
     #: stability)
     max_krein_pairs: int = 4
@@ -71,6 +78,10 @@ class StabilitySettings:
     #: counts as at the threshold (two eigen-solvers' imaginary parts of a pair near its collision differ by ~1e-4
     #: relative)
     flag_band: float = 1e-3
+
+    def __post_init__(self):
+        if self.krein_route not in ("local", "dense"):
+            raise ValueError(f"krein_route must be 'local' or 'dense', not {self.krein_route!r}")
 
 
 #: the stability layer's settings (the defaults above, written once)
