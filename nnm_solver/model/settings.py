@@ -32,6 +32,10 @@ class ModelSettings:
     lanczos_bytes: float = 4e9
     #: the Ritz basis keeps the modes below cutoff_factor x (highest harmonic) x (the followed mode's frequency)
     cutoff_factor: float = 2.0
+    #: SparseSolver refines its solves (x += solve(b - A x)) when the componentwise backward error of a probe solve
+    #: is above this (CHOLMOD's is ~1e-13 on the aircraft's K, SuperLU's 1e-7), with at most this many steps
+    solve_backward_error: float = 1e-12
+    solve_refinement_steps: int = 2
 
 
 #: the model layer's settings (the defaults above, written once)
