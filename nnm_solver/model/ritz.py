@@ -10,7 +10,8 @@ first inertial attachment fields of the n_s element deformations,
 
     Psi0 = K^-1 B^T,      Psi1 = K^-1 M K^-1 B^T      (n, n_s each),
 
-M-orthogonalised against the modes.  Rayleigh-Ritz on that space gives m + 2 n_s Ritz pairs: the m
+M-orthogonal to the modes (each solved for the part of its load the modes do not take, ``_residual_fields``, so
+that round-off of K^-1 does not stand in for the small part left).  Rayleigh-Ritz on that space gives m + 2 n_s Ritz pairs: the m
 modes below the cutoff exactly (the space holds them), and 2 n_s pairs above w_cut that carry the
 flexibility of every mode left out.  The element receptance of the Ritz model,
 
