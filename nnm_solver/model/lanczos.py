@@ -105,7 +105,7 @@ def _ritz_pairs(T, R, j0, j1, invariant, top):
     eigenvalues alone 7.0 s, under a load of 12)."""
     top = int(min(top, j1))
     th, Y = sla.eigh(T, driver="evr", subset_by_index=[j1 - top, j1 - 1], overwrite_a=True, check_finite=False)
-    th, Y = th[::-1], Y[:, ::-1]
+    th, Y = th[::-1], np.ascontiguousarray(Y[:, ::-1])     # contiguous: numpy's products on reversed strides skip BLAS
     res = np.zeros(len(th)) if invariant else np.linalg.norm(R @ Y[j0:j1], axis=0)
     return th, Y, res
 
@@ -185,13 +185,9 @@ def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.
         j0, j1, J = J, J + kn, J + kn
 
 
-def _ritz_vectors(Q, j, Y, M, rows=4096):
-    """Phi = Q[:, :j] Y (n x c, C order), M-normalised, formed a block of ``rows`` rows at a time (no temporary of
-    the whole product besides Phi)."""
-    n, c = Q.shape[0], Y.shape[1]
-    Phi = np.empty((n, c))
-    for r in range(0, n, rows):
-        Phi[r:r + rows] = Q[r:r + rows, :j] @ Y
+def _ritz_vectors(Q, j, Y, M):
+    """Phi = Q[:, :j] Y (n x c), M-normalised: one BLAS product on the column-major block."""
+    Phi = Q[:, :j] @ np.ascontiguousarray(Y)
     Phi /= np.sqrt(np.einsum("ij,ij->j", Phi, np.asarray(M @ Phi)))
     return Phi
 
