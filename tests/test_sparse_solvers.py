@@ -137,3 +137,14 @@ def test_the_ritz_basis_is_the_same_whichever_solver_factorises_k(plate, monkeyp
         # the residual fields' Ritz values: to the solves' forward error (~1e-9 here, the condition of K)
         assert np.allclose(lam[m:], lam0[m:], rtol=1e-8), be
         assert np.allclose(np.abs(Phi0.T @ (M @ Phi)), np.eye(len(lam)), atol=1e-7), be
+
+
+def test_a_stored_basis_serves_a_branch_whose_cutoff_it_reaches_to_the_eigenvalues_round_off():
+    """ritz._holds: a basis whose cutoff was set from the Lanczos value of the mode serves a branch whose cutoff comes
+    from the stored Rayleigh-Ritz value, 1.7e-6 apart on the unreduced aircraft's mode 20 (it was refused at 1e-6 and
+    the basis computed again); a cutoff short by 1e-4, or a mode above the exact ones, is refused."""
+    omega2 = (2 * np.pi * np.array([10.0, 20.0, 35.544661378])) ** 2
+    need = ritz.cutoff_for(35.544661378, 9)
+    assert ritz._holds(omega2, 3, need * (1 - 1.7e-6), 3, 9, None)
+    assert not ritz._holds(omega2, 3, need * (1 - 1e-4), 3, 9, None)
+    assert not ritz._holds(omega2, 2, 2 * need, 3, 9, None)
