@@ -5,7 +5,7 @@
                                                                    # its --store-basis: the stored-basis timing too
     python benchmarks/bench_full_aircraft.py --quick                # one repetition of the branches
 
-Prints, with the machine's load (os.getloadavg) at each stage: the time of the sparse factorisation (and its back
+Prints, with the machine's load (os.getloadavg), the process's CPU time and its peak memory at each stage: the time of the sparse factorisation (and its back
 end), of the Ritz basis (the modes below 2 H f_20 by block Lanczos + the springs' residual fields, model/ritz.py) and
 of the branch ``continue_nnm(model, 20, 30, method="hb", harmonics=9, condensed=True, floquet=False)`` on the full
 model; the same branch from a basis stored in the file (``--file`` with /ritz_basis: a fresh read of the file, the
@@ -40,7 +40,10 @@ HB = dict(method="hb", harmonics=9, condensed=True, floquet=False)
 
 
 def load():
-    return f"load {os.getloadavg()[0]:.2f}"
+    """The load average, the process's CPU time so far and its peak resident memory (ru_maxrss)."""
+    import resource
+    return (f"load {os.getloadavg()[0]:.2f}, CPU {time.process_time():.0f} s, peak "
+            f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6:.2f} GB")
 
 
 def timed(fn, reps):

@@ -1,4 +1,5 @@
-"""Sparse factorisations of the full aircraft's stiffness K (64,446 DOFs): SuperLU against CHOLMOD and PARDISO.
+"""Sparse factorisations of the full aircraft's stiffness K (64,446 DOFs): SuperLU against CHOLMOD (cholespy,
+scikit-sparse), PARDISO and QDLDL.
 
     python benchmarks/bench_sparse.py                 # every solver installed, one BLAS thread, medians of 3
     python benchmarks/bench_sparse.py --threads 2     # the threaded libraries on both cores
@@ -12,9 +13,12 @@ that its memory and its thread count are its own):
   SparseSolver did for the Ritz basis, model/ritz.py, before CHOLMOD);
 - ``superlu-nd``: the same with ``xyz=nodes``, the nodes' geometric nested dissection and symmetric-mode LU (what
   nnm_fem.modes and Craig-Bampton used);
+- ``cholespy``: CHOLMOD's simplicial Cholesky with nested dissection in cholespy's self-contained wheel (a main
+  dependency: what ``SparseSolver`` uses without scikit-sparse);
 - ``cholmod``: scikit-sparse's CHOLMOD supernodal Cholesky with its default ordering (AMD, METIS tried), the
-  library ``SparseSolver`` uses when it is installed (``pip install nnm[sparse]``);
-- ``pardiso``: MKL PARDISO through pypardiso, real symmetric positive definite (mtype 2, upper triangle).
+  library ``SparseSolver`` uses first when it is installed (``pip install nnm[sparse]``);
+- ``pardiso``: MKL PARDISO through pypardiso, real symmetric positive definite (mtype 2, upper triangle);
+- ``qdldl``: the qdldl wheel's L D L^T (AMD ordering; one right-hand side at a time).
 
 Printed per solver: the time of the factorisation (ordering included), of one solve with a single right-hand side
 (what ARPACK's Lanczos does at every step) and with 8 (medians), the factor's nonzeros, the memory the process holds
@@ -38,7 +42,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-SOLVERS = ("superlu", "superlu-nd", "cholmod", "pardiso")
+SOLVERS = ("superlu", "superlu-nd", "cholespy", "cholmod", "pardiso", "qdldl")
 
 
 def rss_mb():
@@ -59,14 +63,25 @@ def factorise(name, K, xyz):
     import numpy as np
     import scipy.sparse as sp
 
+    from nnm_solver.model.sparse import SparseSolver
     if name in ("superlu", "superlu-nd"):
-        from nnm_solver.model.sparse import SparseSolver
         s = SparseSolver(K, xyz=xyz if name == "superlu-nd" else None, backend="superlu")
         return s.solve, int(s.lu.L.nnz + s.lu.U.nnz)
+    if name == "cholespy":
+        s = SparseSolver(K, backend="cholespy")
+        return s.solve, None
     if name == "cholmod":
         from sksparse.cholmod import cholesky
         f = cholesky(sp.csc_matrix(K))
         return f.solve_A, None                    # nonzeros: f.L() below, once (it copies the factor)
+    if name == "qdldl":
+        import qdldl
+        f = qdldl.Solver(sp.triu(K, format="csc"))
+
+        def solve(b):
+            b = np.asarray(b, dtype=np.float64)
+            return f.solve(b) if b.ndim == 1 else np.column_stack([f.solve(c) for c in b.T])
+        return solve, None
     if name == "pardiso":
         import pypardiso
         A = sp.triu(K, format="csr").astype(np.float64)
@@ -132,7 +147,7 @@ def aircraft_K():
 
 def available(name):
     import importlib.util
-    mod = {"cholmod": "sksparse", "pardiso": "pypardiso"}.get(name)
+    mod = {"cholespy": "cholespy", "cholmod": "sksparse", "pardiso": "pypardiso", "qdldl": "qdldl"}.get(name)
     return mod is None or importlib.util.find_spec(mod) is not None
 
 
@@ -187,6 +202,7 @@ def main(argv=None):
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         nnz = f"{r['nnz_factor'] / 1e6:.1f} M" if r["nnz_factor"] else "-"
+        r["peak_mb"] = float("nan") if r["peak_mb"] is None else r["peak_mb"]
         print(f"| {r['name']} | {r['factor_s']:.2f} | {r['solve1_s']:.3f} | {r['solve8_s']:.3f} | {nnz} | "
               f"{r['held_mb']:.0f} | {r['peak_mb']:.0f} | {r['residual']:.1e} | {r['backward']:.1e} | {r['diff']:.1e} |")
     print(f"\nload average at the end {os.getloadavg()}")

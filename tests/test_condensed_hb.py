@@ -224,16 +224,17 @@ def test_ritz_basis_falls_back_to_arpack_where_the_block_lanczos_cannot_converge
 
 
 def test_sparse_solver_backends_agree_and_superlu_is_the_fallback():
-    """SparseSolver: CHOLMOD (when scikit-sparse is installed) and SuperLU (with and without the nested-dissection
+    """SparseSolver: CHOLMOD (scikit-sparse, or cholespy) and SuperLU (with and without the nested-dissection
     ordering) give the same solutions for 1-D and 2-D right-hand sides; a matrix that is not positive definite goes
     to SuperLU, and SuperLU's "exactly singular" stays the error of a singular one."""
     import scipy.sparse as sp
-    from nnm_solver.model.sparse import SparseSolver, cholmod_available
+    from nnm_solver.model.sparse import SparseSolver, cholespy_available, cholmod_available
     model = sparse_cantilever(60)
     K = sp.csc_matrix(model.K)
     b = np.random.default_rng(1).standard_normal((K.shape[0], 3))
     ref = np.linalg.solve(K.toarray(), b)
-    backends = ["superlu"] + (["cholmod"] if cholmod_available() else [])
+    backends = ["superlu"] + (["cholespy"] if cholespy_available() else []) + (["cholmod"] if cholmod_available()
+                                                                                else [])
     for be in backends:
         s = SparseSolver(K, backend=be)
         assert s.backend == be

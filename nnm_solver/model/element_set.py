@@ -41,7 +41,7 @@ class ElementSet:
         springs = [e for e in self.elements if not isinstance(e, PolynomialStiffness)]
         coupled = [e for e in self.elements if isinstance(e, PolynomialStiffness)]
         self.n_springs = len(springs)
-        rows = [np.eye(self.n)[0:0]] + [e.matrix(self.n) for e in coupled]
+        rows = [np.zeros((0, self.n))] + [e.matrix(self.n) for e in coupled]
         ns = self.n_springs + sum(len(r) for r in rows)          # rows of B: springs, then coupled deformations
         self.B = np.zeros((ns, self.n))
         for s, e in enumerate(springs):

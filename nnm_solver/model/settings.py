@@ -26,12 +26,17 @@ class ModelSettings:
     lanczos_block: int = 32
     #: convergence of a Ritz pair of K^-1 M: residual / value below this (what ARPACK's tol means)
     lanczos_tol: float = 1e-10
-    #: the block Lanczos keeps at most this many vectors (and at most lanczos_bytes of them with their M-images)
-    #: before ritz_basis falls back to ARPACK's restarted Lanczos (lowest_modes)
+    #: the block Lanczos keeps at most this many vectors (and at most lanczos_bytes of them: n x 8 bytes each; 1.5 GB
+    #: is 2,900 vectors of the 64,446-DOF aircraft, which needs ~2,000) before ritz_basis falls back to ARPACK's
+    #: restarted Lanczos (lowest_modes)
     lanczos_max_vectors: int = 4096
-    lanczos_bytes: float = 4e9
+    lanczos_bytes: float = 1.5e9
     #: the Ritz basis keeps the modes below cutoff_factor x (highest harmonic) x (the followed mode's frequency)
     cutoff_factor: float = 2.0
+    #: SparseSolver refines its solves (x += solve(b - A x)) when the componentwise backward error of a probe solve
+    #: is above this (CHOLMOD's is ~1e-13 on the aircraft's K, SuperLU's 1e-7), with at most this many steps
+    solve_backward_error: float = 1e-12
+    solve_refinement_steps: int = 2
 
 
 #: the model layer's settings (the defaults above, written once)

@@ -1,23 +1,36 @@
 """Sparse symmetric factorisation and solve with a fill-reducing ordering.
 
-Used by Craig-Bampton (reduction.py), the Ritz basis (ritz.py) and the FE kit (nnm_fem) for shift-invert
-eigensolves.  Two back ends:
+Used by Craig-Bampton (reduction.py), the Ritz basis (ritz.py, lanczos.py) and the FE kit (nnm_fem) for
+shift-invert eigensolves.  Three back ends, tried in this order by ``backend="auto"``:
 
-- CHOLMOD (scikit-sparse, the optional extra ``nnm[sparse]``): supernodal Cholesky with its own fill-reducing
-  ordering (AMD, METIS tried), for symmetric positive definite matrices.  Used whenever it is installed and the
-  matrix is positive definite: on the full aircraft's K (64,446 DOFs, benchmarks/bench_sparse.py) it factorises
-  in 0.9 s against SuperLU's 8.9 s with the nested dissection below (12.9 s with COLAMD), holds 166 MB against
-  1,058 MB, solves 8 right-hand sides 4x faster, at the same backward error (1e-13).
+- CHOLMOD through scikit-sparse (the optional extra ``nnm[sparse]``, which needs SuiteSparse's headers to build):
+  supernodal Cholesky, for symmetric positive definite matrices.
+- CHOLMOD through cholespy (a main dependency: a self-contained wheel, CHOLMOD and METIS inside): simplicial
+  Cholesky L L^T with nested-dissection ordering, for symmetric positive definite matrices.  On the unreduced
+  aircraft's K (64,446 DOFs, 3.4 M nonzeros, benchmarks/bench_sparse.py) it factorises in 2-3 s against SuperLU's
+  6-8 s, solves 16 right-hand sides in 0.15-0.2 s against 0.7 s, with a componentwise backward error of 1e-13
+  against SuperLU's 1e-7.
 - SuperLU (scipy, always there): LU with scipy's COLAMD ordering, or, given the node coordinates ``xyz``, with
-  the nodes' geometric nested dissection in symmetric mode.  The fallback when CHOLMOD is not installed, and for
-  matrices that are not positive definite (a shift inside the spectrum, a singular K: SuperLU's RuntimeError
-  "Factor is exactly singular" is what callers catch).
+  the nodes' geometric nested dissection in symmetric mode.  The fallback when neither CHOLMOD is installed, and
+  for matrices that are not positive definite or not symmetric (a shift inside the spectrum, a singular K:
+  SuperLU's RuntimeError "Factor is exactly singular" is what callers catch).
+
+Accuracy.  A stiffness matrix whose diagonal spans many decades (the aircraft's: 2e2 to 8e11 N/m) has a large
+condition number, so the relative residual ||A x - b|| / ||b|| of any double-precision solve is dominated by the
+round-off of evaluating A x itself (1e-6 on the aircraft for every back end) and says little.  The measure of a
+solve is its componentwise backward error  max_i |A x - b|_i / (|A| |x| + |b|)_i  (Oettli-Prager: x solves a
+system whose every entry is perturbed by that relative amount).  After each factorisation the solver measures it
+on a probe right-hand side (``backward_error``); when it is above ``MODEL.solve_backward_error`` every solve is
+followed by up to ``MODEL.solve_refinement_steps`` steps of iterative refinement (x += solve(b - A x)), which bring
+it down to ~1e-15 (``refined`` says whether they are on).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+
+from .settings import MODEL
 
 
 def nested_dissection(adj, xyz, leaf=48):
@@ -56,8 +69,9 @@ def dof_ordering(A, xyz, ndof=6):
     return (ndof * p[:, None] + np.arange(ndof)).ravel()
 
 
-#: the back ends of SparseSolver: "auto" (CHOLMOD if installed and the matrix is positive definite, else SuperLU)
-BACKENDS = ("auto", "cholmod", "superlu")
+#: the back ends of SparseSolver: "auto" (the first of CHOLMOD by scikit-sparse, CHOLMOD by cholespy, SuperLU that
+#: is installed and takes the matrix), or one of them by name
+BACKENDS = ("auto", "cholmod", "cholespy", "superlu")
 
 
 def _cholmod():
@@ -69,54 +83,136 @@ def _cholmod():
     return cholmod
 
 
+def _cholespy():
+    """The cholespy module, or None when it is not installed."""
+    try:
+        import cholespy
+    except ImportError:
+        return None
+    return cholespy
+
+
 def cholmod_available():
+    """True when scikit-sparse's CHOLMOD is installed."""
     return _cholmod() is not None
+
+
+def cholespy_available():
+    """True when cholespy (CHOLMOD in a wheel) is installed."""
+    return _cholespy() is not None
+
+
+def is_symmetric(A, rtol=1e-12):
+    """True when the sparse A equals its transpose to rtol of its largest entry (the Cholesky back ends read one
+    triangle only)."""
+    D = A - A.T
+    return D.nnz == 0 or float(abs(D).max()) <= rtol * float(abs(A).max())
+
+
+def backward_error(A, x, b):
+    """Componentwise backward error max_i |A x - b|_i / (|A| |x| + |b|)_i of a solution x (n,) or (n, k)."""
+    r = np.abs(A @ x - b)
+    scale = abs(A) @ np.abs(x) + np.abs(b)
+    return float(np.max(r / np.maximum(scale, np.finfo(float).tiny)))
+
+
+def _cholespy_factor(A):
+    """cholespy's factor of the symmetric positive definite A (csc), or None when CHOLMOD finds it is not."""
+    cholespy = _cholespy()
+    A = A.copy()
+    A.sort_indices()
+    try:
+        f = cholespy.CholeskySolverD(A.shape[0], A.indptr.astype(np.int32), A.indices.astype(np.int32),
+                                     np.ascontiguousarray(A.data, dtype=np.float64), cholespy.MatrixType.CSC)
+    except ValueError:                                 # "Matrix is not positive definite!"
+        return None
+
+    def solve(b):
+        b = np.ascontiguousarray(b, dtype=np.float64)
+        x = np.empty_like(b)
+        f.solve(b, x)
+        return x
+    return solve
 
 
 class SparseSolver:
     """Factorisation of a symmetric FE matrix A; ``solve(b)`` for b (n,) or (n, k).
 
-    backend "auto" (default): CHOLMOD's Cholesky when scikit-sparse is installed and A is positive definite, else
-    SuperLU (LU, nested-dissection ordering of the nodes when their coordinates ``xyz`` (n / ndof, 3) are given,
-    scipy's COLAMD otherwise); "cholmod" or "superlu" to choose (CHOLMOD refuses a matrix that is not positive
-    definite with its CholmodNotPositiveDefiniteError).  ``backend`` tells which one factorised A.
+    backend "auto" (default): CHOLMOD's Cholesky (scikit-sparse, else cholespy) when A is symmetric and positive
+    definite, else SuperLU (LU, nested-dissection ordering of the nodes when their coordinates ``xyz`` (n / ndof, 3)
+    are given, scipy's COLAMD otherwise); "cholmod", "cholespy" or "superlu" to choose (a Cholesky back end refuses
+    a matrix that is not positive definite: scikit-sparse with its CholmodNotPositiveDefiniteError, cholespy with
+    ValueError).  ``backend`` tells which one factorised A; ``backward_error`` the componentwise backward error of
+    a probe solve, ``refined`` whether solves are refined (module docstring).
     """
 
     def __init__(self, A, xyz=None, ndof=6, backend="auto"):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-        A = sp.csc_matrix(A)
+        A = sp.csc_matrix(A).astype(float)
         self.shape = A.shape
+        self.A = A
         self.p = None
-        self.factor = None
-        cholmod = _cholmod() if backend != "superlu" else None
-        if backend == "cholmod" and cholmod is None:
-            raise ImportError("the CHOLMOD back end needs scikit-sparse (pip install scikit-sparse)")
-        if cholmod is not None:
-            try:
-                # supernodal: always L L^T, so that a matrix that is not positive definite is refused (the simplicial
-                # mode CHOLMOD picks for small matrices is L D L^T without pivoting, which takes indefinite ones)
-                self.factor = cholmod.cholesky(A.astype(float), mode="supernodal")
-                self.backend = "cholmod"
-                return
-            except cholmod.CholmodNotPositiveDefiniteError:
-                if backend == "cholmod":
-                    raise
-        self.backend = "superlu"
+        self.lu = None
+        self._solve = None
+        self.refined = False
+        self.backend = self._factorise(A, xyz, ndof, backend)
+        self.backward_error = self._probe()
+        self.refined = self.backward_error > MODEL.solve_backward_error
+
+    def _factorise(self, A, xyz, ndof, backend):
+        """Factorise A with the back end asked for (or the first that takes it); its name."""
+        symmetric = backend in ("cholmod", "cholespy") or (backend == "auto" and is_symmetric(A))
+        if backend in ("auto", "cholmod") and symmetric:
+            cholmod = _cholmod()
+            if backend == "cholmod" and cholmod is None:
+                raise ImportError("the CHOLMOD back end needs scikit-sparse (pip install scikit-sparse)")
+            if cholmod is not None:
+                try:
+                    # supernodal: always L L^T, so that a matrix that is not positive definite is refused (the
+                    # simplicial mode CHOLMOD picks for small matrices is L D L^T without pivoting)
+                    self._solve = cholmod.cholesky(A, mode="supernodal").solve_A
+                    return "cholmod"
+                except cholmod.CholmodNotPositiveDefiniteError:
+                    if backend == "cholmod":
+                        raise
+        if backend in ("auto", "cholespy") and symmetric:
+            if backend == "cholespy" and _cholespy() is None:
+                raise ImportError("the cholespy back end needs cholespy (pip install cholespy)")
+            if _cholespy() is not None:
+                self._solve = _cholespy_factor(A)
+                if self._solve is not None:
+                    return "cholespy"
+                if backend == "cholespy":
+                    raise ValueError("cholespy: the matrix is not positive definite")
         if xyz is None:
             self.lu = spla.splu(A)
+            self._solve = self.lu.solve
         else:
             self.p = dof_ordering(A, xyz, ndof)
             Ap = A[self.p][:, self.p].tocsc()
             self.lu = spla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0,
                                 options=dict(SymmetricMode=True))
+            self._solve = self._solve_permuted
+        return "superlu"
 
-    def solve(self, b):
-        if self.factor is not None:
-            return self.factor.solve_A(np.asarray(b, dtype=float))
-        if self.p is None:
-            return self.lu.solve(b)
-        b = np.asarray(b)
-        y = np.empty_like(b, dtype=float)
+    def _solve_permuted(self, b):
+        y = np.empty(b.shape, dtype=float)
         y[self.p] = self.lu.solve(np.ascontiguousarray(b[self.p]))
         return y
+
+    def _probe(self):
+        """The componentwise backward error of solving A x = A 1 + r (r: a fixed random vector, so that both
+        smooth and rough right-hand sides are in it)."""
+        n = self.shape[0]
+        b = self.A @ np.ones(n) + np.random.default_rng(0).standard_normal(n) * abs(self.A).sum(axis=1).A1
+        return backward_error(self.A, self._solve(b), b)
+
+    def solve(self, b):
+        """x with A x = b, for b (n,) or (n, k) (refined when ``refined``)."""
+        b = np.asarray(b, dtype=float)
+        x = self._solve(b)
+        if self.refined:
+            for _ in range(MODEL.solve_refinement_steps):
+                x += self._solve(b - self.A @ x)
+        return x

@@ -92,8 +92,13 @@ def _secular(problem, A, w, bp, C):
             _, inv, W, _ = parts(nu)
             Mz = eye[None] + w_times(W)
             z = np.linalg.solve(Mz, np.ones((S_, r, 1)) / np.sqrt(r))[..., 0]
-            if not np.all(np.isfinite(z)):
-                z = np.linalg.svd(Mz)[2][:, -1, :].conj()                            # (S, r)
+            lost = ~np.all(np.isfinite(z), axis=1)
+            if np.any(lost):        # M singular to round-off: its null vector; NaN where M is not finite (nu on a
+                # pole 1 / q0 of an uncoupled mode: the class is then refused by its residual, not by the SVD failing)
+                ok = lost & np.all(np.isfinite(Mz), axis=(1, 2))
+                z[lost] = np.nan
+                if np.any(ok):
+                    z[ok] = np.linalg.svd(Mz[ok])[2][:, -1, :].conj()                  # (S, r)
             z /= np.linalg.norm(z, axis=1, keepdims=True)
             f = (z @ Ct.T).reshape(S_, nb, ns)                                     # (C~ z)_(k, s)
             c = np.zeros((S_, nb, n), dtype=complex)
