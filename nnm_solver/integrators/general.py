@@ -30,12 +30,9 @@ import numpy as np
 from ..jit import jit as _jit, lapack_solve, lapack_solve_many, matmul_t
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
+from . import general_band
 from .settings import KERNELS
-
-#: the step's Newton limits, compile-time constants of the kernels (settings.py: KERNELS)
-NEWTON_MAX = KERNELS.newton_max
-NEWTON_RTOL = KERNELS.newton_rtol
-
+from .step_newton import NEWTON_MAX, newton_end as _newton_end
 
 @_jit
 def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width):
@@ -71,29 +68,6 @@ def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
                     acc += T[r0 + a, b] * Bq[r0 + b, i]
                 YT[i, r0 + a] = acc
     return f, matmul_t(BqT, YT)
-
-
-@_jit
-def _newton_end(it, nR, J, scale):
-    """(stop, ok) of a step's Newton iteration it with residual norm nR and Newton matrix J: converged (nR within
-    NEWTON_RTOL of scale), out of iterations (ok if nR is within 1e-9 of scale), or a NaN/inf (a failed step, not a
-    LinAlgError from the solve)."""
-    if nR <= NEWTON_RTOL * scale:
-        return True, True
-    if it == NEWTON_MAX or not _finite(nR, J):
-        return True, it == NEWTON_MAX and nR <= 1e-9 * scale
-    return False, False
-
-
-@_jit
-def _finite(nR, J):
-    """True when the residual norm and the Newton matrix are finite (NaN or inf: the step failed)."""
-    if not np.isfinite(nR):
-        return False
-    for v in J.ravel():
-        if not np.isfinite(v):
-            return False
-    return True
 
 
 @_jit
@@ -282,10 +256,25 @@ def _scheme(stages):
     return _gauss, (np.ascontiguousarray(A @ A), b, np.ascontiguousarray(A.T @ b), c)
 
 
-def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0):
+def stage_solver(system, stages):
+    """How the implicit stages of a step are solved: "band" (general_band.py: physical coordinates, the tangent's
+    band) for Gauss schemes on a complete modal basis whose band pays (KERNELS.band_solver), else "dense" (the
+    modal kernels here)."""
+    if stages < 2:
+        return "dense"
+    lay = general_band.layout(system)
+    return "band" if lay is not None and KERNELS.band_solver(system.n, lay.w, stages) else "dense"
+
+
+def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0, solver=None):
+    """(q, v, Q, V, SQ, SV, k, ok) of the scheme with ``stages`` (1: Newmark) from the modal state (q0, v0);
+    solver "dense" or "band" (default: stage_solver's choice)."""
     fn, tab = _scheme(stages)
+    args = kernel_args(system)
+    if (solver or stage_solver(system, stages)) == "band":
+        return general_band.sweep(general_band.layout(system), args, tab, q0, v0, h, nsteps, record, ncols)
     return fn(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float), float(h), int(nsteps),
-              *kernel_args(system), *tab, bool(record), int(ncols))
+              *args, *tab, bool(record), int(ncols))
 
 
 def state(system, stages, q0, v0, h, nsteps):
