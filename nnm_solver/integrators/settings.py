@@ -3,7 +3,8 @@
 ``KERNELS`` is the instance the code reads (``KERNELS.volterra_block``).  The compiled kernels (newmark.py,
 general.py) read ``newton_max`` and ``newton_rtol`` as compile-time constants (numba freezes a module global when it
 compiles; they bind them to module names from ``KERNELS``); numba's disk cache is keyed on each kernel's own source
-file, so after changing them here touch newmark.py and general.py (jit.py says so for laws.py).
+file, so after changing them here touch newmark.py, step_newton.py, general.py and general_band.py (jit.py says so
+for laws.py).
 """
 from __future__ import annotations
 
