@@ -22,6 +22,11 @@ Gauss (s stages, Nystrom form as in gauss.py): R_l = Q_l - q - c_l h v - h^2 sum
 Tested against finite differences of the state sweeps (tests/test_polynomial_stiffness.py).  A step whose Newton
 iteration meets a NaN or an infinity (an orbit that escapes, a NaN start) ends the sweep with ok = False, the failed
 orbit the corrector refuses, instead of the LinAlgError of the linear solve (tests/test_general_nan.py).
+
+The dense stage LU is O((s n)^3) a Newton iteration.  A model whose physical tangent is banded (a beam: every
+element's force on a few neighbouring DOFs) and whose modal basis is complete takes general_band.py instead for the
+Gauss schemes: the same iteration with the stage system solved as one band matrix in physical coordinates
+(``stage_solver`` decides, with KERNELS.band_solver; measured in benchmarks/README.md, "von Karman beam").
 """
 from __future__ import annotations
 
