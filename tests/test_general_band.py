@@ -64,7 +64,7 @@ def test_stage_solver_choice():
     assert lay.w <= KERNELS.band_max_fraction * beam.n                  # the beam's tangent is banded
     small = modal_system(nnm.Model(np.eye(2), np.diag([1.0, 4.0]),
                                    [nnm.PolynomialStiffness([[3, 0], [0, 3]], [[1.0, 0.0], [0.0, 1.0]])]))
-    assert general.stage_solver(small, 3) == "dense"
+    assert general.stage_solver(small, 3) == "dense" and general_band.layout(small) is None    # no band built
     lam, Phi = beam.model.eigensolution                                  # a basis of fewer modes: no physical form
     ritz = ModalSystem(beam.model, eigensolution=(lam[:10], Phi[:, :10]))
     assert general_band.layout(ritz) is None and general.stage_solver(ritz, 3) == "dense"

@@ -158,11 +158,12 @@ def _element_rows(n_rows, index):
     return sp.csr_matrix((np.ones(n_rows), (owner, np.arange(n_rows))), shape=(int(owner.max(initial=-1)) + 1, n_rows))
 
 
-def band_layout(M, K, B, index, Phi, PhiT_M):
+def band_layout(M, K, B, index, Phi, PhiT_M, accept=None):
     """The BandLayout of a model with mass M, linear stiffness K (dense or sparse, n x n), deformations d = B x
     (B (n_d, n)) with coupled elements on the rows of ``index`` (coupled.coupled_table), and a complete
     M-orthonormal basis Phi (n, n) with its left inverse PhiT_M = Phi^T M.  The pattern of the tangents is that of
-    E^T E, E the DOFs each element's force depends on (a coupled element couples the DOFs of all its rows)."""
+    E^T E, E the DOFs each element's force depends on (a coupled element couples the DOFs of all its rows).
+    accept(n, w) -> bool: None is returned (no band arrays built) when it refuses the half-bandwidth w."""
     M, K, B = sp.csr_matrix(M), sp.csr_matrix(K), sp.csr_matrix(B)
     E = _element_rows(B.shape[0], np.asarray(index)) @ abs(B)
     pattern = (abs(M) + abs(K) + E.T @ E).tocsr()
@@ -171,6 +172,8 @@ def band_layout(M, K, B, index, Phi, PhiT_M):
     if _bandwidth(pattern[perm][:, perm]) >= _bandwidth(pattern):
         perm = np.arange(M.shape[0])
     w = _bandwidth(pattern[perm][:, perm])
+    if accept is not None and not accept(M.shape[0], w):
+        return None
     Bp_ = B[:, perm].tocsr()
     Bp_.sort_indices()
     return BandLayout(perm=perm, w=w, Mb=to_band(M[perm][:, perm], w), Kb=to_band(K[perm][:, perm], w),

@@ -36,7 +36,6 @@ from ..jit import jit as _jit, lapack_solve, lapack_solve_many, matmul_t
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
 from . import general_band
-from .settings import KERNELS
 from .step_newton import NEWTON_MAX, newton_end as _newton_end
 
 @_jit
@@ -265,10 +264,7 @@ def stage_solver(system, stages):
     """How the implicit stages of a step are solved: "band" (general_band.py: physical coordinates, the tangent's
     band) for Gauss schemes on a complete modal basis whose band pays (KERNELS.band_solver), else "dense" (the
     modal kernels here)."""
-    if stages < 2:
-        return "dense"
-    lay = general_band.layout(system)
-    return "band" if lay is not None and KERNELS.band_solver(system.n, lay.w, stages) else "dense"
+    return "band" if stages >= 2 and general_band.layout(system) is not None else "dense"
 
 
 def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0, solver=None):
@@ -277,7 +273,8 @@ def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0, solver=None)
     fn, tab = _scheme(stages)
     args = kernel_args(system)
     if (solver or stage_solver(system, stages)) == "band":
-        return general_band.sweep(general_band.layout(system), args, tab, q0, v0, h, nsteps, record, ncols)
+        return general_band.sweep(general_band.layout(system, always=True), args, tab, q0, v0, h, nsteps, record,
+                                  ncols)
     return fn(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float), float(h), int(nsteps),
               *args, *tab, bool(record), int(ncols))
 

@@ -41,6 +41,7 @@ from ..jit import jit as _jit, matvec
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
 from .band import band_layout, band_lu, band_mul, band_solve, band_vec
+from .settings import KERNELS
 from .step_newton import NEWTON_MAX, newton_end
 
 __all__ = ["layout", "sweep"]
@@ -265,18 +266,19 @@ _layouts = weakref.WeakKeyDictionary()
 _layouts_lock = threading.Lock()
 
 
-def layout(system):
+def layout(system, always=False):
     """The BandLayout of a ModalSystem in its complete modal basis (band.band_layout), computed once per system;
-    None when the basis is not complete (a Ritz basis of fewer modes: no physical form)."""
+    None when the basis is not complete (a Ritz basis of fewer modes: no physical form) or, unless always, when the
+    band does not pay (KERNELS.band_solver: then no band arrays are built)."""
     if system.n != system.model.n:
         return None
     with _layouts_lock:
-        lay = _layouts.get(system)
-        if lay is None:
+        per = _layouts.setdefault(system, {})
+        if always not in per:
             index = system.elements.table[0]
-            lay = _layouts[system] = band_layout(system.model.M, system.model.K_linear, system.elements.B, index,
-                                                 system.Phi, system.PhiT_M)
-        return lay
+            per[always] = band_layout(system.model.M, system.model.K_linear, system.elements.B, index, system.Phi,
+                                      system.PhiT_M, accept=None if always else KERNELS.band_solver)
+        return per[always]
 
 
 def sweep(lay, args, tab, q0, v0, h, nsteps, record=False, ncols=0):

@@ -39,8 +39,8 @@ class KernelSettings:
     #: O(s^2 n^3))
     band_max_fraction: float = 0.2
 
-    def band_solver(self, n, w, stages):
-        """True when a Gauss step with ``stages`` on n DOFs of half-bandwidth w is solved as one band matrix."""
+    def band_solver(self, n, w):
+        """True when a Gauss step on n DOFs whose tangent has the half-bandwidth w is solved as one band matrix."""
         return n >= self.band_min_dofs and w <= self.band_max_fraction * n
 
 
