@@ -43,8 +43,8 @@ L, h, b, E, rho = 1.0, 0.01, 0.02, 210e9, 7800.0
 N, tongues, kernel = int(sys.argv[1]), sys.argv[2], sys.argv[3]
 if kernel == "dense":
     import dataclasses
-    from nnm_solver.integrators import general
-    general.KERNELS = dataclasses.replace(general.KERNELS, band_min_dofs=10 ** 9)
+    from nnm_solver.integrators import general_band
+    general_band.KERNELS = dataclasses.replace(general_band.KERNELS, band_min_dofs=10 ** 9)
 model = nnm_fem.von_karman_beam(L, h, b, E, rho, elements=N, ends="hinged")
 mid = model.dof_labels.index(f"node {N + 1} uz")
 energy_max = float(hinged_backbone(2 * h, L, h, E, rho)[1]) * b
