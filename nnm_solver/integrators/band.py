@@ -1,12 +1,12 @@
 r"""Banded matrices for the general kernels in physical coordinates (general_band.py): LU with partial pivoting,
-solves, products, and the band layout of a model (its DOFs renumbered by reverse Cuthill-McKee).
+solves, and the band layout of a model (its DOFs renumbered by reverse Cuthill-McKee).
 
 Storage: a band matrix A (n, n) of half-bandwidth w is the array Ab (n, 2 w + 1), Ab[i, j - i + w] = A[i, j].
 The LU works on W (N, 2 kl + ku + 1), W[i, j - i + kl] = A[i, j] for j in [i - kl, i + ku] (the last kl columns
 hold the fill of the row interchanges), as LAPACK's dgbtrf: L is kept as the sequence of its steps (the multipliers
 of step k in column k of rows k + 1 .. k + kl, never swapped afterwards) with the pivots piv.  Costs: factor
-O(N kl (kl + ku)), solve with m right-hand sides O(N (2 kl + ku) m), product O(n w m): linear in n where dense
-LU is O(n^3).  Tested against numpy.linalg.solve (tests/test_general_band.py).
+O(N kl (kl + ku)), solve with m right-hand sides O(N (2 kl + ku) m): linear in N where dense LU is O(N^3).
+Tested against numpy.linalg.solve (tests/test_general_band.py).
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..jit import jit as _jit
 
-__all__ = ["band_lu", "band_solve", "band_mul", "to_band", "BandLayout", "band_layout"]
+__all__ = ["band_lu", "band_solve", "to_band", "BandLayout", "band_layout"]
 
 
 @_jit
@@ -82,33 +82,6 @@ def band_solve(W, piv, kl, ku, X):
         d = W[i, kl]
         for c in range(m):
             X[i, c] /= d
-
-
-@_jit
-def band_mul(Ab, w, X):
-    """A X for the band matrix Ab (n, 2 w + 1) and X (n, m)."""
-    n, m = X.shape
-    Y = np.zeros((n, m))
-    for i in range(n):
-        for j in range(max(0, i - w), min(n - 1, i + w) + 1):
-            a = Ab[i, j - i + w]
-            if a != 0.0:
-                for c in range(m):
-                    Y[i, c] += a * X[j, c]
-    return Y
-
-
-@_jit
-def band_vec(Ab, w, x):
-    """A x for the band matrix Ab (n, 2 w + 1) and x (n,)."""
-    n = x.shape[0]
-    y = np.zeros(n)
-    for i in range(n):
-        acc = 0.0
-        for j in range(max(0, i - w), min(n - 1, i + w) + 1):
-            acc += Ab[i, j - i + w] * x[j]
-        y[i] = acc
-    return y
 
 
 def to_band(A, w):

@@ -40,7 +40,7 @@ import numpy as np
 from ..jit import jit as _jit, matvec
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
-from .band import band_layout, band_lu, band_mul, band_solve, band_vec
+from .band import band_layout, band_lu, band_solve
 from .settings import KERNELS
 from .step_newton import NEWTON_MAX, newton_end
 
@@ -124,7 +124,6 @@ def _gauss_band(q0, v0, h, nsteps, omega2, Phi, PhiT, PhiT_M, MPhi, Mb, Kb, w, B
     s = b.shape[0]
     m = Sx0.shape[1]
     sens = m > 0
-    ncols = m - 1
     h2Abar = (h * h) * Abar
     q = q0.copy()
     v = v0.copy()
