@@ -22,6 +22,11 @@ Gauss (s stages, Nystrom form as in gauss.py): R_l = Q_l - q - c_l h v - h^2 sum
 Tested against finite differences of the state sweeps (tests/test_polynomial_stiffness.py).  A step whose Newton
 iteration meets a NaN or an infinity (an orbit that escapes, a NaN start) ends the sweep with ok = False, the failed
 orbit the corrector refuses, instead of the LinAlgError of the linear solve (tests/test_general_nan.py).
+
+The dense stage LU is O((s n)^3) a Newton iteration.  A model whose physical tangent is banded (a beam: every
+element's force on a few neighbouring DOFs) and whose modal basis is complete takes general_band.py instead for the
+Gauss schemes: the same iteration with the stage system solved as one band matrix in physical coordinates
+(``stage_solver`` decides, with KERNELS.band_solver; measured in benchmarks/README.md, "von Karman beam").
 """
 from __future__ import annotations
 
@@ -30,12 +35,8 @@ import numpy as np
 from ..jit import jit as _jit, lapack_solve, lapack_solve_many, matmul_t
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
-from .settings import KERNELS
-
-#: the step's Newton limits, compile-time constants of the kernels (settings.py: KERNELS)
-NEWTON_MAX = KERNELS.newton_max
-NEWTON_RTOL = KERNELS.newton_rtol
-
+from . import general_band
+from .step_newton import NEWTON_MAX, newton_end as _newton_end
 
 @_jit
 def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width):
@@ -71,29 +72,6 @@ def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
                     acc += T[r0 + a, b] * Bq[r0 + b, i]
                 YT[i, r0 + a] = acc
     return f, matmul_t(BqT, YT)
-
-
-@_jit
-def _newton_end(it, nR, J, scale):
-    """(stop, ok) of a step's Newton iteration it with residual norm nR and Newton matrix J: converged (nR within
-    NEWTON_RTOL of scale), out of iterations (ok if nR is within 1e-9 of scale), or a NaN/inf (a failed step, not a
-    LinAlgError from the solve)."""
-    if nR <= NEWTON_RTOL * scale:
-        return True, True
-    if it == NEWTON_MAX or not _finite(nR, J):
-        return True, it == NEWTON_MAX and nR <= 1e-9 * scale
-    return False, False
-
-
-@_jit
-def _finite(nR, J):
-    """True when the residual norm and the Newton matrix are finite (NaN or inf: the step failed)."""
-    if not np.isfinite(nR):
-        return False
-    for v in J.ravel():
-        if not np.isfinite(v):
-            return False
-    return True
 
 
 @_jit
@@ -282,10 +260,23 @@ def _scheme(stages):
     return _gauss, (np.ascontiguousarray(A @ A), b, np.ascontiguousarray(A.T @ b), c)
 
 
-def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0):
+def stage_solver(system, stages):
+    """How the implicit stages of a step are solved: "band" (general_band.py: physical coordinates, the tangent's
+    band) for Gauss schemes on a complete modal basis whose band pays (KERNELS.band_solver), else "dense" (the
+    modal kernels here)."""
+    return "band" if stages >= 2 and general_band.layout(system) is not None else "dense"
+
+
+def sweep(system, stages, q0, v0, h, nsteps, record=False, ncols=0, solver=None):
+    """(q, v, Q, V, SQ, SV, k, ok) of the scheme with ``stages`` (1: Newmark) from the modal state (q0, v0);
+    solver "dense" or "band" (default: stage_solver's choice)."""
     fn, tab = _scheme(stages)
+    args = kernel_args(system)
+    if (solver or stage_solver(system, stages)) == "band":
+        return general_band.sweep(general_band.layout(system, always=True), args, tab, q0, v0, h, nsteps, record,
+                                  ncols)
     return fn(np.ascontiguousarray(q0, dtype=float), np.ascontiguousarray(v0, dtype=float), float(h), int(nsteps),
-              *kernel_args(system), *tab, bool(record), int(ncols))
+              *args, *tab, bool(record), int(ncols))
 
 
 def state(system, stages, q0, v0, h, nsteps):
