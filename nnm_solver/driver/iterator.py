@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..results.branch import Branch
-from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
+from ..continuation.engine import REFUSE, ContinuationPoint, energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import is_stable, sort_multipliers
@@ -275,7 +275,7 @@ class NNMIterator:
         energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
         could not be located and the step should be refused (at most Continuation.max_refusals times in a row)."""
         point = cand.point
-        slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
+        slope = energy_slope(self._problem, cp.u, cp.tangent)
         prev, self._prev = self._prev, (cp, cand, slope)
         if prev is None:
             return cand, state
