@@ -36,7 +36,10 @@ class Candidate:
     collision : the Krein locator's coordinates at it (stability/krein.py), or None;
     spectrum : the background job computing its multipliers (problem.multipliers_later), or None once settled;
     disc_error : the time discretisation's part of point.freq_error (what finer steps reduce; NaN: none or not
-        estimated)."""
+        estimated);
+    distance : (dev, tolerance) of its label's Verdict (backbone/labels.py: its relative frequency distance from the
+        skeleton's family, dev None where no skeleton covers its energy), None where no label was judged (the
+        mid-step check's policy, stability/locator.mid_step_check)."""
 
     point: Point
     solution: tuple | None = None
@@ -45,6 +48,7 @@ class Candidate:
     collision: Any = None
     spectrum: Callable | None = None
     disc_error: float = math.nan
+    distance: tuple | None = None
 
     def release(self):
         """Drop the large working data (a solve's Jacobian and factorisation, O(n^2) each, and the orbit)."""
