@@ -86,7 +86,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
-        self._BqT = np.ascontiguousarray(self.lin.Bq.T)
+        self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
 
     def _kernel_arguments(self):
@@ -105,7 +105,7 @@ class CondensedHBProblem(HBTruncationError):
         c0, s0 = bs.state_at_zero()
         energy = None if not lin.complete else ((self.sys.kinks.shape[1] == 0,) + common + (
             np.ascontiguousarray(c0, dtype=float), np.ascontiguousarray(s0, dtype=float),
-            self._BqT, lin.omega2) + table)
+            self._Bq, lin.omega2) + table)
         return equations, energy
 
     # --------------------------------------------------------------- packing
@@ -247,7 +247,7 @@ class CondensedHBProblem(HBTruncationError):
         W = self.lin.weights(Omega2, self.r, self.fund)
         if self._kernel is not None:              # A and F in one pass over the modes (condensed_kernels.py)
             eq = self._kernel[0]
-            A, F = kernels.amplitudes(np.asarray(u, dtype=float), *eq[:6], self._BqT, self.lin.omega2, *eq[-5:])
+            A, F = kernels.amplitudes(np.asarray(u, dtype=float), *eq[:6], self._Bq, self.lin.omega2, *eq[-5:])
             d = self.basis.E @ D
         else:
             d, F = self._forces(D)

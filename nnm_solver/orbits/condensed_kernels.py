@@ -31,18 +31,59 @@ __all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "en
 #: modes would be far slower than them)
 AVAILABLE = numba is not None
 
+if AVAILABLE:
+    #: the loops over the modes: IEEE division (1 / 0 = inf at an exact internal resonance, no Python check, so
+    #: the loop vectorises) and sums over the modes reassociated (vectorised; deterministic, the order fixed by the
+    #: compiled code)
+    jit_modes = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract"})
+else:  # pragma: no cover
+    jit_modes = jit
+
 
 def element_pairs(Bq):
-    """(pairs (m, P), index (n_s, n_s)): pairs[k, index[s, t]] = Bq[s, k] Bq[t, k] for s <= t (P = n_s (n_s + 1) / 2),
+    """(pairs (P, m), index (n_s, n_s)): pairs[index[s, t], k] = Bq[s, k] Bq[t, k] for s <= t (P = n_s (n_s + 1) / 2),
     index symmetric."""
     ns = Bq.shape[0]
     index = np.zeros((ns, ns), dtype=np.int64)
-    cols = []
+    rows = []
     for s in range(ns):
         for t in range(s, ns):
-            index[s, t] = index[t, s] = len(cols)
-            cols.append(Bq[s] * Bq[t])
-    return np.ascontiguousarray(np.array(cols).T), index
+            index[s, t] = index[t, s] = len(rows)
+            rows.append(Bq[s] * Bq[t])
+    return np.ascontiguousarray(np.array(rows)), index
+
+
+@jit_modes
+def _weights(w, h2, fund, r, omega2, squared):
+    """W (N_b, m): W[j, k] = 1 / (w_k^2 - h_j^2 w^2), zero for the followed mode r at the fundamental (fund[j]); inf
+    at an exact internal resonance.  With ``squared`` also W^2 (else an empty array)."""
+    nb, m = h2.shape[0], omega2.shape[0]
+    W = np.empty((nb, m))
+    W2 = np.empty((nb if squared else 0, m))
+    for j in range(nb):
+        Om = h2[j] * w * w
+        for k in range(m):
+            W[j, k] = 1.0 / (omega2[k] - Om)
+        if fund[j]:
+            W[j, r] = 0.0
+        if squared:
+            for k in range(m):
+                W2[j, k] = W[j, k] * W[j, k]
+    return W, W2
+
+
+@jit_modes
+def _row_products(V, rows):
+    """out[j, p] = sum_k V[j, k] rows[p, k] (N_b, P)."""
+    nb, P, m = V.shape[0], rows.shape[0], rows.shape[1]
+    out = np.empty((nb, P))
+    for j in range(nb):
+        for p in range(P):
+            acc = 0.0
+            for k in range(m):
+                acc += V[j, k] * rows[p, k]
+            out[j, p] = acc
+    return out
 
 
 @jit
@@ -50,24 +91,11 @@ def flexibility(w, h2, fund, r, omega2, pairs, index, R0, R1, complete, slope):
     """(G, dG) (N_b, n_s, n_s) each at the frequency w (rad/s): G_j = sum_k b_k b_k^T / (w_k^2 - h_j^2 w^2) over the
     modes but the followed mode r at the fundamental (fund[j]), + R0 + h_j^2 w^2 R1 unless complete; dG its slope in
     Omega2_j (W^2 in place of W, + R1), only when ``slope`` (else zeros).  An exact internal resonance gives inf."""
-    nb, m, P = h2.shape[0], omega2.shape[0], pairs.shape[1]
+    nb = h2.shape[0]
     ns = index.shape[0]
-    Gp = np.zeros((nb, P))
-    dGp = np.zeros((nb, P))
-    for j in range(nb):
-        Om = h2[j] * w * w
-        skip = r if fund[j] else -1
-        for k in range(m):
-            if k == skip:
-                continue
-            den = omega2[k] - Om
-            wk = 1.0 / den if den != 0.0 else np.inf
-            for p in range(P):
-                Gp[j, p] += wk * pairs[k, p]
-            if slope:
-                wk2 = wk * wk
-                for p in range(P):
-                    dGp[j, p] += wk2 * pairs[k, p]
+    W, W2 = _weights(w, h2, fund, r, omega2, slope)
+    Gp = _row_products(W, pairs)
+    dGp = _row_products(W2, pairs) if slope else np.zeros((nb, pairs.shape[0]))
     G = np.empty((nb, ns, ns))
     dG = np.zeros((nb, ns, ns))
     for j in range(nb):
@@ -197,84 +225,90 @@ def residual_jacobian(u, want_jacobian, cos1, r, beta, w_r, h2, fund, b_r, omega
     return res, J
 
 
-@jit
-def _weight(omega2k, Om, skip):
-    if skip:
-        return 0.0
-    den = omega2k - Om
-    return 1.0 / den if den != 0.0 else np.inf
+@jit_modes
+def _modal_amplitudes(F, W, Bq, cos1, r, a):
+    """A (N_b, m): A[j, k] = -W[j, k] b_k . F[j], A[cos 1, r] = a."""
+    nb, m = W.shape
+    ns = Bq.shape[0]
+    A = np.zeros((nb, m))
+    for j in range(nb):
+        for s in range(ns):
+            f = F[j, s]
+            for k in range(m):
+                A[j, k] += f * Bq[s, k]
+        for k in range(m):
+            A[j, k] *= -W[j, k]
+    A[cos1, r] = a
+    return A
 
 
 @jit
-def amplitudes(u, cos1, r, beta, w_r, h2, fund, BqT, omega2, E, P, powers, coeffs, kinks):
+def amplitudes(u, cos1, r, beta, w_r, h2, fund, Bq, omega2, E, P, powers, coeffs, kinks):
     """(A, F): the modal Fourier coefficients A (N_b, m) of the orbit u (A[j, k] = -W[j, k] b_k . F[j], A[cos 1, r] =
     a) and the element force coefficients F (N_b, n_s)."""
-    nb, m = h2.shape[0], omega2.shape[0]
-    ns = BqT.shape[1]
+    nb = h2.shape[0]
+    ns = Bq.shape[0]
     nD = nb * ns
     w = u[nD + 1] * w_r
     d, F, tg = _forces(u[:nD].reshape((nb, ns)), E, P, powers, coeffs, kinks, False)
-    A = np.empty((nb, m))
+    W, W2 = _weights(w, h2, fund, r, omega2, False)
+    return _modal_amplitudes(F, W, Bq, cos1, r, u[nD] / beta), F
+
+
+@jit_modes
+def _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, gradient):
+    """(kinetic / w^2 x 2, potential x 2, gF (N_b, n_s), gw part, Lambda[cos 1, r] needs the caller): the sums over the
+    modes of condensed_energy.py's formulas; gF and the omega derivative's sum only when ``gradient``."""
+    nb, m = A.shape
+    ns = Bq.shape[0]
+    q0 = np.zeros(m)
+    v1 = np.zeros(m)
     for j in range(nb):
-        Om = h2[j] * w * w
         for k in range(m):
-            f = 0.0
+            q0[k] += c0[j] * A[j, k]
+            v1[k] += s0[j] * A[j, k]
+    kin = 0.0
+    pot = 0.0
+    for k in range(m):
+        kin += v1[k] * v1[k]
+        pot += omega2[k] * q0[k] * q0[k]
+    gF = np.zeros((nb if gradient else 0, ns))
+    gw = 0.0
+    if gradient:
+        lw = np.empty(m)
+        for j in range(nb):
+            for k in range(m):
+                lw[k] = (c0[j] * omega2[k] * q0[k] + w * w * s0[j] * v1[k]) * W[j, k]
+            acc = 0.0
+            for k in range(m):
+                acc += lw[k] * A[j, k]
+            gw += acc * (2.0 * w * h2[j])
             for s in range(ns):
-                f += BqT[k, s] * F[j, s]
-            A[j, k] = -_weight(omega2[k], Om, fund[j] and k == r) * f
-    A[cos1, r] = u[nD] / beta
-    return A, F
+                acc = 0.0
+                for k in range(m):
+                    acc += lw[k] * Bq[s, k]
+                gF[j, s] = -acc
+    return kin, pot, gF, gw, q0, v1
 
 
 @jit
-def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fund, c0, s0, BqT, omega2, E, P, powers,
+def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fund, c0, s0, Bq, omega2, E, P, powers,
                     coeffs, kinks):
     """(energy, gradient): the modes' kinetic and linear potential energy at t = 0 (J), with the element potentials
     at t = 0 when ``with_potential`` (polynomial laws only: a table without kinks, whose potentials need the
     dilogarithm; else the caller adds them) and, when ``want_gradient``, dE/du of the whole energy (J per unit of u;
     the elements' part included: its derivative needs only the forces at t = 0), condensed_energy.py's formulas in
-    one pass over the modes (a complete basis)."""
-    nb, m = h2.shape[0], omega2.shape[0]
-    ns = BqT.shape[1]
+    passes over the modes (a complete basis)."""
+    nb = h2.shape[0]
+    ns = Bq.shape[0]
     nD = nb * ns
     a = u[nD] / beta
     w = u[nD + 1] * w_r
     D = u[:nD].reshape((nb, ns))
     d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_gradient)
-    Oms = h2 * (w * w)
-    Wk = np.empty(nb)
-    Ak = np.empty(nb)
-    gF = np.zeros((nb, ns))
-    kin = 0.0
-    pot = 0.0
-    gw = 0.0
-    lam_a = 0.0
-    for k in range(m):
-        q0 = 0.0
-        v1 = 0.0
-        for j in range(nb):
-            if j == cos1 and k == r:
-                Wk[j] = 0.0
-                Ak[j] = a
-            else:
-                f = 0.0
-                for s in range(ns):
-                    f += BqT[k, s] * F[j, s]
-                Wk[j] = _weight(omega2[k], Oms[j], fund[j] and k == r)
-                Ak[j] = -Wk[j] * f
-            q0 += c0[j] * Ak[j]
-            v1 += s0[j] * Ak[j]
-        kin += v1 * v1
-        pot += omega2[k] * q0 * q0
-        if want_gradient:
-            for j in range(nb):
-                lam = c0[j] * omega2[k] * q0 + w * w * s0[j] * v1
-                lw = lam * Wk[j]
-                for s in range(ns):
-                    gF[j, s] -= lw * BqT[k, s]
-                gw += lw * (2.0 * w * h2[j]) * Ak[j]
-                if j == cos1 and k == r:
-                    lam_a = lam
+    W, W2 = _weights(w, h2, fund, r, omega2, False)
+    A = _modal_amplitudes(F, W, Bq, cos1, r, a)
+    kin, pot, gF, gw, q0, v1 = _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, want_gradient)
     energy = 0.5 * (w * w) * kin + 0.5 * pot
     x0 = np.zeros(ns)
     for l in range(nb):
@@ -288,6 +322,7 @@ def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fu
     if not want_gradient:
         return energy, np.zeros(0)
     gw += w * kin
+    lam_a = c0[cos1] * omega2[r] * q0[r] + w * w * s0[cos1] * v1[r]        # dE/dA[cos 1, r]
     C = _galerkin(tg, E, P)
     grad = np.zeros(nD + 2)
     for l in range(nb):
