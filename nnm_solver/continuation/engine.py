@@ -184,6 +184,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     """
     w = scale_of(problem, u0)
     p0 = p0 / _norm(w * p0)
+    energy = _Remembered(problem) if hasattr(problem, "energy") else None
     try:
         u, J, it, err, factor = correct_factored(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
@@ -216,7 +217,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             cos = (w * p_new) @ (w * p) / _norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
-            reason = _unseen_turns(getattr(problem, "energy", None), u, p, u_new, p_new, 10 * tol, _slopes(problem))
+            reason = _unseen_turns(energy, u, p, u_new, p_new, 10 * tol)
             if reason:
                 raise CorrectorFailure(reason)
         except CorrectorFailure as exc:
@@ -288,11 +289,24 @@ def energy_slope(problem, u, p):
     return _energy_slope(problem.energy, u, p)
 
 
-def _slopes(problem):
-    """The slope function (u, p) -> dE/ds of the problem for ``_unseen_turns``, or None without an energy."""
-    if not hasattr(problem, "energy"):
-        return None
-    return lambda u, p: energy_slope(problem, u, p)
+class _Remembered:
+    """The problem's energy function remembering its last two values, by the orbit's bytes (each step's unseen-turns
+    check asks for the energy of its start, which the step before computed as its end), with its slope along a
+    tangent (``slope(u, p)``: energy_slope)."""
+
+    def __init__(self, problem):
+        self.energy = problem.energy
+        self.slope = lambda u, p: energy_slope(problem, u, p)
+        self.kept = []
+
+    def __call__(self, u):
+        key = u.tobytes()
+        for k, E in self.kept:
+            if k == key:
+                return E
+        E = self.energy(u)
+        self.kept = self.kept[-1:] + [(key, E)]
+        return E
 
 
 def _unseen_turns(energy, u, p, u_new, p_new, floor, slope=None):
@@ -302,9 +316,9 @@ def _unseen_turns(energy, u, p, u_new, p_new, floor, slope=None):
     branch turned back and forth unseen, e.g. over a tongue's fold), or the corrector landed on another branch
     running alongside (e.g. from the side of a tongue onto the backbone).  Changes below ``floor`` (relative:
     the corrector's own accuracy) are not judged.  energy : callable or None; slope : callable (u, p) -> dE/ds
-    (default: central differences of energy)."""
+    (default: energy's own ``slope`` if it has one, the engine's _Remembered, else central differences of energy)."""
     if energy is not None:
-        slope = slope or (lambda x, t: _energy_slope(energy, x, t))
+        slope = slope or getattr(energy, "slope", None) or (lambda x, t: _energy_slope(energy, x, t))
         E0, E1 = energy(u), energy(u_new)
         dE = E1 - E0
         if (abs(dE) > floor * max(abs(E0), abs(E1)) and dE * slope(u, p) < 0

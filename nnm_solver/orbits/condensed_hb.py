@@ -235,7 +235,8 @@ class CondensedHBProblem(HBTruncationError):
     # --------------------------------------------------------------- the eliminated amplitudes
     def amplitude_parts(self, u):
         """(A, W, F, Omega2, d) of the orbit u: the modal Fourier coefficients A (N_b, m) in the LinearPart's modes
-        (the eliminated amplitudes recovered exactly), the weights W (N_b, m), the element force coefficients F
+        (the eliminated amplitudes recovered exactly), the weights W (N_b, m; None where the compiled kernels compute
+        the energy gradient), the element force coefficients F
         (N_b, n_d), Omega2 = (h_j omega)^2 and the sampled deformations d (N, n_d).  The last orbit's are kept (its
         state, coefficients, orbit, energy and energy gradient all start from them): read-only arrays."""
         key = u.tobytes() if isinstance(u, np.ndarray) else None
@@ -244,18 +245,21 @@ class CondensedHBProblem(HBTruncationError):
             return last[1]
         D, a, w = self.unpack(u)
         Omega2 = self.h2 * w * w
-        W = self.lin.weights(Omega2, self.r, self.fund)
         if self._kernel is not None:              # A and F in one pass over the modes (condensed_kernels.py)
             eq = self._kernel[0]
             A, F = kernels.amplitudes(np.asarray(u, dtype=float), *eq[:6], self._Bq, self.lin.omega2, *eq[-5:])
             d = self.basis.E @ D
+            # (W only for the numpy form of the energy gradient, which a truncated basis takes)
+            W = self.lin.weights(Omega2, self.r, self.fund) if self._kernel[1] is None else None
         else:
+            W = self.lin.weights(Omega2, self.r, self.fund)
             d, F = self._forces(D)
             A = -W * (F @ self.lin.Bq)
             A[self.cos1, self.r] = a
         parts = (A, W, F, Omega2, d)
         for x in parts:
-            x.setflags(write=False)
+            if x is not None:
+                x.setflags(write=False)
         self._last_parts = (key, parts) if key is not None else last
         return parts
 
