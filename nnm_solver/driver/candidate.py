@@ -32,7 +32,8 @@ class Candidate:
 
     solution : (problem, u, J, tangent, factor) of its converged solve, for its error estimate (None once kept);
     observed : (HarmonicContent, modal orbit Q) for its label and the tongue policy (None once kept);
-    restoring : the smallest restoring-force ratio along the orbit (stops.py: the escape test);
+    restoring : the smallest restoring-force ratio along the orbit (stops.py: the escape test), 1.0 where it is
+        at least 1 (``_restoring_at_least_one``: no escape);
     collision : the Krein locator's coordinates at it (stability/krein.py), or None;
     spectrum : the background job computing its multipliers (problem.multipliers_later), or None once settled;
     disc_error : the time discretisation's part of point.freq_error (what finer steps reduce; NaN: none or not
@@ -82,7 +83,7 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
     content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
                          if series else None)
-    if Q is None:
+    if Q is None or _restoring_at_least_one(sys_, Q):
         restoring = 1.0
     else:
         restoring = series_restoring_ratio(sys_, prob.basis, A, len(Q)) if series else restoring_ratio(sys_, Q)
@@ -97,3 +98,16 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
                      restoring=restoring, collision=collision,
                      spectrum=job)
     return cand, (q0, vq0, T)
+
+
+def _restoring_at_least_one(system, Q):
+    """True when the restoring-force ratio of the modal orbit Q (samples, n) is at least 1 at every sample, so that
+    the escape test (stops.restoring_ratio, threshold RESULTS.escape_ratio < 1) cannot fire: the ratio is at least
+    q . res / q . lin = 1 + d . g(d) / q^T Omega^2 q (res = Omega^2 q + Bq^T g(Bq q), d = Bq q), which is at least 1
+    where the elements do non-negative work on their deformations (d . g(d) >= 0: hardening springs, e.g. every orbit
+    of the aircraft) and q^T Omega^2 q > 0.  O(S (n n_s + n)) for S samples, against the ratio's Gram matrices and
+    sample-wise sums (~10x more on the aircraft)."""
+    d = Q @ system.Bq.T
+    if not np.all(np.einsum("ts,ts->t", d, system.force(d)) >= 0.0):
+        return False
+    return bool(np.all((Q * Q) @ system.omega2 > 0.0))

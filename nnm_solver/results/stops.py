@@ -122,7 +122,8 @@ class LoopDetector:
         # first the distance in the last two coordinates (period, log amplitude): a lower bound of the whole one,
         # O(m) instead of O(m n); the whole distance only for the segments it leaves in (none on a branch whose
         # period or amplitude moves on)
-        near = np.flatnonzero(_segment_distance(a[:, -2:], ab[:, -2:], y[-2:]) <= reach * (1 + 1e-9))
+        near = np.flatnonzero(_segment_distance(a[:, -2], a[:, -1], ab[:, -2], ab[:, -1], y[-2], y[-1])
+                              <= reach * (1 + 1e-9))
         if not len(near):
             return None
         a, ab, L, u, reach = a[near], ab[near], L[near], u[near], reach[near]
@@ -139,10 +140,10 @@ class LoopDetector:
         return int(near[ok[0]]) if len(ok) else None
 
 
-def _segment_distance(a, ab, y):
-    """Distance (m,) of the point y (k,) from each segment a[j] -> a[j] + ab[j] (m, k each)."""
-    t = np.clip(np.einsum("ij,ij->i", y - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
-    return np.linalg.norm(a + t[:, None] * ab - y, axis=1)
+def _segment_distance(ax, ay, bx, by, x, y):
+    """Distance (m,) of the point (x, y) in a plane from each segment (ax, ay) -> (ax + bx, ay + by) (m,) each."""
+    t = np.clip(((x - ax) * bx + (y - ay) * by) / np.maximum(bx * bx + by * by, 1e-300), 0.0, 1.0)
+    return np.hypot(ax + t * bx - x, ay + t * by - y)
 
 
 class _Rows:
