@@ -37,7 +37,10 @@ m x m block instead of a diagonal entry, so their Jacobian is assembled from the
 
 Unknowns (scaled, all in m): u = [D.ravel(); a beta; omega / w_r], beta = |b_r| (1 if mode r does not
 deform the elements); residuals [R_D; R_a beta / w_r^2] in m.  Each evaluation costs
-O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.
+O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.  For models of springs (no coupled element) the residual, the
+Jacobian, the energy, its gradient and the amplitudes are compiled kernels (condensed_kernels.py: one pass over the
+modes each, 10-35 us on the aircraft against 90-570 us for the numpy forms below, which coupled elements and an
+installation without numba take); the two agree to round-off (tests/test_per_point_kernels.py).
 """
 from __future__ import annotations
 
