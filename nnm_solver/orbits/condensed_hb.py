@@ -286,6 +286,8 @@ class CondensedHBProblem(HBTruncationError):
     def modal_orbit(self, u, samples=None):
         """Modal displacements (samples, m) over one period (default: the AFT samples)."""
         samples = samples or max(self.basis.samples, 4 * self.basis.harmonics + 4)
+        if samples == self.basis.samples:          # the basis's own samples: its E (the same numbers)
+            return self.basis.E @ self.amplitudes(u)[0]
         theta = 2 * np.pi * np.arange(samples) / samples
         return self.basis.functions(theta) @ self.amplitudes(u)[0]
 
