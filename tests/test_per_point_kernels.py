@@ -74,3 +74,24 @@ def test_kernel_jacobian_and_gradient_are_the_derivatives(name):
     assert np.max(np.abs(J - Jfd)) < 1e-6 * np.max(np.abs(J))
     g, gfd = p.energy_gradient(u), p.energy_gradient_fd(u, h=1e-6)
     assert np.max(np.abs(g - gfd)) < 1e-6 * np.max(np.abs(g))
+
+
+def test_the_correctors_qr_through_numba_is_scipys(monkeypatch):
+    """continuation/linalg.py: the small QR by LAPACK through numba has scipy.linalg.qr's factors bit for bit, and its
+    compiled solve scipy's triangular solve's result to round-off; an exactly singular system gives a non-finite
+    solution as before."""
+    from nnm_solver.continuation import linalg
+    rng = np.random.default_rng(11)
+    A = rng.standard_normal((23, 22))
+    b = rng.standard_normal(23)
+    fast = linalg.LeastSquares(np.array(A, order="F"))
+    monkeypatch.setattr(linalg, "_GEQRF", None)
+    plain = linalg.LeastSquares(np.array(A, order="F"))
+    assert np.array_equal(fast.R, plain.R) and np.array_equal(fast._Q, plain._Q)
+    x, x0 = fast.solve(b), plain.solve(b)
+    assert np.max(np.abs(x - x0)) <= 1e-13 * np.max(np.abs(x0))
+    assert np.allclose(A.T @ (A @ x - b), 0.0, atol=1e-12)        # the least-squares normal equations
+    monkeypatch.undo()
+    singular = np.array(A, order="F")
+    singular[:, 3] = 0.0
+    assert not np.all(np.isfinite(linalg.LeastSquares(singular).solve(b)))
