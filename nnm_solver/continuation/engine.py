@@ -80,7 +80,7 @@ class ContinuationPoint:
 def _norm(x):
     """|x| of a 1-D float array: sqrt(x . x), np.linalg.norm's numbers bit for bit without its dispatch (~3 us; the
     engine takes several per corrector iteration)."""
-    return math.sqrt(float(x @ x))
+    return math.sqrt(float(x.dot(x)))
 
 
 def tangent(J, previous, w=None):

@@ -224,7 +224,7 @@ class CondensedHBProblem(HBTruncationError):
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
         x = u[:-1]
-        return math.sqrt(float(r @ r)) / max(math.sqrt(float(x @ x)), 1e-300)   # np.linalg.norm's numbers
+        return math.sqrt(float(r.dot(r))) / max(math.sqrt(float(x.dot(x))), 1e-300)   # np.linalg.norm's
 
     def accept(self, u, J):
         pass
