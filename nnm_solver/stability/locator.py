@@ -35,9 +35,9 @@ def event_rtol(freq_error):
 
 def mid_step_check(step, distances):
     """Whether a step of the continuation gets the mid-step check (Locator.jumped): where the step is long (at least
-    STABILITY.jump_check_long in the balanced norm: a relative change of the orbit) or a tongue is near, i.e. at either end
-    the point's relative distance from the skeleton's family is at least STABILITY.jump_check_near x its label's
-    tolerance; and wherever a distance is unknown.  distances : ((dev, tolerance) or None) of the step's two ends
+    STABILITY.jump_check_long in the balanced norm: a relative change of the orbit) or a tongue is near, i.e. at
+    either end the point's relative distance from the skeleton's family is at least STABILITY.jump_check_near x its
+    label's tolerance; and wherever a distance is unknown.  distances : ((dev, tolerance) or None) of the step's two ends
     (labels.Verdict: dev None where no skeleton covers the energy).  settings.py gives the measurement."""
     if step >= STABILITY.jump_check_long:
         return True
