@@ -104,7 +104,8 @@ class CondensedHBProblem(HBTruncationError):
         table = (np.ascontiguousarray(bs.E, dtype=float), np.ascontiguousarray(bs.P, dtype=float), self.sys.powers,
                  self.sys.coefficients, self.sys.kinks)
         common = (self.cos1, self.r, float(self.beta), self.w_r, np.ascontiguousarray(self.h2), fund)
-        equations = common + (np.ascontiguousarray(self.b_r), lin.omega2, pairs, index, lin.R0, lin.R1, lin.complete) + table
+        equations = common + (np.ascontiguousarray(self.b_r), lin.omega2, pairs, index, lin.R0, lin.R1,
+                              lin.complete) + table
         c0, s0 = bs.state_at_zero()
         energy = None if not lin.complete else ((self.sys.kinks.shape[1] == 0,) + common + (
             np.ascontiguousarray(c0, dtype=float), np.ascontiguousarray(s0, dtype=float),
