@@ -6,8 +6,8 @@ no truncation estimate, freq_error NaN), each run in its own process (BLAS 1 thr
 times, after one warm-up run per process (compiled kernels, the skeleton's cache).  Printed: the median milliseconds
 per point of each tree and variant, wall and CPU time of the process (the CPU time is the steadier on a shared
 machine), with the load average before and after, the points and status; with
-``--sections`` the time per point of each part of the driver's work (this tree only: wall time inside each
-method, nested parts included in their callers).  Usage::
+``--sections`` the time per point of each part of the driver's work (this tree only: CPU time of the thread inside
+each method, nested parts included in their callers; the total is the process's CPU time).  Usage::
 
     git archive e655183 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
     python benchmarks/bench_per_point.py --before /tmp/base --repeats 5 --sections
@@ -40,11 +40,11 @@ if sections:
     def wrap(obj, name, key):
         f = getattr(obj, name)
         def g(*a, **k):
-            t = time.perf_counter()
+            t = time.thread_time()
             try:
                 return f(*a, **k)
             finally:
-                acc[key] += time.perf_counter() - t
+                acc[key] += time.thread_time() - t
         setattr(obj, name, g)
     for obj, name, key in [(ed.EngineDriver, "next", "engine: predictor, corrector (continuation/)"),
                            (it_.NNMIterator, "_record", "record the point (candidate.py)"),
@@ -107,9 +107,9 @@ def main(argv=None):
             rs = [run(ROOT, dict(method="hb", condensed=True, harmonics=9, **kw), args.energy_max, True)
                   for _ in range(args.repeats)]
             N = rs[0]["points"]
-            print(f"\n  {vname}, this tree, per point (median of {len(rs)}; wall time in each part, "
+            print(f"\n  {vname}, this tree, per point (median of {len(rs)}; CPU time in each part, "
                   f"load {os.getloadavg()[0]:.1f}):")
-            print(f"    {'total':48s} {statistics.median(1e3 * r['seconds'] / N for r in rs):7.3f} ms")
+            print(f"    {'total':48s} {statistics.median(1e3 * r['cpu'] / N for r in rs):7.3f} ms")
             for key in rs[0]["sections"]:
                 print(f"    {key:48s} {statistics.median(1e3 * r['sections'].get(key, 0) / N for r in rs):7.3f} ms")
 

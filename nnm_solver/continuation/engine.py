@@ -41,8 +41,8 @@ never longer than the problem's largest step.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-
 
 import numpy as np
 
@@ -77,6 +77,12 @@ class ContinuationPoint:
     factor: object = None       # LeastSquares of [jacobian; previous tangent] (reusable for other solves)
 
 
+def _norm(x):
+    """|x| of a 1-D float array: sqrt(x . x), np.linalg.norm's numbers bit for bit without its dispatch (~3 us; the
+    engine takes several per corrector iteration)."""
+    return math.sqrt(float(x.dot(x)))
+
+
 def tangent(J, previous, w=None):
     """Tangent p of F(u) = 0 from J = dF/du (eq. 8), |w * p| = 1, oriented along ``previous``."""
     return tangent_factored(J, previous, w)[0]
@@ -95,7 +101,7 @@ def tangent_factored(J, previous, w=None, factor=None):
     b = np.zeros(J.shape[0] + 1)
     b[-1] = 1.0
     p = factor.solve(b)
-    p /= np.linalg.norm(w * p)
+    p /= _norm(w * p)
     return (p if (w * p) @ (w * previous) >= 0 else -p), factor
 
 
@@ -151,7 +157,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             break
         rhs = np.concatenate([-r, [-(row @ (u - u_pred))]])
         du = factor.solve(rhs)
-        nrm = np.linalg.norm(du)
+        nrm = _norm(du)
         if not np.isfinite(nrm):
             raise CorrectorFailure("singular corrector system")
         if last_norm is not None and nrm > settings.refresh_ratio * last_norm and not fresh:
@@ -177,7 +183,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     a ``StopIteration`` value: the reason (str).  Step lengths are in the problem's scaled units.
     """
     w = scale_of(problem, u0)
-    p0 = p0 / np.linalg.norm(w * p0)
+    p0 = p0 / _norm(w * p0)
+    energy = _Remembered(problem) if hasattr(problem, "energy") else None
     try:
         u, J, it, err, factor = correct_factored(problem, u0, p0, settings, tol, w)
     except CorrectorFailure as exc:
@@ -196,7 +203,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         u_pred = u + s * p
         try:
             u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w)
-            dist = np.linalg.norm(w * (u_new - u_pred))
+            dist = _norm(w * (u_new - u_pred))
             # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
             if dist > settings.max_correction * s and dist > 10 * tol:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
@@ -207,10 +214,10 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
             if not np.all(np.isfinite(p_new)):
                 raise CorrectorFailure("no tangent at the new point (a singular Jacobian)")
-            cos = (w * p_new) @ (w * p) / np.linalg.norm(w * p_new)
+            cos = (w * p_new) @ (w * p) / _norm(w * p_new)
             if cos < np.cos(settings.max_angle):
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
-            reason = _unseen_turns(getattr(problem, "energy", None), u, p, u_new, p_new, 10 * tol)
+            reason = _unseen_turns(energy, u, p, u_new, p_new, 10 * tol)
             if reason:
                 raise CorrectorFailure(reason)
         except CorrectorFailure as exc:
@@ -234,7 +241,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         failures = 0
         previous = (u, J, p, factor, w)
         w = scale_of(problem, u_new)
-        u, J, p, factor = u_new, J_new, p_new / np.linalg.norm(w * p_new), factor_new
+        u, J, p, factor = u_new, J_new, p_new / _norm(w * p_new), factor_new
         problem.accept(u, J)
         if (yield ContinuationPoint(u, p, J, it, s, err, factor)) == REFUSE:
             # the caller refuses the step (its events could not be located inside it): back to the
@@ -272,18 +279,50 @@ def _energy_slope(energy, u, p, h=1e-6):
     return (energy(u + h * p) - energy(u - h * p)) / (2 * h)
 
 
-def _unseen_turns(energy, u, p, u_new, p_new, floor):
+def energy_slope(problem, u, p):
+    """dE/ds along the tangent p: g . p with the problem's energy gradient in closed form where it says it has one
+    that costs about an energy (``problem.slope_from_gradient``: the condensed HB problem, one gradient instead of
+    two energies), else the central difference ``_energy_slope`` (whose own error, ~1e-10 relative, is what the two
+    differ by)."""
+    if getattr(problem, "slope_from_gradient", False):
+        return float(problem.energy_gradient(u) @ p)
+    return _energy_slope(problem.energy, u, p)
+
+
+class _Remembered:
+    """The problem's energy function remembering its last two values, by the orbit's bytes (each step's unseen-turns
+    check asks for the energy of its start, which the step before computed as its end), with its slope along a
+    tangent (``slope(u, p)``: energy_slope)."""
+
+    def __init__(self, problem):
+        self.energy = problem.energy
+        self.slope = lambda u, p: energy_slope(problem, u, p)
+        self.kept = []
+
+    def __call__(self, u):
+        key = u.tobytes()
+        for k, E in self.kept:
+            if k == key:
+                return E
+        E = self.energy(u)
+        self.kept = self.kept[-1:] + [(key, E)]
+        return E
+
+
+def _unseen_turns(energy, u, p, u_new, p_new, floor, slope=None):
     """A reason to refuse the step if the energy, or the last unknown (for orbit problems the period or the
     frequency: the other coordinate of the frequency-energy plot), changed against its derivative along the
     tangent at both ends.  Then the step crossed an even number of turning points of that coordinate (the
     branch turned back and forth unseen, e.g. over a tongue's fold), or the corrector landed on another branch
     running alongside (e.g. from the side of a tongue onto the backbone).  Changes below ``floor`` (relative:
-    the corrector's own accuracy) are not judged.  energy : callable or None."""
+    the corrector's own accuracy) are not judged.  energy : callable or None; slope : callable (u, p) -> dE/ds
+    (default: energy's own ``slope`` if it has one, the engine's _Remembered, else central differences of energy)."""
     if energy is not None:
+        slope = slope or getattr(energy, "slope", None) or (lambda x, t: _energy_slope(energy, x, t))
         E0, E1 = energy(u), energy(u_new)
         dE = E1 - E0
-        if (abs(dE) > floor * max(abs(E0), abs(E1)) and dE * _energy_slope(energy, u, p) < 0
-                and dE * _energy_slope(energy, u_new, p_new) < 0):
+        if (abs(dE) > floor * max(abs(E0), abs(E1)) and dE * slope(u, p) < 0
+                and dE * slope(u_new, p_new) < 0):
             return "the energy changed against its slope at both ends of the step (folds crossed unseen)"
     dT = u_new[-1] - u[-1]
     if abs(dT) > floor * max(abs(u[-1]), abs(u_new[-1])) and dT * p[-1] < 0 and dT * p_new[-1] < 0:

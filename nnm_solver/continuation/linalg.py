@@ -9,7 +9,57 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg import lapack
 
+from ..jit import jit, numba
+
 __all__ = ["stacked", "LeastSquares"]
+
+_GEQRF = _ORGQR = None
+if numba is not None:
+    try:   # numba's own LAPACK entry points (numba/np/linalg.py), as jit.py's: scipy's dgeqrf and dorgqr
+        from numba.core import types as _types
+        from numba.np.linalg import _LAPACK, ensure_lapack as _ensure_lapack
+
+        _ensure_lapack()
+        _GEQRF, _ORGQR = _LAPACK().numba_ez_geqrf(_types.float64), _LAPACK().numba_ez_xxgqr(_types.float64)
+    except Exception:  # pragma: no cover - another numba version, or no scipy: scipy's functions below
+        _GEQRF = _ORGQR = None
+
+if _GEQRF is not None:
+    @jit
+    def _qr_explicit(A):
+        """(Q (m, n), R (n, n)) of A (m >= n, Fortran-ordered; overwritten): LAPACK dgeqrf then dorgqr, the routines
+        scipy.linalg.qr(mode="economic") calls (its numbers), without its wrappers' ~50 us a call."""
+        m, n = A.shape
+        tau = np.empty(n)
+        if _GEQRF(ord("d"), m, n, A.ctypes, m, tau.ctypes) < 0:
+            raise ValueError("dgeqrf was called with an invalid argument")
+        R = np.zeros((n, n))
+        for j in range(n):
+            for i in range(j + 1):
+                R[i, j] = A[i, j]
+        if _ORGQR(ord("d"), m, n, n, A.ctypes, m, tau.ctypes) != 0:
+            raise ValueError("dorgqr failed")
+        return A, R
+
+    @jit
+    def _qr_solve(Q, R, b):
+        """x = R^-1 (Q^T b) (b (m,)); NaN where R has a zero on its diagonal (an exactly singular A)."""
+        m, n = Q.shape
+        x = np.zeros(n)
+        for j in range(n):
+            if R[j, j] == 0.0:
+                x[:] = np.nan
+                return x
+            acc = 0.0
+            for i in range(m):
+                acc += Q[i, j] * b[i]
+            x[j] = acc
+        for j in range(n - 1, -1, -1):
+            x[j] /= R[j, j]
+            xj = x[j]
+            for i in range(j):
+                x[i] -= xj * R[i, j]
+        return x
 
 
 def stacked(J, row):
@@ -48,7 +98,9 @@ class LeastSquares:
             d = np.abs(np.diag(self._lu[0]))
             self.rcond = d.min() / max(d.max(), 1e-300)
             return
-        if self.n < self.EXPLICIT_Q:
+        if self.n < self.EXPLICIT_Q and _GEQRF is not None and A.flags.f_contiguous and A.dtype == float:
+            self._Q, self.R = _qr_explicit(A)
+        elif self.n < self.EXPLICIT_Q:
             self._Q, self.R = sla.qr(A, mode="economic", check_finite=False)
         else:
             self._Q = None
@@ -64,6 +116,8 @@ class LeastSquares:
         if self._lu is not None:
             return sla.lu_solve(self._lu, b, check_finite=False)
         if self._Q is not None:
+            if _GEQRF is not None and np.ndim(b) == 1:
+                return _qr_solve(self._Q, self.R, np.asarray(b, dtype=float))
             return self._triangular(self._Q.T @ b)
         c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),
                                    lwork=64 * max(1, np.ndim(b) and (1 if np.ndim(b) == 1 else np.shape(b)[1])))

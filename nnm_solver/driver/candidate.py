@@ -16,6 +16,7 @@ from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ra
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
 from ..results.point import ModalState, Point
+from ..results.settings import RESULTS
 from ..results.stops import restoring_ratio
 from ..stability.floquet import is_stable, sort_multipliers
 from ..stability.settings import STABILITY
@@ -32,11 +33,15 @@ class Candidate:
 
     solution : (problem, u, J, tangent, factor) of its converged solve, for its error estimate (None once kept);
     observed : (HarmonicContent, modal orbit Q) for its label and the tongue policy (None once kept);
-    restoring : the smallest restoring-force ratio along the orbit (stops.py: the escape test);
+    restoring : the smallest restoring-force ratio along the orbit (stops.py: the escape tests), or a lower bound
+        of it where that bound is above both escape thresholds (``restoring_lower_bound``);
     collision : the Krein locator's coordinates at it (stability/krein.py), or None;
     spectrum : the background job computing its multipliers (problem.multipliers_later), or None once settled;
     disc_error : the time discretisation's part of point.freq_error (what finer steps reduce; NaN: none or not
-        estimated)."""
+        estimated);
+    distance : (dev, tolerance) of its label's Verdict (backbone/labels.py: its relative frequency distance from the
+        skeleton's family, dev None where no skeleton covers its energy), None where no label was judged (the
+        mid-step check's policy, stability/locator.mid_step_check)."""
 
     point: Point
     solution: tuple | None = None
@@ -45,6 +50,7 @@ class Candidate:
     collision: Any = None
     spectrum: Callable | None = None
     disc_error: float = math.nan
+    distance: tuple | None = None
 
     def release(self):
         """Drop the large working data (a solve's Jacobian and factorisation, O(n^2) each, and the orbit)."""
@@ -78,9 +84,8 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
     content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
                          if series else None)
-    if Q is None:
-        restoring = 1.0
-    else:
+    restoring = 1.0 if Q is None else restoring_lower_bound(sys_, Q)
+    if restoring <= max(RESULTS.escape_ratio, RESULTS.escape_ratio_failed):    # the escape tests need the ratio
         restoring = series_restoring_ratio(sys_, prob.basis, A, len(Q)) if series else restoring_ratio(sys_, Q)
     # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
     # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
@@ -93,3 +98,17 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
                      restoring=restoring, collision=collision,
                      spectrum=job)
     return cand, (q0, vq0, T)
+
+
+def restoring_lower_bound(system, Q):
+    """A lower bound of the smallest restoring-force ratio of the modal orbit Q (samples, n) (stops.restoring_ratio):
+    the ratio is at least q . res / q . lin = 1 + d . g(d) / q^T Omega^2 q at each sample (res = Omega^2 q + Bq^T
+    g(Bq q), d = Bq q), so at least the smallest of these over the samples (at least 1 where the elements do
+    non-negative work, d . g(d) >= 0: hardening springs); 0 where some q^T Omega^2 q is not positive.  O(S n n_s)
+    for S samples: where it is above the escape thresholds (RESULTS.escape_ratio, escape_ratio_failed) the ratio
+    itself (its Gram matrices and sample-wise sums, several times the cost) is not needed."""
+    d = Q @ system.Bq.T
+    qlin = (Q * Q) @ system.omega2
+    if not np.all(qlin > 0.0):
+        return 0.0
+    return float(np.min(1.0 + np.einsum("ts,ts->t", d, system.force(d)) / qlin))

@@ -14,12 +14,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..results.branch import Branch
-from ..continuation.engine import REFUSE, ContinuationPoint, _energy_slope, pseudo_arclength
+from ..continuation.engine import REFUSE, ContinuationPoint, energy_slope, pseudo_arclength
 from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import is_stable, sort_multipliers
 from ..stability.settings import STABILITY
-from ..stability.locator import event_rtol
+from ..stability.locator import event_rtol, mid_step_check
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
@@ -228,6 +228,7 @@ class NNMIterator:
             verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run,
                                            falling=falling)
             point.label = verdict.text
+            cand.distance = (verdict.dev, verdict.tolerance)
         return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1].point if self._last_kept else None,
                                    len(self.points), self.tongues)
 
@@ -275,7 +276,7 @@ class NNMIterator:
         energy_max.  Returns the (possibly located) end point and its modal state, or None when an event
         could not be located and the step should be refused (at most Continuation.max_refusals times in a row)."""
         point = cand.point
-        slope = _energy_slope(self._problem.energy, cp.u, cp.tangent)
+        slope = energy_slope(self._problem, cp.u, cp.tangent)
         prev, self._prev = self._prev, (cp, cand, slope)
         if prev is None:
             return cand, state
@@ -291,7 +292,8 @@ class NNMIterator:
         for sigma, c in ((0.0, pcand), (cp.step, cand)):     # their multipliers are known too
             if not np.isnan(c.point.floquet).any():
                 loc.spectra[float(sigma)] = (c.point.floquet, c.collision)
-        if self._refusals < self.max_refusals and cp.step > 4 * self._cs.step_min and loc.jumped():
+        if (self._refusals < self.max_refusals and cp.step > 4 * self._cs.step_min
+                and mid_step_check(cp.step, (pcand.distance, cand.distance)) and loc.jumped()):
             # the step's corrector landed on another branch alongside (near a tongue): half the step
             self._refusals += 1
             self._prev = prev

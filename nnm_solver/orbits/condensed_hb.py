@@ -37,94 +37,27 @@ m x m block instead of a diagonal entry, so their Jacobian is assembled from the
 
 Unknowns (scaled, all in m): u = [D.ravel(); a beta; omega / w_r], beta = |b_r| (1 if mode r does not
 deform the elements); residuals [R_D; R_a beta / w_r^2] in m.  Each evaluation costs
-O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.
+O(N_b n_s^2 m + N n_s N_b): nothing of order n^2.  For models of springs (no coupled element) the residual, the
+Jacobian, the energy, its gradient and the amplitudes are compiled kernels (condensed_kernels.py: one pass over the
+modes each, 10-35 us on the aircraft against 90-570 us for the numpy forms below, which coupled elements and an
+installation without numba take); the two agree to round-off (tests/test_per_point_kernels.py).
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from . import condensed_kernels as kernels
 from .condensed_energy import condensed_energy, condensed_energy_gradient
+from .condensed_linear import LinearPart, coupled_galerkin, flexibility_times_tangent
 from .harmonic_balance import HBProblem
 from .hb_basis import harmonics_in
 from .hb_error import HBTruncationError
 from .hill import hill_multipliers
 
 __all__ = ["LinearPart", "CondensedHBProblem"]
-
-
-class LinearPart:
-    """The linear structure as seen from its nonlinear elements.
-
-    omega2 (m,) rad^2/s^2, Bq (n_s, m) element deformations of the modes (b_k = Bq[:, k]), Phi (n, m)
-    mode shapes (None: no physical reconstruction here), R0 / R1 (n_s, n_s) the residual flexibility of
-    the modes left out (m/N and m s^2/N; None: the basis is complete), Psi0 / Psi1 (n, n_s) the same as
-    displacement fields (x of a unit element force), for the reconstruction.
-    """
-
-    def __init__(self, omega2, Bq, Phi=None, R0=None, R1=None, Psi0=None, Psi1=None):
-        self.omega2 = np.asarray(omega2, dtype=float)
-        self.Bq = np.asarray(Bq, dtype=float)
-        self.Phi = Phi
-        ns = self.Bq.shape[0]
-        self.R0 = np.zeros((ns, ns)) if R0 is None else np.asarray(R0, dtype=float)
-        self.R1 = np.zeros((ns, ns)) if R1 is None else np.asarray(R1, dtype=float)
-        self.Psi0, self.Psi1 = Psi0, Psi1
-        self.complete = R0 is None
-
-    @property
-    def m(self):
-        return len(self.omega2)
-
-    def weights(self, Omega2, r, fundamental):
-        """W[j, k] = 1 / (w_k^2 - Omega2_j) (N_b, m), zero for the followed mode r at the fundamental."""
-        den = self.omega2[None, :] - Omega2[:, None]
-        den[fundamental, r] = 1.0
-        if den.all():
-            W = 1.0 / den
-        else:                                      # an exact internal resonance: inf, as the equations' pole
-            with np.errstate(divide="ignore"):
-                W = 1.0 / den
-        W[fundamental, r] = 0.0
-        return W
-
-    def _weighted(self, V):
-        """Bq diag(V[j]) Bq^T (N_b, n_s, n_s) for the rows of V (N_b, m)."""
-        return (self.Bq[None] * V[:, None, :]) @ self.Bq.T               # batched: no einsum path search per call
-
-    def flexibility(self, W, Omega2):
-        """G_j = Bq diag(W[j]) Bq^T + R0 + Omega2_j R1: (N_b, n_s, n_s) m/N."""
-        G = self._weighted(W)
-        return G if self.complete else G + self.R0[None] + Omega2[:, None, None] * self.R1[None]
-
-    def flexibility_slope(self, W, Omega2):
-        """dG_j / d(Omega2_j) = Bq diag(W[j]^2) Bq^T + R1."""
-        G = self._weighted(W * W)
-        return G if self.complete else G + self.R1[None]
-
-
-def coupled_galerkin(basis, elements, d):
-    """The non-zero Galerkin blocks of the whole element tangent at the sampled deformations d (N, n_d), as a list of
-    (u, t, C): index arrays u, t (k,) and C (k, N_b, N_b), C[i, j, l] = d F[j, u_i] / d D[l, t_i]; the springs' on
-    the diagonal, the coupled elements' (model/coupled.py) in their m x m blocks, one entry per block position (a, b)
-    (t unique within an entry).  The condensed equations of a model with coupled elements use them."""
-    nd = d.shape[1]
-    idx = np.arange(nd)
-    out = [(idx, idx, basis.galerkin(elements.tangent(d)))]
-    for rows, T in elements.coupled_tangents(d):
-        for a in range(rows.shape[1]):
-            for b in range(rows.shape[1]):
-                out.append((rows[:, a], rows[:, b], basis.galerkin(T[:, :, a, b])))
-    return out
-
-
-def flexibility_times_tangent(G, blocks, nb, nd):
-    """JD (N_b, n_d, N_b, n_d): JD[j, s, l, t] = sum_u G[j, s, u] dF[j, u] / dD[l, t] (G (N_b, n_d, n_d), blocks of
-    ``coupled_galerkin``); O(N_b^2 n_d (n_d + sum m^2)), the tangent's sparsity kept."""
-    JD = np.zeros((nb, nd, nb, nd))
-    for u, t, C in blocks:
-        JD[:, :, :, t] += np.einsum("jsk,kjl->jslk", G[:, :, u], C)
-    return JD
 
 
 class CondensedHBProblem(HBTruncationError):
@@ -156,6 +89,28 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
+        self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
+        self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
+
+    def _kernel_arguments(self):
+        """The constant arguments of the compiled kernels (condensed_kernels.py): (equations, energy), or None where
+        the numpy forms are used (coupled elements, or numba absent); the energy's None for a truncated basis."""
+        if not kernels.AVAILABLE or self.sys.elements.coupled:
+            return None
+        lin, bs = self.lin, self.basis
+        pairs, index = kernels.element_pairs(lin.Bq)
+        fund = np.zeros(self.nb, dtype=bool)
+        fund[self.fund] = True
+        table = (np.ascontiguousarray(bs.E, dtype=float), np.ascontiguousarray(bs.P, dtype=float), self.sys.powers,
+                 self.sys.coefficients, self.sys.kinks)
+        common = (self.cos1, self.r, float(self.beta), self.w_r, np.ascontiguousarray(self.h2), fund)
+        equations = common + (np.ascontiguousarray(self.b_r), lin.omega2, pairs, index, lin.R0, lin.R1,
+                              lin.complete) + table
+        c0, s0 = bs.state_at_zero()
+        energy = None if not lin.complete else ((self.sys.kinks.shape[1] == 0,) + common + (
+            np.ascontiguousarray(c0, dtype=float), np.ascontiguousarray(s0, dtype=float),
+            self._Bq, lin.omega2) + table)
+        return equations, energy
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -214,18 +169,28 @@ class CondensedHBProblem(HBTruncationError):
         return D, a, w, Omega2, W, G, d, F, r
 
     def residual(self, u):
+        if self._kernel is not None:
+            return kernels.residual_jacobian(np.asarray(u, dtype=float), False, *self._kernel[0])[0]
         return self._parts(u)[-1]
 
     def jacobian(self, u):
+        if self._kernel is not None:
+            return kernels.residual_jacobian(np.asarray(u, dtype=float), True, *self._kernel[0])
         return self.jacobian_of(self._parts(u))
 
     def residual_parts(self, u):
-        """The residual's intermediate results at u, its last item the residual: what ``jacobian_of`` needs."""
+        """The residual's intermediate results at u, its last item the residual: what ``jacobian_of`` needs (with
+        the compiled kernels: u and the residual, the Jacobian's kernel evaluating both again)."""
+        if self._kernel is not None:
+            u = np.array(u, dtype=float)
+            return u, self.residual(u)
         return self._parts(u)
 
     def jacobian_of(self, parts):
         """(r, J) from the parts of the residual already computed at u (``_parts``: e.g. where a Newton loop
         tested the residual first and needs the Jacobian only when it is not converged)."""
+        if self._kernel is not None:
+            return self.jacobian(parts[0])
         D, a, w, Omega2, W, G, d, F, r = parts
         bs, nb, ns = self.basis, self.nb, self.ns
         nD = nb * ns
@@ -259,7 +224,8 @@ class CondensedHBProblem(HBTruncationError):
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
-        return float(np.linalg.norm(r) / max(np.linalg.norm(u[:-1]), 1e-300))
+        x = u[:-1]
+        return math.sqrt(float(r.dot(r))) / max(math.sqrt(float(x.dot(x))), 1e-300)   # np.linalg.norm's
 
     def accept(self, u, J):
         pass
@@ -273,7 +239,8 @@ class CondensedHBProblem(HBTruncationError):
     # --------------------------------------------------------------- the eliminated amplitudes
     def amplitude_parts(self, u):
         """(A, W, F, Omega2, d) of the orbit u: the modal Fourier coefficients A (N_b, m) in the LinearPart's modes
-        (the eliminated amplitudes recovered exactly), the weights W (N_b, m), the element force coefficients F
+        (the eliminated amplitudes recovered exactly), the weights W (N_b, m; None where the compiled kernels compute
+        the energy gradient), the element force coefficients F
         (N_b, n_d), Omega2 = (h_j omega)^2 and the sampled deformations d (N, n_d).  The last orbit's are kept (its
         state, coefficients, orbit, energy and energy gradient all start from them): read-only arrays."""
         key = u.tobytes() if isinstance(u, np.ndarray) else None
@@ -282,13 +249,21 @@ class CondensedHBProblem(HBTruncationError):
             return last[1]
         D, a, w = self.unpack(u)
         Omega2 = self.h2 * w * w
-        W = self.lin.weights(Omega2, self.r, self.fund)
-        d, F = self._forces(D)
-        A = -W * (F @ self.lin.Bq)
-        A[self.cos1, self.r] = a
+        if self._kernel is not None:              # A and F in one pass over the modes (condensed_kernels.py)
+            eq = self._kernel[0]
+            A, F = kernels.amplitudes(np.asarray(u, dtype=float), *eq[:6], self._Bq, self.lin.omega2, *eq[-5:])
+            d = self.basis.E @ D
+            # (W only for the numpy form of the energy gradient, which a truncated basis takes)
+            W = self.lin.weights(Omega2, self.r, self.fund) if self._kernel[1] is None else None
+        else:
+            W = self.lin.weights(Omega2, self.r, self.fund)
+            d, F = self._forces(D)
+            A = -W * (F @ self.lin.Bq)
+            A[self.cos1, self.r] = a
         parts = (A, W, F, Omega2, d)
         for x in parts:
-            x.setflags(write=False)
+            if x is not None:
+                x.setflags(write=False)
         self._last_parts = (key, parts) if key is not None else last
         return parts
 
@@ -312,6 +287,8 @@ class CondensedHBProblem(HBTruncationError):
     def modal_orbit(self, u, samples=None):
         """Modal displacements (samples, m) over one period (default: the AFT samples)."""
         samples = samples or max(self.basis.samples, 4 * self.basis.harmonics + 4)
+        if samples == self.basis.samples:          # the basis's own samples: its E (the same numbers)
+            return self.basis.E @ self.amplitudes(u)[0]
         theta = 2 * np.pi * np.arange(samples) / samples
         return self.basis.functions(theta) @ self.amplitudes(u)[0]
 
@@ -319,13 +296,23 @@ class CondensedHBProblem(HBTruncationError):
         """Energy (J) of the orbit u: the modes' kinetic and linear potential energy at t = 0 plus the
         element potentials (and the left-out modes' share through R0, R1 for a truncated basis;
         condensed_energy.py)."""
+        if self._kernel is not None and self._kernel[1] is not None:
+            E = kernels.energy_gradient(np.asarray(u, dtype=float), False, *self._kernel[1])[0]
+            return E if self._kernel[1][0] else float(E + np.sum(self.sys.elements.potential(
+                self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
         return condensed_energy(self, u)
 
     def galerkin_blocks(self, d):
         return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
 
+    #: the energy's slope along a tangent is g . p (continuation.engine.energy_slope): one gradient, about the cost
+    #: of one energy with the compiled kernels, instead of two energies by central differences
+    slope_from_gradient = True
+
     def energy_gradient(self, u):
         """dE/du (J per unit of u) in closed form (condensed_energy.py)."""
+        if self._kernel is not None and self._kernel[1] is not None:
+            return kernels.energy_gradient(np.asarray(u, dtype=float), True, *self._kernel[1])[1]
         return condensed_energy_gradient(self, u)
 
     def energy_spread(self, u):

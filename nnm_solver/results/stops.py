@@ -118,6 +118,15 @@ class LoopDetector:
         turn[1:] = np.maximum(turn[1:], ang)
         turn[:-1] = np.maximum(turn[:-1], ang)
         a = rows.y()[:m - 1]
+        reach = 0.25 * L * turn + self.floor
+        # first the distance in the last two coordinates (period, log amplitude): a lower bound of the whole one,
+        # O(m) instead of O(m n); the whole distance only for the segments it leaves in (none on a branch whose
+        # period or amplitude moves on)
+        near = np.flatnonzero(_segment_distance(a[:, -2], a[:, -1], ab[:, -2], ab[:, -1], y[-2], y[-1])
+                              <= reach * (1 + 1e-9))
+        if not len(near):
+            return None
+        a, ab, L, u, reach = a[near], ab[near], L[near], u[near], reach[near]
         t = np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300)
         inside = (t > 0.0) & (t < 1.0)
         t = np.clip(t, 0.0, 1.0)
@@ -126,9 +135,15 @@ class LoopDetector:
         # the path travelled since the segment must be much longer than the segment: a lap, not a
         # continuation that merely crawls on from the segment's end
         all_L = rows.lengths()
-        since = np.sum(all_L) - np.concatenate([[0.0], np.cumsum(all_L)])[1:m] + np.linalg.norm(y - rows.last())
-        ok = np.flatnonzero((d <= 0.25 * L * turn + self.floor) & same_way & inside & (since > 3.0 * L))
-        return int(ok[0]) if len(ok) else None
+        since = (np.sum(all_L) - np.concatenate([[0.0], np.cumsum(all_L)])[1:m] + np.linalg.norm(y - rows.last()))[near]
+        ok = np.flatnonzero((d <= reach) & same_way & inside & (since > 3.0 * L))
+        return int(near[ok[0]]) if len(ok) else None
+
+
+def _segment_distance(ax, ay, bx, by, x, y):
+    """Distance (m,) of the point (x, y) in a plane from each segment (ax, ay) -> (ax + bx, ay + by) (m,) each."""
+    t = np.clip(((x - ax) * bx + (y - ay) * by) / np.maximum(bx * bx + by * by, 1e-300), 0.0, 1.0)
+    return np.hypot(ax + t * bx - x, ay + t * by - y)
 
 
 class _Rows:

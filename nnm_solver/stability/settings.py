@@ -40,6 +40,18 @@ class StabilitySettings:
     #: a step whose mid-step point lies farther than this from the cubic interpolant of its ends (relative to the
     #: step, balanced norm) jumped onto another branch (Locator.jumped)
     jump_limit: float = 0.05
+    #: the mid-step check (locator.mid_step_check) runs where the step is long (at least jump_check_long in the
+    #: continuation's balanced norm, a relative change of the orbit: a long step can cross a tongue's entrance and
+    #: exit unseen) or a tongue is near (at either end the point's distance from the skeleton's family is at least
+    #: jump_check_near x its label's tolerance, labels.Verdict), and wherever no skeleton measures the distance.
+    #: Measured (condensed HB, H = 9 on the aircraft, default H on the 2-DOF, shooting on the 2-DOF; 2026-12-07): the
+    #: 10 jumps found on the aircraft's NNM 20 (to 6 J skipping tongues, to 20 J following them) were at steps of
+    #: 0.0025-0.04 with a distance of 0.049-0.17 of the tolerance; on the smooth stretches the distance is below 5e-4
+    #: of it.  With these values the check ran at every step of the aircraft's three runs (to 3, 6 and 20 J: 38, 46
+    #: and 40 steps, the same 5 jumps found in each), at 18 of 82 steps on the 2-DOF (HB, to 200 J skipping) and 11 of
+    #: 73 (shooting, to 50 J); the same branches
+    jump_check_long: float = 0.25
+    jump_check_near: float = 0.01
     #: a located point within this many steps of the latest one starts from it (Locator._from_latest; 1: always)
     chord_reach: float = 1.0
     #: ... to a corrector tolerance this much tighter than the continuation's

@@ -1,0 +1,337 @@
+r"""Compiled kernels of the condensed harmonic-balance equations (condensed_hb.py) and of their energy
+(condensed_energy.py), for models whose elements are springs (the element table of model/element_set.py: no coupled
+element).
+
+The numpy forms evaluate the flexibility G_j = sum_k b_k b_k^T W[j, k] as batched products on (N_b, n_s, m) arrays
+and the energy through the modal amplitudes A (N_b, m): on the aircraft (m = 548 modes, n_s = 4 springs, N_b = 5)
+90-200 us of numpy calls per evaluation, most of it call overhead.  Here each evaluation is one pass over the m modes:
+
+* the flexibility from the element pairs b_s b_t of each mode, kept as ``pairs`` (m, n_s (n_s + 1) / 2): G_j and its
+  slope dG_j / dOmega2_j = sum_k b_k b_k^T W[j, k]^2 (for the Jacobian) in N_b n_s (n_s + 1) / 2 m multiply-adds
+  each, G symmetric (plus the residual flexibility R0 + Omega2_j R1 of a truncated basis, not necessarily symmetric);
+* the element forces and stiffnesses at the N samples by the spring laws' kernel (model/laws.py);
+* the energy and its gradient (condensed_energy.py's formulas) with the amplitudes of each mode made and used in
+  the same pass, nothing of size N_b m stored.
+
+They round differently from the numpy forms (the sums in another order): the same equations, the results within a
+few ulps (tests/test_per_point_kernels.py checks residual, Jacobian, energy and gradient against the numpy forms and
+the gradient against central differences).  The units are condensed_hb.py's: D (N_b, n_s) m, a sqrt(kg) m,
+omega rad/s, u = [D.ravel(); a beta; omega / w_r].
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..jit import jit, numba
+from ..model.laws import law_scalar
+
+__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes"]
+
+#: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
+#: modes would be far slower than them)
+AVAILABLE = numba is not None
+
+if AVAILABLE:
+    #: the loops over the modes: IEEE division (1 / 0 = inf at an exact internal resonance, no Python check, so
+    #: the loop vectorises) and sums over the modes reassociated (vectorised; deterministic, the order fixed by the
+    #: compiled code)
+    jit_modes = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract"})
+else:  # pragma: no cover
+    jit_modes = jit
+
+
+def element_pairs(Bq):
+    """(pairs (P, m), index (n_s, n_s)): pairs[index[s, t], k] = Bq[s, k] Bq[t, k] for s <= t (P = n_s (n_s + 1) / 2),
+    index symmetric."""
+    ns = Bq.shape[0]
+    index = np.zeros((ns, ns), dtype=np.int64)
+    rows = []
+    for s in range(ns):
+        for t in range(s, ns):
+            index[s, t] = index[t, s] = len(rows)
+            rows.append(Bq[s] * Bq[t])
+    return np.ascontiguousarray(np.array(rows)), index
+
+
+@jit_modes
+def _weights(w, h2, fund, r, omega2, squared):
+    """W (N_b, m): W[j, k] = 1 / (w_k^2 - h_j^2 w^2), zero for the followed mode r at the fundamental (fund[j]); inf
+    at an exact internal resonance.  With ``squared`` also W^2 (else an empty array)."""
+    nb, m = h2.shape[0], omega2.shape[0]
+    W = np.empty((nb, m))
+    W2 = np.empty((nb if squared else 0, m))
+    for j in range(nb):
+        Om = h2[j] * w * w
+        for k in range(m):
+            W[j, k] = 1.0 / (omega2[k] - Om)
+        if fund[j]:
+            W[j, r] = 0.0
+        if squared:
+            for k in range(m):
+                W2[j, k] = W[j, k] * W[j, k]
+    return W, W2
+
+
+@jit_modes
+def _row_products(V, rows):
+    """out[j, p] = sum_k V[j, k] rows[p, k] (N_b, P)."""
+    nb, P, m = V.shape[0], rows.shape[0], rows.shape[1]
+    out = np.empty((nb, P))
+    for j in range(nb):
+        for p in range(P):
+            acc = 0.0
+            for k in range(m):
+                acc += V[j, k] * rows[p, k]
+            out[j, p] = acc
+    return out
+
+
+@jit
+def flexibility(w, h2, fund, r, omega2, pairs, index, R0, R1, complete, slope):
+    """(G, dG) (N_b, n_s, n_s) each at the frequency w (rad/s): G_j = sum_k b_k b_k^T / (w_k^2 - h_j^2 w^2) over the
+    modes but the followed mode r at the fundamental (fund[j]), + R0 + h_j^2 w^2 R1 unless complete; dG its slope in
+    Omega2_j (W^2 in place of W, + R1), only when ``slope`` (else zeros).  An exact internal resonance gives inf."""
+    nb = h2.shape[0]
+    ns = index.shape[0]
+    W, W2 = _weights(w, h2, fund, r, omega2, slope)
+    Gp = _row_products(W, pairs)
+    dGp = _row_products(W2, pairs) if slope else np.zeros((nb, pairs.shape[0]))
+    G = np.empty((nb, ns, ns))
+    dG = np.zeros((nb, ns, ns))
+    for j in range(nb):
+        Om = h2[j] * w * w
+        for s in range(ns):
+            for t in range(ns):
+                G[j, s, t] = Gp[j, index[s, t]]
+                if slope:
+                    dG[j, s, t] = dGp[j, index[s, t]]
+                if not complete:
+                    G[j, s, t] += R0[s, t] + Om * R1[s, t]
+                    if slope:
+                        dG[j, s, t] += R1[s, t]
+    return G, dG
+
+
+@jit
+def _forces(D, E, P, powers, coeffs, kinks, tangents):
+    """(d (N, n_s), F (N_b, n_s), g' (N, n_s)): the sampled deformations d = E D, the force coefficients F = P g(d) and
+    (when ``tangents``; else zeros) the sampled stiffnesses."""
+    N, nb = E.shape
+    ns = D.shape[1]
+    d = np.zeros((N, ns))
+    for n in range(N):
+        for l in range(nb):
+            e = E[n, l]
+            for s in range(ns):
+                d[n, s] += e * D[l, s]
+    g = np.empty((N, ns))
+    tg = np.zeros((N, ns))
+    for n in range(N):
+        for s in range(ns):
+            f, t = law_scalar(d[n, s], s, powers, coeffs, kinks)
+            g[n, s] = f
+            if tangents:
+                tg[n, s] = t
+    F = np.zeros((nb, ns))
+    for j in range(nb):
+        for n in range(N):
+            pj = P[j, n]
+            for s in range(ns):
+                F[j, s] += pj * g[n, s]
+    return d, F, tg
+
+
+@jit
+def _galerkin(tg, E, P):
+    """C (n_s, N_b, N_b): C[s, j, l] = sum_n P[j, n] g'_s(t_n) E[n, l] (hb_basis.HBBasis.galerkin)."""
+    N, nb = E.shape
+    ns = tg.shape[1]
+    C = np.zeros((ns, nb, nb))
+    for s in range(ns):
+        for n in range(N):
+            t = tg[n, s]
+            for j in range(nb):
+                pt = P[j, n] * t
+                for l in range(nb):
+                    C[s, j, l] += pt * E[n, l]
+    return C
+
+
+@jit
+def residual_jacobian(u, want_jacobian, cos1, r, beta, w_r, h2, fund, b_r, omega2, pairs, index, R0, R1, complete,
+                      E, P, powers, coeffs, kinks):
+    """(residual, Jacobian) of the condensed equations at u (condensed_hb.CondensedHBProblem: residual [R_D; R_a beta /
+    w_r^2] in m, Jacobian (len(r), N_b n_s + 2)); the Jacobian only when ``want_jacobian`` (else (0, 0))."""
+    nb = h2.shape[0]
+    ns = b_r.shape[0]
+    nD = nb * ns
+    a = u[nD] / beta
+    w = u[nD + 1] * w_r
+    D = u[:nD].reshape((nb, ns))
+    G, dG = flexibility(w, h2, fund, r, omega2, pairs, index, R0, R1, complete, want_jacobian)
+    d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_jacobian)
+    nf = 0
+    for j in range(nb):
+        if fund[j]:
+            nf += 1
+    res = np.empty(nD + nf)
+    for j in range(nb):
+        for s in range(ns):
+            acc = D[j, s]
+            for t in range(ns):
+                acc += G[j, s, t] * F[j, t]
+            if j == cos1:
+                acc -= a * b_r[s]
+            res[j * ns + s] = acc
+    c = beta / (w_r * w_r)
+    i = 0
+    for j in range(nb):
+        if fund[j]:
+            acc = 0.0
+            for s in range(ns):
+                acc += F[j, s] * b_r[s]
+            if j == cos1:
+                acc += (w_r * w_r - w * w) * a
+            res[nD + i] = acc * c
+            i += 1
+    if not want_jacobian:
+        return res, np.zeros((0, 0))
+    C = _galerkin(tg, E, P)
+    J = np.zeros((nD + nf, nD + 2))
+    for j in range(nb):
+        for s in range(ns):
+            row = j * ns + s
+            for l in range(nb):
+                for t in range(ns):
+                    J[row, l * ns + t] = G[j, s, t] * C[t, j, l]
+            J[row, row] += 1.0
+            acc = 0.0
+            for t in range(ns):
+                acc += dG[j, s, t] * F[j, t]
+            J[row, nD + 1] = acc * (2.0 * h2[j] * w) * w_r
+    for s in range(ns):
+        J[cos1 * ns + s, nD] = -b_r[s] / beta
+    i = 0
+    for j in range(nb):
+        if fund[j]:
+            row = nD + i
+            for l in range(nb):
+                for t in range(ns):
+                    J[row, l * ns + t] = c * b_r[t] * C[t, j, l]
+            if j == cos1:
+                J[row, nD] = (w_r * w_r - w * w) / (w_r * w_r)
+                J[row, nD + 1] = -2.0 * w * a * c * w_r
+            i += 1
+    return res, J
+
+
+@jit_modes
+def _modal_amplitudes(F, W, Bq, cos1, r, a):
+    """A (N_b, m): A[j, k] = -W[j, k] b_k . F[j], A[cos 1, r] = a."""
+    nb, m = W.shape
+    ns = Bq.shape[0]
+    A = np.zeros((nb, m))
+    for j in range(nb):
+        for s in range(ns):
+            f = F[j, s]
+            for k in range(m):
+                A[j, k] += f * Bq[s, k]
+        for k in range(m):
+            A[j, k] *= -W[j, k]
+    A[cos1, r] = a
+    return A
+
+
+@jit
+def amplitudes(u, cos1, r, beta, w_r, h2, fund, Bq, omega2, E, P, powers, coeffs, kinks):
+    """(A, F): the modal Fourier coefficients A (N_b, m) of the orbit u (A[j, k] = -W[j, k] b_k . F[j], A[cos 1, r] =
+    a) and the element force coefficients F (N_b, n_s)."""
+    nb = h2.shape[0]
+    ns = Bq.shape[0]
+    nD = nb * ns
+    w = u[nD + 1] * w_r
+    d, F, tg = _forces(u[:nD].reshape((nb, ns)), E, P, powers, coeffs, kinks, False)
+    W, W2 = _weights(w, h2, fund, r, omega2, False)
+    return _modal_amplitudes(F, W, Bq, cos1, r, u[nD] / beta), F
+
+
+@jit_modes
+def _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, gradient):
+    """(kinetic / w^2 x 2, potential x 2, gF (N_b, n_s), gw part, Lambda[cos 1, r] needs the caller): the sums over the
+    modes of condensed_energy.py's formulas; gF and the omega derivative's sum only when ``gradient``."""
+    nb, m = A.shape
+    ns = Bq.shape[0]
+    q0 = np.zeros(m)
+    v1 = np.zeros(m)
+    for j in range(nb):
+        for k in range(m):
+            q0[k] += c0[j] * A[j, k]
+            v1[k] += s0[j] * A[j, k]
+    kin = 0.0
+    pot = 0.0
+    for k in range(m):
+        kin += v1[k] * v1[k]
+        pot += omega2[k] * q0[k] * q0[k]
+    gF = np.zeros((nb if gradient else 0, ns))
+    gw = 0.0
+    if gradient:
+        lw = np.empty(m)
+        for j in range(nb):
+            for k in range(m):
+                lw[k] = (c0[j] * omega2[k] * q0[k] + w * w * s0[j] * v1[k]) * W[j, k]
+            acc = 0.0
+            for k in range(m):
+                acc += lw[k] * A[j, k]
+            gw += acc * (2.0 * w * h2[j])
+            for s in range(ns):
+                acc = 0.0
+                for k in range(m):
+                    acc += lw[k] * Bq[s, k]
+                gF[j, s] = -acc
+    return kin, pot, gF, gw, q0, v1
+
+
+@jit
+def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fund, c0, s0, Bq, omega2, E, P, powers,
+                    coeffs, kinks):
+    """(energy, gradient): the modes' kinetic and linear potential energy at t = 0 (J), with the element potentials
+    at t = 0 when ``with_potential`` (polynomial laws only: a table without kinks, whose potentials need the
+    dilogarithm; else the caller adds them) and, when ``want_gradient``, dE/du of the whole energy (J per unit of u;
+    the elements' part included: its derivative needs only the forces at t = 0), condensed_energy.py's formulas in
+    passes over the modes (a complete basis)."""
+    nb = h2.shape[0]
+    ns = Bq.shape[0]
+    nD = nb * ns
+    a = u[nD] / beta
+    w = u[nD + 1] * w_r
+    D = u[:nD].reshape((nb, ns))
+    d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_gradient)
+    W, W2 = _weights(w, h2, fund, r, omega2, False)
+    A = _modal_amplitudes(F, W, Bq, cos1, r, a)
+    kin, pot, gF, gw, q0, v1 = _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, want_gradient)
+    energy = 0.5 * (w * w) * kin + 0.5 * pot
+    x0 = np.zeros(ns)
+    for l in range(nb):
+        for t in range(ns):
+            x0[t] += c0[l] * D[l, t]
+    if with_potential:
+        for s in range(ns):
+            for i in range(powers.shape[0]):
+                p = powers[i]
+                energy += coeffs[s, i] * x0[s] ** (p + 1) / (p + 1)
+    if not want_gradient:
+        return energy, np.zeros(0)
+    gw += w * kin
+    lam_a = c0[cos1] * omega2[r] * q0[r] + w * w * s0[cos1] * v1[r]        # dE/dA[cos 1, r]
+    C = _galerkin(tg, E, P)
+    grad = np.zeros(nD + 2)
+    for l in range(nb):
+        for t in range(ns):
+            acc = 0.0
+            for j in range(nb):
+                acc += gF[j, t] * C[t, j, l]
+            acc += c0[l] * law_scalar(x0[t], t, powers, coeffs, kinks)[0]
+            grad[l * ns + t] = acc
+    grad[nD] = lam_a / beta
+    grad[nD + 1] = gw * w_r
+    return energy, grad
