@@ -60,12 +60,12 @@ def _close_region(*_):
     """One BLAS-limited region fewer; the last one restores the limits it found (under BLAS_CONFIG)."""
     global _limiter, _open
     with BLAS_CONFIG:
-        _open -= 1
-        if _open == 0:
+        if _open == 1:               # the limits are restored before the count reads 0 (read without the lock)
             _release_control()
             _limiter.restore_original_limits()
             _release_control()
             _limiter = None
+        _open -= 1
 
 
 @contextlib.contextmanager

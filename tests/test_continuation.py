@@ -156,7 +156,7 @@ def test_stop_event_stops_continue_nnm():
 
 
 def test_five_to_one_tongue_at_higher_energy(two_dof):
-    b = nnm.continue_nnm(two_dof, mode=1, energy_max=3e5)
+    b = nnm.continue_nnm(two_dof, mode=1, energy_max=3e5, tongues="follow-all")
     folds = [e for e in b.events if e["kind"] == "fold"]
     maxima = [e for e in folds if e["detail"] == "energy maximum"]
     top5 = max(maxima, key=lambda e: e["energy"])
