@@ -144,6 +144,8 @@ def test_follow_jumps_a_departure_into_a_tongue_above_its_order_and_keeps_the_re
     d = pol.decide(off, v5, five, None, last, 5, [])
     assert isinstance(d, Jump) and d.record.order == 5 and d.base == 1.0
     assert d.targets == SkipPolicy(nnm.Skip(), sk, mode=1).decide(off, v5, five, None, last, 5, []).targets
+    end = pol.no_landing(last, d.record, (1.105, 1.2))            # no target landed: the end says how to follow it
+    assert isinstance(end, Finish) and end.status == "tongue" and "follow-all" in end.message
     inside = P(1.0, sk.frequency_at(1.0) * 1.001)
     inside.label = "tongue 3:1"                          # the last kept point is inside a followed 3:1 tongue
     assert isinstance(pol.decide(off, v5, five, None, inside, 9, []), Keep)

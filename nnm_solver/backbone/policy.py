@@ -105,7 +105,11 @@ class FollowPolicy:
         return self.jumper.recorded(record)
 
     def no_landing(self, last, record, tried, index=-1):
-        return self.jumper.no_landing(last, record, tried, index)
+        """Skip's end where no landing is found, its message saying that following every tongue goes on."""
+        end = self.jumper.no_landing(last, record, tried, index)
+        return Finish(end.status, f"{end.message} (Follow(max_order={self.settings.max_order}) jumps tongues of "
+                                  f"higher order; tongues='follow-all', nnm-solve --tongues follow-all, follows "
+                                  f"them)", end.record, end.index)
 
     def stopped(self, last, reason, index):
         return None
