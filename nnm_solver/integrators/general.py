@@ -36,7 +36,7 @@ from ..jit import jit as _jit, lapack_solve, lapack_solve_many, matmul_t
 from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
 from . import general_band
-from .step_newton import NEWTON_MAX, newton_end as _newton_end
+from .step_newton import NEWTON_MAX, newton_end as _newton_end, stage_guess
 
 @_jit
 def force_stiffness(q, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width):
@@ -234,9 +234,7 @@ def _gauss(q0, v0, h, nsteps, omega2, Bq, BqT, ns, powers, coeffs, kinks, index,
         f1, K = force_stiffness(q1, Bq, BqT, ns, powers, coeffs, kinks, index, ex, co, width)
         a = -omega2 * q1 - f1
         q, v = q1, v1
-        for l in range(s):
-            tl = c[l] * h
-            X[l] = q + tl * v + (0.5 * tl * tl) * a
+        stage_guess(X, q, v, a, c, h)
         if record:
             Q[k + 1] = q
             V[k + 1] = v

@@ -42,7 +42,7 @@ from ..model.coupled import coupled_force_tangent
 from ..model.laws import law_scalar
 from .band import band_layout, band_lu, band_solve
 from .settings import KERNELS
-from .step_newton import NEWTON_MAX, newton_end
+from .step_newton import NEWTON_MAX, newton_end, stage_guess
 
 __all__ = ["layout", "sweep"]
 
@@ -195,9 +195,7 @@ def _gauss_band(q0, v0, h, nsteps, omega2, Phi, PhiT, PhiT_M, MPhi, Mb, Kb, w, B
                               False)
         a = -omega2 * q1 - matvec(PhiT, f1)
         q, v = q1, v1
-        for l in range(s):
-            tl = c[l] * h
-            X[l] = q + tl * v + (0.5 * tl * tl) * a
+        stage_guess(X, q, v, a, c, h)
         if record:
             Q[k + 1] = q
             V[k + 1] = v

@@ -12,7 +12,7 @@ import numpy as np
 from ..jit import jit as _jit
 from .settings import KERNELS
 
-__all__ = ["NEWTON_MAX", "NEWTON_RTOL", "newton_end"]
+__all__ = ["NEWTON_MAX", "NEWTON_RTOL", "newton_end", "stage_guess"]
 
 #: the step's Newton limits, compile-time constants of the kernels (settings.py: KERNELS)
 NEWTON_MAX = KERNELS.newton_max
@@ -40,3 +40,13 @@ def _finite(nR, J):
         if not np.isfinite(v):
             return False
     return True
+
+
+@_jit
+def stage_guess(X, q, v, a, c, h):
+    """The next step's first guess of its stage values X (s, m), in place: the Taylor polynomial of the state q, v
+    with acceleration a at the stage times c h (the collocation polynomial of the step just taken, extrapolated)."""
+    for l in range(X.shape[0]):
+        tl = c[l] * h
+        X[l] = q + tl * v + (0.5 * tl * tl) * a
+
