@@ -20,13 +20,11 @@ def basis_fourier_coefficients(basis, A, n):
     (an HBBasis: orders h, sine flags); harmonics above n are left out."""
     A = np.asarray(A, dtype=float)
     c = np.zeros((int(n) + 1, A.shape[1]), dtype=complex)
-    for j, (h, sine) in enumerate(zip(basis.h, basis.sine)):
-        if h > n:
-            continue
-        if sine:
-            c[h].imag -= A[j]
-        else:
-            c[h].real += A[j]
+    h, sine = np.asarray(basis.h), np.asarray(basis.sine, dtype=bool)
+    cos_rows, sin_rows = np.flatnonzero(~sine & (h <= n)), np.flatnonzero(sine & (h <= n))
+    c.real[h[cos_rows]] = A[cos_rows]           # (each harmonic has one cosine and at most one sine)
+    if len(sin_rows):
+        c.imag[h[sin_rows]] = -A[sin_rows]
     return c
 
 

@@ -93,6 +93,8 @@ class Skeleton:
         #: are the tongue's sheet
         self.sheet_starts = [float(E0) for E0 in self.energy[self._starts]]
         self._interp = None
+        self._lnE = np.log(self.energy)       # ln E and ln f of the points (the labels read them at every point)
+        self._lnf = np.log(self.frequency_hz)
         self._shares = None
         self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
         self._truncation = np.full(len(self.energy), np.nan)
@@ -132,12 +134,12 @@ class Skeleton:
         the point before it, down by at most the sheet's first interval), the pair is the start and the point after it
         (t < 0): the backbone's sheet extends a little below where the stepping met it (sheet_start stops where it
         is no longer nearer the guide than the tongue's sheet), and the point before is the tongue's sheet."""
-        x = np.log(self.energy)
-        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
+        x, lnE = self._lnE, math.log(E)
+        j = min(max(int(np.searchsorted(x, lnE)) - 1, 0), len(x) - 2)
         if (j + 2 < len(x) and self._starts[j + 1] and E < self.energy[j + 1]
-                and math.log(E) >= 2 * x[j + 1] - x[j + 2]):      # at most one of its first intervals below
+                and lnE >= 2 * x[j + 1] - x[j + 2]):      # at most one of its first intervals below
             j += 1
-        return j, (math.log(E) - x[j]) / (x[j + 1] - x[j])
+        return j, (lnE - x[j]) / (x[j + 1] - x[j])
 
     def frequency_at(self, E):
         """Skeleton frequency (Hz) at energy E (J) on the sheet it lies on (_pair); NaN outside its range.  Each sheet
@@ -160,15 +162,15 @@ class Skeleton:
         x = math.log(E)
         if t < 0:                                   # just below a sheet's start: extrapolated along it
             return float(f(c[0] + t * (c[1] - c[0])))
-        a, b = c[j - lo], c[j + 1 - lo]
-        g = lambda s: float(lnE(s)) - x             # noqa: E731
-        ga, gb = g(a), g(b)
+        i = j - lo                                  # the spline piece between points j and j + 1
+        a, b = float(c[i]), float(c[i + 1])
+        pl, pf = lnE.c[:, i].tolist(), f.c[:, i].tolist()     # its cubics in s - a
+        ga, gb = _cubic(pl, 0.0) - x, _cubic(pl, b - a) - x
         if ga == 0.0:
-            return float(f(a))
+            return _cubic(pf, 0.0)
         if ga * gb > 0:                             # no sign change (a spline wiggle at round-off): linear
             return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
-        from scipy.optimize import brentq
-        return float(f(brentq(g, a, b, xtol=1e-14 * max(1.0, abs(b)))))
+        return _cubic(pf, _cubic_root(pl, x, b - a, ga, gb, 1e-14 * max(1.0, abs(b))))
 
     def _sheets(self):
         """{point index: (first index, chord parameters, spline of ln E, spline of f)} of each sheet (the points
@@ -209,7 +211,7 @@ class Skeleton:
         2.3e-4 where the interpolated frequency was 2.1e-4 off the family's orbit at that energy."""
         if not self.covers(E):
             return float("nan")
-        x, y = np.log(self.energy), np.log(self.frequency_hz)
+        x, y = self._lnE, self._lnf
         j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
         h = np.diff(x)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -223,7 +225,7 @@ class Skeleton:
         points it left out); NaN outside its range."""
         if not (self.covers(E1) and self.covers(E2)) or E1 == E2:
             return float("nan")
-        x, y = np.log(self.energy), np.log(self.frequency_hz)
+        x, y = self._lnE, self._lnf
         a, b = np.interp(math.log(E1), x, y), np.interp(math.log(E2), x, y)
         return float((b - a) / (math.log(E2) - math.log(E1)))
 
@@ -266,6 +268,36 @@ class Skeleton:
         tongue may converge onto the tongue's sheet: the soft 2-DOF chain's 3:1 at 0.075 J, 0.6 % off.)"""
         f_i, err = self.frequency_at(E), self.interpolation_error(E)
         return math.isfinite(f_i) and abs(f / f_i - 1.0) <= tol + 2 * (err if math.isfinite(err) else 0.0)
+
+
+def _cubic(p, s):
+    """p[0] s^3 + p[1] s^2 + p[2] s + p[3] (Horner)."""
+    return ((p[0] * s + p[1]) * s + p[2]) * s + p[3]
+
+
+def _cubic_root(p, x, h, ga, gb, xtol):
+    """The root s in [0, h] of _cubic(p, s) = x, given its values minus x at the ends ga, gb of opposite signs:
+    Newton's steps kept inside the bracket (a bisection where one would leave it), to within xtol (the bracket or
+    the last step).  What scipy's brentq on the spline gave (to its xtol), in a few microseconds instead of ~150."""
+    lo, hi = (0.0, h) if ga < 0 else (h, 0.0)          # cubic - x < 0 at lo, > 0 at hi
+    s = h * ga / (ga - gb)                             # the chord's root
+    for _ in range(60):
+        g = _cubic(p, s) - x
+        if g == 0.0:
+            return s
+        if g < 0:
+            lo = s
+        else:
+            hi = s
+        dg = (3.0 * p[0] * s + 2.0 * p[1]) * s + p[2]
+        step = g / dg if dg != 0.0 else math.inf
+        new = s - step
+        if not (min(lo, hi) < new < max(lo, hi)):       # outside the bracket (or no slope): bisect
+            new = 0.5 * (lo + hi)
+        if abs(new - s) <= xtol or abs(hi - lo) <= xtol:
+            return new
+        s = new
+    return s
 
 
 def compute_skeleton(system, mode, E_reach, settings=SkeletonSettings(), E_start=None):

@@ -302,6 +302,15 @@ class CondensedHBProblem(HBTruncationError):
                 self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
         return condensed_energy(self, u)
 
+    def energy_and_gradient(self, u):
+        """(energy J, dE/du): ``energy`` and ``energy_gradient`` of u, the same numbers, in one pass of the compiled
+        kernel where there is one (the truncation estimate's bordered Newton needs both at each step)."""
+        if self._kernel is not None and self._kernel[1] is not None:
+            E, g = kernels.energy_gradient(np.asarray(u, dtype=float), True, *self._kernel[1])
+            return (E if self._kernel[1][0] else float(E + np.sum(self.sys.elements.potential(
+                self.basis.state_at_zero()[0] @ self.unpack(u)[0])))), g
+        return self.energy(u), self.energy_gradient(u)
+
     def galerkin_blocks(self, d):
         return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
 

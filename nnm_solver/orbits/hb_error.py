@@ -121,6 +121,11 @@ class HBTruncationError:
         return float(err), float("nan")
 
 
+def _norm(x):
+    """|x| of a 1-D float array: sqrt(x . x), np.linalg.norm's number without its dispatch."""
+    return math.sqrt(float(x.dot(x)))
+
+
 def _least_squares(J, b):
     """The engine's least-squares solve (QR, or LU when square) of the bordered system."""
     return LeastSquares(np.asfortranarray(J)).solve(b)
@@ -142,11 +147,12 @@ class _AtTheEnergy:
         big = self.big
         r2, J2 = big.jacobian(v)
         self.w = w = big.scale(v)
-        g = big.energy_gradient(v)
+        both = getattr(big, "energy_and_gradient", None)
+        E, g = both(v) if both is not None else (None, big.energy_gradient(v))
         self.fold = at_energy_fold(g @ self.t2 / self.E0, self.t2[-1] / v[-1])
         if self.fold:          # the step orthogonal to the branch tangent (the hyperplane through v)
-            return np.r_[r2, 0.0], stacked(J2, w * w * self.t2)
-        return np.r_[r2, big.energy(v) - self.E0], stacked(J2, g)
+            return np.append(r2, 0.0), stacked(J2, w * w * self.t2)
+        return np.append(r2, (big.energy(v) if E is None else E) - self.E0), stacked(J2, g)
 
     def residual(self, v):
         return self.jacobian(v)[0]
@@ -161,7 +167,7 @@ class _AtTheEnergy:
         def stop(k, v, du, v_new):
             if self.fold:
                 return "next to an energy fold: one step orthogonal to the branch"
-            if k == 0 and np.linalg.norm(self.w * du) < ORBITS.error_one_step:
+            if k == 0 and _norm(self.w * du) < ORBITS.error_one_step:
                 return "a short first step"
             if k > 0 and abs(v_new[-1] - v[-1]) <= ORBITS.error_settled * abs(v_new[-1] - u2[-1]):
                 return "the frequency settled"
