@@ -84,8 +84,14 @@ class HBTruncationError:
     def _embed(self, big, u):
         """u (or a direction) of this problem as a vector of the larger problem ``big``: the coefficients on the
         harmonics both have, zero on the new ones, the tail unchanged."""
+        u = np.asarray(u)
         k = self.nb * self._width
-        C = harmonics_in(big.basis, self.basis, np.asarray(u[:k]).reshape(self.nb, self._width))
+        if u.ndim == 2:                   # several vectors (rows) at once
+            C = harmonics_in(big.basis, self.basis, u[:, :k].reshape(len(u), self.nb, self._width)
+                             .transpose(1, 0, 2).reshape(self.nb, -1))
+            C = C.reshape(len(big.basis), len(u), self._width).transpose(1, 0, 2).reshape(len(u), -1)
+            return np.concatenate([C, u[:, k:]], axis=1)
+        C = harmonics_in(big.basis, self.basis, u[:k].reshape(self.nb, self._width))
         return np.concatenate([C.ravel(), u[k:]])
 
     def frequency_error(self, u, J, tangent, factor=None):
@@ -99,7 +105,7 @@ class HBTruncationError:
         if getattr(self, "q_ref", None) is not None:
             big.q_ref = self.q_ref      # the phase condition's reference (full basis): the engine's accept() has set
                                         # it to this orbit's own shape, which the larger orbit keeps
-        u2, t2 = self._embed(big, u), self._embed(big, tangent)
+        u2, t2 = self._embed(big, np.stack([u, tangent]))
         E0 = self.energy(u)        # the point's (a condensed problem's energy of u2 is not it: its eliminated
                                    # amplitudes see the new harmonics' forces)
         bordered = _AtTheEnergy(big, E0, t2)
