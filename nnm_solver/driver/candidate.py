@@ -15,6 +15,7 @@ import numpy as np
 from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ratio
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
+from ..orbits import condensed_kernels as kernels
 from ..results.point import ModalState, Point
 from ..results.settings import RESULTS
 from ..results.stops import restoring_ratio
@@ -113,6 +114,9 @@ def restoring_lower_bound(system, Q):
     non-negative work, d . g(d) >= 0: hardening springs); 0 where some q^T Omega^2 q is not positive.  O(S n n_s)
     for S samples: where it is above the escape thresholds (RESULTS.escape_ratio, escape_ratio_failed) the ratio
     itself (its Gram matrices and sample-wise sums, several times the cost) is not needed."""
+    if kernels.AVAILABLE and not system.elements.coupled:      # springs: one compiled pass per sample
+        return float(kernels.restoring_bound(np.ascontiguousarray(Q, dtype=float), system.Bq, system.omega2,
+                                             system.powers, system.coefficients, system.kinks))
     d = Q @ system.Bq.T
     qlin = (Q * Q) @ system.omega2
     if not np.all(qlin > 0.0):

@@ -25,7 +25,8 @@ import numpy as np
 from ..jit import jit, numba
 from ..model.laws import law_scalar
 
-__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes"]
+__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes",
+           "restoring_bound"]
 
 #: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
 #: modes would be far slower than them)
@@ -372,3 +373,38 @@ def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fu
     grad[nD] = lam_a / beta
     grad[nD + 1] = gw * w_r
     return energy, grad
+
+
+@jit_modes
+def _sample_work(Q, t, Bq, omega2, powers, coeffs, kinks):
+    """(q^T Omega^2 q, d . g(d)) of the modal sample q = Q[t] (d = Bq q): sums over the modes."""
+    m = Q.shape[1]
+    ns = Bq.shape[0]
+    qlin = 0.0
+    for k in range(m):
+        qlin += omega2[k] * Q[t, k] * Q[t, k]
+    work = 0.0
+    for s in range(ns):
+        d = 0.0
+        for k in range(m):
+            d += Bq[s, k] * Q[t, k]
+        work += d * law_scalar(d, s, powers, coeffs, kinks)[0]
+    return qlin, work
+
+
+@jit
+def restoring_bound(Q, Bq, omega2, powers, coeffs, kinks):
+    """driver/candidate.restoring_lower_bound of the modal orbit Q (samples, m) for springs (the element table):
+    min over the samples of 1 + d . g(d) / q^T Omega^2 q, 0 where some q^T Omega^2 q is not positive (NaN where a
+    sample's is NaN), in one pass over the modes per sample (its numpy form's numbers to round-off)."""
+    best = np.inf
+    for t in range(Q.shape[0]):
+        qlin, work = _sample_work(Q, t, Bq, omega2, powers, coeffs, kinks)
+        if not qlin > 0.0:
+            return 0.0
+        v = 1.0 + work / qlin
+        if v != v:
+            return v
+        if v < best:
+            best = v
+    return best
