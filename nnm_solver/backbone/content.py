@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.harmonics import RESONANCE_FRACTION
+from ..analysis.hb_series import basis_fourier_coefficients, basis_harmonic_amplitudes
 from ..fourier import fourier_coefficients
 from .settings import LabelSettings
 
@@ -26,8 +27,10 @@ class Content:
     """The harmonic content of a modal orbit: k (strongest harmonic >= 2), fraction (its share of the orbit's
     amplitude), partner_k (the harmonic >= 2 the other modes carry most: the order of a partner's resonance),
     share (the fundamental's share), amplitudes (per harmonic, or None when unknown), coefficients (the orbit's
-    complex Fourier coefficients a_0..a_n (n + 1, modes), or None: what ``partners`` is made from, when read), r (the
-    followed mode, 0-based), orbit (the modal orbit's samples (S, modes), or None: ``tongue_partner``)."""
+    complex Fourier coefficients a_0..a_n (n + 1, modes), or None: what ``partners`` is made from, when read), series
+    ((HBBasis, A (N_b, modes)) of a harmonic-balance orbit whose coefficients were not made: they are made from it
+    when read), r (the followed mode, 0-based), orbit (the modal orbit's samples (S, modes), or None:
+    ``tongue_partner``)."""
 
     k: int = 1
     fraction: float = 0.0
@@ -35,6 +38,7 @@ class Content:
     share: float = 1.0
     amplitudes: np.ndarray | None = None
     coefficients: np.ndarray | None = field(default=None, repr=False)
+    series: tuple | None = field(default=None, repr=False)
     r: int = 0
     orbit: np.ndarray | None = field(default=None, repr=False)
 
@@ -57,28 +61,38 @@ class Content:
         mode's column zero; None when unknown.  Made when read (only a point off the family needs it:
         ``tongue_partner``), O(n modes)."""
         tot = float(np.sum(self.amplitudes[1:])) if self.amplitudes is not None else 0.0
-        if self.coefficients is None or not tot > 0:
+        c = self.coefficients
+        if c is None and self.series is not None:
+            c = basis_fourier_coefficients(*self.series, len(self.amplitudes) - 1)
+        if c is None or not tot > 0:
             return None
-        partners = np.abs(self.coefficients)
+        partners = np.abs(c)
         partners[:, self.r] = 0.0
         return partners / tot
 
 
-def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None):
+def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None, series=None):
     """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None.
-    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q).
-    The amplitude of each harmonic and the other modes' (partner_harmonic's) in one pass over the coefficients."""
+    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q);
+    series : (HBBasis, A (N_b, modes)) of a harmonic-balance orbit, whose harmonic amplitudes are read from its basis
+    coefficients (analysis/hb_series.basis_harmonic_amplitudes; its complex coefficients only if ``partners`` is read).
+    The amplitude of each harmonic and the other modes' (partner_harmonic's) in one pass."""
     if Q is None:
         return Content()
-    c = fourier_coefficients(Q, n) if coefficients is None else coefficients
-    amps, others = _harmonic_amplitudes(c, r)
+    if series is not None and coefficients is None:
+        c = None
+        amps, others = basis_harmonic_amplitudes(*series, n, r)
+    else:
+        c = fourier_coefficients(Q, n) if coefficients is None else coefficients
+        amps, others = _harmonic_amplitudes(c, r)
     label, k, fraction = _label_of(amps)
     tot = float(np.sum(amps[1:]))
-    if not tot > 0 or len(amps) < 3 or c.shape[1] < 2:
+    if not tot > 0 or len(amps) < 3 or Q.shape[1] < 2:
         partner = 1
     else:
         partner = int(np.argmax(others[2:]) + 2)
-    return Content(k, fraction, partner, fundamental_share(amps), amps, c, int(r), np.asarray(Q, dtype=float))
+    return Content(k, fraction, partner, fundamental_share(amps), amps, c, series if c is None else None, int(r),
+                   np.asarray(Q, dtype=float))
 
 
 def _harmonic_amplitudes(c, r):

@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ratio
+from ..analysis.hb_series import series_restoring_ratio
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
 from ..orbits import condensed_kernels as kernels
@@ -87,8 +87,7 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
     series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
-    content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
-                         if series else None)
+    content = content_of(Q, mode - 1, LABEL_HARMONICS, series=(prob.basis, A) if series else None)
     restoring = 1.0 if Q is None else restoring_lower_bound(sys_, Q)
     bound = series and Q is not None    # Q's first sample is the state at t = 0 (basis.E's first row)
     if restoring <= max(RESULTS.escape_ratio, RESULTS.escape_ratio_failed):    # the escape tests need the ratio
