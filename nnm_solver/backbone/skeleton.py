@@ -229,6 +229,10 @@ class Skeleton:
         a, b = np.interp(math.log(E1), x, y), np.interp(math.log(E2), x, y)
         return float((b - a) / (math.log(E2) - math.log(E1)))
 
+    def log_frequency(self, E):
+        """ln f of the family at energy E (J) interpolated linearly in ln E between its points (``slope``'s)."""
+        return np.interp(math.log(E), self._lnE, self._lnf)
+
     def covers(self, E):
         return len(self.energy) >= 2 and self.energy[0] <= E <= self.energy[-1]
 
