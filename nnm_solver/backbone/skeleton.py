@@ -42,6 +42,7 @@ import numpy as np
 
 from ..errors import NNMInputError
 from .amplitude_family import solve_at_amplitude, family_share, amplitude_family
+from .cubic_piece import cubic, cubic_root
 from .settings import SkeletonSettings
 
 __all__ = ["Skeleton", "skeleton", "skeleton_of", "compute_skeleton", "amplitude_family"]
@@ -165,12 +166,12 @@ class Skeleton:
         i = j - lo                                  # the spline piece between points j and j + 1
         a, b = float(c[i]), float(c[i + 1])
         pl, pf = lnE.c[:, i].tolist(), f.c[:, i].tolist()     # its cubics in s - a
-        ga, gb = _cubic(pl, 0.0) - x, _cubic(pl, b - a) - x
+        ga, gb = cubic(pl, 0.0) - x, cubic(pl, b - a) - x
         if ga == 0.0:
-            return _cubic(pf, 0.0)
+            return cubic(pf, 0.0)
         if ga * gb > 0:                             # no sign change (a spline wiggle at round-off): linear
             return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
-        return _cubic(pf, _cubic_root(pl, x, b - a, ga, gb, 1e-14 * max(1.0, abs(b))))
+        return cubic(pf, cubic_root(pl, x, b - a, ga, gb, 1e-14 * max(1.0, abs(b))))
 
     def _sheets(self):
         """{point index: (first index, chord parameters, spline of ln E, spline of f)} of each sheet (the points
@@ -272,36 +273,6 @@ class Skeleton:
         tongue may converge onto the tongue's sheet: the soft 2-DOF chain's 3:1 at 0.075 J, 0.6 % off.)"""
         f_i, err = self.frequency_at(E), self.interpolation_error(E)
         return math.isfinite(f_i) and abs(f / f_i - 1.0) <= tol + 2 * (err if math.isfinite(err) else 0.0)
-
-
-def _cubic(p, s):
-    """p[0] s^3 + p[1] s^2 + p[2] s + p[3] (Horner)."""
-    return ((p[0] * s + p[1]) * s + p[2]) * s + p[3]
-
-
-def _cubic_root(p, x, h, ga, gb, xtol):
-    """The root s in [0, h] of _cubic(p, s) = x, given its values minus x at the ends ga, gb of opposite signs:
-    Newton's steps kept inside the bracket (a bisection where one would leave it), to within xtol (the bracket or
-    the last step).  What scipy's brentq on the spline gave (to its xtol), in a few microseconds instead of ~150."""
-    lo, hi = (0.0, h) if ga < 0 else (h, 0.0)          # cubic - x < 0 at lo, > 0 at hi
-    s = h * ga / (ga - gb)                             # the chord's root
-    for _ in range(60):
-        g = _cubic(p, s) - x
-        if g == 0.0:
-            return s
-        if g < 0:
-            lo = s
-        else:
-            hi = s
-        dg = (3.0 * p[0] * s + 2.0 * p[1]) * s + p[2]
-        step = g / dg if dg != 0.0 else math.inf
-        new = s - step
-        if not (min(lo, hi) < new < max(lo, hi)):       # outside the bracket (or no slope): bisect
-            new = 0.5 * (lo + hi)
-        if abs(new - s) <= xtol or abs(hi - lo) <= xtol:
-            return new
-        s = new
-    return s
 
 
 def compute_skeleton(system, mode, E_reach, settings=SkeletonSettings(), E_start=None):

@@ -16,6 +16,7 @@ from ..analysis.hb_series import series_restoring_ratio
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
 from ..orbits import condensed_kernels as kernels
+from ..orbits.spring_kernels import restoring_bound
 from ..results.point import ModalState, Point
 from ..results.settings import RESULTS
 from ..results.stops import restoring_ratio
@@ -114,7 +115,7 @@ def restoring_lower_bound(system, Q):
     for S samples: where it is above the escape thresholds (RESULTS.escape_ratio, escape_ratio_failed) the ratio
     itself (its Gram matrices and sample-wise sums, several times the cost) is not needed."""
     if kernels.AVAILABLE and not system.elements.coupled:      # springs: one compiled pass per sample
-        return float(kernels.restoring_bound(np.ascontiguousarray(Q, dtype=float), system.Bq, system.omega2,
+        return float(restoring_bound(np.ascontiguousarray(Q, dtype=float), system.Bq, system.omega2,
                                              system.powers, system.coefficients, system.kinks))
     d = Q @ system.Bq.T
     qlin = (Q * Q) @ system.omega2

@@ -24,9 +24,9 @@ import numpy as np
 
 from ..jit import jit, numba
 from ..model.laws import law_scalar
+from .spring_kernels import int_power
 
-__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes",
-           "restoring_bound"]
+__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes"]
 
 #: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
 #: modes would be far slower than them)
@@ -114,24 +114,6 @@ def flexibility(w, h2, fund, r, omega2, pairs, index, R0, R1, complete, slope):
 
 
 @jit
-def _int_power(x, e):
-    """x ** e for an integer e, as numba computes ``float ** int`` (numba/cpython/numbers.py int_power: squaring, the
-    same products in the same order, so the same number): model/laws.law_scalar's powers, in _forces."""
-    r = 1.0
-    a = x
-    invert = e < 0
-    k = -e if invert else e
-    if k > 0x10000:
-        return x ** float(e)
-    while k != 0:
-        if k & 1:
-            r *= a
-        k >>= 1
-        a *= a
-    return 1.0 / r if invert else r
-
-
-@jit
 def _forces(D, E, P, powers, coeffs, kinks, tangents):
     """(d (N, n_s), F (N_b, n_s), g' (N, n_s)): the sampled deformations d = E D, the force coefficients F = P g(d) and
     (when ``tangents``; else zeros) the sampled stiffnesses."""
@@ -158,7 +140,7 @@ def _forces(D, E, P, powers, coeffs, kinks, tangents):
                     c = coeffs[s, i]
                     if c != 0.0:
                         p = powers[i]
-                        xp1 = _int_power(x, p - 1)
+                        xp1 = int_power(x, p - 1)
                         f += c * xp1 * x
                         t += p * c * xp1
             else:
@@ -374,37 +356,3 @@ def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fu
     grad[nD + 1] = gw * w_r
     return energy, grad
 
-
-@jit_modes
-def _sample_work(Q, t, Bq, omega2, powers, coeffs, kinks):
-    """(q^T Omega^2 q, d . g(d)) of the modal sample q = Q[t] (d = Bq q): sums over the modes."""
-    m = Q.shape[1]
-    ns = Bq.shape[0]
-    qlin = 0.0
-    for k in range(m):
-        qlin += omega2[k] * Q[t, k] * Q[t, k]
-    work = 0.0
-    for s in range(ns):
-        d = 0.0
-        for k in range(m):
-            d += Bq[s, k] * Q[t, k]
-        work += d * law_scalar(d, s, powers, coeffs, kinks)[0]
-    return qlin, work
-
-
-@jit
-def restoring_bound(Q, Bq, omega2, powers, coeffs, kinks):
-    """driver/candidate.restoring_lower_bound of the modal orbit Q (samples, m) for springs (the element table):
-    min over the samples of 1 + d . g(d) / q^T Omega^2 q, 0 where some q^T Omega^2 q is not positive (NaN where a
-    sample's is NaN), in one pass over the modes per sample (its numpy form's numbers to round-off)."""
-    best = np.inf
-    for t in range(Q.shape[0]):
-        qlin, work = _sample_work(Q, t, Bq, omega2, powers, coeffs, kinks)
-        if not qlin > 0.0:
-            return 0.0
-        v = 1.0 + work / qlin
-        if v != v:
-            return v
-        if v < best:
-            best = v
-    return best
