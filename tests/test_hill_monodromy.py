@@ -122,3 +122,45 @@ def test_a_ritz_branch_takes_the_monodromy_route_by_default(monkeypatch):
     b = nnm.continue_nnm(model, 1, 1e-4, method="hb", harmonics=5, condensed=True, max_points=6)
     assert b.settings.modal_basis == "ritz" and b.settings.floquet and len(calls) >= len(b)
     assert not np.isnan(b.floquet).any() and np.allclose(np.abs(b.floquet), 1.0, atol=1e-6) and b.stable.all()
+
+
+def test_the_diagonal_blocks_are_the_monodromys(pitchfork_orbits):
+    """hill_monodromy's half assembly (A11, A22) against gauss_monodromy.monodromy's whole map: to round-off."""
+    from nnm_solver.integrators.gauss import constants
+    from nnm_solver.integrators.gauss_monodromy import monodromy
+    problem, us = pitchfork_orbits
+    A, w = problem.unpack(us[-1])
+    s, N = 3, 40
+    k = constants(problem.sys, np.pi / w / N, s)
+    Dseq = np.random.default_rng(1).uniform(0.0, 5.0, (N, s * problem.sys.Bq.shape[0]))
+    Sq, Sv = monodromy(k, problem.sys.Bq, N, Dseq, 2 * problem.n, velocities=True)
+    A11, A22 = hill_monodromy._diagonal_blocks(k, np.ascontiguousarray(problem.sys.Bq), N, Dseq)
+    n = problem.n
+    assert np.allclose(A11, Sq[:, :n], rtol=0, atol=1e-13 * np.abs(Sq).max())
+    assert np.allclose(A22, Sv[:, n:], rtol=0, atol=1e-13 * np.abs(Sv).max())
+
+
+@pytest.mark.slow
+def test_monodromy_flags_equal_the_converged_dense_hill_route_along_a_tongue():
+    """A mid-size case: the 20-DOF cantilever's NNM 1 (H = 5) through its 5:1 tongue.  At orbits below, inside and
+    past the tongue the monodromy route's largest |multiplier| equals the dense Hill route's with 13 harmonics (1,040
+    rows; the linearisation converged) to 1e-4, and so do the flags.  The dense route at the orbit's own H = 5 misses
+    the instability from E = 1.8 mJ on (|mu| up to 1.035 at 5.8 mJ: its truncation, 2e-6 from 1 there), which is
+    why the reference here is the converged one.  (~1 min)"""
+    from reference_models import cantilever_beam
+    m = cantilever_beam(n_el=10)
+    b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=5, floquet=False, max_points=300,
+                         tongues="follow-all")
+    problem, us = _orbits(m, b, 5)
+    tol = 1e-6
+    flags, missed = [], 0
+    for E in (1.3e-3, 5.8e-3, 0.0134, 0.016):        # below, inside the tongue, near its fold, past it
+        i = int(np.argmin(np.abs(b.energy - E)))
+        ref = np.abs(hill.hill_multipliers(problem, us[i], harmonics=13, method="dense")).max()
+        mono = np.abs(hill.hill_multipliers(problem, us[i], method="monodromy")).max()
+        low = np.abs(hill.hill_multipliers(problem, us[i], method="dense")).max()
+        assert abs(mono - ref) < 1e-4, (E, mono, ref)
+        assert (mono <= 1 + tol) == (ref <= 1 + tol)
+        flags.append(bool(mono <= 1 + tol))
+        missed += (low <= 1 + tol) and not (ref <= 1 + tol)
+    assert flags[0] and not all(flags) and missed >= 1          # stable below, unstable in the tongue: can fail
