@@ -143,10 +143,10 @@ def test_the_diagonal_blocks_are_the_monodromys(pitchfork_orbits):
 @pytest.mark.slow
 def test_monodromy_flags_equal_the_converged_dense_hill_route_along_a_tongue():
     """A mid-size case: the 20-DOF cantilever's NNM 1 (H = 5) through its 5:1 tongue.  At orbits below, inside and
-    past the tongue the monodromy route's largest |multiplier| equals the dense Hill route's with 13 harmonics (1,040
-    rows; the linearisation converged) to 1e-4, and so do the flags.  The dense route at the orbit's own H = 5 misses
-    the instability from E = 1.8 mJ on (|mu| up to 1.035 at 5.8 mJ: its truncation, 2e-6 from 1 there), which is
-    why the reference here is the converged one.  (~1 min)"""
+    past the tongue the monodromy route's largest |multiplier| equals the dense Hill route's with 15 harmonics (1,240
+    rows; the linearisation converged) to 1e-4, and so do the flags.  The dense route at the orbit's own H = 5 is far
+    from both inside the tongue (|mu| 1.035 at 5.8 mJ, 1.00002 by that route: its truncation of the perturbation),
+    which is why the reference here is the converged one.  (~1-3 min)"""
     from reference_models import cantilever_beam
     m = cantilever_beam(n_el=10)
     b = nnm.continue_nnm(m, 1, 0.05, method="hb", freq_tol=None, harmonics=5, floquet=False, max_points=300,
@@ -156,11 +156,11 @@ def test_monodromy_flags_equal_the_converged_dense_hill_route_along_a_tongue():
     flags, missed = [], 0
     for E in (1.3e-3, 5.8e-3, 0.0134, 0.016):        # below, inside the tongue, near its fold, past it
         i = int(np.argmin(np.abs(b.energy - E)))
-        ref = np.abs(hill.hill_multipliers(problem, us[i], harmonics=13, method="dense")).max()
+        ref = np.abs(hill.hill_multipliers(problem, us[i], harmonics=15, method="dense")).max()
         mono = np.abs(hill.hill_multipliers(problem, us[i], method="monodromy")).max()
         low = np.abs(hill.hill_multipliers(problem, us[i], method="dense")).max()
         assert abs(mono - ref) < 1e-4, (E, mono, ref)
         assert (mono <= 1 + tol) == (ref <= 1 + tol)
         flags.append(bool(mono <= 1 + tol))
-        missed += (low <= 1 + tol) and not (ref <= 1 + tol)
+        missed += abs(low - ref) > 10 * abs(mono - ref) + 1e-3
     assert flags[0] and not all(flags) and missed >= 1          # stable below, unstable in the tongue: can fail

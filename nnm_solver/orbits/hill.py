@@ -48,7 +48,7 @@ Two routes to the same eigenvalues (``method=``):
   orbit has no such symmetry.
 * ``"monodromy"``: not through the Hill matrix: the time-domain monodromy of the same variational equation along the
   HB orbit (hill_monodromy.py: Gauss collocation in low-rank form, an n x n eigenproblem for a time-symmetric
-  orbit), for many modes and few elements: ~0.5 s a point for the unreduced aircraft's Ritz system (670 modes,
+  orbit), for many modes and few elements: ~0.7 s CPU a point for the unreduced aircraft's Ritz system (670 modes,
   H = 9), whose Hill matrix has 25,460 rows.  It differs from the Hill routes by their truncation of the
   perturbation to 2H + 1 harmonics (the flags and events agree: tests/test_hill_monodromy.py).
 * ``"auto"`` (default): reversible up to ORBITS.hill_dense_max_rows rows of the whole matrix, secular above (structured,
