@@ -130,7 +130,8 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
     """Floquet multipliers (2n,) of the HB orbit u of ``problem`` (an HBProblem), largest modulus first.
 
     method : "dense", "structured", "secular", "reversible", "monodromy" or "auto" (module docstring); default:
-    ``problem.hill_method`` if it has one, else "auto".  The structured route returns the trivial pair as exactly 1, 1."""
+    ``problem.hill_method`` if it has one, else "auto".  The structured route returns the trivial pair as exactly
+    1, 1."""
     method = method or getattr(problem, "hill_method", None) or "auto"
     if method not in HILL_METHODS:
         raise ValueError(f"method must be one of {HILL_METHODS}, got {method!r}")
