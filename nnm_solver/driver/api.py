@@ -203,7 +203,8 @@ def continue_nnm(model, mode, energy_max, method=None, *, continuation=None, ton
         backbone/policy.py describes the algorithm, backbone/settings.py its settings.
     energy_min : energy (J) of the first point (default: where the springs hold 1e-5 of the energy).
     floquet : compute Floquet multipliers and stability at every point (default: yes; HB: when the Hill matrix
-        has at most driver/settings.SIZES.hill_auto_size rows).
+        has at most driver/settings.SIZES.hill_auto_size rows, or in a Ritz basis of a large model whose
+        multipliers take the monodromy route, driver/problems.hb_floquet_default).
     locate_events : locate folds and stability changes between points (default True).
     on_point : optional callable(point: Point) called after each converged point.
     stop : optional threading.Event-like object; when set, the continuation stops (status 'cancelled').

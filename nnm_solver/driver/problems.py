@@ -15,6 +15,7 @@ from ..integrators.registry import get_integrator
 from ..orbits.condensed_hb import CondensedHBProblem
 from ..orbits.harmonic_balance import HBProblem
 from ..orbits.hb_basis import BASES, HBBasis
+from ..orbits.hill import auto_route
 from ..orbits.shooting import ShootingProblem
 from ..results.settings import HarmonicBalanceSettings, ShootingSettings
 from .settings import SIZES
@@ -111,6 +112,15 @@ def shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
     return problem, u0, p0, settings
 
 
+def hb_floquet_default(n, harmonics, ritz):
+    """Does harmonic balance compute the multipliers when floquet=None: for a Hill matrix of at most
+    SIZES.hill_auto_size rows, or in a Ritz basis (``ritz``: a large model) of at most SIZES.ritz_floquet_modes modes
+    whose multipliers take the monodromy route (an n x n eigenproblem a point, hill_monodromy.py)."""
+    if 2 * n * (2 * harmonics + 1) <= SIZES.hill_auto_size:
+        return True
+    return bool(ritz and n <= SIZES.ritz_floquet_modes and auto_route(n, harmonics) == "monodromy")
+
+
 def hb_problem(system, k, a0, opts, tol, energy_max, floquet):
     basis, harmonics, samples = opts["basis"], opts["harmonics"], opts["samples"]
     if basis is None:
@@ -141,9 +151,9 @@ def hb_problem(system, k, a0, opts, tol, energy_max, floquet):
         u0 = problem.pack(A0, problem.w_r)
         p0 = np.zeros_like(u0)
         p0[:-1] = A0.ravel() / a0
-    if floquet is None:
-        floquet = 2 * system.n * (2 * hb.harmonics + 1) <= SIZES.hill_auto_size
     cutoff = getattr(system, "cutoff_hz", None)
+    if floquet is None:
+        floquet = hb_floquet_default(system.n, hb.harmonics, cutoff is not None)
     settings = HarmonicBalanceSettings(tol=tol, harmonics=hb.harmonics, basis=hb.kind, samples=hb.samples,
                                        energy_max=energy_max, floquet=bool(floquet), condensed=bool(condensed),
                                        modal_basis="full" if cutoff is None else "ritz",

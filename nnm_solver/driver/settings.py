@@ -65,6 +65,9 @@ class Sizes:
         first point (1e-5: the first point is linear to that order, far below any frequency accuracy asked);
     hill_auto_size : largest Hill matrix (rows) for which harmonic balance computes the multipliers when
         floquet=None (a dense eigenproblem of that size costs about 0.1 s here);
+    ritz_floquet_modes : harmonic balance in a Ritz basis (a large model) computes them too when floquet=None if its
+        multipliers take the monodromy route (orbits/hill.auto_route) and the basis has at most this many modes (an
+        n x n eigenproblem a point: ~0.3 s for the unreduced aircraft's 670, a small share of its basis's cost);
     ritz_min_dof : harmonic balance works in a Ritz basis (model/ritz.py) by default above this many DOFs;
     condense_ratio : a forced response with condensed=None is condensed when n_s * condense_ratio < n (few elements
         in a large model); max_uncondensed : the largest uncondensed forced HB system (basis functions x n).
@@ -72,6 +75,7 @@ class Sizes:
 
     start_nonlinearity: float = 1e-5
     hill_auto_size: int = 1000
+    ritz_floquet_modes: int = 1500
     ritz_min_dof: int = 2000
     condense_ratio: int = 4
     max_uncondensed: int = 20000

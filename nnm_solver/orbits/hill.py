@@ -46,9 +46,15 @@ Two routes to the same eigenvalues (``method=``):
   reversal makes the problem linear in lambda^2, half-wave symmetry splits it by the parity of the harmonics): the
   same eigenpairs from matrices of n (2H + 1) / 2 rows, ~1/30 of the dense route's work; the dense route where the
   orbit has no such symmetry.
+* ``"monodromy"``: not through the Hill matrix: the time-domain monodromy of the same variational equation along the
+  HB orbit (hill_monodromy.py: Gauss collocation in low-rank form, an n x n eigenproblem for a time-symmetric
+  orbit), for many modes and few elements: ~0.7 s CPU a point for the unreduced aircraft's Ritz system (670 modes,
+  H = 9), whose Hill matrix has 25,460 rows.  It differs from the Hill routes by their truncation of the
+  perturbation to 2H + 1 harmonics (the flags and events agree: tests/test_hill_monodromy.py).
 * ``"auto"`` (default): reversible up to ORBITS.hill_dense_max_rows rows of the whole matrix, secular above (structured,
 then
-  reversible, then dense, where it cannot vouch for its answer).
+  reversible, then dense, where it cannot vouch for its answer), monodromy from ORBITS.hill_monodromy_min_rows rows
+  (``auto_route``), where those fallbacks would be eigenproblems of thousands of rows.
 """
 from __future__ import annotations
 
@@ -58,16 +64,17 @@ import numpy as np
 import scipy.linalg as sla
 
 from .hb_basis import HBBasis
+from .hill_monodromy import monodromy_multipliers
 from .hill_reversible import reversible_multipliers
 from .hill_secular import _secular
 from .hill_structured import _structured
 from .settings import ORBITS
 
-__all__ = ["hill_multipliers", "derivative_matrix", "central_exponents", "HILL_METHODS", "DENSE_MAX_ROWS"]
+__all__ = ["hill_multipliers", "auto_route", "derivative_matrix", "central_exponents", "HILL_METHODS", "DENSE_MAX_ROWS"]
 
 
 #: the routes of hill_multipliers(method=...)
-HILL_METHODS = ("auto", "dense", "structured", "secular", "reversible")
+HILL_METHODS = ("auto", "dense", "structured", "secular", "reversible", "monodromy")
 
 #: an alias of settings.py's ORBITS.hill_dense_max_rows (the code reads that)
 DENSE_MAX_ROWS = ORBITS.hill_dense_max_rows
@@ -110,11 +117,21 @@ def _galerkin_blocks(problem, u, harmonics):
     return A, w, H, bp, C
 
 
+def auto_route(n, harmonics):
+    """The route method="auto" takes for n modes and a Hill basis of ``harmonics`` harmonics (module docstring):
+    "reversible", "secular" or "monodromy" by the Hill matrix's rows 2 n (2H + 1)."""
+    rows = 2 * int(n) * (2 * int(harmonics) + 1)
+    if rows <= ORBITS.hill_dense_max_rows:
+        return "reversible"
+    return "monodromy" if rows >= ORBITS.hill_monodromy_min_rows else "secular"
+
+
 def hill_multipliers(problem, u, harmonics=None, method=None):
     """Floquet multipliers (2n,) of the HB orbit u of ``problem`` (an HBProblem), largest modulus first.
 
-    method : "dense", "structured", "secular", "reversible" or "auto" (module docstring); default: ``problem.hill_method`` if it has
-    one, else "auto".  The structured route returns the trivial pair as exactly 1, 1."""
+    method : "dense", "structured", "secular", "reversible", "monodromy" or "auto" (module docstring); default:
+    ``problem.hill_method`` if it has one, else "auto".  The structured route returns the trivial pair as exactly
+    1, 1."""
     method = method or getattr(problem, "hill_method", None) or "auto"
     if method not in HILL_METHODS:
         raise ValueError(f"method must be one of {HILL_METHODS}, got {method!r}")
@@ -125,7 +142,12 @@ def hill_multipliers(problem, u, harmonics=None, method=None):
         d = problem.basis.functions(theta) @ (A @ s.Bq.T)
         return _dense(problem, w, bp, C, bp.galerkin_matrix(s.coupled_stiffness(d)))
     if method == "auto":
-        method = "reversible" if 2 * problem.n * len(bp) <= ORBITS.hill_dense_max_rows else "secular"
+        method = auto_route(problem.n, H)
+    if method == "monodromy":
+        mu = monodromy_multipliers(s, problem.basis, A, w)
+        if mu is not None:
+            return mu
+        method = "secular"
     if method == "secular":
         mu = _secular(problem, A, w, bp, C)
         if mu is not None:

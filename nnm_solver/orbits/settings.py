@@ -35,6 +35,16 @@ class OrbitSettings:
     # ------------------------------------------------------------------ Hill's multipliers: routes (hill.py)
     #: method="auto" takes the dense route up to this many rows 2 n (2H + 1) of the Hill matrix
     hill_dense_max_rows: int = 400
+    #: method="auto" takes the monodromy route (hill_monodromy.py: the time-domain monodromy of the variational
+    #: equation along the HB orbit, an n x n eigenproblem) from this many rows of the Hill matrix: there the other
+    #: routes' fallback is an eigenproblem of that size (the aircraft's 548 modes at H = 9: 20,824 rows, minutes a
+    #: point; the Ritz system of the unreduced aircraft: 25,460)
+    hill_monodromy_min_rows: int = 8000
+    #: (hill_monodromy.py) Gauss stages, steps per half period per harmonic of the orbit (the tangent of a cubic law
+    #: holds harmonics up to 2H: 4 steps per period of its highest harmonic), and the fewest steps per half period
+    monodromy_stages: int = 3
+    monodromy_steps_per_harmonic: float = 8.0
+    monodromy_min_steps: int = 24
     #: (hill_reversible.py) a symmetry holds when the entries of the springs' Galerkin blocks it sets to zero are
     #: below this fraction of the largest entry (the AFT round-off is ~1e-16)
     reversible_symmetry_tol: float = 1e-13
