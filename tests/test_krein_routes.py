@@ -213,3 +213,50 @@ def test_aircraft_mode_20_defaults_the_routes_follow_the_same_branch(monkeypatch
         assert np.allclose([e["energy"] for e in b.events], [1.3229149, 1.3346490], rtol=5e-7, atol=0)
         assert any(label.startswith("tongue 3:1") for label in b.labels)     # the branch enters the tongue
         assert 1.33431 < b.events[1]["energy"] < 1.33541
+
+
+def test_a_point_located_without_its_tangent_is_the_same_orbit(monkeypatch):
+    """Locator.at(sigma, tangent=False) (the Krein follower's local evaluations, quarter-period shooting: the
+    multipliers are swept at the orbit itself) ends on an older Jacobian's chord iterations, with no Jacobian at the
+    converged point: the same orbit as the point with its tangent (the same iterations), one Jacobian fewer;
+    asked for again with its tangent, the point gets the tangent a fresh locator computes.  3-DOF chain, gauss6."""
+    import nnm_solver as nnm
+    from nnm_solver.stability.locator import Locator
+    from test_bifurcation import _combination_resonance_model
+    it = nnm.iter_nnm(_combination_resonance_model(), 1, 3.0, integrator="gauss6", steps_per_period=100,
+                      freq_tol=None)
+    for _ in range(4):
+        next(it)
+    cp = it._prev[0]
+    prob = it._problem
+    assert prob.stability_needs_jacobian is False
+    calls = []
+    jacobian = type(prob).jacobian
+
+    def counted(self, u):
+        calls.append(1)
+        return jacobian(self, u)
+
+    monkeypatch.setattr(type(prob), "jacobian", counted)
+
+    def locator():
+        loc = Locator(prob, it._cs, it._tol, cp.u, cp.tangent, step=0.05)
+        loc.cache[0.0] = (cp.u, None, cp.tangent)
+        return loc
+
+    rough, exact = locator(), locator()
+    for loc in (rough, exact):           # a point located before, as the follower's earlier iterates
+        loc.at(0.02)
+    x = 0.0201
+    calls.clear()
+    u_r = rough.at(x, tangent=False)[0]
+    n_rough = len(calls)
+    u_e, _, p_e = exact.at(x)
+    n_exact = len(calls) - n_rough
+    assert x in rough.rough and x not in exact.rough
+    assert n_rough < n_exact
+    w = exact.w
+    assert np.array_equal(u_r, u_e)      # the same chord iterations; the exact one adds the Jacobian at the end
+    u_x, _, p_x = rough.at(x)
+    assert x not in rough.rough and u_x is u_r
+    assert np.linalg.norm(w * (p_x - p_e)) <= 1e-6
