@@ -2,7 +2,7 @@
 
 The engine (continuation.pseudo_arclength) is a generator of converged points; ``send(REFUSE)`` makes it go back
 and halve the step.  The iterator judges a point (its events located, for which its Floquet multipliers are
-needed) before it takes the next.  With ``ahead``, the driver computes the next ``ahead_points`` (2) meanwhile, and
+needed) before it takes the next.  With ``ahead``, the driver computes the next ``ahead_points`` (1) meanwhile, and
 each point's multipliers are started in the worker threads as soon as the engine gives it (``launch``: the
 problem's state is then that point's; a 548-mode eigenproblem takes about as long as a step, so the two cores
 share the work).  A refusal of a point the engine has gone beyond restarts the engine at the point before the
@@ -22,10 +22,12 @@ class EngineDriver:
 
     problem, settings, tol : the engine's (for a restart after a refusal).  launch : optional callable(cp) run on
     each point as the engine gives it, its result kept as ``cp.spectrum`` (the multipliers started in the
-    background, problem.multipliers_later).  ahead_points : points computed ahead of the one being judged (2: the
-    multipliers of the next point run in the background while the engine steps; more only hold more memory)."""
+    background, problem.multipliers_later).  ahead_points : points computed ahead of the one being judged (1: the
+    multipliers of the next point run in the background while the engine steps; a point computed ahead is lost when
+    the one judged is refused, jumped from or refined: the aircraft's NNM 19 skipping its tongues to 200 J computed
+    50 engine points for 36 kept with 2 ahead, 43 with 1, the same branch, 13.8 -> 11.9 s CPU, 2026-12-07)."""
 
-    def __init__(self, engine, problem, settings, tol, launch=None, ahead_points=2):
+    def __init__(self, engine, problem, settings, tol, launch=None, ahead_points=1):
         self.engine = engine
         self.ahead_points = int(ahead_points)
         self.problem, self.settings, self.tol = problem, settings, tol

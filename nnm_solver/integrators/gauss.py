@@ -91,35 +91,113 @@ class GaussConstants:
     """
 
     def __init__(self, omega2, Bq, h, s):
-        A, b, c = tableau(s)
+        A, b, c = (x.copy() for x in _tableau(s))
         Abar = A @ A
         bbar = A.T @ b
-        n = omega2.shape[0]
-        ns = Bq.shape[0]
-        M = np.eye(s)[None] + (h * h) * omega2[:, None, None] * Abar[None]
-        Minv = np.linalg.inv(M)
         self.s, self.h = s, h
         self.b, self.bbar, self.c, self.Abar = b, bbar, c, Abar
-        self.Minv = np.ascontiguousarray(Minv)
-        self.C1 = np.ascontiguousarray(Minv.sum(axis=2))
-        self.Cc = np.ascontiguousarray(Minv @ c)
-        self.F = np.ascontiguousarray((h * h) * Minv @ Abar)
-        BB = (Bq[:, None, :] * Bq[None, :, :]).reshape(ns * ns, n)           # b_m b_m^T per mode
-        G4 = (self.F.reshape(n, s * s).T @ BB.T).reshape(s, s, ns, ns).transpose(0, 2, 1, 3)
-        self.G = np.ascontiguousarray(G4.reshape(s * ns, s * ns))
-        self.BB = BB
-        # per-mode linear step: z1 = L z + U fQ, fQ = -w^2 Q + p, Q = C z + F p
-        C = np.empty((n, s, 2))
-        C[:, :, 0] = self.C1
-        C[:, :, 1] = h * self.Cc
-        U = np.empty((2, s))
-        U[0] = h * h * bbar
-        U[1] = h * b
-        L = np.array([[1.0, h], [0.0, 1.0]])
-        self.C = C
-        self.A_lin = L[None] - omega2[:, None, None] * (U[None] @ C)
-        IwF = np.eye(s)[None] - omega2[:, None, None] * self.F
-        self.E = U[None] @ IwF
+        Bq = np.ascontiguousarray(Bq, dtype=float)
+        ns, n = Bq.shape
+        self.BB = (Bq[:, None, :] * Bq[None, :, :]).reshape(ns * ns, n)          # b_m b_m^T per mode
+        (self.Minv, self.C1, self.Cc, self.F, self.G, self.C, self.A_lin,
+         self.E) = _step_constants(np.asarray(omega2, dtype=float), Bq, float(h), Abar, b, bbar, c)
+
+
+@_jit
+def _step_constants(omega2, Bq, h, Abar, b, bbar, c):
+    """GaussConstants' arrays in one compiled pass over the modes (numpy's batched 3 x 3 inverses and products took
+    2-4 ms a step size on the aircraft, one per Newton iterate: each has its own period): per mode M = I + h^2 w^2
+    Abar, Minv = M^-1 (Gauss-Jordan, partial pivoting), C1 = Minv 1, Cc = Minv c, F = h^2 Minv Abar, C = [C1, h Cc],
+    A_lin = L - w^2 U C, E = U (I - w^2 F) with L = [[1, h], [0, 1]], U = [h^2 bbar; h b]; and G (s n_s, s n_s),
+    G[(l, x), (j, y)] = sum_i F_i[l, j] Bq[x, i] Bq[y, i]."""
+    n = omega2.shape[0]
+    s = b.shape[0]
+    ns = Bq.shape[0]
+    Minv = np.empty((n, s, s))
+    C1 = np.empty((n, s))
+    Cc = np.empty((n, s))
+    F = np.empty((n, s, s))
+    C = np.empty((n, s, 2))
+    A_lin = np.empty((n, 2, 2))
+    E = np.empty((n, 2, s))
+    W = np.empty((s, 2 * s))
+    U = np.empty((2, s))
+    for l in range(s):
+        U[0, l] = h * h * bbar[l]
+        U[1, l] = h * b[l]
+    for i in range(n):
+        hw = h * h * omega2[i]
+        for a in range(s):
+            for j in range(s):
+                W[a, j] = hw * Abar[a, j] + (1.0 if a == j else 0.0)
+                W[a, s + j] = 1.0 if a == j else 0.0
+        for col in range(s):
+            piv = col
+            for a in range(col + 1, s):
+                if abs(W[a, col]) > abs(W[piv, col]):
+                    piv = a
+            if piv != col:
+                for j in range(2 * s):
+                    t = W[col, j]
+                    W[col, j] = W[piv, j]
+                    W[piv, j] = t
+            d = 1.0 / W[col, col]
+            for j in range(2 * s):
+                W[col, j] *= d
+            for a in range(s):
+                if a != col:
+                    f = W[a, col]
+                    for j in range(2 * s):
+                        W[a, j] -= f * W[col, j]
+        for a in range(s):
+            acc1 = 0.0
+            accc = 0.0
+            for j in range(s):
+                m = W[a, s + j]
+                Minv[i, a, j] = m
+                acc1 += m
+                accc += m * c[j]
+            C1[i, a] = acc1
+            Cc[i, a] = accc
+            C[i, a, 0] = acc1
+            C[i, a, 1] = h * accc
+            for j in range(s):
+                acc = 0.0
+                for k in range(s):
+                    acc += W[a, s + k] * Abar[k, j]
+                F[i, a, j] = h * h * acc
+        w2 = omega2[i]
+        for t in range(2):
+            for col in range(2):
+                acc = 0.0
+                for l in range(s):
+                    acc += U[t, l] * C[i, l, col]
+                A_lin[i, t, col] = (1.0 if t == col else 0.0) + (h if (t == 0 and col == 1) else 0.0) - w2 * acc
+            for j in range(s):
+                acc = 0.0
+                for l in range(s):
+                    acc += U[t, l] * ((1.0 if l == j else 0.0) - w2 * F[i, l, j])
+                E[i, t, j] = acc
+    G = np.zeros((s * ns, s * ns))
+    for l in range(s):
+        for j in range(s):
+            for x in range(ns):
+                for y in range(ns):
+                    acc = 0.0
+                    for i in range(n):
+                        acc += F[i, l, j] * Bq[x, i] * Bq[y, i]
+                    G[l * ns + x, j * ns + y] = acc
+    return Minv, C1, Cc, F, G, C, A_lin, E
+
+
+_TABLEAUX = {}
+
+
+def _tableau(s):
+    """tableau(s), computed once per s (GaussConstants copies the arrays)."""
+    if s not in _TABLEAUX:
+        _TABLEAUX[s] = tableau(s)
+    return _TABLEAUX[s]
 
 
 def constants(system, h, s):

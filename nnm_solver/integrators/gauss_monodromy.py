@@ -97,8 +97,88 @@ def _kernel(CAE, BB, s, ns):
     return (CAE.reshape(R * s * s, -1) @ BB.T).reshape(R, s, s, ns, ns).transpose(0, 1, 3, 2, 4).reshape(R, m, m)
 
 
+@_jit
+def _volterra_system(Hom, HomV, H, G, Dseq, ncols):
+    """The Volterra recursion's unit lower triangular system L dd = B (see _volterra), assembled in one pass:
+    B (N m, ncols) = J_k^-1 [Hom_k, HomV_k] block row by block row, L (N m, N m) with the blocks
+    J_k^-1 H(k-1-j) Dg_j below the diagonal (J_k = I + G Dg_k, m x m, inverted by Gauss-Jordan with partial
+    pivoting: m = s n_s is small)."""
+    N, m, n = Hom.shape
+    B = np.empty((N * m, ncols))
+    L = np.zeros((N * m, N * m))
+    Ji = np.empty((m, m))
+    A = np.empty((m, 2 * m))
+    for k in range(N):
+        for a in range(m):
+            for b in range(m):
+                A[a, b] = G[a, b] * Dseq[k, b] + (1.0 if a == b else 0.0)
+                A[a, m + b] = 1.0 if a == b else 0.0
+        for c in range(m):                       # Gauss-Jordan on [J_k | I]
+            piv = c
+            for a in range(c + 1, m):
+                if abs(A[a, c]) > abs(A[piv, c]):
+                    piv = a
+            if piv != c:
+                for b in range(2 * m):
+                    t = A[c, b]
+                    A[c, b] = A[piv, b]
+                    A[piv, b] = t
+            d = 1.0 / A[c, c]
+            for b in range(2 * m):
+                A[c, b] *= d
+            for a in range(m):
+                if a != c:
+                    f = A[a, c]
+                    if f != 0.0:
+                        for b in range(2 * m):
+                            A[a, b] -= f * A[c, b]
+        for a in range(m):
+            for b in range(m):
+                Ji[a, b] = A[a, m + b]
+        for a in range(m):
+            row = k * m + a
+            for i in range(ncols):
+                B[row, i] = 0.0
+            for b in range(m):
+                f = Ji[a, b]
+                for i in range(n):
+                    B[row, i] += f * Hom[k, b, i]
+                if ncols > n:
+                    for i in range(n):
+                        B[row, n + i] += f * HomV[k, b, i]
+            L[row, row] = 1.0
+            for j in range(k):
+                Hk = H[k - 1 - j]
+                for c in range(m):
+                    acc = 0.0
+                    for b in range(m):
+                        acc += Ji[a, b] * Hk[b, c]
+                    L[row, j * m + c] = acc * Dseq[j, c]
+    return B, L
+
+
 def _volterra(Hom, HomV, H, G, Dseq, ncols):
     """The stage force perturbations W (N m, ncols), m = s n_s, of the monodromy's columns:
+    (I + G Dg_k) dd_k = Hom_k - sum_{j<k} H(k-1-j) w_j,  w_k = Dg_k dd_k (see monodromy); columns n.. (ncols = 2n)
+    from HomV.
+
+    Each block row multiplied by J_k^-1 = (I + G Dg_k)^-1, the system in dd is unit lower triangular:
+    dd_k + sum_{j<k} J_k^-1 H(k-1-j) Dg_j dd_j = J_k^-1 Hom_k; assembled by one compiled pass (_volterra_system) and
+    solved in place by BLAS dtrsm (BLAS-3; O((N m)^2 ncols) in all, memory O((N m)^2 + N m ncols); longer sweeps
+    than KERNELS.volterra_block steps by blocks, _volterra_blocked).  The same
+    numbers as the block-by-block numpy assembly it replaced to round-off (tests/test_gauss_monodromy.py)."""
+    if Hom.shape[0] > max(1, KERNELS.volterra_block):
+        return _volterra_blocked(Hom, HomV, H, G, Dseq, ncols)
+    B, L = _volterra_system(Hom, HomV, H, G, Dseq, ncols)
+    # L dd = B as dd^T L^T = B^T: Fortran-ordered views of the C-ordered arrays, solved in place (unit lower triangular)
+    dd = blas.dtrsm(1.0, L.T, B.T, side=1, lower=0, trans_a=0, diag=1, overwrite_b=1).T
+    dd *= Dseq.reshape(-1)[:, None]
+    return dd
+
+
+def _volterra_blocked(Hom, HomV, H, G, Dseq, ncols):
+    """_volterra for long sweeps (more than KERNELS.volterra_block steps): the stage force perturbations W (N m,
+    ncols), m = s n_s, of the monodromy's columns:
     (I + G Dg_k) dd_k = Hom_k - sum_{j<k} H(k-1-j) w_j,  w_k = Dg_k dd_k (see monodromy); columns n.. (ncols = 2n)
     from HomV.
 
@@ -170,7 +250,16 @@ def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
     if ns == 0 or N == 0:
         return Sq, Sv
     W = _volterra(Hom, HomV, _kernel(CAE, k.BB, s, ns), k.G, Dseq, ncols)
-    Sq -= Uq @ W                                          # - sum_j A^(N-1-j) E Bq^T w_j
+    _subtract_product(Sq, Uq, W)                          # - sum_j A^(N-1-j) E Bq^T w_j
     if velocities:
-        Sv -= Uv @ W
+        _subtract_product(Sv, Uv, W)
     return Sq, Sv
+
+
+def _subtract_product(S, U, W):
+    """S -= U @ W in place (BLAS dgemm with beta = 1 on the transposed, Fortran-ordered views: no temporary)."""
+    if U.shape[1] == 0 or S.size == 0:
+        return
+    out = blas.dgemm(-1.0, np.ascontiguousarray(W).T, np.ascontiguousarray(U).T, beta=1.0, c=S.T, overwrite_c=1)
+    if not np.shares_memory(out, S):      # (BLAS worked on a copy: write it back)
+        S[...] = out.T
