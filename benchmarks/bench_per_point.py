@@ -11,6 +11,13 @@ each method, nested parts included in their callers; the total is the process's 
 
     git archive e655183 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
     python benchmarks/bench_per_point.py --before /tmp/base --repeats 5 --sections
+
+``--compare`` (with ``--before``) checks that the two trees give the same branches: the aircraft's NNM 20 to 3 J with
+and without the estimate and, skipping tongues, to 6 J, the 2-DOF benchmark's NNM 1 to 50 J and, skipping tongues, to
+200 J (condensed HB): every column (energy, frequency, freq_error, fundamental share, x0, v0, coefficients,
+stability), labels, statuses, messages, events and tongues, printed as the largest relative differences::
+
+    python benchmarks/bench_per_point.py --before /tmp/base --repeats 0 --compare
 """
 from __future__ import annotations
 
@@ -67,6 +74,75 @@ print(json.dumps(dict(seconds=dt, cpu=dc, points=len(b), status=b.status, sectio
 """
 
 
+_DUMP = r"""
+import json, pickle, sys
+import numpy as np
+import nnm_solver as nnm
+from nnm_solver.threads import blas_limited
+air = nnm.load_model(sys.argv[1])
+two = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+cases = {"aircraft NNM 20 to 3 J": (air, 20, 3.0, dict(harmonics=9)),
+         "aircraft NNM 20 to 3 J, no estimate": (air, 20, 3.0, dict(harmonics=9, error_estimate=False)),
+         "aircraft NNM 20 to 6 J, skip": (air, 20, 6.0, dict(harmonics=9, tongues="skip")),
+         "2-DOF NNM 1 to 50 J": (two, 1, 50.0, {}),
+         "2-DOF NNM 1 to 200 J, skip": (two, 1, 200.0, dict(tongues="skip"))}
+out = {}
+with blas_limited():
+    for name, (m, mode, E, kw) in cases.items():
+        b = nnm.continue_nnm(m, mode, E, method="hb", condensed=True, **kw)
+        out[name] = dict({k: np.array(getattr(b, k)) for k in ("energy", "frequency_hz", "freq_error",
+                                                                "fundamental_share", "x0", "v0", "coefficients",
+                                                                "stable")},
+                         labels=list(b.labels), status=b.status, message=b.message,
+                         events=[(e["kind"], e["located"], float(e["energy"])) for e in b.events],
+                         tongues=[repr((t.order, t.partner_mode, t.entry_index, t.landings, t.skipped, t.entry_energy,
+                                        t.exit_energy)) for t in b.tongues])
+sys.stdout.buffer.write(pickle.dumps((nnm.__file__, out)))
+"""
+
+
+def branches(tree):
+    """The comparison branches of ``tree`` (``_DUMP``, run in its own process)."""
+    import pickle
+    env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    out = subprocess.run([sys.executable, "-c", _DUMP, str(ROOT / "assets" / "paris.h5")], env=env,
+                         capture_output=True, check=True, cwd=tree)
+    source, res = pickle.loads(out.stdout)
+    if not Path(source).resolve().is_relative_to(Path(tree).resolve()):
+        raise RuntimeError(f"the run of {tree} imported {source}")
+    return res
+
+
+def compare(a, b):
+    """Print the largest relative differences between the branches a (this tree) and b (the other), case by case."""
+    import numpy as np
+
+    def rel(x, y):
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.shape != y.shape or not np.array_equal(np.isfinite(x), np.isfinite(y)):
+            return float("inf")
+        ok = np.isfinite(y)
+        return float(np.max(np.abs(x[ok] - y[ok]) / np.maximum(np.abs(y[ok]), 1e-300), initial=0.0))
+
+    for name, x in a.items():
+        y = b[name]
+        if len(x["energy"]) != len(y["energy"]):
+            print(f"  {name}: {len(x['energy'])} points against {len(y['energy'])}: DIFFERENT")
+            continue
+        same = [k for k in ("labels", "status", "message", "tongues") if x[k] != y[k]]
+        same += ["stable"] if not np.array_equal(x["stable"], y["stable"]) else []
+        same += ["events"] if [e[:2] for e in x["events"]] != [e[:2] for e in y["events"]] else []
+        ev = max([abs(e[2] / f[2] - 1) for e, f in zip(x["events"], y["events"])], default=0.0)
+        vec = {k: float(np.max(np.abs(x[k] - y[k]), initial=0.0) / max(float(np.max(np.abs(y[k]), initial=0.0)), 1e-300))
+               for k in ("x0", "v0", "coefficients")}
+        print(f"  {name}: {len(x['energy'])} points; relative differences: energy {rel(x['energy'], y['energy']):.1e}, "
+              f"frequency {rel(x['frequency_hz'], y['frequency_hz']):.1e}, freq_error "
+              f"{rel(x['freq_error'], y['freq_error']):.1e}, share {rel(x['fundamental_share'], y['fundamental_share']):.1e}, "
+              + ", ".join(f"{k} {v:.1e}" for k, v in vec.items()) + f", events' energies {ev:.1e}; "
+              + (f"DIFFERENT: {', '.join(same)}" if same else "labels, stability, status, message, events, tongues "
+                                                              "the same"))
+
+
 def run(tree, kw, energy, sections):
     env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     before = os.getloadavg()[0]
@@ -86,7 +162,11 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--energy-max", type=float, default=3.0)
     ap.add_argument("--sections", action="store_true", help="time per point of each part of the work (this tree)")
+    ap.add_argument("--compare", action="store_true", help="with --before: compare the two trees' branches")
     args = ap.parse_args(argv)
+    if args.compare and args.before:
+        print("this tree's branches against the other's (condensed HB):")
+        compare(branches(ROOT), branches(Path(args.before)))
     trees = [("this tree", ROOT)] + ([("before", Path(args.before))] if args.before else [])
     print(f"aircraft NNM 20 to {args.energy_max:g} J, condensed HB H = 9; load average at the start "
           f"{tuple(round(x, 2) for x in os.getloadavg())}")

@@ -32,6 +32,9 @@ class CannedSkeleton:
     def slope(self, E1, E2):
         return (math.log(self.frequency_at(E2)) - math.log(self.frequency_at(E1))) / math.log(E2 / E1)
 
+    def log_frequency(self, E):
+        return math.log(self.frequency_at(E))
+
     def interpolation_error(self, E):
         return 0.0
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["basis_fourier_coefficients", "series_restoring_ratio"]
+__all__ = ["basis_fourier_coefficients", "basis_harmonic_amplitudes", "series_restoring_ratio"]
 
 
 def basis_fourier_coefficients(basis, A, n):
@@ -20,14 +20,31 @@ def basis_fourier_coefficients(basis, A, n):
     (an HBBasis: orders h, sine flags); harmonics above n are left out."""
     A = np.asarray(A, dtype=float)
     c = np.zeros((int(n) + 1, A.shape[1]), dtype=complex)
-    for j, (h, sine) in enumerate(zip(basis.h, basis.sine)):
-        if h > n:
-            continue
-        if sine:
-            c[h].imag -= A[j]
-        else:
-            c[h].real += A[j]
+    h, sine = np.asarray(basis.h), np.asarray(basis.sine, dtype=bool)
+    cos_rows, sin_rows = np.flatnonzero(~sine & (h <= n)), np.flatnonzero(sine & (h <= n))
+    c.real[h[cos_rows]] = A[cos_rows]           # (each harmonic has one cosine and at most one sine)
+    if len(sin_rows):
+        c.imag[h[sin_rows]] = -A[sin_rows]
     return c
+
+
+def basis_harmonic_amplitudes(basis, A, n, r):
+    """(amps, others) (n + 1,) each: |a_k| (the 2-norm over the modes of harmonic k's complex coefficients a_k,
+    basis_fourier_coefficients) of the orbit with coefficients A (N_b, m) on ``basis``, over all modes and over the
+    modes but r (0-based), for k = 0..n: the row sums of A^2 gathered by harmonic (|a_kj|^2 = A[cos k, j]^2 +
+    A[sin k, j]^2), O(N_b m) without the (n + 1, m) complex array (np.linalg.norm's sums in another order: the same to
+    round-off)."""
+    A = np.asarray(A, dtype=float)
+    sq = A * A
+    rows = sq.sum(axis=1)
+    sq[:, r] = 0.0                         # (not rows - sq[:, r]: that cancels where mode r dominates)
+    rows_r = sq.sum(axis=1)
+    h = np.asarray(basis.h)
+    keep = h <= n
+    amps2, others2 = np.zeros(int(n) + 1), np.zeros(int(n) + 1)
+    np.add.at(amps2, h[keep], rows[keep])
+    np.add.at(others2, h[keep], rows_r[keep])
+    return np.sqrt(amps2), np.sqrt(others2)
 
 
 def series_restoring_ratio(system, basis, A, samples):

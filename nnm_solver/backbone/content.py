@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.harmonics import RESONANCE_FRACTION
+from ..analysis.hb_series import basis_fourier_coefficients, basis_harmonic_amplitudes
 from ..fourier import fourier_coefficients
 from .settings import LabelSettings
 
@@ -25,16 +26,20 @@ _LABELS = LabelSettings()
 class Content:
     """The harmonic content of a modal orbit: k (strongest harmonic >= 2), fraction (its share of the orbit's
     amplitude), partner_k (the harmonic >= 2 the other modes carry most: the order of a partner's resonance),
-    share (the fundamental's share), amplitudes (per harmonic, or None when unknown), partners ((harmonics + 1,
-    modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed mode's column zero;
-    None when unknown), orbit (the modal orbit's samples (S, modes), or None: ``tongue_partner``)."""
+    share (the fundamental's share), amplitudes (per harmonic, or None when unknown), coefficients (the orbit's
+    complex Fourier coefficients a_0..a_n (n + 1, modes), or None: what ``partners`` is made from, when read), series
+    ((HBBasis, A (N_b, modes)) of a harmonic-balance orbit whose coefficients were not made: they are made from it
+    when read), r (the followed mode, 0-based), orbit (the modal orbit's samples (S, modes), or None:
+    ``tongue_partner``)."""
 
     k: int = 1
     fraction: float = 0.0
     partner_k: int = 1
     share: float = 1.0
     amplitudes: np.ndarray | None = None
-    partners: np.ndarray | None = field(default=None, repr=False)
+    coefficients: np.ndarray | None = field(default=None, repr=False)
+    series: tuple | None = field(default=None, repr=False)
+    r: int = 0
     orbit: np.ndarray | None = field(default=None, repr=False)
 
     @property
@@ -50,19 +55,66 @@ class Content:
             return 1
         return self.partner_k if self.partner_k > 1 else max(self.k, 2)
 
+    @property
+    def partners(self):
+        """(harmonics + 1, modes): |a_kj| of every other mode j and harmonic k over the orbit's amplitude, the followed
+        mode's column zero; None when unknown.  Made when read (only a point off the family needs it:
+        ``tongue_partner``), O(n modes)."""
+        tot = float(np.sum(self.amplitudes[1:])) if self.amplitudes is not None else 0.0
+        c = self.coefficients
+        if c is None and self.series is not None:
+            c = basis_fourier_coefficients(*self.series, len(self.amplitudes) - 1)
+        if c is None or not tot > 0:
+            return None
+        partners = np.abs(c)
+        partners[:, self.r] = 0.0
+        return partners / tot
 
-def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None):
+
+def content_of(Q, r, n=_LABELS.label_harmonics, coefficients=None, series=None):
     """The Content of the modal orbit Q (samples, modes) of the followed mode r (0-based); Content() for None.
-    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q)."""
+    coefficients : its Fourier coefficients a_0..a_n (n + 1, modes) when known (fourier.fourier_coefficients of Q);
+    series : (HBBasis, A (N_b, modes)) of a harmonic-balance orbit, whose harmonic amplitudes are read from its basis
+    coefficients (analysis/hb_series.basis_harmonic_amplitudes; its complex coefficients only if ``partners`` is read).
+    The amplitude of each harmonic and the other modes' (partner_harmonic's) in one pass."""
     if Q is None:
         return Content()
-    c = fourier_coefficients(Q, n) if coefficients is None else coefficients
-    label, k, fraction, amps = harmonic_label(Q, n, c)
-    partners = np.abs(c)
-    partners[:, r] = 0.0
+    if series is not None and coefficients is None:
+        c = None
+        amps, others = basis_harmonic_amplitudes(*series, n, r)
+    else:
+        c = fourier_coefficients(Q, n) if coefficients is None else coefficients
+        amps, others = _harmonic_amplitudes(c, r)
+    label, k, fraction = _label_of(amps)
     tot = float(np.sum(amps[1:]))
-    return Content(k, fraction, partner_harmonic(Q, r, n, c)[0], fundamental_share(amps), amps,
-                   partners / tot if tot > 0 else None, np.asarray(Q, dtype=float))
+    if not tot > 0 or len(amps) < 3 or Q.shape[1] < 2:
+        partner = 1
+    else:
+        partner = int(np.argmax(others[2:]) + 2)
+    return Content(k, fraction, partner, fundamental_share(amps), amps, c, series if c is None else None, int(r),
+                   np.asarray(Q, dtype=float))
+
+
+def _harmonic_amplitudes(c, r):
+    """(amps, others) (n + 1,) each: |a_k| of the complex coefficients c (n + 1, modes) over all modes and over the
+    modes but r (np.linalg.norm's sums of |a_kj|^2, in another order: the same to round-off)."""
+    v = np.ascontiguousarray(c).view(float)            # (n + 1, 2 modes): real and imaginary parts side by side
+    sq = v * v
+    amps2 = sq.sum(axis=1)
+    sq[:, 2 * r:2 * r + 2] = 0.0
+    return np.sqrt(amps2), np.sqrt(sq.sum(axis=1))
+
+
+def _label_of(amps):
+    """(label, k, fraction) of the harmonic amplitudes ``amps`` (harmonic_label)."""
+    tot = float(np.sum(amps[1:]))
+    if not tot > 0:
+        return "backbone", 1, 0.0
+    fr = amps / tot
+    k = int(np.argmax(fr[2:]) + 2) if len(fr) > 2 else 1
+    if k > 1 and fr[k] >= RESONANCE_FRACTION:
+        return f"tongue {k}:1", k, float(fr[k])
+    return "backbone", k, float(fr[k])
 
 
 def tongue_partner(content, frequency_hz, system, share=_LABELS.partner_share, mismatch=_LABELS.partner_mismatch,
@@ -122,14 +174,7 @@ def harmonic_label(Q, n=_LABELS.label_harmonics, c=None):
     if Q is None:
         return "backbone", 1, 0.0, None
     amps = np.linalg.norm(fourier_coefficients(Q, n) if c is None else c, axis=1)
-    tot = float(np.sum(amps[1:]))
-    if not tot > 0:
-        return "backbone", 1, 0.0, amps
-    fr = amps / tot
-    k = int(np.argmax(fr[2:]) + 2) if len(fr) > 2 else 1
-    if k > 1 and fr[k] >= RESONANCE_FRACTION:
-        return f"tongue {k}:1", k, float(fr[k]), amps
-    return "backbone", k, float(fr[k]), amps
+    return _label_of(amps) + (amps,)
 
 
 def partner_harmonic(Q, r, n=_LABELS.label_harmonics, c=None):

@@ -95,8 +95,13 @@ class FamilyLabels:
         """Is the frequency locked (module docstring)?  run : (energy J, frequency Hz) of the kept points since the
         last jump, oldest first."""
         s, sk = self.settings, self.skeleton
+        if not run or not sk.covers(energy):
+            return False
+        lnE, b = math.log(energy), sk.log_frequency(energy)        # (sk.slope(E0, energy)'s numbers, b once)
         for E0, f0 in reversed(run):
-            slope = sk.slope(E0, energy)
+            if not sk.covers(E0) or E0 == energy:
+                return False
+            slope = float((b - sk.log_frequency(E0)) / (lnE - math.log(E0)))
             if not math.isfinite(slope):
                 return False
             expected = slope * math.log(energy / E0)

@@ -42,6 +42,7 @@ import numpy as np
 
 from ..errors import NNMInputError
 from .amplitude_family import solve_at_amplitude, family_share, amplitude_family
+from .cubic_piece import cubic, cubic_root
 from .settings import SkeletonSettings
 
 __all__ = ["Skeleton", "skeleton", "skeleton_of", "compute_skeleton", "amplitude_family"]
@@ -93,6 +94,8 @@ class Skeleton:
         #: are the tongue's sheet
         self.sheet_starts = [float(E0) for E0 in self.energy[self._starts]]
         self._interp = None
+        self._lnE = np.log(self.energy)       # ln E and ln f of the points (the labels read them at every point)
+        self._lnf = np.log(self.frequency_hz)
         self._shares = None
         self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
         self._truncation = np.full(len(self.energy), np.nan)
@@ -132,12 +135,12 @@ class Skeleton:
         the point before it, down by at most the sheet's first interval), the pair is the start and the point after it
         (t < 0): the backbone's sheet extends a little below where the stepping met it (sheet_start stops where it
         is no longer nearer the guide than the tongue's sheet), and the point before is the tongue's sheet."""
-        x = np.log(self.energy)
-        j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
+        x, lnE = self._lnE, math.log(E)
+        j = min(max(int(np.searchsorted(x, lnE)) - 1, 0), len(x) - 2)
         if (j + 2 < len(x) and self._starts[j + 1] and E < self.energy[j + 1]
-                and math.log(E) >= 2 * x[j + 1] - x[j + 2]):      # at most one of its first intervals below
+                and lnE >= 2 * x[j + 1] - x[j + 2]):      # at most one of its first intervals below
             j += 1
-        return j, (math.log(E) - x[j]) / (x[j + 1] - x[j])
+        return j, (lnE - x[j]) / (x[j + 1] - x[j])
 
     def frequency_at(self, E):
         """Skeleton frequency (Hz) at energy E (J) on the sheet it lies on (_pair); NaN outside its range.  Each sheet
@@ -160,15 +163,15 @@ class Skeleton:
         x = math.log(E)
         if t < 0:                                   # just below a sheet's start: extrapolated along it
             return float(f(c[0] + t * (c[1] - c[0])))
-        a, b = c[j - lo], c[j + 1 - lo]
-        g = lambda s: float(lnE(s)) - x             # noqa: E731
-        ga, gb = g(a), g(b)
+        i = j - lo                                  # the spline piece between points j and j + 1
+        a, b = float(c[i]), float(c[i + 1])
+        pl, pf = lnE.c[:, i].tolist(), f.c[:, i].tolist()     # its cubics in s - a
+        ga, gb = cubic(pl, 0.0) - x, cubic(pl, b - a) - x
         if ga == 0.0:
-            return float(f(a))
+            return cubic(pf, 0.0)
         if ga * gb > 0:                             # no sign change (a spline wiggle at round-off): linear
             return float((1 - t) * self.frequency_hz[j] + t * self.frequency_hz[j + 1])
-        from scipy.optimize import brentq
-        return float(f(brentq(g, a, b, xtol=1e-14 * max(1.0, abs(b)))))
+        return cubic(pf, cubic_root(pl, x, b - a, ga, gb, 1e-14 * max(1.0, abs(b))))
 
     def _sheets(self):
         """{point index: (first index, chord parameters, spline of ln E, spline of f)} of each sheet (the points
@@ -209,7 +212,7 @@ class Skeleton:
         2.3e-4 where the interpolated frequency was 2.1e-4 off the family's orbit at that energy."""
         if not self.covers(E):
             return float("nan")
-        x, y = np.log(self.energy), np.log(self.frequency_hz)
+        x, y = self._lnE, self._lnf
         j = int(np.clip(np.searchsorted(x, math.log(E)) - 1, 0, len(x) - 2))
         h = np.diff(x)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -223,9 +226,13 @@ class Skeleton:
         points it left out); NaN outside its range."""
         if not (self.covers(E1) and self.covers(E2)) or E1 == E2:
             return float("nan")
-        x, y = np.log(self.energy), np.log(self.frequency_hz)
+        x, y = self._lnE, self._lnf
         a, b = np.interp(math.log(E1), x, y), np.interp(math.log(E2), x, y)
         return float((b - a) / (math.log(E2) - math.log(E1)))
+
+    def log_frequency(self, E):
+        """ln f of the family at energy E (J) interpolated linearly in ln E between its points (``slope``'s)."""
+        return np.interp(math.log(E), self._lnE, self._lnf)
 
     def covers(self, E):
         return len(self.energy) >= 2 and self.energy[0] <= E <= self.energy[-1]

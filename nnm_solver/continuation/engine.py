@@ -244,11 +244,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     s = settings.step
     yield ContinuationPoint(u, p, J, it, 0.0, err, factor)
     failures = 0
-    s_cap = _largest_step(problem, u, p, settings)
-    # (the first step too: a restart beyond a tongue or with a finer time step, where the period moves fast with the
-    # amplitude, took settings.step and halved it 3-9 times through failed corrections: aircraft NNM 20, 2026-12-07)
-    s = float(np.clip(s, settings.step_min, s_cap))
     s_clean = s_before_jump = s
+    s_cap = _largest_step(problem, u, p, settings)
     while True:
         u_pred = u + s * p
         start = _chord_start(settings, factor, u_pred, w * w * p)

@@ -12,9 +12,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..analysis.hb_series import basis_fourier_coefficients, series_restoring_ratio
+from ..analysis.hb_series import series_restoring_ratio
 from ..backbone.content import content_of
 from ..backbone.settings import LabelSettings
+from ..orbits import condensed_kernels as kernels
+from ..orbits.spring_kernels import restoring_bound
 from ..results.point import ModalState, Point
 from ..results.settings import RESULTS
 from ..results.stops import restoring_ratio
@@ -35,6 +37,9 @@ class Candidate:
     observed : (HarmonicContent, modal orbit Q) for its label and the tongue policy (None once kept);
     restoring : the smallest restoring-force ratio along the orbit (stops.py: the escape tests), or a lower bound
         of it where that bound is above both escape thresholds (``restoring_lower_bound``);
+    restoring_bound : restoring is that lower bound, taken over samples that include the orbit's state at t = 0
+        (a harmonic-balance orbit's): then the ratio at its turning point is above both thresholds too, and the
+        iterator's escape test needs no ratio of its own there;
     collision : the Krein locator's coordinates at it (stability/krein.py), or None;
     spectrum : the background job computing its multipliers (problem.multipliers_later), or None once settled;
     disc_error : the time discretisation's part of point.freq_error (what finer steps reduce; NaN: none or not
@@ -47,6 +52,7 @@ class Candidate:
     solution: tuple | None = None
     observed: tuple | None = None
     restoring: float = 1.0
+    restoring_bound: bool = False
     collision: Any = None
     spectrum: Callable | None = None
     disc_error: float = math.nan
@@ -82,11 +88,12 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     A = prob.coefficients(cp.u)
     Q = prob.modal_orbit(cp.u) if hasattr(prob, "modal_orbit") else None
     series = A is not None and getattr(prob, "basis", None) is not None   # harmonic balance: from its coefficients
-    content = content_of(Q, mode - 1, coefficients=basis_fourier_coefficients(prob.basis, A, LABEL_HARMONICS)
-                         if series else None)
+    content = content_of(Q, mode - 1, LABEL_HARMONICS, series=(prob.basis, A) if series else None)
     restoring = 1.0 if Q is None else restoring_lower_bound(sys_, Q)
+    bound = series and Q is not None    # Q's first sample is the state at t = 0 (basis.E's first row)
     if restoring <= max(RESULTS.escape_ratio, RESULTS.escape_ratio_failed):    # the escape tests need the ratio
         restoring = series_restoring_ratio(sys_, prob.basis, A, len(Q)) if series else restoring_ratio(sys_, Q)
+        bound = False
     # the energy of the modal state (x = Phi q, Phi M-orthonormal, Phi^T K Phi = diag(omega2): the physical energy
     # to round-off) and the physical state only when it is read (results/point.py): nothing O(n^2) per point
     point = Point(energy=sys_.energy(q0, vq0), frequency_hz=float(1.0 / T), period=float(T), x0=None, v0=None,
@@ -95,7 +102,7 @@ def record_candidate(cp, prob, system, model, mode, floquet, known=None, later=F
     point.steps = int(getattr(prob, "spp", 0))
     point.fundamental_share = content.share
     cand = Candidate(point, solution=(prob, cp.u, cp.jacobian, cp.tangent, cp.factor), observed=(content, Q),
-                     restoring=restoring, collision=collision,
+                     restoring=restoring, restoring_bound=bound, collision=collision,
                      spectrum=job)
     return cand, (q0, vq0, T)
 
@@ -107,6 +114,9 @@ def restoring_lower_bound(system, Q):
     non-negative work, d . g(d) >= 0: hardening springs); 0 where some q^T Omega^2 q is not positive.  O(S n n_s)
     for S samples: where it is above the escape thresholds (RESULTS.escape_ratio, escape_ratio_failed) the ratio
     itself (its Gram matrices and sample-wise sums, several times the cost) is not needed."""
+    if kernels.AVAILABLE and not system.elements.coupled:      # springs: one compiled pass per sample
+        return float(restoring_bound(np.ascontiguousarray(Q, dtype=float), system.Bq, system.omega2,
+                                             system.powers, system.coefficients, system.kinks))
     d = Q @ system.Bq.T
     qlin = (Q * Q) @ system.omega2
     if not np.all(qlin > 0.0):

@@ -149,7 +149,8 @@ class NNMIterator:
         self.points.append(point)
         self._disc_errors.append(cand.disc_error)
         E, E0 = point.energy, self.points[0].energy
-        ratio = min(self._turning_ratio(q0, v0), cand.restoring)
+        # (a lower bound over samples that include the turning point's, above the thresholds: its ratio is too)
+        ratio = cand.restoring if cand.restoring_bound else min(self._turning_ratio(q0, v0), cand.restoring)
         if ratio < RESULTS.escape_ratio:
             self._finish("escape", escape_message(point, ratio))
         elif E >= self.energy_max or self._landed:

@@ -49,18 +49,24 @@ class StepRefinement:
         # the finer step aimed at a quarter of the tolerance, else one that just meets it: next to an energy fold the
         # larger change moves the fold away from the coarse orbit (the 2-DOF's 3:1 tongue top at 4.68 kJ, Newmark 364
         # -> 828 steps: no convergence; 364 -> 546 converged)
-        for f in dict.fromkeys((factor, min(max((est / self.freq_tol) ** (1.0 / problem.integrator.order), 1.25),
-                                             factor))):
-            problem.set_steps(min(int(np.ceil(old * f)), self.max_steps_per_period))
-            try:                                # the orbit with the finer step, near this one
-                correct(problem, cp.u, cp.tangent, settings, tol, problem.scale(cp.u))
-            except CorrectorFailure:
-                continue
+        meets = min(max((est / self.freq_tol) ** (1.0 / problem.integrator.order), 1.25), factor)
+        if self._converges(problem, cp, settings, tol, old, factor) or (
+                meets < factor and self._converges(problem, cp, settings, tol, old, meets)):
             return pseudo_arclength(problem, cp.u, cp.tangent, settings, tol)
         problem.set_steps(old)                  # e.g. next to a fold that the finer step moves: keep the coarse
         self._pause = self.pause_after_failure  # point and try again a few points later
         self.failures += 1
         return None
+
+    def _converges(self, problem, cp, settings, tol, old, factor):
+        """Set the problem's steps to factor x old (at most max_steps_per_period): does the orbit with them converge
+        next to the point cp?"""
+        problem.set_steps(min(int(np.ceil(old * factor)), self.max_steps_per_period))
+        try:
+            correct(problem, cp.u, cp.tangent, settings, tol, problem.scale(cp.u))
+        except CorrectorFailure:
+            return False
+        return True
 
     def estimate(self, cand):
         """cand.point.freq_error (and cand.disc_error) from the problem's estimate (shooting: step doubling),

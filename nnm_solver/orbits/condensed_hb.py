@@ -89,6 +89,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
+        self._last_energy = None                       # (u.tobytes(), energy, gradient or None) of the last orbit
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
 
@@ -297,10 +298,35 @@ class CondensedHBProblem(HBTruncationError):
         element potentials (and the left-out modes' share through R0, R1 for a truncated basis;
         condensed_energy.py)."""
         if self._kernel is not None and self._kernel[1] is not None:
-            E = kernels.energy_gradient(np.asarray(u, dtype=float), False, *self._kernel[1])[0]
-            return E if self._kernel[1][0] else float(E + np.sum(self.sys.elements.potential(
-                self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
+            return self._energy_gradient(u, False)[0]
         return condensed_energy(self, u)
+
+    def _energy_gradient(self, u, gradient):
+        """(energy, dE/du or None) of u by the compiled kernel (the gradient only when asked), the last orbit's kept:
+        the engine's unseen-turns check, the iterator's energy slope and the truncation estimate ask for the same
+        orbit's energy and gradient in turn (the same numbers: one kernel call computes both)."""
+        key = u.tobytes() if isinstance(u, np.ndarray) else None
+        last = self._last_energy
+        if key is not None and last is not None and last[0] == key and (last[2] is not None or not gradient):
+            return last[1], last[2]
+        E, g = kernels.energy_gradient(np.asarray(u, dtype=float), gradient, *self._kernel[1])
+        if not self._kernel[1][0]:
+            E = float(E + np.sum(self.sys.elements.potential(self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
+        if gradient:
+            g.setflags(write=False)
+        else:
+            g = None
+        if key is not None:
+            self._last_energy = (key, E, g)
+        return E, g
+
+    def energy_and_gradient(self, u):
+        """(energy J, dE/du): ``energy`` and ``energy_gradient`` of u, the same numbers, in one pass of the compiled
+        kernel where there is one (the truncation estimate's bordered Newton needs both at each step)."""
+        if self._kernel is not None and self._kernel[1] is not None:
+            E, g = self._energy_gradient(u, True)
+            return E, g.copy()
+        return self.energy(u), self.energy_gradient(u)
 
     def galerkin_blocks(self, d):
         return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
@@ -312,7 +338,7 @@ class CondensedHBProblem(HBTruncationError):
     def energy_gradient(self, u):
         """dE/du (J per unit of u) in closed form (condensed_energy.py)."""
         if self._kernel is not None and self._kernel[1] is not None:
-            return kernels.energy_gradient(np.asarray(u, dtype=float), True, *self._kernel[1])[1]
+            return self._energy_gradient(u, True)[1].copy()
         return condensed_energy_gradient(self, u)
 
     def energy_spread(self, u):

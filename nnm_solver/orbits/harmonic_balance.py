@@ -37,6 +37,8 @@ frequency of the continued mode; residuals are divided by w_r^2 (units of A).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..continuation.newton import NOT_FINITE, NewtonSettings, newton_solve
@@ -179,7 +181,8 @@ class HBProblem(HBTruncationError):
 
     def scale(self, u):
         """Weights of the balanced step norm: 1 / |A| on the coefficients, w_r / omega on the frequency."""
-        w = np.full(len(u), 1.0 / max(np.linalg.norm(u[:-1]), 1e-300))
+        x = u[:-1]
+        w = np.full(len(u), 1.0 / max(math.sqrt(float(x.dot(x))), 1e-300))    # (np.linalg.norm's number)
         w[-1] = 1.0 / u[-1]
         return w
 

@@ -85,9 +85,8 @@ def harmonics_in(basis, source_basis, A):
     """The rows of coefficients A (on source_basis) for the functions of ``basis`` (zero where it has one
     that the source has not)."""
     out = np.zeros((len(basis), A.shape[1]))
-    where = {(int(h), bool(s)): j for j, (h, s) in enumerate(zip(source_basis.h, source_basis.sine))}
-    for i, (h, s) in enumerate(zip(basis.h, basis.sine)):
-        j = where.get((int(h), bool(s)))
-        if j is not None:
-            out[i] = A[j]
+    key = 2 * np.asarray(basis.h) + np.asarray(basis.sine, dtype=int)            # (harmonic, sine) of each function
+    source = 2 * np.asarray(source_basis.h) + np.asarray(source_basis.sine, dtype=int)
+    i, j = np.nonzero(key[:, None] == source[None, :])
+    out[i] = np.asarray(A)[j]
     return out

@@ -84,8 +84,14 @@ class HBTruncationError:
     def _embed(self, big, u):
         """u (or a direction) of this problem as a vector of the larger problem ``big``: the coefficients on the
         harmonics both have, zero on the new ones, the tail unchanged."""
+        u = np.asarray(u)
         k = self.nb * self._width
-        C = harmonics_in(big.basis, self.basis, np.asarray(u[:k]).reshape(self.nb, self._width))
+        if u.ndim == 2:                   # several vectors (rows) at once
+            C = harmonics_in(big.basis, self.basis, u[:, :k].reshape(len(u), self.nb, self._width)
+                             .transpose(1, 0, 2).reshape(self.nb, -1))
+            C = C.reshape(len(big.basis), len(u), self._width).transpose(1, 0, 2).reshape(len(u), -1)
+            return np.concatenate([C, u[:, k:]], axis=1)
+        C = harmonics_in(big.basis, self.basis, u[:k].reshape(self.nb, self._width))
         return np.concatenate([C.ravel(), u[k:]])
 
     def frequency_error(self, u, J, tangent, factor=None):
@@ -99,7 +105,7 @@ class HBTruncationError:
         if getattr(self, "q_ref", None) is not None:
             big.q_ref = self.q_ref      # the phase condition's reference (full basis): the engine's accept() has set
                                         # it to this orbit's own shape, which the larger orbit keeps
-        u2, t2 = self._embed(big, u), self._embed(big, tangent)
+        u2, t2 = self._embed(big, np.stack([u, tangent]))
         E0 = self.energy(u)        # the point's (a condensed problem's energy of u2 is not it: its eliminated
                                    # amplitudes see the new harmonics' forces)
         bordered = _AtTheEnergy(big, E0, t2)
@@ -119,6 +125,11 @@ class HBTruncationError:
                                  and abs(big.energy(res.u) / E0 - 1.0) > ORBITS.error_unsettled_energy):
             return float("inf"), float("nan")
         return float(err), float("nan")
+
+
+def _norm(x):
+    """|x| of a 1-D float array: sqrt(x . x), np.linalg.norm's number without its dispatch."""
+    return math.sqrt(float(x.dot(x)))
 
 
 def _least_squares(J, b):
@@ -142,11 +153,12 @@ class _AtTheEnergy:
         big = self.big
         r2, J2 = big.jacobian(v)
         self.w = w = big.scale(v)
-        g = big.energy_gradient(v)
+        both = getattr(big, "energy_and_gradient", None)
+        E, g = both(v) if both is not None else (None, big.energy_gradient(v))
         self.fold = at_energy_fold(g @ self.t2 / self.E0, self.t2[-1] / v[-1])
         if self.fold:          # the step orthogonal to the branch tangent (the hyperplane through v)
-            return np.r_[r2, 0.0], stacked(J2, w * w * self.t2)
-        return np.r_[r2, big.energy(v) - self.E0], stacked(J2, g)
+            return np.append(r2, 0.0), stacked(J2, w * w * self.t2)
+        return np.append(r2, (big.energy(v) if E is None else E) - self.E0), stacked(J2, g)
 
     def residual(self, v):
         return self.jacobian(v)[0]
@@ -161,7 +173,7 @@ class _AtTheEnergy:
         def stop(k, v, du, v_new):
             if self.fold:
                 return "next to an energy fold: one step orthogonal to the branch"
-            if k == 0 and np.linalg.norm(self.w * du) < ORBITS.error_one_step:
+            if k == 0 and _norm(self.w * du) < ORBITS.error_one_step:
                 return "a short first step"
             if k > 0 and abs(v_new[-1] - v[-1]) <= ORBITS.error_settled * abs(v_new[-1] - u2[-1]):
                 return "the frequency settled"

@@ -94,11 +94,13 @@ class LoopDetector:
         nz = max(np.linalg.norm(z), 1e-300)
         y = np.concatenate([z / nz, [T / T_r, np.log(nz)]])
         move = y - self._rows.last() if len(self._rows) else None
-        hit = self._near_segment(y, move)
-        if hit is None and self.mirror and move is not None:
+        near = self._screen(y)
+        hit = self._near_segment(y, move, near)
+        if hit is None and self.mirror and move is not None and near is not None:
+            # (the mirrored orbit has the same period and amplitude, the last two coordinates: the same screen)
             flip = np.ones(len(y))
             flip[:-2] = -1.0
-            hit = self._near_segment(y * flip, move * flip)
+            hit = self._near_segment(y * flip, move * flip, near)
         self._rows.append(y)
         if hit is None:
             self.pending = None
@@ -108,10 +110,14 @@ class LoopDetector:
         self.pending = hit
         return None
 
-    def _near_segment(self, y, move):
+    def _screen(self, y):
+        """The segments whose distance in the last two coordinates (period, log amplitude) from y is within their
+        reach, a lower bound of the whole distance: (indices, reach of each), or None when there are none (or too
+        few points).  O(m) instead of O(m n): the whole distance only for the segments it leaves in (none on a
+        branch whose period or amplitude moves on)."""
         rows = self._rows
         m = len(rows) - self.skip
-        if m < 3 or move is None:
+        if m < 3:
             return None
         ab, L, u, ang = rows.segments(m - 1)                      # segments j -> j+1 of the first m points
         turn = np.zeros(len(ab))                                  # turn (rad) of the polyline at each end
@@ -119,14 +125,21 @@ class LoopDetector:
         turn[:-1] = np.maximum(turn[:-1], ang)
         a = rows.y()[:m - 1]
         reach = 0.25 * L * turn + self.floor
-        # first the distance in the last two coordinates (period, log amplitude): a lower bound of the whole one,
-        # O(m) instead of O(m n); the whole distance only for the segments it leaves in (none on a branch whose
-        # period or amplitude moves on)
         near = np.flatnonzero(_segment_distance(a[:, -2], a[:, -1], ab[:, -2], ab[:, -1], y[-2], y[-1])
                               <= reach * (1 + 1e-9))
-        if not len(near):
+        return (near, reach[near]) if len(near) else None
+
+    def _near_segment(self, y, move, screened):
+        """The first segment (index) that y re-traverses moving along ``move``, among those ``screened``
+        (``_screen``), or None."""
+        if screened is None or move is None:
             return None
-        a, ab, L, u, reach = a[near], ab[near], L[near], u[near], reach[near]
+        rows = self._rows
+        m = len(rows) - self.skip
+        near, reach = screened
+        ab, L, u, _ = rows.segments(m - 1)
+        a = rows.y()[:m - 1]
+        a, ab, L, u = a[near], ab[near], L[near], u[near]
         t = np.einsum("ij,ij->i", y - a, ab) / np.maximum(L * L, 1e-300)
         inside = (t > 0.0) & (t < 1.0)
         t = np.clip(t, 0.0, 1.0)
