@@ -11,10 +11,12 @@ Routes, each run in its own process (BLAS 1 thread, the solver's worker threads 
   eigenproblem of all modes: the reference (``stability.settings.STABILITY.krein_route = "dense"``).
 
 Cases: ``m20`` the aircraft's NNM 20 with the defaults until its first energy fold (as bench_targets.py's ``paris``);
+``m20skip`` its NNM 20 to 200 J skipping tongues (9 tori: issue 52's profile of event location);
 ``m13`` its NNM 13 to 26 J (the torus near 22.5 J); ``2dof`` the 2-DOF benchmark's NNM 1 to 100 J (the pitchfork at
 40.97 J); ``3dof`` a 3-DOF chain's combination resonance (two Krein collisions; tests/test_bifurcation.py), gauss6.
 Printed per case and route: the median time, the load average before and after each run, the dense eigenproblems
-(floquet.eigenvalues calls; on the main thread: during event location), the events, and each event's relative
+(floquet.eigenvalues calls; on the main thread: during event location), the orbits located inside steps and the
+Krein follower's local evaluations among them, the events, and each event's relative
 energy difference from the dense route's; the CPU time of the process (all its threads) beside the wall time (the
 steadier number on a shared machine).  Usage::
 
@@ -38,7 +40,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def _model(case):
     import nnm_solver as nnm
-    if case in ("m20", "m13"):
+    if case in ("m20", "m20skip", "m13"):
         return nnm.load_model(str(ROOT / "assets" / "paris.h5"))
     if case == "2dof":
         return nnm.load_model(str(ROOT / "assets" / "two_dof.h5"))
@@ -65,6 +67,19 @@ def worker(case, route):
         return eig(C)
 
     fl.eigenvalues = counted
+    import nnm_solver.stability.locator as lc
+    counts.update(local=0, orbits=0)
+    local_collision, at = lc.Locator.local_collision, lc.Locator.at
+
+    def counted_local(self, sigma, shift):
+        counts["local"] += 1
+        return local_collision(self, sigma, shift)
+
+    def counted_at(self, sigma, *args, **kw):
+        counts["orbits"] += float(sigma) not in self.cache
+        return at(self, sigma, *args, **kw)
+
+    lc.Locator.local_collision, lc.Locator.at = counted_local, counted_at
     import nnm_solver.orbits.shooting_stability as ss
     if hasattr(ss, "eigenvalues"):
         ss.eigenvalues = counted
@@ -82,7 +97,7 @@ def worker(case, route):
         nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0,
                          integrator=integrator)
     model = _model(case)
-    counts.update(all=0, main=0)
+    counts.update(all=0, main=0, local=0, orbits=0)
     t0, c0 = time.perf_counter(), time.process_time()
     if case == "m20":
         stop, E = threading.Event(), []
@@ -92,6 +107,8 @@ def worker(case, route):
             if len(E) > 2 and E[-1] < E[-2]:
                 stop.set()
         b = nnm.continue_nnm(model, mode=20, energy_max=1e6, on_point=on_point, stop=stop)
+    elif case == "m20skip":
+        b = nnm.continue_nnm(model, mode=20, energy_max=200.0, tongues="skip")
     elif case == "m13":
         b = nnm.continue_nnm(model, mode=13, energy_max=26.0)
     elif case == "2dof":
@@ -100,6 +117,7 @@ def worker(case, route):
         b = nnm.continue_nnm(model, 1, 3.0, integrator="gauss6", steps_per_period=100)
     t, cpu = time.perf_counter() - t0, time.process_time() - c0
     print(json.dumps(dict(seconds=t, cpu=cpu, points=len(b.energy), eig_all=counts["all"], eig_main=counts["main"],
+                          local=counts["local"], located=counts["orbits"],
                           stable=np.asarray(b.stable).astype(int).tolist(),
                           events=[(e["kind"], float(e["energy"]), e.get("stability_change")) for e in b.events],
                           solver=nnm.__file__)))
@@ -121,7 +139,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "ROUTE"))
     ap.add_argument("--before", default=None, help="a source tree of the solver before (omit: no 'before' route)")
-    ap.add_argument("--cases", default="m20,2dof,3dof", help="comma-separated: m20, m13, 2dof, 3dof")
+    ap.add_argument("--cases", default="m20,2dof,3dof", help="comma-separated: m20, m20skip, m13, 2dof, 3dof")
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
     if args.worker:
@@ -148,7 +166,8 @@ def main(argv=None):
             print(f"  {name:7s} median {np.median([r['seconds'] for r in rs]):7.2f} s wall ({times}; load {loads}), "
                   f"CPU {np.median([r.get('cpu', np.nan) for r in rs]):.2f} s ({cpus})  "
                   f"{last['points']} points, flags {flags}; dense eigenproblems {last['eig_all']} "
-                  f"({last['eig_main']} on the main thread)")
+                  f"({last['eig_main']} on the main thread); located orbits {last.get('located', '-')} "
+                  f"(Krein follower's local evaluations {last.get('local', '-')})")
             for kind, energy, change in last["events"]:
                 same = [e for k, e, c in ref["events"] if k == kind and c == change]
                 near = min(same, key=lambda e: abs(e - energy)) if same else None

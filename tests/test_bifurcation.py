@@ -152,10 +152,10 @@ def test_krein_collisions_located_against_harmonic_balance(monkeypatch):
     runs = []
     at = ev.Locator.at
 
-    def counting_at(self, sigma):
+    def counting_at(self, sigma, **kw):
         if float(sigma) not in self.cache:
             runs.append(sigma)
-        return at(self, sigma)
+        return at(self, sigma, **kw)
 
     monkeypatch.setattr(ev.Locator, "at", counting_at)
     sh = nnm.continue_nnm(m, 1, 3.0, integrator="gauss6", steps_per_period=100, freq_tol=None)   # one step size:

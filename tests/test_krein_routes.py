@@ -147,3 +147,116 @@ def test_the_dense_route_is_a_setting(monkeypatch):
     assert np.allclose([e["energy"] for e in local.events], [e["energy"] for e in dense.events], rtol=2e-6, atol=0)
     with pytest.raises(ValueError, match="krein_route"):
         dataclasses.replace(st.STABILITY, krein_route="secular")
+
+
+def _curve_locator(step, off=()):
+    """A Locator on the plane curve u(sigma) = (sigma, sigma^2 + sigma^3) (w = 1, p_a = (1, 0): sigma is u's first
+    coordinate), with the step's two ends and points at 1/8, 1/4 and 1/2 of the step cached; ``off`` : (fraction,
+    offset) pairs that move the point at that fraction of the step by offset x step off the curve (another branch)."""
+    from nnm_solver.stability.locator import Locator
+
+    class Plane:
+        def scale(self, u):
+            return np.ones(2)
+
+    def point(x, shift=0.0):
+        return np.array([x, x * x + x ** 3 + shift]), None, np.array([1.0, 2 * x + 3 * x * x]) / np.hypot(
+            1.0, 2 * x + 3 * x * x)
+
+    loc = Locator(Plane(), None, 1e-10, np.zeros(2), np.array([1.0, 0.0]), step=step)
+    moved = dict(off)
+    for frac in (0.0, 0.125, 0.25, 0.5, 1.0):
+        loc.cache[frac * step] = point(frac * step, moved.get(frac, 0.0) * step)
+    return loc
+
+
+def test_a_located_point_off_the_ends_interpolant_says_the_step_jumped():
+    """Locator.strayed: points on the branch (a cubic, which the ends' Hermite interpolant reproduces) are not
+    judged a jump; a point at 1/8 of the step moved 0.1 step lengths off (another sheet of the branch, as on the
+    aircraft's NNM 20 at 1.374 J) is, whatever the mid-step point says; at 0.01 step lengths it is not (the limit is
+    STABILITY.jump_limit = 0.05).  An end whose tangent is parallel to the hyperplanes is not judged."""
+    assert krein.STABILITY.jump_limit == 0.05
+    assert _curve_locator(0.3).strayed() == ""
+    reason = _curve_locator(0.3, [(0.125, 0.1)]).strayed()
+    assert "0.125 of the step" in reason and "0.10 step lengths" in reason
+    assert _curve_locator(0.3, [(0.125, 0.01)]).strayed() == ""
+    loc = _curve_locator(0.3, [(0.125, 0.1)])
+    u, J, _ = loc.cache[0.3]
+    loc.cache[0.3] = (u, J, np.array([0.0, 1.0]))
+    assert loc.strayed() == ""
+
+
+@pytest.mark.slow
+def test_aircraft_mode_20_defaults_the_routes_follow_the_same_branch(monkeypatch):
+    """The aircraft's NNM 20 with the defaults (gauss6, tongues followed) to 1.7 J, the dense route against the local
+    one.  The step 1.3247 -> 1.6528 J crosses the entrance of the 3:1 tongue at 35.1336 Hz and lands on the backbone's
+    sheet beyond it; its mid-step point lies 0.0499 step lengths off the ends' interpolant (below the jump limit), and
+    the dense route's bisection placed its points on that other sheet (0.07-0.18 off) and reported a gain at 1.3739 J
+    there.  Located points off the interpolant now refuse the step (Locator.strayed): both routes take the same
+    points, into the tongue, with the same flags and events: the loss at 1.32291 J and the gain at 1.33465 J, where
+    the full flag of the backbone's orbits, corrected on their energy level sets from the skeleton, changes
+    (unstable at 1.33431 J, its excess |mu| - 1 = 1.2e-4; stable at 1.33541 J)."""
+    from pathlib import Path
+    import nnm_solver as nnm
+    import nnm_solver.stability.settings as st
+    model = nnm.load_model(str(Path(__file__).resolve().parent.parent / "assets" / "paris.h5"))
+    local = nnm.continue_nnm(model, 20, 1.7)
+    with monkeypatch.context() as m:
+        m.setattr(st, "STABILITY", dataclasses.replace(st.STABILITY, krein_route="dense"))
+        dense = nnm.continue_nnm(model, 20, 1.7)
+    assert len(local.energy) == len(dense.energy) > 15
+    assert np.allclose(local.energy, dense.energy, rtol=1e-9)
+    assert np.allclose(local.frequency_hz, dense.frequency_hz, rtol=1e-12)
+    assert np.array_equal(np.asarray(local.stable), np.asarray(dense.stable))
+    for b in (local, dense):
+        assert [(e["kind"], e.get("stability_change")) for e in b.events] == [("torus", "loss"), ("torus", "gain")]
+        assert np.allclose([e["energy"] for e in b.events], [1.3229149, 1.3346490], rtol=5e-7, atol=0)
+        assert any(label.startswith("tongue 3:1") for label in b.labels)     # the branch enters the tongue
+        assert 1.33431 < b.events[1]["energy"] < 1.33541
+
+
+def test_a_point_located_without_its_tangent_is_the_same_orbit(monkeypatch):
+    """Locator.at(sigma, tangent=False) (the Krein follower's local evaluations, quarter-period shooting: the
+    multipliers are swept at the orbit itself) ends on an older Jacobian's chord iterations, with no Jacobian at the
+    converged point: the same orbit as the point with its tangent (the same iterations), one Jacobian fewer;
+    asked for again with its tangent, the point gets the tangent a fresh locator computes.  3-DOF chain, gauss6."""
+    import nnm_solver as nnm
+    from nnm_solver.stability.locator import Locator
+    from test_bifurcation import _combination_resonance_model
+    it = nnm.iter_nnm(_combination_resonance_model(), 1, 3.0, integrator="gauss6", steps_per_period=100,
+                      freq_tol=None)
+    for _ in range(4):
+        next(it)
+    cp = it._prev[0]
+    prob = it._problem
+    assert prob.stability_needs_jacobian is False
+    calls = []
+    jacobian = type(prob).jacobian
+
+    def counted(self, u):
+        calls.append(1)
+        return jacobian(self, u)
+
+    monkeypatch.setattr(type(prob), "jacobian", counted)
+
+    def locator():
+        loc = Locator(prob, it._cs, it._tol, cp.u, cp.tangent, step=0.05)
+        loc.cache[0.0] = (cp.u, None, cp.tangent)
+        return loc
+
+    rough, exact = locator(), locator()
+    for loc in (rough, exact):           # a point located before, as the follower's earlier iterates
+        loc.at(0.02)
+    x = 0.0201
+    calls.clear()
+    u_r = rough.at(x, tangent=False)[0]
+    n_rough = len(calls)
+    u_e, _, p_e = exact.at(x)
+    n_exact = len(calls) - n_rough
+    assert x in rough.rough and x not in exact.rough
+    assert n_rough < n_exact
+    w = exact.w
+    assert np.array_equal(u_r, u_e)      # the same chord iterations; the exact one adds the Jacobian at the end
+    u_x, _, p_x = rough.at(x)
+    assert x not in rough.rough and u_x is u_r
+    assert np.linalg.norm(w * (p_x - p_e)) <= 1e-6

@@ -317,10 +317,11 @@ class NNMIterator:
 
         events, end = locate_between(loc, cp.step, (ppoint, pslope), (point, slope), len(self.points), record,
                                      self.energy_max)
-        if (any(not e["located"] for e in events) and self._refusals < self.max_refusals
+        if ((any(not e["located"] for e in events) or loc.strayed()) and self._refusals < self.max_refusals
                 and cp.step > 4 * self._cs.step_min):
-            # the corrector failed inside the step: it jumped over a feature of the branch (e.g. a fold and a
-            # branch point, or three folds, next to each other); the engine retries with half the step
+            # the corrector failed inside the step, or a point located in it lies off its ends' interpolant: it
+            # jumped over a feature of the branch (e.g. a fold and a branch point, three folds next to each other, a
+            # narrow tongue's entrance); the engine retries with a shorter step
             self._refusals += 1
             self._prev = prev
             return None

@@ -13,6 +13,7 @@ import copy
 import numpy as np
 
 from ..continuation.engine import CorrectorFailure, _energy_slope, correct_factored, tangent_factored
+from ..continuation.linalg import LeastSquares, stacked
 from .floquet import is_stable, real_crossing, sort_multipliers
 from .roots import BracketRoots
 from .settings import STABILITY
@@ -75,6 +76,7 @@ class Locator(BracketRoots):
         self.cache = {}
         self.factors = {}           # sigma -> factorisation of [J; (w^2 p_a)^T] of a seeded point
         self.spectra = {}           # sigma -> (multipliers, collision coordinates)
+        self.rough = set()          # sigmas of points kept without their own tangent (at: tangent=False)
 
     def seed(self, sigma, u, J, factor):
         """Record a converged point at sigma (e.g. the two points of the continuation's step, so that they
@@ -94,9 +96,7 @@ class Locator(BracketRoots):
         and 0.39.  Not judged ('') when a tangent at an end is nearly parallel to the hyperplanes (no Hermite
         interpolant, e.g. at a fold) or b was not seeded."""
         s = self.step
-        if s is None or float(s) not in self.factors or 0.0 not in self.cache:
-            return ""
-        if self._slope(0.0) is None or self._slope(float(s)) is None:
+        if s is None or float(s) not in self.factors or self._ends_interpolant(0.5 * s) is None:
             return ""
         sigma = 0.5 * s
         u_pred = self.prediction(sigma)
@@ -113,6 +113,51 @@ class Locator(BracketRoots):
             self._keep(sigma, u, J, factor)
         d = np.linalg.norm(self.w * (u - u_pred)) / abs(s)
         return f"the mid-step point lies {d:.2f} step lengths off the ends' interpolant" if d > limit else ""
+
+    def strayed(self, limit=STABILITY.jump_limit):
+        """A reason (str) if a point located inside the step lies farther than ``limit`` x the step from the cubic
+        Hermite interpolant of the step's two ends (the measure of ``jumped``, at every located point instead of the
+        mid-step one only), else ''.  No new point is computed.
+
+        The mid-step point alone misses a step that crossed a narrow tongue near one end: the aircraft's NNM 20 (gauss6,
+        the defaults), the step 1.3247 -> 1.6528 J from the backbone's sheet that enters the 3:1 tongue at 35.1336 Hz
+        landed on the sheet beyond it; its mid-step point (1.480 J, on that sheet) lay 0.0499 step lengths off the
+        interpolant, while the points the event location placed at 1/8 to 1/4 of the step lay 0.07-0.18 off (on that
+        sheet near its own energy minimum, 1.37392 J, where the flag changes: the dense route reported that change as
+        the branch's).  Points of a resolved step lie within the interpolant's error of it (the mid-step one, its
+        largest: at most 1.7e-3 and 1.3e-2 of the step on the aircraft and the 2-DOF, ``jumped``).  Not judged ('')
+        where an end's tangent is nearly parallel to the hyperplanes (e.g. at a fold)."""
+        s = self.step
+        if s is None or 0.0 not in self.cache or float(s) not in self.cache:
+            return ""
+        worst, where = 0.0, None
+        for key in self.cache:
+            if key == 0.0 or key == float(s):
+                continue
+            u_i = self._ends_interpolant(key)
+            if u_i is None:
+                return ""
+            d = np.linalg.norm(self.w * (self.cache[key][0] - u_i)) / abs(s)
+            if d > worst:
+                worst, where = d, key
+        if worst > limit:
+            return (f"the point located at {where / s:.3g} of the step lies {worst:.2f} step lengths off the ends' "
+                    f"interpolant")
+        return ""
+
+    def _ends_interpolant(self, sigma):
+        """The cubic Hermite interpolant of the step's two ends (sigma 0 and self.step) at sigma, or None where they
+        are not both known or an end's tangent is nearly parallel to the hyperplanes."""
+        s = self.step
+        if s is None or 0.0 not in self.cache or float(s) not in self.cache:
+            return None
+        d0, d1 = self._slope(0.0), self._slope(float(s))
+        if d0 is None or d1 is None:
+            return None
+        u0, u1 = self.cache[0.0][0], self.cache[float(s)][0]
+        t = sigma / s
+        return ((2 * t ** 3 - 3 * t ** 2 + 1) * u0 + (t ** 3 - 2 * t ** 2 + t) * s * d0
+                + (3 * t ** 2 - 2 * t ** 3) * u1 + (t ** 3 - t ** 2) * s * d1)
 
     def _slope(self, key):
         """d u / d sigma at a known point, or None where its tangent is nearly parallel to the hyperplanes."""
@@ -145,18 +190,42 @@ class Locator(BracketRoots):
         u, d = slope(k)
         return u + (sigma - k) * (self.p_a if d is None else d)
 
-    def at(self, sigma):
+    def at(self, sigma, tangent=True):
         """(u, J, p) on the branch at pseudo-arclength sigma from point a (CorrectorFailure if the
-        corrector does not converge there); J is None where it is not kept (_keep)."""
+        corrector does not converge there); J is None where it is not kept (_keep).
+
+        tangent=False: the orbit is what is needed, not its Jacobian (the Krein follower's local evaluations, where
+        the multipliers are swept at the orbit itself: problem.stability_needs_jacobian False).  The corrector's
+        chord iterations may then end on an older Jacobian's factorisation, with no new Jacobian (a quarter-period
+        sensitivity sweep and a QR) at the converged point; p is then the latest point's tangent (a predictor's
+        slope, ``rough``) until a later call asks for the point with its tangent."""
         key = float(sigma)
-        if key not in self.cache:
-            u_pred = self.prediction(key)
-            result = self._from_latest(sigma, u_pred)
-            if result is None:
-                result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w)
-            u, J, _, _, factor = result
-            self.latest = (key, u, factor)
-            self._keep(key, u, J, factor)
+        rough = not tangent and not getattr(self.problem, "stability_needs_jacobian", True)
+        if key in self.cache:
+            if key in self.rough and not rough:     # its own tangent now: the Jacobian at the point
+                u = self.cache[key][0]
+                _, J = self.problem.jacobian(u)
+                factor = LeastSquares(stacked(J, self.w * self.w * self.p_a))
+                self.rough.discard(key)
+                self.latest = (key, u, factor)
+                self._keep(key, u, J, factor)
+            return self.cache[key]
+        u_pred = self.prediction(key)
+        result = self._from_latest(sigma, u_pred, refresh=not rough)
+        if result is None:
+            result = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w,
+                                      refresh=not rough)
+        u, J, _, _, factor = result
+        if factor is None:          # converged on an older Jacobian: the point, with a neighbour's tangent
+            near = min(self.cache, key=lambda k: abs(k - key)) if self.cache else None
+            p = self.p_a if near is None else self.cache[near][2]
+            self.cache[key] = (u, None, p)
+            self.rough.add(key)
+            if self.latest is not None:
+                self.latest = (key, u, self.latest[2])
+            return self.cache[key]
+        self.latest = (key, u, factor)
+        self._keep(key, u, J, factor)
         return self.cache[key]
 
     def _keep(self, key, u, J, factor):
@@ -167,7 +236,7 @@ class Locator(BracketRoots):
         keep = getattr(self.problem, "stability_needs_jacobian", True)
         self.cache[key] = (u, J if keep else None, p)
 
-    def _from_latest(self, sigma, u_pred):
+    def _from_latest(self, sigma, u_pred, refresh=True):
         """The point at sigma from the latest located point when it is close (the root finders' last
         iterations): chord iterations with that point's factorisation, from that point moved to sigma's hyperplane
         (all the hyperplanes are parallel), to a tolerance STABILITY.chord_tol_factor tighter (chord iterations stop
@@ -188,7 +257,7 @@ class Locator(BracketRoots):
         tol = STABILITY.chord_tol_factor * self.tol
         try:
             result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
-                                      start=(u_l + (sigma - s_l) * self.p_a, factor))
+                                      start=(u_l + (sigma - s_l) * self.p_a, factor), refresh=refresh)
         except CorrectorFailure:
             return None
         if np.linalg.norm(self.w * (result[0] - u_l)) > STABILITY.chord_continuity * ds + 10 * self.tol:
@@ -248,10 +317,25 @@ class Locator(BracketRoots):
         return is_stable(self.multipliers(sigma), tol)
 
     def local_collision(self, sigma, shift):
-        """The problem's collision coordinates at sigma nearest ``shift`` (problem.local_collision), or None."""
+        """The problem's collision coordinates at sigma nearest ``shift`` (problem.local_collision), or None.
+
+        Away from the trivial coordinate -1 (the family direction's, which the full spectrum deflates) the point is
+        computed without its own tangent (at: tangent=False) and the map is not deflated: its eigenvalues near the
+        shift are those of the deflated map (deflation by the exact family direction leaves the others unchanged;
+        by a neighbour's tangent it would move them to first order in its error, which near a collision is
+        amplified by the square root).  Where the trivial coordinate lies in the local solver's window after all
+        (a sparse spectrum, or a small model's full one), the point's tangent is computed and the map deflated."""
         if not hasattr(self.problem, "local_collision"):
             return None
-        u, J, p = self.at(sigma)
+        reach = STABILITY.trivial_reach
+        u, J, p = self.at(sigma, tangent=abs(complex(shift) + 1.0) < reach)
+        self.refresh(u, J)
+        if float(sigma) not in self.rough:
+            return self.problem.local_collision(p, shift)
+        c = self.problem.local_collision(np.zeros_like(p), shift)
+        if c is None or not np.any(np.abs(np.asarray(c) + 1.0) < reach):
+            return c
+        u, J, p = self.at(sigma)            # the trivial coordinate is in the window: deflated by the point's tangent
         self.refresh(u, J)
         return self.problem.local_collision(p, shift)
 

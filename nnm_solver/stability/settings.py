@@ -83,6 +83,10 @@ class StabilitySettings:
     #: real coordinates nearer to a complex pair's real part than its imaginary part from which the pair is followed
     #: with a complex shift (the local solver's window holds 6 eigenvalues)
     local_crowd: int = 3
+    #: the Krein follower's local evaluations at a shift within this distance of the trivial coordinate c = -1 deflate
+    #: the map by the point's own family tangent (a Jacobian at the point); farther away neither is needed
+    #: (Locator.local_collision)
+    trivial_reach: float = 0.1
     #: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
     #: tolerance (the two margin points of _flag_change_near)
     krein_margin: float = 0.8
