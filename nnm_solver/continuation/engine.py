@@ -64,11 +64,6 @@ class ContinuationSettings:
     jump_after: int = 4          # after this many failures, try one step of jump_factor x the last good step
     jump_factor: float = 2.5
     refresh_ratio: float = 0.5   # refresh the Jacobian when |e_k+1|/|e_k| exceeds this
-    #: start each step's chord iterations with the last point's factorisation (its last row replaced by the new
-    #: hyperplane's, linalg.LeastSquares.with_last_row) instead of a Jacobian at the prediction: one Jacobian a step
-    #: instead of two where a Jacobian costs many residuals (shooting: a sensitivity sweep); the iterations refresh
-    #: it when they contract poorly, and the converged point always gets its own
-    chord_start: bool = False
 
 
 @dataclass
@@ -123,7 +118,7 @@ def correct(problem, u_pred, p, settings, tol, w=None):
     return correct_factored(problem, u_pred, p, settings, tol, w)[:4]
 
 
-def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refresh=True, secant=False):
+def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refresh=True):
     """``correct``, also returning the factorisation of [J; (w^2 p)^T] at the converged point (5th item):
     the tangent there and other solves with J reuse it (one QR per Jacobian evaluation).
 
@@ -132,24 +127,17 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     an event locator, whose hyperplanes are parallel): the chord iterations start there instead of at
     u_pred with a Jacobian there.  A fresh Jacobian is taken when they contract poorly, and always at the
     converged point unless refresh=False (then J and the factorisation are None when the iterations converged on
-    an older Jacobian: for callers that need only the point).  secant : with ``start``, Broyden's updates of the
-    start's factorisation (_Broyden; the engine's chord start); plain chord iterations otherwise (on the 2-DOF's 5:1
-    tongue, Broyden's iterates after a Jacobian at the prediction converged onto the branch alongside: the inner
-    loop's folds at 75.8 and 43.9 kJ were lost, tests/test_quarter_period.py)."""
+    an older Jacobian: for callers that need only the point)."""
     row = p if w is None else w * w * p
     u = u_pred.copy() if start is None else start[0].copy()
     factor = None if start is None else start[1]
-    inverse = None if factor is None else _Broyden(factor)
-    secant = secant and start is not None
-    last_norm = last = None
+    last_norm = None
     for it in range(settings.max_iter + 1):
         fresh = False
         if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(stacked(J, row))
-            inverse = _Broyden(factor)
-            secant = False
         else:
             r = problem.residual(u)
         if not np.all(np.isfinite(r)):
@@ -167,51 +155,16 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             return u, J, it, err, factor
         if it == settings.max_iter:
             break
-        g = np.concatenate([r, [row @ (u - u_pred)]])          # the corrector's residual [F(u); hyperplane]
-        if secant and last is not None:
-            inverse.update(last[1], g - last[0])
-        du = inverse.solve(-g)
+        rhs = np.concatenate([-r, [-(row @ (u - u_pred))]])
+        du = factor.solve(rhs)
         nrm = _norm(du)
         if not np.isfinite(nrm):
             raise CorrectorFailure("singular corrector system")
         if last_norm is not None and nrm > settings.refresh_ratio * last_norm and not fresh:
             factor = None  # poor contraction: refresh the Jacobian at the next iterate
-        last_norm, last = nrm, (g, du)
+        last_norm = nrm
         u = u + du
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
-
-
-class _Broyden:
-    """The inverse of the corrector's matrix for chord iterations: a factorisation's solve with Broyden's rank-one
-    updates (the "second" method: H += (s - H y) y^T / (y . y) for each iterate's step s and residual change y).
-    An older Jacobian (an earlier point's, a chord start) differs from the current one mostly in a few directions,
-    e.g. shooting's period column, proportional to the amplitude: measured on the aircraft's NNM 20, plain chord
-    iterations from the last point's Jacobian contracted by 0.4 an iteration in the linear range (a 40 % larger
-    amplitude a step); the updates learn that difference from the residuals already computed."""
-
-    def __init__(self, factor):
-        self.factor = factor
-        self.terms = []             # (c, y / (y . y))
-
-    def solve(self, b):
-        x = self.factor.solve(b)
-        for c, y in self.terms:
-            x = x + c * float(y @ b)
-        return x
-
-    def update(self, s, y):
-        yy = float(y @ y)
-        if yy > 0 and np.isfinite(yy):
-            self.terms.append((s - self.solve(y), y / yy))
-
-
-def _chord_start(settings, factor, u_pred, row):
-    """correct_factored's ``start`` for a step from a point whose factorisation is ``factor``: (u_pred, the solver of
-    [J; row^T] from it) with settings.chord_start, else None (a Jacobian at the prediction)."""
-    if not settings.chord_start or factor is None or not hasattr(factor, "with_last_row"):
-        return None
-    solver = factor.with_last_row(row)
-    return None if solver is None else (u_pred, solver)
 
 
 def scale_of(problem, u):
@@ -248,10 +201,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     s_cap = _largest_step(problem, u, p, settings)
     while True:
         u_pred = u + s * p
-        start = _chord_start(settings, factor, u_pred, w * w * p)
         try:
-            u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w, start=start,
-                                                                 secant=True)
+            u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w)
             dist = _norm(w * (u_new - u_pred))
             # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
             if dist > settings.max_correction * s and dist > 10 * tol:

@@ -86,7 +86,6 @@ class LeastSquares:
     def __init__(self, A):
         self.n = A.shape[1]
         self._lu = None
-        self.last_row = A[-1].copy()   # (A is overwritten below; with_last_row needs it)
         if A.shape[0] == self.n and self.n >= self.EXPLICIT_Q:
             # An exactly singular A (e.g. a tongue jump's level-set guess on the aircraft) makes scipy warn
             # "LinAlgWarning: Diagonal number k is exactly zero. Singular matrix." and nothing else: the zero
@@ -127,36 +126,7 @@ class LeastSquares:
         x = self._triangular(c[:self.n])
         return x[:, 0] if np.ndim(b) == 1 else x
 
-    def with_last_row(self, row):
-        """A solver of [J; row^T] x = b from this factorisation of the square [J; last_row^T] (Sherman-Morrison on
-        the last row: one more solve with these factors, no new factorisation), or None where that is not exact
-        (a least-squares A) or would lose digits (1 + d . z, the update's pivot, below 1e-8 of its terms)."""
-        if self._lu is None:
-            return None
-        e = np.zeros(self.n)
-        e[-1] = 1.0
-        z = self.solve(e)                  # A^-1 e_m
-        d = np.asarray(row, dtype=float) - self.last_row
-        pivot = 1.0 + float(d @ z)
-        if not np.isfinite(pivot) or abs(pivot) < 1e-8 * (1.0 + abs(float(d @ z))):
-            return None
-        return _RowReplaced(self, z, d, pivot)
-
     def _triangular(self, c):
         if not np.all(np.diag(self.R)):
             return np.full(np.shape(c), np.nan)
         return sla.solve_triangular(self.R, c, check_finite=False)
-
-
-class _RowReplaced:
-    """x of (A + e_m d^T) x = b from A's factors (Sherman-Morrison): x = y - z (d . y) / pivot, y = A^-1 b,
-    z = A^-1 e_m, pivot = 1 + d . z (LeastSquares.with_last_row)."""
-
-    def __init__(self, base, z, d, pivot):
-        self.base, self.z, self.d, self.pivot = base, z, d, pivot
-        self.n = base.n
-
-    def solve(self, b):
-        y = self.base.solve(b)
-        return y - np.multiply.outer(self.z, (self.d @ y) / self.pivot) if np.ndim(y) == 2 else \
-            y - self.z * (float(self.d @ y) / self.pivot)

@@ -137,10 +137,8 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
         u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
         p0 = problem.pack(system.to_modal(xb), system.to_modal(vb), Tb) - u0
         problem.accept(u0, None)
-    # (shooting's Jacobian is a sensitivity sweep, ~10 residuals' cost: its steps start from the last point's
-    # factorisation; harmonic balance's costs about a residual)
     cs = ContinuationSettings(step=cont.step, step_min=cont.step_min, step_max=np.inf, max_angle=cont.max_angle,
-                              max_correction=cont.max_correction, chord_start=name == "shooting")
+                              max_correction=cont.max_correction)
     engine = pseudo_arclength(problem, u0, p0, cs, tol)
     # the branch's record: the request's own fields, with what the problem resolved (steps, basis, symmetry, ...)
     settings = replace(method, **{f.name: getattr(settings, f.name) for f in fields(settings)
