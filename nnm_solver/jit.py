@@ -248,3 +248,36 @@ def eigvals_nogil(A):
     if info != 0:
         return np.full(A.shape[0], np.nan, dtype=complex)
     return wr + 1j * wi
+
+
+@jit
+def small_inverse(A):
+    """A^-1 of a small square matrix (a few rows: a Gauss step's s x s stage matrix, the Volterra recursion's s n_s
+    block) by Gauss-Jordan elimination with partial pivoting, inside compiled kernels (no LAPACK call: its overhead
+    exceeds the work at these sizes).  A is not modified; a zero pivot gives inf/NaN entries."""
+    m = A.shape[0]
+    W = np.zeros((m, 2 * m))
+    for a in range(m):
+        for b in range(m):
+            W[a, b] = A[a, b]
+        W[a, m + a] = 1.0
+    for c in range(m):
+        piv = c
+        for a in range(c + 1, m):
+            if abs(W[a, c]) > abs(W[piv, c]):
+                piv = a
+        if piv != c:
+            for b in range(2 * m):
+                t = W[c, b]
+                W[c, b] = W[piv, b]
+                W[piv, b] = t
+        d = 1.0 / W[c, c]
+        for b in range(2 * m):
+            W[c, b] *= d
+        for a in range(m):
+            if a != c:
+                f = W[a, c]
+                if f != 0.0:
+                    for b in range(2 * m):
+                        W[a, b] -= f * W[c, b]
+    return W[:, m:].copy()

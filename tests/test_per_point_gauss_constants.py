@@ -6,7 +6,7 @@ import dataclasses
 import numpy as np
 
 import nnm_solver as nnm
-from nnm_solver.integrators import gauss
+from nnm_solver.integrators import gauss, gauss_constants
 from nnm_solver.model.modal import modal_system
 
 
@@ -33,13 +33,13 @@ def test_sweeps_with_reused_constants_equal_fresh_ones_bit_for_bit(monkeypatch):
     sys_ = chain()
     rng = np.random.default_rng(3)
     q0, v0, h, N = 0.5 * rng.standard_normal(6), np.zeros(6), 0.05, 40
-    gauss._recent.clear()
+    gauss_constants._recent.clear()
     first = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)
     again = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)        # the cached constants
-    monkeypatch.setattr(gauss, "KERNELS", dataclasses.replace(gauss.KERNELS, gauss_constants_kept=0))  # no reuse
-    gauss._recent.clear()
+    monkeypatch.setattr(gauss_constants, "KERNELS", dataclasses.replace(gauss_constants.KERNELS, gauss_constants_kept=0))  # no reuse
+    gauss_constants._recent.clear()
     fresh = gauss.sweep_sensitivity(q0, v0, h, N, sys_.kernel, 3)
-    assert not gauss._recent
+    assert not gauss_constants._recent
     for a, b, c in zip(first, again, fresh):
         assert np.array_equal(a, b) and np.array_equal(a, c)
     assert first[-1] and np.max(np.abs(first[2])) > 0

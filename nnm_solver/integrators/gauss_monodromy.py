@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import blas
 
-from ..jit import jit as _jit
+from ..jit import jit as _jit, small_inverse
 from .settings import KERNELS
 
 __all__ = ["monodromy", "monodromy_factors"]
@@ -101,40 +101,16 @@ def _kernel(CAE, BB, s, ns):
 def _volterra_system(Hom, HomV, H, G, Dseq, ncols):
     """The Volterra recursion's unit lower triangular system L dd = B (see _volterra), assembled in one pass:
     B (N m, ncols) = J_k^-1 [Hom_k, HomV_k] block row by block row, L (N m, N m) with the blocks
-    J_k^-1 H(k-1-j) Dg_j below the diagonal (J_k = I + G Dg_k, m x m, inverted by Gauss-Jordan with partial
-    pivoting: m = s n_s is small)."""
+    J_k^-1 H(k-1-j) Dg_j below the diagonal (J_k = I + G Dg_k, m x m: jit.small_inverse)."""
     N, m, n = Hom.shape
     B = np.empty((N * m, ncols))
     L = np.zeros((N * m, N * m))
-    Ji = np.empty((m, m))
-    A = np.empty((m, 2 * m))
+    J = np.empty((m, m))
     for k in range(N):
         for a in range(m):
             for b in range(m):
-                A[a, b] = G[a, b] * Dseq[k, b] + (1.0 if a == b else 0.0)
-                A[a, m + b] = 1.0 if a == b else 0.0
-        for c in range(m):                       # Gauss-Jordan on [J_k | I]
-            piv = c
-            for a in range(c + 1, m):
-                if abs(A[a, c]) > abs(A[piv, c]):
-                    piv = a
-            if piv != c:
-                for b in range(2 * m):
-                    t = A[c, b]
-                    A[c, b] = A[piv, b]
-                    A[piv, b] = t
-            d = 1.0 / A[c, c]
-            for b in range(2 * m):
-                A[c, b] *= d
-            for a in range(m):
-                if a != c:
-                    f = A[a, c]
-                    if f != 0.0:
-                        for b in range(2 * m):
-                            A[a, b] -= f * A[c, b]
-        for a in range(m):
-            for b in range(m):
-                Ji[a, b] = A[a, m + b]
+                J[a, b] = G[a, b] * Dseq[k, b] + (1.0 if a == b else 0.0)
+        Ji = small_inverse(J)
         for a in range(m):
             row = k * m + a
             for i in range(ncols):
