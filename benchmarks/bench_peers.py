@@ -132,8 +132,13 @@ HB_PERIOD_STEP = 0.02
 
 
 def nnm_path(model, H, E, f, **kw):
-    """nnm's branch along NLvib's path: from NLvib's first energy until NLvib's last frequency is reached."""
+    """nnm's branch along NLvib's path: from NLvib's first energy until NLvib's last frequency is reached.  NLvib
+    follows example 09's 5:1 tongue; nnm's default jumps tongues above 3:1 (backbone/settings.py, Follow.max_order),
+    so the path is asked for with every tongue followed (tongues="follow-all"): without it nnm stays on the backbone
+    where NLvib is in the tongue (0.51 relative frequency difference at NLvib's energies, 2026-12-07)."""
     import nnm_solver as nnm
+    kw.setdefault("tongues", "follow-all")
+    kw.setdefault("freq_tol", None)        # NLvib's H (and Newmark's 200 steps) kept: no raised truncation or steps
     it = nnm.iter_nnm(model, 1, 1.5 * float(np.max(E)), energy_min=float(E[0]), **kw)
     for p in it:
         if p.frequency_hz >= f[-1] * (1 - 1e-9):
