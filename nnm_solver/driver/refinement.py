@@ -48,7 +48,7 @@ class StepRefinement:
         old = problem.spp
         # the finer step aimed at a quarter of the tolerance, else one that just meets it: next to an energy fold the
         # larger change moves the fold away from the coarse orbit (the 2-DOF's 3:1 tongue top at 4.68 kJ, Newmark 364
-        # -> 828 steps: no convergence; 364 -> 546 converged)
+        # -> 828 steps: no convergence; 364 -> 456 converged)
         meets = min(max((est / self.freq_tol) ** (1.0 / problem.integrator.order), 1.25), factor)
         if self._converges(problem, cp, settings, tol, old, factor) or (
                 meets < factor and self._converges(problem, cp, settings, tol, old, meets)):
