@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .linalg import LeastSquares, stacked
+from .linalg import LeastSquares, all_finite, stacked
 
 
 @dataclass(frozen=True)
@@ -140,7 +140,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             factor = LeastSquares(stacked(J, row))
         else:
             r = problem.residual(u)
-        if not np.all(np.isfinite(r)):
+        if not all_finite(r):
             raise CorrectorFailure("the time integration diverged (non-finite state)")
         err = problem.error(u, r)
         if err < tol:
@@ -155,10 +155,12 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             return u, J, it, err, factor
         if it == settings.max_iter:
             break
-        rhs = np.concatenate([-r, [-(row @ (u - u_pred))]])
+        rhs = np.empty(len(r) + 1)
+        np.negative(r, out=rhs[:-1])
+        rhs[-1] = -(row @ (u - u_pred))
         du = factor.solve(rhs)
         nrm = _norm(du)
-        if not np.isfinite(nrm):
+        if not math.isfinite(nrm):
             raise CorrectorFailure("singular corrector system")
         if last_norm is not None and nrm > settings.refresh_ratio * last_norm and not fresh:
             factor = None  # poor contraction: refresh the Jacobian at the next iterate
@@ -191,7 +193,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         return f"the starting point did not converge: {exc}"
     w = scale_of(problem, u)
     p, factor = tangent_factored(J, p0, w, factor)
-    if not np.all(np.isfinite(p)):
+    if not all_finite(p):
         return "the starting point has no tangent (a singular Jacobian)"
     problem.accept(u, J)
     s = settings.step
@@ -199,6 +201,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     failures = 0
     s_clean = s_before_jump = s
     s_cap = _largest_step(problem, u, p, settings)
+    cos_max = np.cos(settings.max_angle)
+    check_step = getattr(problem, "check_step", None)
     while True:
         u_pred = u + s * p
         try:
@@ -207,15 +211,15 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
             # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
             if dist > settings.max_correction * s and dist > 10 * tol:
                 raise CorrectorFailure(f"the corrector moved {dist / s:.2f} step lengths away from the prediction")
-            if hasattr(problem, "check_step"):
-                reason = problem.check_step(u, u_new)
+            if check_step is not None:
+                reason = check_step(u, u_new)
                 if reason:
                     raise CorrectorFailure(reason)
             p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
-            if not np.all(np.isfinite(p_new)):
+            if not all_finite(p_new):
                 raise CorrectorFailure("no tangent at the new point (a singular Jacobian)")
             cos = (w * p_new) @ (w * p) / _norm(w * p_new)
-            if cos < np.cos(settings.max_angle):
+            if cos < cos_max:
                 raise CorrectorFailure(f"tangent turned by {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f} deg")
             reason = _unseen_turns(energy, u, p, u_new, p_new, 10 * tol)
             if reason:
@@ -259,7 +263,7 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
         elif it > settings.target_iter + 1:
             s *= 0.6
         s_cap = _largest_step(problem, u, p, settings)
-        s = float(np.clip(s, settings.step_min, s_cap))
+        s = float(min(max(s, settings.step_min), s_cap))      # (np.clip's number)
 
 
 def _largest_step(problem, u, p, settings):

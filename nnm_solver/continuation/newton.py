@@ -25,6 +25,8 @@ from typing import Callable, Optional
 import numpy as np
 import scipy.linalg
 
+from .linalg import all_finite
+
 __all__ = ["newton", "newton_solve", "NewtonSettings", "NewtonResult", "CONVERGED", "MAX_ITER", "SINGULAR",
            "NOT_FINITE", "NON_POSITIVE"]
 
@@ -88,12 +90,12 @@ def newton_solve(problem, u, settings: NewtonSettings = NewtonSettings(), free=N
         if parts_of is not None:
             parts = parts_of(u)
             r = parts[-1]
-            if tol > 0 and np.all(np.isfinite(r)) and problem.error(u, r) < tol:
+            if tol > 0 and all_finite(r) and problem.error(u, r) < tol:
                 return NewtonResult(u, k, True, CONVERGED)
             r, J = problem.jacobian_of(parts)
         else:
             r, J = problem.jacobian(u)
-        if not np.all(np.isfinite(r)):
+        if not all_finite(r):
             return NewtonResult(u, k, False, NOT_FINITE)
         if tol > 0 and problem.error(u, r) < tol:
             return NewtonResult(u, k, True, CONVERGED)
@@ -102,7 +104,7 @@ def newton_solve(problem, u, settings: NewtonSettings = NewtonSettings(), free=N
         except np.linalg.LinAlgError:
             return NewtonResult(u, k, False, SINGULAR)
         u_new = u + du if free is None else _added(u, free, du)
-        if not np.all(np.isfinite(u_new)):
+        if not all_finite(u_new):
             return NewtonResult(u, k, False, NOT_FINITE)
         if settings.positive_last and u_new[-1] <= 0:
             return NewtonResult(u, k, False, NON_POSITIVE)
@@ -112,7 +114,7 @@ def newton_solve(problem, u, settings: NewtonSettings = NewtonSettings(), free=N
             return NewtonResult(u, k + 1, True, reason)
     if tol > 0:
         r = problem.residual(u)
-        if np.all(np.isfinite(r)) and problem.error(u, r) < tol:
+        if all_finite(r) and problem.error(u, r) < tol:
             return NewtonResult(u, settings.max_iter, True, CONVERGED)
     return NewtonResult(u, settings.max_iter, False, MAX_ITER)
 
