@@ -89,7 +89,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
-        self._last_energy = None                       # (u.tobytes(), energy, gradient or None) of the last orbit
+        self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last two orbits
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
 
@@ -302,13 +302,16 @@ class CondensedHBProblem(HBTruncationError):
         return condensed_energy(self, u)
 
     def _energy_gradient(self, u, gradient):
-        """(energy, dE/du or None) of u by the compiled kernel (the gradient only when asked), the last orbit's kept:
-        the engine's unseen-turns check, the iterator's energy slope and the truncation estimate ask for the same
-        orbit's energy and gradient in turn (the same numbers: one kernel call computes both)."""
+        """(energy, dE/du or None) of u by the compiled kernel (the gradient only when asked), the last two orbits'
+        kept: the engine's unseen-turns check asks for the energy of a step's end, then the gradient at its start (the
+        iterator's energy slope there a step before), the truncation estimate and the iterator's energy slope for the
+        end's in turn (the same numbers: one kernel call computes both; the energy does not depend on whether the
+        gradient is made)."""
         key = u.tobytes() if isinstance(u, np.ndarray) else None
-        last = self._last_energy
-        if key is not None and last is not None and last[0] == key and (last[2] is not None or not gradient):
-            return last[1], last[2]
+        kept = self._last_energy
+        for last in kept:
+            if last[0] == key and (last[2] is not None or not gradient):
+                return last[1], last[2]
         E, g = kernels.energy_gradient(np.asarray(u, dtype=float), gradient, *self._kernel[1])
         if not self._kernel[1][0]:
             E = float(E + np.sum(self.sys.elements.potential(self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
@@ -317,7 +320,7 @@ class CondensedHBProblem(HBTruncationError):
         else:
             g = None
         if key is not None:
-            self._last_energy = (key, E, g)
+            self._last_energy = tuple(x for x in kept if x[0] != key)[-1:] + ((key, E, g),)
         return E, g
 
     def energy_and_gradient(self, u):

@@ -83,16 +83,31 @@ class HBTruncationError:
 
     def _embed(self, big, u):
         """u (or a direction) of this problem as a vector of the larger problem ``big``: the coefficients on the
-        harmonics both have, zero on the new ones, the tail unchanged."""
+        harmonics both have, zero on the new ones, the tail unchanged (the rows of a 2-D u: several vectors at once)."""
         u = np.asarray(u)
-        k = self.nb * self._width
-        if u.ndim == 2:                   # several vectors (rows) at once
-            C = harmonics_in(big.basis, self.basis, u[:, :k].reshape(len(u), self.nb, self._width)
-                             .transpose(1, 0, 2).reshape(self.nb, -1))
-            C = C.reshape(len(big.basis), len(u), self._width).transpose(1, 0, 2).reshape(len(u), -1)
-            return np.concatenate([C, u[:, k:]], axis=1)
-        C = harmonics_in(big.basis, self.basis, u[:k].reshape(self.nb, self._width))
-        return np.concatenate([C.ravel(), u[k:]])
+        target, source, n2 = self._embedding(big, u.shape[-1])
+        out = np.zeros(u.shape[:-1] + (n2,))
+        out[..., target] = u[..., source]
+        return out
+
+    def _embedding(self, big, n):
+        """(target, source, n2): u2[target] = u[source] embeds a vector u (length n) of this problem in ``big``'s
+        (length n2), its other entries zero: ``harmonics_in``'s rows of the coefficient block, then the tail.  Made once
+        per larger problem (the truncation estimate embeds two vectors a point)."""
+        kept = getattr(self, "_embedding_in", None)
+        if kept is not None and kept[0] is big and kept[1] == n:
+            return kept[2]
+        width, k = self._width, self.nb * self._width
+        # the source row of each of big's rows (-1: a function this basis has not)
+        rows = harmonics_in(big.basis, self.basis, np.arange(1.0, self.nb + 1)[:, None])[:, 0].astype(int) - 1
+        j2 = np.flatnonzero(rows >= 0)
+        target = (j2[:, None] * width + np.arange(width)).ravel()
+        source = (rows[j2][:, None] * width + np.arange(width)).ravel()
+        k2 = len(big.basis) * width
+        made = (np.concatenate([target, k2 + np.arange(n - k)]), np.concatenate([source, np.arange(k, n)]),
+                k2 + n - k)
+        self._embedding_in = (big, n, made)
+        return made
 
     def frequency_error(self, u, J, tangent, factor=None):
         """Estimated relative error of the frequency of the converged orbit u from the truncation of the harmonics:
