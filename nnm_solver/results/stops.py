@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..jit import jit, numba
+
 STOP_STATUSES = ("done", "max_points", "escape", "closed_loop", "tongue", "failed", "cancelled", "stopped", "running")
 
 
@@ -120,10 +122,14 @@ class LoopDetector:
         if m < 3:
             return None
         ab, L, u, ang = rows.segments(m - 1)                      # segments j -> j+1 of the first m points
+        a = rows.y()[:m - 1]
+        if numba is not None:           # one compiled pass over the segments (the numpy form's numbers)
+            near, reach = _screened(a[:, -2], a[:, -1], ab[:, -2], ab[:, -1], L, ang, float(y[-2]), float(y[-1]),
+                                    float(self.floor))
+            return (near, reach) if len(near) else None
         turn = np.zeros(len(ab))                                  # turn (rad) of the polyline at each end
         turn[1:] = np.maximum(turn[1:], ang)
         turn[:-1] = np.maximum(turn[:-1], ang)
-        a = rows.y()[:m - 1]
         reach = 0.25 * L * turn + self.floor
         near = np.flatnonzero(_segment_distance(a[:, -2], a[:, -1], ab[:, -2], ab[:, -1], y[-2], y[-1])
                               <= reach * (1 + 1e-9))
@@ -157,6 +163,47 @@ def _segment_distance(ax, ay, bx, by, x, y):
     """Distance (m,) of the point (x, y) in a plane from each segment (ax, ay) -> (ax + bx, ay + by) (m,) each."""
     t = np.clip(((x - ax) * bx + (y - ay) * by) / np.maximum(bx * bx + by * by, 1e-300), 0.0, 1.0)
     return np.hypot(ax + t * bx - x, ay + t * by - y)
+
+
+@jit
+def _nan_max(a, b):
+    """np.maximum of two floats (NaN if either is)."""
+    if a != a or b != b:
+        return np.nan
+    return a if a >= b else b
+
+
+@jit
+def _screened(ax, ay, bx, by, L, ang, x, y, floor):
+    """LoopDetector._screen's numpy form in one pass over the segments, its operations in its order (the same
+    numbers): (near, reach[near]) with the turn of each segment the larger of the angles at its two ends and
+    ``_segment_distance``'s distance of (x, y) from it compared with its reach 0.25 L turn + floor."""
+    k = L.shape[0]
+    near = np.empty(k, dtype=np.int64)
+    reach = np.empty(k)
+    c = 0
+    margin = 1 + 1e-9
+    for j in range(k):
+        turn = 0.0
+        if j >= 1:
+            turn = _nan_max(turn, ang[j - 1])
+        if j < k - 1:
+            turn = _nan_max(turn, ang[j])
+        r = 0.25 * L[j] * turn + floor
+        den = bx[j] * bx[j] + by[j] * by[j]
+        t = ((x - ax[j]) * bx[j] + (y - ay[j]) * by[j]) / _nan_max(den, 1e-300)
+        if t != t:
+            pass
+        elif t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+        d = np.hypot(ax[j] + t * bx[j] - x, ay[j] + t * by[j] - y)
+        if d <= r * margin:
+            near[c] = j
+            reach[c] = r
+            c += 1
+    return near[:c], reach[:c]
 
 
 class _Rows:
