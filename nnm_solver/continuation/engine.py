@@ -300,6 +300,10 @@ class _Remembered:
 
     def __init__(self, problem):
         self.energy = problem.energy
+        if getattr(problem, "gradient_with_energy", False):
+            # (an energy costs about as much with its gradient, which the problem keeps: the slope at a step's end is
+            # asked for next, by this check or by the branch iterator's events; the same energy)
+            self.energy = lambda u: problem.energy_and_gradient(u)[0]
         self.slope = lambda u, p: energy_slope(problem, u, p)
         self.kept = []
 

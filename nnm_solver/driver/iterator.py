@@ -290,8 +290,8 @@ class NNMIterator:
             loc.problem.accept(cp.u, cp.jacobian)
         if cp.factor is not None:          # the engine's factorisation of [J; (w^2 p_a)^T] at the new point
             loc.seed(cp.step, cp.u, cp.jacobian, cp.factor)
-        for sigma, c in ((0.0, pcand), (cp.step, cand)):     # their multipliers are known too
-            if not np.isnan(c.point.floquet).any():
+        for sigma, c in ((0.0, pcand), (cp.step, cand)) if self.settings.floquet else ():  # their multipliers are known
+            if not np.isnan(c.point.floquet).any():                                           # too (NaN: floquet off)
                 loc.spectra[float(sigma)] = (c.point.floquet, c.collision)
         if (self._refusals < self.max_refusals and cp.step > 4 * self._cs.step_min
                 and mid_step_check(cp.step, (pcand.distance, cand.distance)) and loc.jumped()):

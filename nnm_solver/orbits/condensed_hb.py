@@ -334,6 +334,13 @@ class CondensedHBProblem(HBTruncationError):
     def galerkin_blocks(self, d):
         return coupled_galerkin(self.basis, self.sys.elements, d)      # (the element tangent's: condensed_energy.py)
 
+    @property
+    def gradient_with_energy(self):
+        """Does the energy cost about as much with its gradient, both kept for the last two orbits (the compiled
+        kernel: one pass makes both)?  Then the engine asks for both at a step's end, whose energy slope the branch
+        iterator reads next (continuation.engine._Remembered)."""
+        return self._kernel is not None and self._kernel[1] is not None
+
     #: the energy's slope along a tangent is g . p (continuation.engine.energy_slope): one gradient, about the cost
     #: of one energy with the compiled kernels, instead of two energies by central differences
     slope_from_gradient = True
