@@ -41,10 +41,9 @@ def basis_harmonic_amplitudes(basis, A, n, r):
     rows_r = sq.sum(axis=1)
     h = np.asarray(basis.h)
     keep = h <= n
-    amps2, others2 = np.zeros(int(n) + 1), np.zeros(int(n) + 1)
-    np.add.at(amps2, h[keep], rows[keep])
-    np.add.at(others2, h[keep], rows_r[keep])
-    return np.sqrt(amps2), np.sqrt(others2)
+    hk, size = h[keep], int(n) + 1          # (bincount adds in the rows' order from zero: np.add.at's sums)
+    return (np.sqrt(np.bincount(hk, weights=rows[keep], minlength=size)[:size]),
+            np.sqrt(np.bincount(hk, weights=rows_r[keep], minlength=size)[:size]))
 
 
 def series_restoring_ratio(system, basis, A, samples):

@@ -182,7 +182,8 @@ class HBProblem(HBTruncationError):
     def scale(self, u):
         """Weights of the balanced step norm: 1 / |A| on the coefficients, w_r / omega on the frequency."""
         x = u[:-1]
-        w = np.full(len(u), 1.0 / max(math.sqrt(float(x.dot(x))), 1e-300))    # (np.linalg.norm's number)
+        w = np.empty(len(u))
+        w.fill(1.0 / max(math.sqrt(float(x.dot(x))), 1e-300))    # (np.linalg.norm's number; np.full's array)
         w[-1] = 1.0 / u[-1]
         return w
 
