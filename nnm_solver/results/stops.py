@@ -33,6 +33,8 @@ the continuation where r < escape_ratio_failed (0.1).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..jit import jit, numba
@@ -92,9 +94,14 @@ class LoopDetector:
     def add(self, q0, v0, w_r, T, T_r):
         """Record the next point; returns the index j of the earlier segment (j, j+1) that the
         continuation is re-traversing (confirmed over two points), or None."""
-        z = np.concatenate([q0, v0 / w_r])
-        nz = max(np.linalg.norm(z), 1e-300)
-        y = np.concatenate([z / nz, [T / T_r, np.log(nz)]])
+        n = len(q0)
+        y = np.empty(2 * n + 2)                 # [z / |z|; T / T_r; log |z|], z = [q0; v0 / w_r], filled in place
+        y[:n] = q0
+        np.divide(v0, w_r, out=y[n:2 * n])
+        z = y[:2 * n]
+        nz = max(math.sqrt(float(z.dot(z))), 1e-300)     # (np.linalg.norm's number)
+        z /= nz
+        y[-2], y[-1] = T / T_r, np.log(nz)
         move = y - self._rows.last() if len(self._rows) else None
         near = self._screen(y)
         hit = self._near_segment(y, move, near)
@@ -236,17 +243,16 @@ class _Rows:
         if self._y is None or n == len(self._y):
             self._grow(max(16, 2 * n), len(y))
         self._y[n] = y
-        if n:
-            ab = np.diff(self._y[n - 1:n + 1], axis=0)
-            self._ab[n - 1] = ab[0]
-            L = np.linalg.norm(ab, axis=1)
-            self._L[n - 1] = L[0]
-            self._Lc[n - 1] = L = np.maximum(L, 1e-300)[0]
-            u = ab / np.array([L])[:, None]
-            self._u[n - 1] = u[0]
+        if n:           # (row by row, the numbers of the whole arrays' np.diff, norm(axis=1), einsum, arccos)
+            ab = self._ab[n - 1]
+            np.subtract(self._y[n], self._y[n - 1], out=ab)
+            L = math.sqrt(float(np.add.reduce(ab * ab)))
+            self._L[n - 1] = L
+            self._Lc[n - 1] = L = max(L, 1e-300)
+            u = self._u[n - 1]
+            np.divide(ab, L, out=u)
             if n > 1:
-                cos = np.clip(np.einsum("ij,ij->i", u, self._u[n - 2:n - 1]), -1.0, 1.0)
-                self._ang[n - 2] = np.arccos(cos)[0]
+                self._ang[n - 2] = np.arccos(min(max(float(np.einsum("i,i->", u, self._u[n - 2])), -1.0), 1.0))
         self._n = n + 1
 
     def _grow(self, size, dim):
