@@ -129,7 +129,7 @@ class LeastSquares:
         if self._lu is not None:
             return sla.lu_solve(self._lu, b, check_finite=False)
         if self._Q is not None:
-            if _GEQRF is not None and np.ndim(b) == 1:
+            if _GEQRF is not None and (b.ndim if isinstance(b, np.ndarray) else np.ndim(b)) == 1:
                 return _qr_solve(self._Q, self.R, np.asarray(b, dtype=float))
             return self._triangular(self._Q.T @ b)
         c, _, info = lapack.dormqr("L", "T", self._h, self._tau, np.asarray(b, dtype=float).reshape(len(b), -1),

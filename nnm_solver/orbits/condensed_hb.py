@@ -320,7 +320,8 @@ class CondensedHBProblem(HBTruncationError):
         else:
             g = None
         if key is not None:
-            self._last_energy = tuple(x for x in kept if x[0] != key)[-1:] + ((key, E, g),)
+            newer = kept[-1] if kept and kept[-1][0] != key else (kept[0] if len(kept) > 1 else None)
+            self._last_energy = ((key, E, g),) if newer is None else (newer, (key, E, g))
         return E, g
 
     def energy_and_gradient(self, u):
