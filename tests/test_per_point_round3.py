@@ -10,6 +10,7 @@ it replaced, or decides the same way (checked here against that form), and the b
 * the harmonic amplitudes gathered by np.bincount (analysis/hb_series.basis_harmonic_amplitudes).
 """
 import importlib
+import math
 from pathlib import Path
 
 import numpy as np
@@ -277,3 +278,20 @@ def test_round_three_gives_round_twos_branch_bit_for_bit(name, monkeypatch):
         assert np.array_equal(getattr(new, column), getattr(old, column), equal_nan=True), column
     assert [(e["kind"], e["energy"]) for e in new.events] == [(e["kind"], e["energy"]) for e in old.events]
     assert [repr(t) for t in new.tongues] == [repr(t) for t in old.tongues]
+
+
+def test_the_skeletons_kept_log_frequencies_and_pieces_are_fresh_ones():
+    """Skeleton.log_frequency (kept per energy: the lock test asks for the run's energies at every point) and
+    frequency_at (each spline piece's cubics kept) give a fresh skeleton's numbers, asked in any order and again."""
+    from nnm_solver.backbone.skeleton import compute_skeleton
+    system = modal_system(two_dof())
+    sk = compute_skeleton(system, 1, 50.0)
+    E = np.geomspace(sk.energy[0], sk.energy[-1], 301)
+    order = np.random.default_rng(7).permutation(np.r_[E, E[::3], E[::-7]])
+    for e in order:
+        assert sk.log_frequency(e) == np.interp(math.log(e), np.log(sk.energy), np.log(sk.frequency_hz))
+    fresh = compute_skeleton(system, 1, 50.0)
+    for e in order:
+        fresh._pieces.clear()
+        assert sk.frequency_at(e) == fresh.frequency_at(e) or (np.isnan(sk.frequency_at(e))
+                                                               and np.isnan(fresh.frequency_at(e)))

@@ -97,6 +97,8 @@ class Skeleton:
         self._lnE = np.log(self.energy)       # ln E and ln f of the points (the labels read them at every point)
         self._lnf = np.log(self.frequency_hz)
         self._shares = None
+        self._log_f = {}                      # E -> log_frequency(E), for the energies the labels ask for again
+        self._pieces = {}                     # (sheet's first index, piece) -> its two cubics (frequency_at)
         self._lower = None                    # the problem with two harmonics fewer (_truncation_of)
         self._truncation = np.full(len(self.energy), np.nan)
         self._estimated = np.zeros(len(self.energy), dtype=bool)
@@ -165,7 +167,10 @@ class Skeleton:
             return float(f(c[0] + t * (c[1] - c[0])))
         i = j - lo                                  # the spline piece between points j and j + 1
         a, b = float(c[i]), float(c[i + 1])
-        pl, pf = lnE.c[:, i].tolist(), f.c[:, i].tolist()     # its cubics in s - a
+        piece = self._pieces.get((lo, i))
+        if piece is None:
+            piece = self._pieces[(lo, i)] = (lnE.c[:, i].tolist(), f.c[:, i].tolist())
+        pl, pf = piece                              # its cubics in s - a
         ga, gb = cubic(pl, 0.0) - x, cubic(pl, b - a) - x
         if ga == 0.0:
             return cubic(pf, 0.0)
@@ -232,7 +237,12 @@ class Skeleton:
 
     def log_frequency(self, E):
         """ln f of the family at energy E (J) interpolated linearly in ln E between its points (``slope``'s)."""
-        return np.interp(math.log(E), self._lnE, self._lnf)
+        v = self._log_f.get(E)
+        if v is None:           # (the lock test asks for the run's energies at every point: each once)
+            if len(self._log_f) > 4096:
+                self._log_f.clear()
+            v = self._log_f[E] = np.interp(math.log(E), self._lnE, self._lnf)
+        return v
 
     def covers(self, E):
         return len(self.energy) >= 2 and self.energy[0] <= E <= self.energy[-1]
