@@ -18,6 +18,11 @@ and without the estimate and, skipping tongues, to 6 J, the 2-DOF benchmark's NN
 stability), labels, statuses, messages, events and tongues, printed as the largest relative differences::
 
     python benchmarks/bench_per_point.py --before /tmp/base --repeats 0 --compare
+
+``--calls`` counts the function calls (Python functions and C functions, numpy's included: each costs ~0.1-5 us) made
+in each part per point, this tree and ``--before``'s side by side (a profile hook; no times)::
+
+    python benchmarks/bench_per_point.py --before /tmp/base --repeats 0 --calls
 """
 from __future__ import annotations
 
@@ -34,11 +39,31 @@ VARIANTS = {"defaults": {}, "no estimate": {"error_estimate": False}}
 
 _CHILD = r"""
 import collections, json, sys, time
-kw, E, sections = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3] == "1"
+kw, E, sections = json.loads(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+calls = sections == "calls"
 import nnm_solver as nnm
 from nnm_solver.threads import blas_limited
 acc = collections.Counter()
-if sections:
+if calls:     # Python and C function calls (numpy's included) made in each part, innermost part counted
+    from nnm_solver.driver import iterator as it_, refinement as rf
+    from nnm_solver.continuation import engine_driver as ed
+    from nnm_solver.results import stops, branch as br
+    parts = {ed.EngineDriver.next.__code__: "engine: predictor, corrector (continuation/)",
+             it_.NNMIterator._record.__code__: "record the point (candidate.py)",
+             rf.StepRefinement.estimate.__code__: "truncation error estimate (hb_error.py)",
+             it_.NNMIterator._decide.__code__: "label and policy (backbone/)",
+             it_.NNMIterator._locate.__code__: "step check and events (stability/locator.py)",
+             stops.LoopDetector.add.__code__: "loop detector (stops.py)",
+             br.Branch.from_points.__code__: "the Branch (physical states, results/point.py)"}
+    inside = ["the iterator and the rest"]
+    def counter(frame, event, arg):
+        if event == "call" or event == "c_call":
+            acc[inside[-1]] += 1
+            if event == "call" and frame.f_code in parts:
+                inside.append(parts[frame.f_code])
+        elif event == "return" and frame.f_code in parts and inside[-1] == parts[frame.f_code]:
+            inside.pop()
+elif sections == "1":
     from nnm_solver.driver import iterator as it_, refinement as rf
     from nnm_solver.continuation import engine_driver as ed
     from nnm_solver.results import stops, branch as br
@@ -66,9 +91,12 @@ model = nnm.load_model(sys.argv[4])
 with blas_limited():
     nnm.continue_nnm(model, 20, E, **kw)                 # warm-up
     acc.clear()
+    if calls:
+        sys.setprofile(counter)
     t, c = time.perf_counter(), time.process_time()
     b = nnm.continue_nnm(model, 20, E, **kw)
     dt, dc = time.perf_counter() - t, time.process_time() - c
+    sys.setprofile(None)
 print(json.dumps(dict(seconds=dt, cpu=dc, points=len(b), status=b.status, sections={k: v for k, v in acc.items()},
                  source=nnm.__file__)))
 """
@@ -144,9 +172,12 @@ def compare(a, b):
 
 
 def run(tree, kw, energy, sections):
+    """One timed branch of ``tree`` in its own process; sections : False, True (CPU time per part) or "calls" (the
+    function calls per part, counted by a profile hook: its times are not the run's)."""
     env = dict(os.environ, PYTHONPATH=str(tree), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     before = os.getloadavg()[0]
-    out = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(kw), str(energy), "1" if sections else "0",
+    flag = "calls" if sections == "calls" else ("1" if sections else "0")
+    out = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(kw), str(energy), flag,
                           str(ROOT / "assets" / "paris.h5")], env=env, capture_output=True, text=True, check=True,
                          cwd=tree)        # (the child's sys.path starts with its working directory)
     res = json.loads(out.stdout.strip().splitlines()[-1])
@@ -163,11 +194,23 @@ def main(argv=None):
     ap.add_argument("--energy-max", type=float, default=3.0)
     ap.add_argument("--sections", action="store_true", help="time per point of each part of the work (this tree)")
     ap.add_argument("--compare", action="store_true", help="with --before: compare the two trees' branches")
+    ap.add_argument("--calls", action="store_true", help="the function calls (Python and C, numpy's included) per "
+                                                          "point in each part, this tree and --before's (defaults)")
     args = ap.parse_args(argv)
     if args.compare and args.before:
         print("this tree's branches against the other's (condensed HB):")
         compare(branches(ROOT), branches(Path(args.before)))
     trees = [("this tree", ROOT)] + ([("before", Path(args.before))] if args.before else [])
+    if args.calls:
+        kw_all = dict(method="hb", condensed=True, harmonics=9)
+        counted = {tname: run(tree, kw_all, args.energy_max, "calls") for tname, tree in trees}
+        print("function calls a point (Python and C, numpy's included; defaults), by part: "
+              + ", ".join(f"{t}" for t in counted))
+        keys = list(dict.fromkeys(k for r in counted.values() for k in r["sections"]))
+        for key in keys + ["total"]:
+            vals = [(sum(r["sections"].values()) if key == "total" else r["sections"].get(key, 0)) / r["points"]
+                    for r in counted.values()]
+            print(f"    {key:48s} " + "  ".join(f"{v:8.0f}" for v in vals))
     print(f"aircraft NNM 20 to {args.energy_max:g} J, condensed HB H = 9; load average at the start "
           f"{tuple(round(x, 2) for x in os.getloadavg())}")
     results = {}
