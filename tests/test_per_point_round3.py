@@ -3,7 +3,7 @@ it replaced, or decides the same way (checked here against that form), and the b
 
 * continuation/linalg.all_finite: np.all(np.isfinite(x))'s answer from one dot product (the corrector's test at every
   iteration); LeastSquares.rcond made when read;
-* the condensed problem keeps the energy (and gradient) of its last two orbits, and the engine asks for a step end's
+* the condensed problem keeps the energy (and gradient) of its last three orbits, and the engine asks for a step end's
   energy with its gradient where one kernel pass makes both (gradient_with_energy);
 * the truncation estimate embeds its vectors by index arrays made once (hb_error._embedding);
 * the loop detector screens the earlier segments in one compiled pass (results/stops._screened);
@@ -112,12 +112,12 @@ def _orbits(p, count=3):
 
 
 @needs_numba
-def test_the_energy_of_the_last_two_orbits_is_kept(monkeypatch):
-    """Kernel calls counted: an orbit asked again while it is one of the last two costs none, a third orbit pushes the
-    oldest out, a gradient asked where only the energy is kept costs one; the numbers are a fresh problem's."""
+def test_the_energy_of_the_last_three_orbits_is_kept(monkeypatch):
+    """Kernel calls counted: an orbit asked again while it is one of the last three costs none, a fourth orbit pushes
+    the oldest out, a gradient asked where only the energy is kept costs one; the numbers are a fresh problem's."""
     system = modal_system(chain())
     p = CondensedHBProblem(system, 1, HBBasis(7, "odd"))
-    u1, u2, u3 = _orbits(p)
+    u1, u2, u3, u4 = _orbits(p, 4)
     calls = []
     kernel = condensed_kernels.energy_gradient
     monkeypatch.setattr(condensed_kernels, "energy_gradient", lambda *a: calls.append(a[1]) or kernel(*a))
@@ -126,18 +126,17 @@ def test_the_energy_of_the_last_two_orbits_is_kept(monkeypatch):
         q = CondensedHBProblem(system, 1, HBBasis(7, "odd"))
         return q.energy(u), q.energy_gradient(u)
 
-    E1, g1 = fresh(u1)
-    E2, g2 = fresh(u2)
-    E3, _ = fresh(u3)
+    (E1, g1), (E2, g2), (E3, _), (E4, _) = fresh(u1), fresh(u2), fresh(u3), fresh(u4)
     calls.clear()
-    assert p.energy(u1) == E1 and np.array_equal(p.energy_gradient(u2), g2) and calls == [False, True]
+    assert p.energy(u1) == E1 and np.array_equal(p.energy_gradient(u2), g2) and p.energy(u3) == E3
+    assert calls == [False, True, False]
     assert p.energy(u1) == E1 and p.energy(u2) == E2 and np.array_equal(p.energy_gradient(u2), g2)
-    assert calls == [False, True]                      # both kept
-    assert np.array_equal(p.energy_gradient(u1), g1) and calls == [False, True, True]   # (only its energy was kept)
-    assert p.energy(u3) == E3 and calls[-1] is False   # u1 (the newer) and u3 kept now: u2 pushed out
+    assert p.energy(u3) == E3 and calls == [False, True, False]            # all three kept
+    assert np.array_equal(p.energy_gradient(u1), g1) and calls[-1] is True   # (only its energy was kept): u2, u3, u1
     n = len(calls)
-    assert p.energy(u1) == E1 and len(calls) == n
-    assert p.energy(u2) == E2 and len(calls) == n + 1
+    assert p.energy(u4) == E4 and len(calls) == n + 1                       # u3, u1, u4 kept: u2 pushed out
+    assert p.energy(u3) == E3 and p.energy(u1) == E1 and len(calls) == n + 1
+    assert p.energy(u2) == E2 and len(calls) == n + 2
 
 
 @needs_numba

@@ -89,7 +89,7 @@ class CondensedHBProblem(HBTruncationError):
         self.max_rel_period_step = max_rel_period_step
         self.q_ref = None
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
-        self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last two orbits
+        self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last 3 orbits
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
 
@@ -302,11 +302,11 @@ class CondensedHBProblem(HBTruncationError):
         return condensed_energy(self, u)
 
     def _energy_gradient(self, u, gradient):
-        """(energy, dE/du or None) of u by the compiled kernel (the gradient only when asked), the last two orbits'
+        """(energy, dE/du or None) of u by the compiled kernel (the gradient only when asked), the last three orbits'
         kept: the engine's unseen-turns check asks for the energy of a step's end, then the gradient at its start (the
-        iterator's energy slope there a step before), the truncation estimate and the iterator's energy slope for the
-        end's in turn (the same numbers: one kernel call computes both; the energy does not depend on whether the
-        gradient is made)."""
+        iterator's energy slope there a step before, or two steps before when the step from there was refused), the
+        truncation estimate and the iterator's energy slope for the end's in turn (the same numbers: one kernel call
+        computes both; the energy does not depend on whether the gradient is made)."""
         key = u.tobytes() if isinstance(u, np.ndarray) else None
         kept = self._last_energy
         for last in kept:
@@ -320,8 +320,7 @@ class CondensedHBProblem(HBTruncationError):
         else:
             g = None
         if key is not None:
-            newer = kept[-1] if kept and kept[-1][0] != key else (kept[0] if len(kept) > 1 else None)
-            self._last_energy = ((key, E, g),) if newer is None else (newer, (key, E, g))
+            self._last_energy = tuple(x for x in kept[-2:] if x[0] != key)[-2:] + ((key, E, g),)
         return E, g
 
     def energy_and_gradient(self, u):
@@ -337,7 +336,7 @@ class CondensedHBProblem(HBTruncationError):
 
     @property
     def gradient_with_energy(self):
-        """Does the energy cost about as much with its gradient, both kept for the last two orbits (the compiled
+        """Does the energy cost about as much with its gradient, both kept for the last three orbits (the compiled
         kernel: one pass makes both)?  Then the engine asks for both at a step's end, whose energy slope the branch
         iterator reads next (continuation.engine._Remembered)."""
         return self._kernel is not None and self._kernel[1] is not None
