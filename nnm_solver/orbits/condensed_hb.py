@@ -320,7 +320,7 @@ class CondensedHBProblem(HBTruncationError):
         else:
             g = None
         if key is not None:
-            self._last_energy = tuple(x for x in kept[-2:] if x[0] != key)[-2:] + ((key, E, g),)
+            self._last_energy = tuple([x for x in kept[-2:] if x[0] != key]) + ((key, E, g),)
         return E, g
 
     def energy_and_gradient(self, u):
