@@ -70,12 +70,12 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
                 continue
         a, b = (lo, far) if f_lo else (far, hi)
         ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
-        bracket, local, root = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
-        best = (bracket, root)
+        bracket, local, root, pair = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        best = (bracket, root, pair)
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
-    (blo, bhi), root = best
-    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root, windows=False)
+    (blo, bhi), root, pair = best
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root, windows=False, pair=pair)
     if bracket is None:        # the flag changed nearer the stable end: the pairs complex there are followed
         x_s = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)[0]
         earlier = _earlier_change(loc, lo, hi, f_lo, r_lo if f_lo else r_hi, x_s, depth)
@@ -197,7 +197,7 @@ def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
     return x_s, x_u, c, width
 
 
-def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair=None):
     """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
     energy tolerance; None if the flag does not change there.
 
@@ -209,11 +209,17 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     (1 + STABILITY.flag_band) x the tolerance and the unstable side's beyond (1 - STABILITY.flag_band) x it (two
     spectra).  Otherwise (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or
     1000 times the bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin
-    points (else around the bracket)."""
+    points (else around the bracket); pair : optional (rho_star, shift) of the pair followed by the local eigen-solver
+    to (blo, bhi): the unstable side is then shown by that pair alone (_pair_unstable: one local evaluation, often the
+    secant's own check, instead of a full spectrum; the event is recorded on the stable side, whose spectrum is known,
+    events.locate_between)."""
     a, b = min(lo, hi), max(lo, hi)
     x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
-    loc.prefetch([x_s, x_u])
     tol = STABILITY.stability_tol
+    if pair is not None and loc.stable(x_s, tol * (1 + STABILITY.flag_band)):
+        if _pair_unstable(loc, x_u, *pair):
+            return (x_s, x_u) if x_s < x_u else (x_u, x_s)
+    loc.prefetch([x_s, x_u])
     if loc.stable(x_s, tol * (1 + STABILITY.flag_band)) and not loc.stable(x_u, tol * (1 - STABILITY.flag_band)):
         return (x_s, x_u) if x_s < x_u else (x_u, x_s)
     if not windows:
@@ -226,12 +232,24 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     return None
 
 
+def _pair_unstable(loc, x, rho_star, shift):
+    """Is the full stability flag at x unstable by the followed pair alone: does the local eigen-solver's pair around
+    rho_star have a multiplier whose modulus excess is beyond (1 - STABILITY.flag_band) x the stability tolerance (the
+    full flag's round-off band at the margin points, as _flag_change_near's full spectrum is judged)?  One local
+    evaluation (none where the secant's check was at x)."""
+    r = loc.local_collision(x, shift)
+    tol = STABILITY.stability_tol * (1 - STABILITY.flag_band)
+    g = krein_gap(r, rho_star, _per_modulus(loc), tol) if r is not None else None
+    return g is not None and g < 0
+
+
 def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
     collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
     flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
     its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
-    centre -+ delta are STABILITY.krein_margin x the energy tolerance apart)."""
+    centre -+ delta are STABILITY.krein_margin x the energy tolerance apart; (rho_star, shift): the pair's real part
+    at the end and the local solver's shift there, None when the full flag was used)."""
     pm = _per_modulus(loc)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
     r_u = r_hi if f_lo else r_lo
@@ -280,7 +298,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 delta = 0.5 * STABILITY.krein_margin * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
                 verdict = _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm)
                 if verdict is None:
-                    return (lo, hi), local, (c, delta)
+                    return (lo, hi), local, (c, delta), ((rho_star, shift) if local else None)
                 x_v, g_v = verdict           # a stalled secant (g far from linear): the bracket shrinks by that point
                 if (g_v > 0) == f_lo:
                     lo = x_v
@@ -289,7 +307,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 last = [(c, g_c), (x_v, g_v)]
                 widths.append(abs(hi - lo))
                 stalled = True               # the next step bisects
-    return (lo, hi), local, None
+    return (lo, hi), local, None, ((rho_star, shift) if local else None)
 
 
 def _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm):
