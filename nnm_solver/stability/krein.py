@@ -175,9 +175,12 @@ def _earlier_change(loc, lo, hi, f_lo, r_stable, x_s, depth):
 def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
     """The two margin points around a followed collision (blo, bhi) where the full flag is checked: (x_s, x_u, c,
     width), x_s on the stable side, x_u on the unstable one, STABILITY.krein_margin x the energy tolerance apart around
-    the centre c (the secant's root when given: (centre, delta)); width: the bracket's (or 2 delta)."""
+    the centre c (the secant's root when given: (centre, delta), or (centre, delta, x_s, x_u) with the two points
+    themselves, _follow_pair's); width: the bracket's (or 2 delta)."""
     a, b = min(lo, hi), max(lo, hi)
     width = abs(bhi - blo)
+    if root is not None and len(root) == 4:
+        return root[2], root[3], root[0], 2 * root[1]
     if root is not None:
         c, delta = root
         width = 2 * delta
@@ -209,7 +212,8 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair
     (1 + STABILITY.flag_band) x the tolerance and the unstable side's beyond (1 - STABILITY.flag_band) x it (two
     spectra).  Otherwise (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or
     1000 times the bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin
-    points (else around the bracket); pair : optional (rho_star, shift) of the pair followed by the local eigen-solver
+    points (else around the bracket), or (centre, delta, x_s, x_u) where the follower's last two local evaluations
+    bracket its pair's root (x_u unstable by the pair: only x_s's full spectrum is needed); pair : optional (rho_star, shift) of the pair followed by the local eigen-solver
     to (blo, bhi): the unstable side is then shown by that pair alone (_pair_unstable: one local evaluation, often the
     secant's own check, instead of a full spectrum; the event is recorded on the stable side, whose spectrum is known,
     events.locate_between)."""
@@ -217,7 +221,7 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair
     x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
     tol = STABILITY.stability_tol
     if pair is not None and loc.stable(x_s, tol * (1 + STABILITY.flag_band)):
-        if _pair_unstable(loc, x_u, *pair):
+        if (root is not None and len(root) == 4) or _pair_unstable(loc, x_u, *pair):
             return (x_s, x_u) if x_s < x_u else (x_u, x_s)
     loc.prefetch([x_s, x_u])
     if loc.stable(x_s, tol * (1 + STABILITY.flag_band)) and not loc.stable(x_u, tol * (1 - STABILITY.flag_band)):
@@ -259,6 +263,9 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     local, stalled = True, False
     for _ in range(60):
         if loc._converged(lo, hi):
+            if local:                # both ends' pair (local evaluations or the ends' spectra) bracket its root
+                x_s, x_u = (lo, hi) if f_lo else (hi, lo)
+                return (lo, hi), local, (0.5 * (lo + hi), 0.5 * abs(hi - lo), x_s, x_u), (rho_star, shift)
             break
         (x1, g1), (x2, g2) = last
         c = None
@@ -269,6 +276,25 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         stalled = False
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
+        elif local:
+            ahead = _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm)
+            if ahead is not None and (ahead[1] > 0) != (g2 > 0):     # the root between x2 and that point
+                x_b, g_b = ahead
+                x_s, x_u = (x_b, x2) if g_b > 0 else (x2, x_b)
+                return ((x_s, x_u) if f_lo else (x_u, x_s)), local, (0.5 * (x2 + x_b), 0.5 * abs(x_b - x2), x_s,
+                                                                      x_u), (rho_star, shift)
+            if ahead is not None:            # the secant stalled (the root lies farther): the bracket shrinks by it
+                x_b, g_b = ahead
+                if g_b < 0:
+                    rho_star, shift = _followed(loc.local_collision(x_b, shift), rho_star, spacing)
+                if (g_b > 0) == f_lo:
+                    lo = x_b
+                else:
+                    hi = x_b
+                last = [(x2, g2), (x_b, g_b)]
+                widths.append(abs(hi - lo))
+                stalled = True               # the next step bisects
+                continue
         r_c = loc.local_collision(c, shift)
         if r_c is not None:                  # this collision only: its test function is the flag
             g_c = krein_gap(r_c, rho_star, pm)
@@ -281,9 +307,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             if g_c is not None and (g_c > 0) != f_c:
                 g_c = None                   # the test function disagrees with the flag: no secant from here
         if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
-            z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
-            z = z[np.argmin(np.abs(z.real - rho_star))]
-            rho_star, shift = float(z.real), _shift_for(z, spacing)
+            rho_star, shift = _followed(r_c, rho_star, spacing)
         if f_c == f_lo:
             lo = c
         else:
@@ -308,6 +332,37 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 widths.append(abs(hi - lo))
                 stalled = True               # the next step bisects
     return (lo, hi), local, None, ((rho_star, shift) if local else None)
+
+
+def _followed(r, rho_star, spacing):
+    """(rho_star, shift) of the complex pair in the coordinates r nearest rho_star: the pair followed, as it drifts
+    along the branch."""
+    z = np.asarray(r)[np.abs(np.imag(r)) > 1e-12]
+    z = z[np.argmin(np.abs(z.real - rho_star))]
+    return float(z.real), _shift_for(z, spacing)
+
+
+def _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm):
+    """The secant's predicted convergence: where the step from the latest iterate x2 to the next one c moves the
+    energy (interpolated linearly from x1 and x2: no orbit at c) by at most a quarter of the margin, the pair's local
+    test function at the point half a margin beyond c (delta: half the margin, in sigma) -- with the other sign than
+    at x2, the root lies between x2 and that point, at most 3/4 of the margin apart: the secant has converged
+    without an evaluation at c itself or a separate check (_root_within).  (x, gap) of that point, or None where the
+    step is not that small, the point lies outside the bracket (lo, hi) or the local solver gives nothing there.
+    The same sign as at x2 means a stalled secant (the root lies farther): the caller shrinks the bracket by it."""
+    if x1 == x2:
+        return None
+    E_1, E_2 = loc.energy(x1), loc.energy(x2)
+    E_c = E_2 + (c - x2) * (E_2 - E_1) / (x2 - x1)
+    if E_c == E_2 or abs(E_c - E_2) > 0.25 * STABILITY.krein_margin * loc.rtol * abs(E_c):
+        return None
+    delta = 0.5 * STABILITY.krein_margin * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
+    x = c + np.sign(c - x2) * delta
+    if not min(lo, hi) < x < max(lo, hi):
+        return None
+    r = loc.local_collision(x, shift)
+    g = krein_gap(r, rho_star, pm) if r is not None else None
+    return None if g is None else (x, g)
 
 
 def _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm):
