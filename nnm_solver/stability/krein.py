@@ -259,7 +259,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     r_u = r_hi if f_lo else r_lo
     shift, spacing = _shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
-    widths = [abs(hi - lo)]
+    moves = []                            # |iterate - the one before| of each evaluation (Brent's safeguard)
     local, stalled = True, False
     for _ in range(60):
         if loc._converged(lo, hi):
@@ -271,8 +271,10 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         c = None
         if g1 is not None and g2 is not None and g1 != g2:
             c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
+        # the secant step must shrink: less than half the move before the latest (Brent), else a bisection (a
+        # secant creeping from one side where g is far from linear; superlinear convergence from one side passes)
         secant = c is not None and min(lo, hi) < c < max(lo, hi) and not stalled and not (
-            len(widths) > 3 and widths[-1] > 0.5 * widths[-4])
+            len(moves) >= 2 and abs(c - x2) >= 0.5 * moves[-2])
         stalled = False
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
@@ -292,7 +294,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 else:
                     hi = x_b
                 last = [(x2, g2), (x_b, g_b)]
-                widths.append(abs(hi - lo))
+                moves.append(abs(x_b - x2))
                 stalled = True               # the next step bisects
                 continue
         r_c = loc.local_collision(c, shift)
@@ -313,7 +315,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         else:
             hi = c
         last = [last[1], (c, g_c)]
-        widths.append(abs(hi - lo))
+        moves.append(abs(c - x2))
         if secant and local and g_c is not None:
             # converged when the secant step moved the energy by less than a quarter of the margin: its root is
             # then within the margin points of _flag_change_near around c, which check the flag there
@@ -329,7 +331,7 @@ def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 else:
                     hi = x_v
                 last = [(c, g_c), (x_v, g_v)]
-                widths.append(abs(hi - lo))
+                moves.append(abs(x_v - c))
                 stalled = True               # the next step bisects
     return (lo, hi), local, None, ((rho_star, shift) if local else None)
 
