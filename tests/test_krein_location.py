@@ -54,9 +54,8 @@ def _noisy_locator(excess):
 def test_full_flag_bracketed_by_two_margin_spectra(monkeypatch, band):
     """With the full flag's imaginary part 2e-4 relative above the local solver's, the full flag changes 1.5e-5
     before the local threshold: far outside the event tolerance (1e-8 here).  The two margin points around the
-    local root bracket the change within the round-off band (FLAG_BAND): one full evaluation besides the
-    probes (the stable side's; the unstable side is shown by the followed pair's local evaluation, beyond the band),
-    and the bracket is within the energy tolerance.  Without the band the flag is bisected instead."""
+    local root bracket the change within the round-off band (FLAG_BAND): two full evaluations besides the
+    probes, and the bracket is within the energy tolerance.  Without the band the flag is bisected instead."""
     if not band:
         monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, flag_band=0.0))
     loc, seen = _noisy_locator(2e-4)
@@ -69,7 +68,7 @@ def test_full_flag_bracketed_by_two_margin_spectra(monkeypatch, band):
     full_evaluations = len(set(seen))
     if band:
         assert abs(0.5 * (lo + hi) - threshold) < 1e-6
-        assert full_evaluations == 1 + krein.STABILITY.krein_probes
+        assert full_evaluations == 2 + krein.STABILITY.krein_probes
     else:                                   # bisection on the full flag: its own change, more spectra
         assert not loc.stable(max(lo, hi)) and loc.stable(min(lo, hi))
         assert full_evaluations > 2 + krein.STABILITY.krein_probes + 5

@@ -109,13 +109,9 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
                                               ends=[(pa.stable, rho_a), (pb.stable, rho_b)])
                 else:           # the dense route, or no coordinates (e.g. Hill's method): bisection on the flag
                     lo, hi = loc.bisect(loc.stable, 0.0, s)
-                # the bracket's end towards the step's unstable end, within the energy tolerance of the flag's
-                # change; the other end where only its spectrum is known (the Krein locator's margin point on the
-                # stable side, the unstable one shown by the followed pair alone): the event's point costs no
-                # eigenproblem
-                sig, other = (max(lo, hi), min(lo, hi)) if pa.stable else (min(lo, hi), max(lo, hi))
-                if float(sig) not in loc.spectra and float(other) in loc.spectra:
-                    sig = other
+                # the bracket's end towards the step's unstable end (its spectrum is known, so the event's point
+                # costs no eigenproblem), within the energy tolerance of the flag's change
+                sig = max(lo, hi) if pa.stable else min(lo, hi)
             pe = record(sig)
         except CorrectorFailure:
             pe, located = pu, False

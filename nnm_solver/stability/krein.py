@@ -10,8 +10,7 @@ stability changes at the collision nearest the stable end, and a collision undon
 neither end) is caught by probing the full flag at STABILITY.krein_probes points, when its window covers one of them.  A
 pair that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
 found in the full spectrum of the margin point next to that collision, and followed from there.  The follower is
-krein_follow.py's; the full flag is checked at one margin point on the stable side of the collision, the unstable
-side shown by the followed pair's own local evaluation (the event is recorded where the spectrum is known).
+krein_follow.py's.
 """
 from __future__ import annotations
 
@@ -55,7 +54,7 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
     within one step: the stability changes at the collision nearest the stable end, so a further candidate is
     followed only if it is complex already on the stable side of the nearest collision found so far (one local
     evaluation decides).  The full stability flag's change is then bracketed around that collision
-    (_flag_change_near: one full spectrum, on its stable side, in most cases); where the margin point on the stable side is unstable
+    (_flag_change_near: two full spectra in most cases); where the margin point on the stable side is unstable
     already, the pairs complex there are followed on the shorter interval (_earlier_change); bisection on the full
     flag only when neither brackets the change.
     ends : optional ((stable, coordinates) at lo, at hi), known from the two points, to save their
@@ -73,12 +72,12 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
                 continue
         a, b = (lo, far) if f_lo else (far, hi)
         ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
-        bracket, local, root, pair = follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
-        best = (bracket, root, pair)
+        bracket, local, root = follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        best = (bracket, root)
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
-    (blo, bhi), root, pair = best
-    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root, windows=False, pair=pair)
+    (blo, bhi), root = best
+    bracket = _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root, windows=False)
     if bracket is None:        # the flag changed nearer the stable end: the pairs complex there are followed
         x_s = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)[0]
         earlier = _earlier_change(loc, lo, hi, f_lo, r_lo if f_lo else r_hi, x_s, depth)
@@ -160,7 +159,7 @@ def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
     return x_s, x_u, c, width
 
 
-def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair=None):
+def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     """A bracket of the full stability flag's change next to a followed collision (blo, bhi), to the locator's
     energy tolerance; None if the flag does not change there.
 
@@ -173,17 +172,11 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair
     spectra).  Otherwise (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or
     1000 times the bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin
     points (else around the bracket), or (centre, delta, x_s, x_u) where the follower's last two local evaluations
-    bracket its pair's root (x_u unstable by the pair: only x_s's full spectrum is needed); pair : optional (rho_star, shift) of the pair followed by the local eigen-solver
-    to (blo, bhi): the unstable side is then shown by that pair alone (_pair_unstable: one local evaluation, often the
-    secant's own check, instead of a full spectrum; the event is recorded on the stable side, whose spectrum is known,
-    events.locate_between)."""
+    bracket its pair's root (their orbits are known)."""
     a, b = min(lo, hi), max(lo, hi)
     x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
-    tol = STABILITY.stability_tol
-    if pair is not None and loc.stable(x_s, tol * (1 + STABILITY.flag_band)):
-        if (root is not None and len(root) == 4) or _pair_unstable(loc, x_u, *pair):
-            return (x_s, x_u) if x_s < x_u else (x_u, x_s)
     loc.prefetch([x_s, x_u])
+    tol = STABILITY.stability_tol
     if loc.stable(x_s, tol * (1 + STABILITY.flag_band)) and not loc.stable(x_u, tol * (1 - STABILITY.flag_band)):
         return (x_s, x_u) if x_s < x_u else (x_u, x_s)
     if not windows:
@@ -195,14 +188,4 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True, pair
             return loc.bisect(loc.stable, x0, x1)
     return None
 
-
-def _pair_unstable(loc, x, rho_star, shift):
-    """Is the full stability flag at x unstable by the followed pair alone: does the local eigen-solver's pair around
-    rho_star have a multiplier whose modulus excess is beyond (1 - STABILITY.flag_band) x the stability tolerance (the
-    full flag's round-off band at the margin points, as _flag_change_near's full spectrum is judged)?  One local
-    evaluation (none where the secant's check was at x)."""
-    r = loc.local_collision(x, shift)
-    tol = STABILITY.stability_tol * (1 - STABILITY.flag_band)
-    g = krein_gap(r, rho_star, per_modulus(loc), tol) if r is not None else None
-    return g is not None and g < 0
 

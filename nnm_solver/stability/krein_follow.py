@@ -72,12 +72,12 @@ def _followed(r, rho_star, spacing):
 
 
 def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
-    """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
-    collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
-    flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
-    its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
-    centre -+ delta are STABILITY.krein_margin x the energy tolerance apart; (rho_star, shift): the pair's real part
-    at the end and the local solver's shift there, None when the full flag was used)."""
+    """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard) to its collision: ((lo, hi)
+    bracket, True if the problem's local eigen-solver was used; False if the full flag had to be, i.e. the bracket is
+    that of the flag's change; the margin points where krein._flag_change_near checks the full flag: (centre, delta)
+    when the secant converged to its root (within a quarter of the margin in energy: centre -+ delta are
+    STABILITY.krein_margin x the energy tolerance apart), (centre, delta, x_s, x_u) when two local evaluations
+    bracket it to the margin (the stable and the unstable one: their orbits are known), else None)."""
     pm = per_modulus(loc)
     g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
     r_u = r_hi if f_lo else r_lo
@@ -89,7 +89,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         if loc._converged(lo, hi):
             if local:                # both ends' pair (local evaluations or the ends' spectra) bracket its root
                 x_s, x_u = (lo, hi) if f_lo else (hi, lo)
-                return (lo, hi), local, (0.5 * (lo + hi), 0.5 * abs(hi - lo), x_s, x_u), (rho_star, shift)
+                return (lo, hi), local, (0.5 * (lo + hi), 0.5 * abs(hi - lo), x_s, x_u)
             break
         (x1, g1), (x2, g2) = last
         c = None
@@ -104,22 +104,23 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
         elif local:
             ahead = _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm)
-            if ahead is not None and (ahead[1] > 0) != (g2 > 0):     # the root between x2 and that point
+            if ahead is not None:
                 x_b, g_b = ahead
-                x_s, x_u = (x_b, x2) if g_b > 0 else (x2, x_b)
-                return ((x_s, x_u) if f_lo else (x_u, x_s)), local, (0.5 * (x2 + x_b), 0.5 * abs(x_b - x2), x_s,
-                                                                      x_u), (rho_star, shift)
-            if ahead is not None:            # the secant stalled (the root lies farther): the bracket shrinks by it
-                x_b, g_b = ahead
+                E_b, E_2 = loc.energy(x_b), loc.energy(x2)
+                if (g_b > 0) != (g2 > 0) and abs(E_b - E_2) <= STABILITY.krein_margin * loc.rtol * max(abs(E_b),
+                                                                                                      abs(E_2)):
+                    x_s, x_u = (x_b, x2) if g_b > 0 else (x2, x_b)   # the root between x2 and x_b: converged
+                    return ((x_s, x_u) if f_lo else (x_u, x_s)), local, (0.5 * (x2 + x_b), 0.5 * abs(x_b - x2),
+                                                                          x_s, x_u)
                 if g_b < 0:
                     rho_star, shift = _followed(loc.local_collision(x_b, shift), rho_star, spacing)
-                if (g_b > 0) == f_lo:
+                if (g_b > 0) == f_lo:        # the bracket shrinks by that point
                     lo = x_b
                 else:
                     hi = x_b
                 last = [(x2, g2), (x_b, g_b)]
                 moves.append(abs(x_b - x2))
-                stalled = True               # the next step bisects
+                stalled = (g_b > 0) == (g2 > 0)      # the secant stalled (the root lies farther): a bisection next
                 continue
         r_c = loc.local_collision(c, shift)
         if r_c is not None:                  # this collision only: its test function is the flag
@@ -148,7 +149,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 delta = 0.5 * STABILITY.krein_margin * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
                 verdict = _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm)
                 if verdict is None:
-                    return (lo, hi), local, (c, delta), ((rho_star, shift) if local else None)
+                    return (lo, hi), local, (c, delta)
                 x_v, g_v = verdict           # a stalled secant (g far from linear): the bracket shrinks by that point
                 if (g_v > 0) == f_lo:
                     lo = x_v
@@ -157,7 +158,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 last = [(c, g_c), (x_v, g_v)]
                 moves.append(abs(x_v - c))
                 stalled = True               # the next step bisects
-    return (lo, hi), local, None, ((rho_star, shift) if local else None)
+    return (lo, hi), local, None
 
 
 def _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm):
@@ -165,9 +166,10 @@ def _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm):
     energy (interpolated linearly from x1 and x2: no orbit at c) by at most a quarter of the margin, the pair's local
     test function at the point half a margin beyond c (delta: half the margin, in sigma) -- with the other sign than
     at x2, the root lies between x2 and that point, at most 3/4 of the margin apart: the secant has converged
-    without an evaluation at c itself or a separate check (_root_within).  (x, gap) of that point, or None where the
-    step is not that small, the point lies outside the bracket (lo, hi) or the local solver gives nothing there.
-    The same sign as at x2 means a stalled secant (the root lies farther): the caller shrinks the bracket by it."""
+    without an evaluation at c itself or a separate check (_root_within), when the two points' energies are indeed
+    within the margin (the caller checks).  (x, gap) of that point, or None where the step is not that small, the point
+    lies outside the bracket (lo, hi) or the local solver gives nothing there.  The same sign as at x2 means a stalled
+    secant (the root lies farther): the caller shrinks the bracket by it and bisects."""
     if x1 == x2:
         return None
     E_1, E_2 = loc.energy(x1), loc.energy(x2)
