@@ -2,8 +2,8 @@
 
 The pair's test function is its discriminant (floquet.krein_gap: the squared half-distance of the two coordinates
 while real, minus the squared imaginary part once they are a complex pair, offset by the stability threshold), linear
-in the branch parameter sigma through a generic collision: a secant on it (Dekker's, with Brent's step rule as the
-bisection safeguard), each value from the problem's local eigen-solver near the pair (shift-invert Arnoldi,
+in the branch parameter sigma through a generic collision: a secant on it (Dekker's, a bisection where the bracket
+did not halve in three steps), each value from the problem's local eigen-solver near the pair (shift-invert Arnoldi,
 Locator.local_collision), the shift moving with the pair as it drifts.  The secant's convergence is checked by one
 local evaluation past the predicted root (_beyond_root) or past a converged iterate (_root_within): a secant stalled
 where the gap is far from linear is not taken for converged.
@@ -83,7 +83,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     r_u = r_hi if f_lo else r_lo
     shift, spacing = pair_shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
-    moves = []                            # |iterate - the one before| of each evaluation (Brent's safeguard)
+    widths = [abs(hi - lo)]
     local, stalled = True, False
     for _ in range(60):
         if loc._converged(lo, hi):
@@ -95,10 +95,8 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         c = None
         if g1 is not None and g2 is not None and g1 != g2:
             c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
-        # the secant step must shrink: less than half the move before the latest (Brent), else a bisection (a
-        # secant creeping from one side where g is far from linear; superlinear convergence from one side passes)
         secant = c is not None and min(lo, hi) < c < max(lo, hi) and not stalled and not (
-            len(moves) >= 2 and abs(c - x2) >= 0.5 * moves[-2])
+            len(widths) > 3 and widths[-1] > 0.5 * widths[-4])
         stalled = False
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
@@ -119,7 +117,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 else:
                     hi = x_b
                 last = [(x2, g2), (x_b, g_b)]
-                moves.append(abs(x_b - x2))
+                widths.append(abs(hi - lo))
                 stalled = (g_b > 0) == (g2 > 0)      # the secant stalled (the root lies farther): a bisection next
                 continue
         r_c = loc.local_collision(c, shift)
@@ -140,7 +138,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
         else:
             hi = c
         last = [last[1], (c, g_c)]
-        moves.append(abs(c - x2))
+        widths.append(abs(hi - lo))
         if secant and local and g_c is not None:
             # converged when the secant step moved the energy by less than a quarter of the margin: its root is
             # then within the margin points of _flag_change_near around c, which check the flag there
@@ -156,7 +154,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 else:
                     hi = x_v
                 last = [(c, g_c), (x_v, g_v)]
-                moves.append(abs(x_v - c))
+                widths.append(abs(hi - lo))
                 stalled = True               # the next step bisects
     return (lo, hi), local, None
 
