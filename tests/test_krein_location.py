@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import nnm_solver.stability.krein as krein
+import nnm_solver.stability.krein_follow as krein_follow
 from test_bifurcation import _pair, _synthetic_locator
 
 
@@ -113,7 +114,7 @@ def test_a_pair_far_off_the_axis_in_a_dense_spectrum_is_followed(monkeypatch, co
     window) are all real there, so a real shift loses the pair and the flag is bisected (~20 full spectra); the
     pair's complex coordinate as the shift keeps it (the margin spectra and the probes only)."""
     if not complex_shift:
-        monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, local_crowd=10 ** 9))
+        monkeypatch.setattr(krein_follow, "STABILITY", dataclasses.replace(krein.STABILITY, local_crowd=10 ** 9))
     dense = list(0.30 + 0.0006 * np.arange(300))
 
     def coords(sigma):

@@ -1,4 +1,4 @@
-"""The Krein locator without bisection of the full flag over a step (krein._earlier_change, krein._root_within), on
+"""The Krein locator without bisection of the full flag over a step (krein._earlier_change, krein_follow._root_within), on
 synthetic spectra whose local solver sees only the 6 eigenvalues nearest its shift (as the shift-invert Arnoldi
 does): a pair that drifts out of that window before the followed collision, and a pair whose test function is far
 from linear (the secant stalls).  Each is checked against the full flag's own change (what a bisection of the
@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import nnm_solver.stability.krein as krein
+import nnm_solver.stability.krein_follow as krein_follow
 from test_bifurcation import _pair, _synthetic_locator
 from test_krein_location import _windowed
 
@@ -65,10 +66,11 @@ def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
     threshold until 0.45, where it jumps onto the real axis and separates (its test function: -3e-10, then
     +7e-11 rising by 0.01 per unit sigma).  The secant from the far real side moves by ~1e-8 of the step and
     would stop there, short of the root; one local evaluation at the margin point shows the sign unchanged, so the
-    follower bisects on.  Both routes find the flag's change at 0.45; with the check, from two margin spectra and
+    follower bisects on (_root_within, or _beyond_root where the step was predicted that small).  Both routes find the flag's change at 0.45; with the check, from two margin spectra and
     the probes, without it by bisecting the full flag."""
-    if not checked:
-        monkeypatch.setattr(krein, "_root_within", lambda *a, **k: None)
+    if not checked:                     # (neither the secant's own check nor its predicted convergence's)
+        monkeypatch.setattr(krein_follow, "_root_within", lambda *a, **k: None)
+        monkeypatch.setattr(krein_follow, "_beyond_root", lambda *a, **k: None)
         monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, krein_depth=0))
 
     def coords(sigma):

@@ -9,7 +9,8 @@ collision: a secant on it, with the pair followed by the problem's local eigen-s
 stability changes at the collision nearest the stable end, and a collision undone inside the step (complex at
 neither end) is caught by probing the full flag at STABILITY.krein_probes points, when its window covers one of them.  A
 pair that drifted out of the local solver's window between the step's end and the followed collision (not followed) is
-found in the full spectrum of the margin point next to that collision, and followed from there.
+found in the full spectrum of the margin point next to that collision, and followed from there.  The follower is
+krein_follow.py's.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ import numpy as np
 
 from ..continuation.engine import CorrectorFailure
 from .floquet import krein_gap
+from .krein_follow import follow_pair, pair_shift, per_modulus
 from .settings import STABILITY
 
 __all__ = ["locate_collision", "candidates"]
@@ -65,12 +67,12 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
             far, r_far = hi if f_lo else lo, r_hi if f_lo else r_lo
         else:                      # does this pair collide before the best one?  It is complex there already if so
             far = best[1][0] if best[1] else (min(best[0]) if f_lo else max(best[0]))
-            r_far = loc.local_collision(far, _shift(r_hi if f_lo else r_lo, rho_star))
-            if r_far is None or not krein_gap(r_far, rho_star, _per_modulus(loc)) < 0:
+            r_far = loc.local_collision(far, pair_shift(r_hi if f_lo else r_lo, rho_star))
+            if r_far is None or not krein_gap(r_far, rho_star, per_modulus(loc)) < 0:
                 continue
         a, b = (lo, far) if f_lo else (far, hi)
         ra, rb = (r_lo, r_far) if f_lo else (r_far, r_hi)
-        bracket, local, root = _follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
+        bracket, local, root = follow_pair(loc, a, b, rho_star, f_lo, ra, rb)
         best = (bracket, root)
         if not local:              # followed with the full flags: its bracket is the flag's change already
             break
@@ -99,49 +101,6 @@ def locate_collision(loc, lo, hi, rho_stars, ends=None, depth=0):
             return (locate_collision(loc, start, x, cands, [stable_end, unstable_x], depth + 1) if f_lo else
                     locate_collision(loc, x, start, cands, [unstable_x, stable_end], depth + 1))
     return bracket
-
-
-def _spacing(rho, rho_star, count=8):
-    """The mean distance between the real coordinates of rho nearest rho_star (the local eigenvalue spacing), or
-    inf when there are too few."""
-    if rho is None:
-        return np.inf
-    rho = np.asarray(rho, dtype=complex)
-    real = rho.real[np.abs(rho.imag) <= 1e-12]
-    if len(real) < 3:
-        return np.inf
-    near = np.sort(real[np.argsort(np.abs(real - rho_star))[:count]])
-    return float((near[-1] - near[0]) / (len(near) - 1)) or np.inf
-
-
-def _shift_for(z, spacing):
-    """The local solver's shift for a pair at the complex coordinate z: its real part, or z itself when the pair
-    lies so far off the real axis that the real eigenvalues nearer to its real part could fill the local solver's
-    window of 6 (STABILITY.local_crowd of them within |Im z|, at the local spacing).  A 1,100-mode plate: 0.0006 between
-    eigenvalues and a pair 0.01 off the axis, which the 6 eigenvalues nearest its real part missed.  A complex
-    shift costs a complex LU (4x a real one) and more Arnoldi iterations, so near the collision the real part
-    is used again."""
-    b = abs(complex(z).imag)
-    return complex(complex(z).real, b) if 2 * b >= STABILITY.local_crowd * spacing else float(complex(z).real)
-
-
-def _shift(rho, rho_star):
-    """The local solver's shift for the pair around rho_star, from the coordinates rho of a point where it is complex
-    (_shift_for; rho_star itself if rho has no complex coordinate near it)."""
-    if rho is None:
-        return rho_star
-    rho = np.asarray(rho, dtype=complex)
-    z = rho[np.abs(rho.imag) > 1e-12]
-    if not len(z):
-        return rho_star
-    z = z[np.argmin(np.abs(z.real - rho_star))]
-    if abs(z.real - rho_star) > 1e-6 + abs(z.imag):
-        return rho_star
-    return _shift_for(complex(rho_star, z.imag), _spacing(rho, rho_star))
-
-
-def _per_modulus(loc):
-    return getattr(loc.problem, "collision_per_modulus", 1.0)
 
 
 #: an alias of settings.py's STABILITY.krein_margin (the code reads that)
@@ -175,9 +134,12 @@ def _earlier_change(loc, lo, hi, f_lo, r_stable, x_s, depth):
 def _margin_points(loc, lo, hi, blo, bhi, f_lo, root=None):
     """The two margin points around a followed collision (blo, bhi) where the full flag is checked: (x_s, x_u, c,
     width), x_s on the stable side, x_u on the unstable one, STABILITY.krein_margin x the energy tolerance apart around
-    the centre c (the secant's root when given: (centre, delta)); width: the bracket's (or 2 delta)."""
+    the centre c (the secant's root when given: (centre, delta), or (centre, delta, x_s, x_u) with the two points
+    themselves, krein_follow.follow_pair's); width: the bracket's (or 2 delta)."""
     a, b = min(lo, hi), max(lo, hi)
     width = abs(bhi - blo)
+    if root is not None and len(root) == 4:
+        return root[2], root[3], root[0], 2 * root[1]
     if root is not None:
         c, delta = root
         width = 2 * delta
@@ -209,7 +171,8 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     (1 + STABILITY.flag_band) x the tolerance and the unstable side's beyond (1 - STABILITY.flag_band) x it (two
     spectra).  Otherwise (another pair changed the flag nearby), with ``windows``, a bisection on the flag within 10 or
     1000 times the bracket's width around it.  f_lo : the flag at lo; root : optional (centre, delta) of the margin
-    points (else around the bracket)."""
+    points (else around the bracket), or (centre, delta, x_s, x_u) where the follower's last two local evaluations
+    bracket its pair's root (their orbits are known)."""
     a, b = min(lo, hi), max(lo, hi)
     x_s, x_u, c, width = _margin_points(loc, lo, hi, blo, bhi, f_lo, root)
     loc.prefetch([x_s, x_u])
@@ -226,85 +189,3 @@ def _flag_change_near(loc, lo, hi, blo, bhi, f_lo, root=None, windows=True):
     return None
 
 
-def _follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
-    """Follow the pair around rho_star from lo to hi (secant with a bisection safeguard, Dekker) to its
-    collision: ((lo, hi) bracket, True if the problem's local eigen-solver was used; False if the full
-    flag had to be, i.e. the bracket is that of the flag's change; (centre, delta) when the secant converged to
-    its root (within a quarter of the margin in energy) before the bracket did, else None: the margin points
-    centre -+ delta are STABILITY.krein_margin x the energy tolerance apart)."""
-    pm = _per_modulus(loc)
-    g_lo, g_hi = krein_gap(r_lo, rho_star, pm), krein_gap(r_hi, rho_star, pm)
-    r_u = r_hi if f_lo else r_lo
-    shift, spacing = _shift(r_u, rho_star), _spacing(r_u, rho_star)    # the pair at the unstable end
-    last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
-    widths = [abs(hi - lo)]
-    local, stalled = True, False
-    for _ in range(60):
-        if loc._converged(lo, hi):
-            break
-        (x1, g1), (x2, g2) = last
-        c = None
-        if g1 is not None and g2 is not None and g1 != g2:
-            c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
-        secant = c is not None and min(lo, hi) < c < max(lo, hi) and not stalled and not (
-            len(widths) > 3 and widths[-1] > 0.5 * widths[-4])
-        stalled = False
-        if not secant:
-            c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
-        r_c = loc.local_collision(c, shift)
-        if r_c is not None:                  # this collision only: its test function is the flag
-            g_c = krein_gap(r_c, rho_star, pm)
-            f_c = g_c > 0
-        else:
-            local = False
-            f_c = loc.stable(c)
-            r_c = loc.collision(c)
-            g_c = krein_gap(r_c, rho_star, pm)
-            if g_c is not None and (g_c > 0) != f_c:
-                g_c = None                   # the test function disagrees with the flag: no secant from here
-        if g_c is not None and g_c < 0:     # follow the complex pair: it drifts along the branch
-            z = np.asarray(r_c)[np.abs(np.imag(r_c)) > 1e-12]
-            z = z[np.argmin(np.abs(z.real - rho_star))]
-            rho_star, shift = float(z.real), _shift_for(z, spacing)
-        if f_c == f_lo:
-            lo = c
-        else:
-            hi = c
-        last = [last[1], (c, g_c)]
-        widths.append(abs(hi - lo))
-        if secant and local and g_c is not None:
-            # converged when the secant step moved the energy by less than a quarter of the margin: its root is
-            # then within the margin points of _flag_change_near around c, which check the flag there
-            E_c, E_2 = loc.energy(c), loc.energy(x2)
-            if abs(E_c - E_2) <= 0.25 * STABILITY.krein_margin * loc.rtol * abs(E_c) and E_c != E_2:
-                delta = 0.5 * STABILITY.krein_margin * loc.rtol * abs(E_c) * abs(c - x2) / abs(E_c - E_2)
-                verdict = _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm)
-                if verdict is None:
-                    return (lo, hi), local, (c, delta)
-                x_v, g_v = verdict           # a stalled secant (g far from linear): the bracket shrinks by that point
-                if (g_v > 0) == f_lo:
-                    lo = x_v
-                else:
-                    hi = x_v
-                last = [(c, g_c), (x_v, g_v)]
-                widths.append(abs(hi - lo))
-                stalled = True               # the next step bisects
-    return (lo, hi), local, None
-
-
-def _root_within(loc, c, g_c, delta, lo, hi, f_lo, rho_star, shift, pm):
-    """Check a secant's convergence at c: the local test function at the margin point c -+ delta towards the
-    root (the side where the bracket's other end lies) must have the other sign.  A secant step is small also
-    where it stalls: g far from linear, e.g. a complex pair's tiny negative gap beside a real side's large one (the
-    aircraft's NNM 20 at 122.6 J: -8e-11 against 2.5e-5, the step 1e-8 of the bracket while the root lay 4e-2
-    of the step away).  None when the root lies within delta of c, else (x, g) at that point; one local
-    evaluation."""
-    towards = hi if (g_c > 0) == f_lo else lo         # (lo's side has g > 0 where f_lo)
-    x = c + np.sign(towards - c) * delta
-    if not min(lo, hi) <= x <= max(lo, hi):
-        return None
-    r = loc.local_collision(x, shift)
-    g = krein_gap(r, rho_star, pm) if r is not None else None
-    if g is None or (g > 0) != (g_c > 0):
-        return None
-    return x, g

@@ -76,6 +76,7 @@ class Locator(BracketRoots):
         self.cache = {}
         self.factors = {}           # sigma -> factorisation of [J; (w^2 p_a)^T] of a seeded point
         self.spectra = {}           # sigma -> (multipliers, collision coordinates)
+        self.locals = {}            # (sigma, shift) -> the local eigen-solver's coordinates (local_collision)
         self.rough = set()          # sigmas of points kept without their own tangent (at: tangent=False)
 
     def seed(self, sigma, u, J, factor):
@@ -327,6 +328,12 @@ class Locator(BracketRoots):
         (a sparse spectrum, or a small model's full one), the point's tangent is computed and the map deflated."""
         if not hasattr(self.problem, "local_collision"):
             return None
+        key = (float(sigma), complex(shift))        # (asked again: a margin point of the follower's check)
+        if key not in self.locals:
+            self.locals[key] = self._local_collision(sigma, shift)
+        return self.locals[key]
+
+    def _local_collision(self, sigma, shift):
         reach = STABILITY.trivial_reach
         u, J, p = self.at(sigma, tangent=abs(complex(shift) + 1.0) < reach)
         self.refresh(u, J)
