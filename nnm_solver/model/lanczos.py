@@ -166,44 +166,14 @@ def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.
     next_check = min(max(2 * need, 4 * b), j_max)
     before = None                                 # the band eigenvalues of the last check
 
-    def target(th):
-        # the length of converged run needed (None while w2_of cannot tell): well past the cutoff (5 % and a block
-        # more), so that a mode that Lanczos has not found yet would lie at the end of the converged run, never inside
-        # it (Ritz values converge from the end of the spectrum).  th: Ritz values (descending), converged or not:
-        # where the run has not reached the cutoff yet, the values beyond it count the modes below it (from below:
-        # unconverged values are sparser than the eigenvalues they converge to)
+    def enough(th):
+        # converged well past the cutoff (5 % and a block more): a mode that Lanczos has not found yet would lie
+        # at the end of the converged run, never inside it (Ritz values converge from the end of the spectrum)
+        # th : the converged Ritz values (descending), the run from the top
         lam = 1.0 / th
         w2 = w2_of(lam) if len(th) else None
-        if w2 is None:
-            return None
-        below = int(np.searchsorted(lam, w2, side="right"))
-        return max(need + 1, below + max(b, below // 20))
-
-    def after(j, th, run, dense):
-        # the next check after one at j vectors whose converged run ``run`` of the Ritz values th fell short: at
-        # least two blocks on, at most the geometric step that was the only rule before (on the aircraft its checks
-        # at the end lay 256 vectors apart, and the modes had converged ~150 vectors before the last one).  After a
-        # band check, where its settled run, growing as between the last two band checks, has what is missing; after
-        # a dense check (whose run of pairs converged to ``tol`` lags ~100 vectors behind the settled values; it costs
-        # as much as two blocks), where the run has it at its mean rate so far, run / j (on the aircraft 0.34 pairs a
-        # vector against 0.5 at the end: one more check, rather than several two blocks apart)
-        step = max(4 * b, j // 8)
-        want = target(th[th > 0]) if run else None
-        if want is not None and want > run:
-            if dense:
-                more = (want - run) * j / run
-            elif len(history) >= 2 and history[-1][1] > history[-2][1]:
-                more = (want - run) * (history[-1][0] - history[-2][0]) / (history[-1][1] - history[-2][1])
-            else:
-                more = step
-            step = int(min(step, max(2 * b, math.ceil(more))))
-        return min(j + step, j_max)
-
-    def enough(th):
-        want = target(th) if len(th) else None
-        return want is not None and len(th) >= want
-    history = []                                  # (vectors, settled run) at the band checks
-
+        below = int(np.searchsorted(lam, w2, side="right")) if w2 is not None else len(th)
+        return len(th) > need and w2 is not None and len(th) >= below + max(b, below // 20) and lam[-1] > w2
     while True:
         W = np.asarray(solver.solve(np.ascontiguousarray(MQb)), dtype=float).reshape(n, -1)
         MW = np.asarray(M @ W)
@@ -229,11 +199,10 @@ def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.
                 k = min(len(before), len(th))
                 settled = (th[:k] - before[:k]) <= tol * np.abs(th[:k])
                 run = int(np.argmin(settled)) if not settled.all() else k
-                history.append((J + kn, run))
                 check = enough(th[:run]) if run and th[run - 1] > 0 else False
-                if not check:
-                    next_check = after(J + kn, th, run, False)
             before = th
+            if not check:
+                next_check = min(J + kn + max(4 * b, (J + kn) // 8), j_max)
         if check:
             # the Ritz pairs of the space whose images are known (columns up to j1)
             # the top half of the Ritz pairs (the converged ones are the top third or so: a run of pairs converged
@@ -257,14 +226,14 @@ def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.
                 return lam[:keep], _ritz_vectors(Q, j1, Y[:, :keep], M)
             if full:
                 raise LanczosStall(f"{J + kn} vectors of {n}: {c} modes converged, not yet past the cutoff")
-            next_check = after(J + kn, th, c, True)
+            next_check = min(J + kn + max(4 * b, (J + kn) // 8), j_max)
         p0, j0, j1, J = j0, J, J + kn, J + kn
 
 
 def _kept(lam, need, w2_of):
-    """How many of the converged eigenvalues lam (ascending) modes_below returns: at least ``need``, and those up to the
-    cutoff w2_of(lam) and one above it (the others, converged only to show that none is missing below the cutoff,
-    would be Ritz vectors computed and dropped: 140 of 803 on the unreduced aircraft)."""
+    """How many of the converged eigenvalues lam (ascending) modes_below returns: at least ``need`` + 1, and those up
+    to the cutoff w2_of(lam) and one above it (the others, converged only to show that none is missing below the
+    cutoff, would be Ritz vectors computed and dropped by ritz_basis: 141 of 803 on the unreduced aircraft)."""
     w2 = w2_of(lam) if len(lam) else None
     below = len(lam) if w2 is None else int(np.searchsorted(lam, w2, side="right"))
     return int(min(len(lam), max(need + 1, below + 1)))
@@ -272,7 +241,7 @@ def _kept(lam, need, w2_of):
 
 def _ritz_vectors(Q, j, Y, M, cols=64):
     """Phi = Q[:, :j] Y (n x c), M-normalised: one BLAS product on the column-major block (its M-image formed
-    ``cols`` columns at a time for the norms: no second n x c array)."""
+    ``cols`` columns at a time for the norms: no second n x c array, 0.4 GB on the unreduced aircraft)."""
     Phi = Q[:, :j] @ np.ascontiguousarray(Y)
     for c in range(0, Phi.shape[1], cols):
         P = Phi[:, c:c + cols]
