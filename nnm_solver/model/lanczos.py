@@ -134,8 +134,9 @@ def _ritz_pairs(T, R, j0, j1, invariant, top):
 
 def modes_below(K, M, solver, need, w2_of, block=MODEL.lanczos_block, tol=MODEL.lanczos_tol):
     """(lam ascending, Phi M-orthonormal): the lowest eigenpairs of K phi = lam M phi, K positive definite, until one
-    above the cutoff: at least ``need`` pairs, and every one with lam <= w2_of(lam found) plus 5 % and a block more
-    (w2_of returns None while it cannot tell yet, e.g. before the followed mode is found).
+    above the cutoff: at least ``need`` + 1 pairs, and every one with lam <= w2_of(lam found) and the next (w2_of
+    returns None while it cannot tell yet, e.g. before the followed mode is found).  Converged are 5 % and a block
+    more past the cutoff, to show that none is missing below it; those are not returned (``_kept``).
 
     Block shift-invert Lanczos about 0: the Krylov space of K^-1 M from a fixed random block of ``block`` vectors,
     M-orthonormal with full re-orthogonalisation (block Gram-Schmidt, a second pass where the first cancelled),
