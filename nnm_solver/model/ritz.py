@@ -180,10 +180,14 @@ def _residual_fields(solver, M, Phi, B):
 
 
 def _gram(X, A, cols=128):
-    """X^T A X (k x k) for X (n, k), A sparse (n, n): ``cols`` columns of A X at a time (no n x k temporary)."""
-    G = np.empty((X.shape[1], X.shape[1]))
-    for c in range(0, X.shape[1], cols):
-        G[:, c:c + cols] = X.T @ np.asarray(A @ np.ascontiguousarray(X[:, c:c + cols]))
+    """X^T A X (k x k) for X (n, k), A sparse symmetric (n, n): ``cols`` columns of A X at a time (no n x k
+    temporary), the blocks on and above the diagonal only (half the products), the lower triangle their mirror."""
+    k = X.shape[1]
+    G = np.empty((k, k))
+    for c in range(0, k, cols):
+        G[:c + cols, c:c + cols] = X[:, :c + cols].T @ np.asarray(A @ np.ascontiguousarray(X[:, c:c + cols]))
+    lower = np.tril_indices(k, -1)
+    G[lower] = G.T[lower]
     return G
 
 
