@@ -27,12 +27,17 @@ class _Job:
     def progress(self):
         return 0.0 if self.polls < 3 else 0.5
 
-    def points(self):
+    def rows(self, start=0):
+        """(the progress reads the points' energies and frequencies, not a Branch snapshot: job.rows / latest)"""
         self.polls += 1
-        b = nnm.Branch(self.model, 1, [], [], [], np.zeros((0, 2)), np.zeros((0, 2)), status="running")
-        if self.polls >= 3:
-            b = nnm.Branch(self.model, 1, [1.5], [0.2], [5.0], np.zeros((1, 2)), np.zeros((1, 2)), status="running")
-        return b
+        return [(1.5, 0.2)][start:] if self.polls >= 3 else []
+
+    def latest(self):
+        rows = self.rows()
+        return (len(rows), *rows[-1]) if rows else (0, np.nan, np.nan)
+
+    def points(self):
+        raise AssertionError("the progress line builds no Branch snapshot (it costs a copy of every point's state)")
 
 
 class _Terminal(io.StringIO):
@@ -81,3 +86,17 @@ def test_default_out_is_the_file_unless_it_cannot_be_written(tmp_path, monkeypat
     monkeypatch.setattr("os.access", lambda path, mode: False)        # (root may write anywhere)
     out, reason = outputs.default_out(p)
     assert out == Path.cwd() / "m_branches.h5" and reason == f"{p} is not writable"
+
+
+def test_job_rows_and_latest_are_the_branch_points():
+    """What the progress line reads (Job.rows, Job.latest) is the points' own energies and frequencies."""
+    from nnm_solver.driver.jobs import start_branch
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), [nnm.CubicSpring(dof=0, k3=0.5)])
+    job = start_branch(model, 1, 1.0, max_points=12)
+    b = job.result(timeout=300)
+    rows = job.rows()
+    assert len(rows) == len(b) > 3
+    assert np.allclose([r[0] for r in rows], b.energy, rtol=0, atol=0)
+    assert np.allclose([r[1] for r in rows], b.frequency_hz, rtol=0, atol=0)
+    assert job.rows(2) == rows[2:]
+    assert job.latest() == (len(b), rows[-1][0], rows[-1][1])

@@ -49,20 +49,19 @@ def _progress(job, stream, interval=0.2):
     if not (callable(isatty) and isatty()):
         shown = 0
         while not job.done:
-            pts = job.points()
-            for i in range(shown, len(pts)):
-                stream.write(f"point {i + 1:4d}  E = {pts.energy[i]:.4e} J  f = {pts.frequency_hz[i]:.6f} Hz\n")
-            shown = max(shown, len(pts))
+            for i, (energy, freq) in enumerate(job.rows(shown), start=shown):
+                stream.write(f"point {i + 1:4d}  E = {energy:.4e} J  f = {freq:.6f} Hz\n")
+                shown = i + 1
             stream.flush()
             time.sleep(interval)
         return
     while not job.done:
         f = job.progress
-        pts = job.points()
+        count, energy, freq = job.latest()
         bar = "#" * int(width * f) + "-" * (width - int(width * f))
-        if len(pts):
-            text = (f"[{bar}] {100 * f:5.1f}%  {len(pts):4d} points  E = {pts.energy[-1]:.3e} J  "
-                    f"f = {pts.frequency_hz[-1]:.5f} Hz")
+        if count:
+            text = (f"[{bar}] {100 * f:5.1f}%  {count:4d} points  E = {energy:.3e} J  "
+                    f"f = {freq:.5f} Hz")
         else:
             text = (f"[{bar}] waiting for the first point ({time.perf_counter() - t0:.0f} s; the first run "
                     f"compiles the solver)")

@@ -88,6 +88,23 @@ class Job:
             return 0.0
         return float(np.clip(math.log(emax / e0) / math.log(self.energy_max / e0), 0.0, 1.0))
 
+    def latest(self):
+        """(number of points converged so far, the last one's energy in J, its frequency in Hz), NaN before the
+        first: what a progress line shows, without the Branch snapshot of ``points()`` (which copies every point's
+        state: on the unreduced 64,446-DOF aircraft 87 ms a call, 11.6 s of CPU over nnm-solve's 133 polls of a
+        36-point branch, 2026-12-07)."""
+        pts = self._it.points
+        count = len(pts)
+        if not count:
+            return 0, math.nan, math.nan
+        last = pts[count - 1]
+        return count, float(last.energy), float(last.frequency_hz)
+
+    def rows(self, start=0):
+        """[(energy J, frequency Hz)] of the points converged so far from index ``start`` (0-based) on: a progress
+        log's lines, without the Branch snapshot of ``points()``."""
+        return [(float(p.energy), float(p.frequency_hz)) for p in list(self._it.points)[start:]]
+
     def points(self):
         """Branch snapshot of the points converged so far (status 'running' while running)."""
         if self.done and self._result is not None:
