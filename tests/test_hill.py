@@ -94,23 +94,37 @@ def test_secular_multipliers_equal_dense_along_a_tongue(beam_tongue):
     assert calls["none"] <= 2 and 0 < calls["hard"]
 
 
-def test_secular_route_is_fast_on_a_beam(beam_tongue):
-    """Away from internal resonances the secular route costs a few Newton iterations on 11 x 11 matrices: well
-    below the dense eigenproblem of 440 rows."""
-    import time
+def test_secular_route_is_fast_on_a_beam(beam_tongue, monkeypatch):
+    """Away from internal resonances the secular route costs a few Newton iterations on 11 x 11 matrices, well below
+    the dense eigenproblem of 440 rows: it vouches for every orbit below the tongue without the dense Hill matrix
+    (nor an eigenproblem of more than r = 11 rows), and gives the dense route's multipliers.  (A wall-clock ratio
+    here failed at load 3 with the suite beside it; the time is a benchmark's, not a unit test's.)"""
     m, b = beam_tongue
     problem, us = _orbits(m, b, 5)
     us = us[:20]                                      # below the tongue
-    A, w, _, bp, C = hill._galerkin_blocks(problem, us[0], None)
-    t = time.perf_counter()
-    hill._dense(problem, w, bp, C)
-    dense = time.perf_counter() - t
-    t = time.perf_counter()
+    refs = []
     for u in us:
         A, w, _, bp, C = hill._galerkin_blocks(problem, u, None)
-        assert hill._secular(problem, A, w, bp, C) is not None
-    secular = (time.perf_counter() - t) / len(us)
-    assert secular < 0.5 * dense, (secular, dense)
+        refs.append(without_nearest_to_one(hill._dense(problem, w, bp, C)))
+    sizes = []
+    eigvals, solve, svd = np.linalg.eigvals, np.linalg.solve, np.linalg.svd
+
+    def sized(f):
+        def g(a, *args, **kw):
+            sizes.append(np.shape(a)[-1])
+            return f(a, *args, **kw)
+        return g
+
+    monkeypatch.setattr(hill, "_dense", lambda *a, **k: pytest.fail("the secular route fell back to the dense one"))
+    monkeypatch.setattr(np.linalg, "eigvals", sized(eigvals))
+    monkeypatch.setattr(np.linalg, "solve", sized(solve))
+    monkeypatch.setattr(np.linalg, "svd", sized(svd))
+    for u, ref in zip(us, refs):
+        A, w, _, bp, C = hill._galerkin_blocks(problem, u, None)
+        mu = hill._secular(problem, A, w, bp, C)
+        assert mu is not None
+        assert _matched(without_nearest_to_one(mu), ref) < 1e-8
+    assert sizes and max(sizes) <= 2 * problem.n < len(bp) * problem.n    # no matrix of the dense route's size
 
 
 @pytest.mark.parametrize("case", ["pitchfork", "krein"])
