@@ -19,7 +19,7 @@ import pytest
 import nnm_solver as nnm
 from nnm_solver.continuation import engine, linalg
 from nnm_solver.model.modal import modal_system
-from nnm_solver.orbits import condensed_kernels
+from nnm_solver.orbits import condensed_energy_kernels, condensed_kernels
 from nnm_solver.orbits.condensed_hb import CondensedHBProblem
 from nnm_solver.orbits.harmonic_balance import HBProblem
 from nnm_solver.orbits.hb_basis import HBBasis, harmonics_in
@@ -119,8 +119,8 @@ def test_the_energy_of_the_last_three_orbits_is_kept(monkeypatch):
     p = CondensedHBProblem(system, 1, HBBasis(7, "odd"))
     u1, u2, u3, u4 = _orbits(p, 4)
     calls = []
-    kernel = condensed_kernels.energy_gradient
-    monkeypatch.setattr(condensed_kernels, "energy_gradient", lambda *a: calls.append(a[1]) or kernel(*a))
+    kernel = condensed_energy_kernels.energy_gradient
+    monkeypatch.setattr(condensed_energy_kernels, "energy_gradient", lambda *a: calls.append(a[1]) or kernel(*a))
 
     def fresh(u):
         q = CondensedHBProblem(system, 1, HBBasis(7, "odd"))
@@ -150,10 +150,10 @@ def test_the_engines_step_end_energy_comes_with_its_gradient(monkeypatch):
         assert p.gradient_with_energy
         E = engine._Remembered(p)(u)
         assert E == q.energy(u)
-        kernel = condensed_kernels.energy_gradient
+        kernel = condensed_energy_kernels.energy_gradient
         calls = []
         with monkeypatch.context() as m:
-            m.setattr(condensed_kernels, "energy_gradient", lambda *a: calls.append(a) or kernel(*a))
+            m.setattr(condensed_energy_kernels, "energy_gradient", lambda *a: calls.append(a) or kernel(*a))
             assert np.array_equal(p.energy_gradient(u), q.energy_gradient(u)) and len(calls) == 1   # (q's, not p's)
     with monkeypatch.context() as m:
         m.setattr(condensed_kernels, "AVAILABLE", False)

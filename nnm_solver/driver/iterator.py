@@ -19,7 +19,7 @@ from ..continuation.engine_driver import EngineDriver
 from ..stability.events import Locator, locate_between
 from ..stability.floquet import is_stable, sort_multipliers
 from ..stability.settings import STABILITY
-from ..stability.locator import event_rtol, mid_step_check
+from ..stability.step_policy import event_rtol, mid_step_check
 from ..backbone.jumps import find_landing, upward_tangent
 from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings

@@ -49,6 +49,7 @@ import math
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from . import condensed_energy_kernels as energy_kernels
 from . import condensed_kernels as kernels
 from .condensed_energy import condensed_energy, condensed_energy_gradient
 from .condensed_linear import LinearPart, coupled_galerkin, flexibility_times_tangent
@@ -91,27 +92,7 @@ class CondensedHBProblem(HBTruncationError):
         self._last_parts = None                        # (u.tobytes(), amplitude_parts(u)) of the last orbit
         self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last 3 orbits
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
-        self._kernel = self._kernel_arguments()        # the compiled kernels' constants, or None (numpy forms)
-
-    def _kernel_arguments(self):
-        """The constant arguments of the compiled kernels (condensed_kernels.py): (equations, energy), or None where
-        the numpy forms are used (coupled elements, or numba absent); the energy's None for a truncated basis."""
-        if not kernels.AVAILABLE or self.sys.elements.coupled:
-            return None
-        lin, bs = self.lin, self.basis
-        pairs, index = kernels.element_pairs(lin.Bq)
-        fund = np.zeros(self.nb, dtype=bool)
-        fund[self.fund] = True
-        table = (np.ascontiguousarray(bs.E, dtype=float), np.ascontiguousarray(bs.P, dtype=float), self.sys.powers,
-                 self.sys.coefficients, self.sys.kinks)
-        common = (self.cos1, self.r, float(self.beta), self.w_r, np.ascontiguousarray(self.h2), fund)
-        equations = common + (np.ascontiguousarray(self.b_r), lin.omega2, pairs, index, lin.R0, lin.R1,
-                              lin.complete) + table
-        c0, s0 = bs.state_at_zero()
-        energy = None if not lin.complete else ((self.sys.kinks.shape[1] == 0,) + common + (
-            np.ascontiguousarray(c0, dtype=float), np.ascontiguousarray(s0, dtype=float),
-            self._Bq, lin.omega2) + table)
-        return equations, energy
+        self._kernel = kernels.kernel_arguments(self)  # the compiled kernels' constants, or None (numpy forms)
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -312,7 +293,7 @@ class CondensedHBProblem(HBTruncationError):
         for last in kept:
             if last[0] == key and (last[2] is not None or not gradient):
                 return last[1], last[2]
-        E, g = kernels.energy_gradient(np.asarray(u, dtype=float), gradient, *self._kernel[1])
+        E, g = energy_kernels.energy_gradient(np.asarray(u, dtype=float), gradient, *self._kernel[1])
         if not self._kernel[1][0]:
             E = float(E + np.sum(self.sys.elements.potential(self.basis.state_at_zero()[0] @ self.unpack(u)[0])))
         if gradient:

@@ -11,7 +11,7 @@ and the energy through the modal amplitudes A (N_b, m): on the aircraft (m = 548
   each, G symmetric (plus the residual flexibility R0 + Omega2_j R1 of a truncated basis, not necessarily symmetric);
 * the element forces and stiffnesses at the N samples by the spring laws' kernel (model/laws.py);
 * the energy and its gradient (condensed_energy.py's formulas) with the amplitudes of each mode made and used in
-  the same pass, nothing of size N_b m stored.
+  the same pass, nothing of size N_b m stored (condensed_energy_kernels.py, on this module's pieces).
 
 They round differently from the numpy forms (the sums in another order): the same equations, the results within a
 few ulps (tests/test_per_point_kernels.py checks residual, Jacobian, energy and gradient against the numpy forms and
@@ -26,7 +26,7 @@ from ..jit import jit, numba
 from ..model.laws import law_scalar
 from .spring_kernels import int_power
 
-__all__ = ["AVAILABLE", "element_pairs", "flexibility", "residual_jacobian", "energy_gradient", "amplitudes"]
+__all__ = ["AVAILABLE", "kernel_arguments", "element_pairs", "flexibility", "residual_jacobian", "amplitudes"]
 
 #: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
 #: modes would be far slower than them)
@@ -39,6 +39,27 @@ if AVAILABLE:
     jit_modes = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract"})
 else:  # pragma: no cover
     jit_modes = jit
+
+
+def kernel_arguments(prob):
+    """The constant arguments of the compiled kernels for the CondensedHBProblem prob: (equations, energy), or None
+    where the numpy forms are used (coupled elements, or numba absent); the energy's None for a truncated basis."""
+    if not AVAILABLE or prob.sys.elements.coupled:
+        return None
+    lin, bs, sys = prob.lin, prob.basis, prob.sys
+    pairs, index = element_pairs(lin.Bq)
+    fund = np.zeros(prob.nb, dtype=bool)
+    fund[prob.fund] = True
+    table = (np.ascontiguousarray(bs.E, dtype=float), np.ascontiguousarray(bs.P, dtype=float), sys.powers,
+             sys.coefficients, sys.kinks)
+    common = (prob.cos1, prob.r, float(prob.beta), prob.w_r, np.ascontiguousarray(prob.h2), fund)
+    equations = common + (np.ascontiguousarray(prob.b_r), lin.omega2, pairs, index, lin.R0, lin.R1,
+                          lin.complete) + table
+    c0, s0 = bs.state_at_zero()
+    energy = None if not lin.complete else ((sys.kinks.shape[1] == 0,) + common + (
+        np.ascontiguousarray(c0, dtype=float), np.ascontiguousarray(s0, dtype=float),
+        np.ascontiguousarray(lin.Bq, dtype=float), lin.omega2) + table)
+    return equations, energy
 
 
 def element_pairs(Bq):
@@ -270,89 +291,3 @@ def amplitudes(u, cos1, r, beta, w_r, h2, fund, Bq, omega2, E, P, powers, coeffs
     d, F, tg = _forces(u[:nD].reshape((nb, ns)), E, P, powers, coeffs, kinks, False)
     W, W2 = _weights(w, h2, fund, r, omega2, False)
     return _modal_amplitudes(F, W, Bq, cos1, r, u[nD] / beta), F
-
-
-@jit_modes
-def _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, gradient):
-    """(kinetic / w^2 x 2, potential x 2, gF (N_b, n_s), gw part, Lambda[cos 1, r] needs the caller): the sums over the
-    modes of condensed_energy.py's formulas; gF and the omega derivative's sum only when ``gradient``."""
-    nb, m = A.shape
-    ns = Bq.shape[0]
-    q0 = np.zeros(m)
-    v1 = np.zeros(m)
-    for j in range(nb):
-        for k in range(m):
-            q0[k] += c0[j] * A[j, k]
-            v1[k] += s0[j] * A[j, k]
-    kin = 0.0
-    pot = 0.0
-    for k in range(m):
-        kin += v1[k] * v1[k]
-        pot += omega2[k] * q0[k] * q0[k]
-    gF = np.zeros((nb if gradient else 0, ns))
-    gw = 0.0
-    if gradient:
-        lw = np.empty(m)
-        for j in range(nb):
-            for k in range(m):
-                lw[k] = (c0[j] * omega2[k] * q0[k] + w * w * s0[j] * v1[k]) * W[j, k]
-            acc = 0.0
-            for k in range(m):
-                acc += lw[k] * A[j, k]
-            gw += acc * (2.0 * w * h2[j])
-            for s in range(ns):
-                acc = 0.0
-                for k in range(m):
-                    acc += lw[k] * Bq[s, k]
-                gF[j, s] = -acc
-    return kin, pot, gF, gw, q0, v1
-
-
-@jit
-def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fund, c0, s0, Bq, omega2, E, P, powers,
-                    coeffs, kinks):
-    """(energy, gradient): the modes' kinetic and linear potential energy at t = 0 (J), with the element potentials
-    at t = 0 when ``with_potential`` (polynomial laws only: a table without kinks, whose potentials need the
-    dilogarithm; else the caller adds them) and, when ``want_gradient``, dE/du of the whole energy (J per unit of u;
-    the elements' part included: its derivative needs only the forces at t = 0), condensed_energy.py's formulas in
-    passes over the modes (a complete basis)."""
-    nb = h2.shape[0]
-    ns = Bq.shape[0]
-    nD = nb * ns
-    a = u[nD] / beta
-    w = u[nD + 1] * w_r
-    D = u[:nD].reshape((nb, ns))
-    d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_gradient)
-    W, W2 = _weights(w, h2, fund, r, omega2, False)
-    A = _modal_amplitudes(F, W, Bq, cos1, r, a)
-    kin, pot, gF, gw, q0, v1 = _modal_energy(A, W, c0, s0, omega2, Bq, w, h2, want_gradient)
-    energy = 0.5 * (w * w) * kin + 0.5 * pot
-    x0 = np.zeros(ns)
-    for l in range(nb):
-        for t in range(ns):
-            x0[t] += c0[l] * D[l, t]
-    if with_potential:
-        for s in range(ns):
-            for i in range(powers.shape[0]):
-                p = powers[i]
-                energy += coeffs[s, i] * x0[s] ** (p + 1) / (p + 1)
-    if not want_gradient:
-        return energy, np.zeros(0)
-    gw += w * kin
-    lam_a = c0[cos1] * omega2[r] * q0[r] + w * w * s0[cos1] * v1[r]        # dE/dA[cos 1, r]
-    C = _galerkin(tg, E, P)
-    g0 = np.empty(ns)                          # the element forces at t = 0
-    for t in range(ns):
-        g0[t] = law_scalar(x0[t], t, powers, coeffs, kinks)[0]
-    grad = np.zeros(nD + 2)
-    for l in range(nb):
-        for t in range(ns):
-            acc = 0.0
-            for j in range(nb):
-                acc += gF[j, t] * C[t, j, l]
-            acc += c0[l] * g0[t]
-            grad[l * ns + t] = acc
-    grad[nD] = lam_a / beta
-    grad[nD + 1] = gw * w_r
-    return energy, grad
-
