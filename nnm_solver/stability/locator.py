@@ -9,7 +9,6 @@ slope and Floquet multipliers, and, with the scalar root finders (roots.py), wha
 from __future__ import annotations
 
 import copy
-import os
 
 import numpy as np
 
@@ -231,7 +230,7 @@ class Locator(BracketRoots):
         ds = abs(sigma - s_l)
         if ds > STABILITY.chord_reach * self.step:
             return None
-        tol = self.chord_tol(ds)
+        tol = self.chord_tol()
         try:
             result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
                                       start=(u_l + (sigma - s_l) * self.p_a, factor), refresh=refresh)
@@ -244,17 +243,15 @@ class Locator(BracketRoots):
             return None
         return result
 
-    def chord_tol(self, ds=0.0):
-        """The chord iterations' corrector tolerance (relative periodicity error) for a point ds (pseudo-arclength, the
-        continuation's balanced norm: a relative change of the orbit) from the latest located one:
-        STABILITY.chord_tol_factor x the continuation's, and at most STABILITY.chord_event_fraction x max(ds, rtol),
-        rtol the events' relative energy tolerance.  The root finders compare the point with its neighbours, which
-        differ from it by about ds (and across an event's final bracket by about rtol / 2: E grows like the
-        amplitude squared or faster); its error must lie well below that, or a test function's noise exceeds its
-        change between the points and the root finders halve the bracket on noise."""
-        if not os.environ.get("ADAPT"):
-            ds = 0.0
-        return min(STABILITY.chord_tol_factor * self.tol, STABILITY.chord_event_fraction * max(ds, self.rtol))
+    def chord_tol(self):
+        """The chord iterations' corrector tolerance (relative periodicity error): STABILITY.chord_tol_factor x the
+        continuation's, and at most STABILITY.chord_event_fraction x the events' relative energy tolerance rtol.
+        Across an event's final bracket the orbit changes by about rtol / 2 (E grows like the amplitude squared or
+        faster); the located orbits' error must lie well below that, or a test function's noise exceeds its change
+        across the bracket and the root finders halve the bracket on noise.  (A tolerance from each point's distance to
+        the latest one instead, looser while the iterates are far apart, left the noise at the final bracket, whose
+        other end was often computed far from its then neighbours: settings.py.)"""
+        return min(STABILITY.chord_tol_factor * self.tol, STABILITY.chord_event_fraction * self.rtol)
 
     def energy(self, sigma):
         return self.problem.energy(self.at(sigma)[0])
