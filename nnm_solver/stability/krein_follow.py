@@ -6,7 +6,9 @@ in the branch parameter sigma through a generic collision: a secant on it (Dekke
 did not halve in three steps), each value from the problem's local eigen-solver near the pair (shift-invert Arnoldi,
 Locator.local_collision), the shift moving with the pair as it drifts.  The secant's convergence is checked by one
 local evaluation past the predicted root (_beyond_root) or past a converged iterate (_root_within): a secant stalled
-where the gap is far from linear is not taken for converged.
+where the gap is far from linear is not taken for converged.  A secant that stalled next to a bracket's end (a complex
+pair's tiny gap beside a real side's large one) is moved clear of that end the next time (_clear_of_ends), and then
+bisects.
 """
 from __future__ import annotations
 
