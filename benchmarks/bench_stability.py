@@ -16,7 +16,8 @@ Cases: ``m20`` the aircraft's NNM 20 with the defaults until its first energy fo
 40.97 J); ``3dof`` a 3-DOF chain's combination resonance (two Krein collisions; tests/test_bifurcation.py), gauss6.
 Printed per case and route: the median time, the load average before and after each run, the dense eigenproblems
 (floquet.eigenvalues calls; on the main thread: during event location), the orbits located inside steps and the
-Krein follower's local evaluations among them, the events, and each event's relative
+Krein follower's local evaluations among them, the event location's CPU time and the integrator's sweeps during it
+(gauss6's sensitivity and state sweeps), the events, and each event's relative
 energy difference from the dense route's; the CPU time of the process (all its threads) beside the wall time (the
 steadier number on a shared machine).  Usage::
 
@@ -80,6 +81,30 @@ def worker(case, route):
         return at(self, sigma, *args, **kw)
 
     lc.Locator.local_collision, lc.Locator.at = counted_local, counted_at
+    # the event location's own cost: CPU time inside locate_between (all threads of the process, so a spectrum the
+    # continuation computes in the background meanwhile counts too) and the integrator's sweeps there
+    import nnm_solver.driver.iterator as iterator
+    import nnm_solver.integrators.registry as registry
+    counts.update(location_cpu=0.0, sweeps=0, states=0)
+    locating = [False]
+    between = iterator.locate_between
+
+    def timed_between(*a, **k):
+        c, locating[0] = time.process_time(), True
+        try:
+            return between(*a, **k)
+        finally:
+            locating[0] = False
+            counts["location_cpu"] += time.process_time() - c
+
+    iterator.locate_between = timed_between
+    gauss = getattr(registry, "_Gauss", None)
+    for name, key in (("sensitivity", "sweeps"), ("state", "states")):
+        if gauss is not None and hasattr(gauss, name):
+            def sweep(self, *a, _f=getattr(gauss, name), _k=key, **k):
+                counts[_k] += locating[0]
+                return _f(self, *a, **k)
+            setattr(gauss, name, sweep)
     import nnm_solver.orbits.shooting_stability as ss
     if hasattr(ss, "eigenvalues"):
         ss.eigenvalues = counted
@@ -97,7 +122,7 @@ def worker(case, route):
         nnm.continue_nnm(nnm.load_model(str(ROOT / "assets" / "two_dof.h5")), mode=1, energy_max=1.0,
                          integrator=integrator)
     model = _model(case)
-    counts.update(all=0, main=0, local=0, orbits=0)
+    counts.update(all=0, main=0, local=0, orbits=0, location_cpu=0.0, sweeps=0, states=0)
     t0, c0 = time.perf_counter(), time.process_time()
     if case == "m20":
         stop, E = threading.Event(), []
@@ -117,7 +142,8 @@ def worker(case, route):
         b = nnm.continue_nnm(model, 1, 3.0, integrator="gauss6", steps_per_period=100)
     t, cpu = time.perf_counter() - t0, time.process_time() - c0
     print(json.dumps(dict(seconds=t, cpu=cpu, points=len(b.energy), eig_all=counts["all"], eig_main=counts["main"],
-                          local=counts["local"], located=counts["orbits"],
+                          local=counts["local"], located=counts["orbits"], location_cpu=counts["location_cpu"],
+                          sweeps=counts["sweeps"], states=counts["states"],
                           stable=np.asarray(b.stable).astype(int).tolist(),
                           events=[(e["kind"], float(e["energy"]), e.get("stability_change")) for e in b.events],
                           solver=nnm.__file__)))
@@ -168,6 +194,10 @@ def main(argv=None):
                   f"{last['points']} points, flags {flags}; dense eigenproblems {last['eig_all']} "
                   f"({last['eig_main']} on the main thread); located orbits {last.get('located', '-')} "
                   f"(Krein follower's local evaluations {last.get('local', '-')})")
+            if "location_cpu" in last:
+                print(f"          event location: CPU {np.median([r['location_cpu'] for r in rs]):.2f} s "
+                      f"({', '.join('%.2f' % r['location_cpu'] for r in rs)}), sensitivity sweeps {last['sweeps']}, "
+                      f"state sweeps {last['states']}")
             for kind, energy, change in last["events"]:
                 same = [e for k, e, c in ref["events"] if k == kind and c == change]
                 near = min(same, key=lambda e: abs(e - energy)) if same else None

@@ -60,18 +60,22 @@ def test_a_pair_that_drifted_out_of_the_window_is_found_at_the_margin(monkeypatc
         assert full > 25
 
 
-@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize("checked", ["all", "overshoot", "none"])
 def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
     """A pair complex from the step's unstable start (sigma = 0) whose imaginary part stays at twice the stability
     threshold until 0.45, where it jumps onto the real axis and separates (its test function: -3e-10, then
     +7e-11 rising by 0.01 per unit sigma).  The secant from the far real side moves by ~1e-8 of the step and
     would stop there, short of the root; one local evaluation at the margin point shows the sign unchanged, so the
-    follower bisects on (_root_within, or _beyond_root where the step was predicted that small).  Both routes find the flag's change at 0.45; with the check, from two margin spectra and
-    the probes, without it by bisecting the full flag."""
-    if not checked:                     # (neither the secant's own check nor its predicted convergence's)
+    follower bisects on (_root_within, or _beyond_root where the step was predicted that small); a secant iterate
+    that close to the bracket's end is moved ten times as far from it (_clear_of_ends), which shows the stall by
+    itself ("overshoot": the two checks off).  The flag's change at 0.45 is found from two margin spectra and the
+    probes; with none of the three (and no nested location), by bisecting the full flag."""
+    if checked != "all":                # (neither the secant's own check nor its predicted convergence's)
         monkeypatch.setattr(krein_follow, "_root_within", lambda *a, **k: None)
         monkeypatch.setattr(krein_follow, "_beyond_root", lambda *a, **k: None)
         monkeypatch.setattr(krein, "STABILITY", dataclasses.replace(krein.STABILITY, krein_depth=0))
+    if checked == "none":
+        monkeypatch.setattr(krein_follow, "_clear_of_ends", lambda c, lo, hi, again: (c, False, False))
 
     def coords(sigma):
         pair = ([0.5 + 2e-5j, 0.5 - 2e-5j] if sigma < 0.45 else _pair(0.5, 0.01 * (sigma - 0.45)))
@@ -83,7 +87,7 @@ def test_a_stalled_secant_is_not_taken_for_the_root(monkeypatch, checked):
     ref = _flag_change(loc, 0.0, 1.0)
     assert abs(ref - 0.45) < 1e-9
     assert min(lo, hi) <= ref + 1e-9 and ref - 1e-9 <= max(lo, hi) and abs(hi - lo) <= loc.rtol * (1 + hi)
-    if checked:
+    if checked != "none":
         assert full <= 2 + krein.STABILITY.krein_probes
     else:
         assert full > 25

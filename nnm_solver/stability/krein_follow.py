@@ -6,7 +6,9 @@ in the branch parameter sigma through a generic collision: a secant on it (Dekke
 did not halve in three steps), each value from the problem's local eigen-solver near the pair (shift-invert Arnoldi,
 Locator.local_collision), the shift moving with the pair as it drifts.  The secant's convergence is checked by one
 local evaluation past the predicted root (_beyond_root) or past a converged iterate (_root_within): a secant stalled
-where the gap is far from linear is not taken for converged.
+where the gap is far from linear is not taken for converged.  A secant that stalled next to a bracket's end (a complex
+pair's tiny gap beside a real side's large one) is moved clear of that end the next time (_clear_of_ends), and then
+bisects.
 """
 from __future__ import annotations
 
@@ -85,6 +87,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
     last = [(lo, g_lo), (hi, g_hi)]       # the two latest evaluations, for the secant step
     widths = [abs(hi - lo)]
     local, stalled = True, False
+    beside = 0                            # secant iterates that landed next to a bracket's end and did not cross
     for _ in range(60):
         if loc._converged(lo, hi):
             if local:                # both ends' pair (local evaluations or the ends' spectra) bracket its root
@@ -97,7 +100,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             c = x2 - g2 * (x2 - x1) / (g2 - g1)          # secant (Dekker): fast where g is linear
         secant = c is not None and min(lo, hi) < c < max(lo, hi) and not stalled and not (
             len(widths) > 3 and widths[-1] > 0.5 * widths[-4])
-        stalled = False
+        stalled, overshot, near = False, False, False
         if not secant:
             c = 0.5 * (lo + hi)                          # bisection keeps the bracket shrinking
         elif local:
@@ -120,6 +123,7 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 widths.append(abs(hi - lo))
                 stalled = (g_b > 0) == (g2 > 0)      # the secant stalled (the root lies farther): a bisection next
                 continue
+            c, overshot, near = _clear_of_ends(c, lo, hi, beside > 0)
         r_c = loc.local_collision(c, shift)
         if r_c is not None:                  # this collision only: its test function is the flag
             g_c = krein_gap(r_c, rho_star, pm)
@@ -139,6 +143,9 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
             hi = c
         last = [last[1], (c, g_c)]
         widths.append(abs(hi - lo))
+        if secant and local and near and g_c is not None and _stalled_beside(c, g_c, x1, g1, x2, g2):
+            beside += 1
+            stalled = overshot                        # (moved beyond the secant's point: the next step bisects)
         if secant and local and g_c is not None:
             # converged when the secant step moved the energy by less than a quarter of the margin: its root is
             # then within the margin points of _flag_change_near around c, which check the flag there
@@ -157,6 +164,32 @@ def follow_pair(loc, lo, hi, rho_star, f_lo, r_lo, r_hi):
                 widths.append(abs(hi - lo))
                 stalled = True               # the next step bisects
     return (lo, hi), local, None
+
+
+def _clear_of_ends(c, lo, hi, again):
+    """(c', moved, near): whether a secant iterate c lies within STABILITY.krein_end_fraction of the bracket's width
+    from one of its ends (near) and, where an earlier one did so and did not cross (again), c moved
+    STABILITY.krein_overshoot times as far from that end (at most to the midpoint).  A secant through a complex
+    pair's tiny negative gap and a real side's large positive one lands next to the complex point whether the root is
+    there or not: the aircraft's NNM 20 near 212.6 J, the pair's imaginary part stationary at 5.8e-6 over the
+    bracket's complex end, the root 12 % of the bracket away; two iterates 1e-5 apart before each bisection.  Where
+    g is linear the root lies between the end and c' (a bracket 10 times the secant's step); where it is not, the
+    bracket shrinks by c' and the next step bisects.  The first such iterate is taken as it is: where the root does
+    lie next to the end (a linear g), it is found there."""
+    a, b = min(lo, hi), max(lo, hi)
+    reach = STABILITY.krein_end_fraction * (b - a)
+    if c - a < reach:
+        return (min(a + STABILITY.krein_overshoot * (c - a), 0.5 * (a + b)), True, True) if again else (c, False, True)
+    if b - c < reach:
+        return (max(b - STABILITY.krein_overshoot * (b - c), 0.5 * (a + b)), True, True) if again else (c, False, True)
+    return c, False, False
+
+
+def _stalled_beside(c, g_c, x1, g1, x2, g2):
+    """Did a secant iterate c next to a bracket's end stall: its gap g_c of the same sign as that of the nearer of
+    the two points it came from and at least half its size (a secant on a linear g leaves a gap much smaller)?"""
+    g_near = g1 if abs(c - x1) < abs(c - x2) else g2
+    return g_near is not None and (g_c > 0) == (g_near > 0) and abs(g_c) >= 0.5 * abs(g_near)
 
 
 def _beyond_root(loc, x1, x2, g2, c, lo, hi, rho_star, shift, pm):

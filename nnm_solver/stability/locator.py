@@ -215,8 +215,8 @@ class Locator(BracketRoots):
     def _from_latest(self, sigma, u_pred, refresh=True):
         """The point at sigma from the latest located point when it is close (the root finders' last
         iterations): chord iterations with that point's factorisation, from that point moved to sigma's hyperplane
-        (all the hyperplanes are parallel), to a tolerance STABILITY.chord_tol_factor tighter (chord iterations stop
-        just below the tolerance, where Newton overshoots it: fold test functions need the accuracy).  The result must
+        (all the hyperplanes are parallel), to a tighter tolerance (chord_tol: chord iterations stop just below the
+        tolerance, where Newton overshoots it: fold and Krein test functions need the accuracy).  The result must
         continue the branch: within STABILITY.chord_continuity x |d sigma| of that point, and within
         STABILITY.jump_limit x the distance to the nearest known point (plus the corrector's accuracy) of the prediction
         (the interpolant of the known points).  Near a tongue a hyperplane can cut the solution curve twice within a
@@ -230,7 +230,7 @@ class Locator(BracketRoots):
         ds = abs(sigma - s_l)
         if ds > STABILITY.chord_reach * self.step:
             return None
-        tol = STABILITY.chord_tol_factor * self.tol
+        tol = self.chord_tol()
         try:
             result = correct_factored(self.problem, u_pred, self.p_a, self.settings, tol, self.w,
                                       start=(u_l + (sigma - s_l) * self.p_a, factor), refresh=refresh)
@@ -242,6 +242,16 @@ class Locator(BracketRoots):
         if np.linalg.norm(self.w * (result[0] - u_pred)) > STABILITY.jump_limit * nearest + 10 * tol:
             return None
         return result
+
+    def chord_tol(self):
+        """The chord iterations' corrector tolerance (relative periodicity error): STABILITY.chord_tol_factor x the
+        continuation's, and at most STABILITY.chord_event_fraction x the events' relative energy tolerance rtol.
+        Across an event's final bracket the orbit changes by about rtol / 2 (E grows like the amplitude squared or
+        faster); the located orbits' error must lie well below that, or a test function's noise exceeds its change
+        across the bracket and the root finders halve the bracket on noise.  (A tolerance from each point's distance to
+        the latest one instead, looser while the iterates are far apart, left the noise at the final bracket, whose
+        other end was often computed far from its then neighbours: settings.py.)"""
+        return min(STABILITY.chord_tol_factor * self.tol, STABILITY.chord_event_fraction * self.rtol)
 
     def energy(self, sigma):
         return self.problem.energy(self.at(sigma)[0])

@@ -56,6 +56,19 @@ class StabilitySettings:
     chord_reach: float = 1.0
     #: ... to a corrector tolerance this much tighter than the continuation's
     chord_tol_factor: float = 1e-2
+    #: ... and at most this fraction of the events' relative energy tolerance (Locator.rtol; Locator.chord_tol): a
+    #: Krein pair's test function must change across the events' tolerance by more than its noise from the located
+    #: orbits' error.  Measured on the aircraft's NNM 20 (gauss6, the defaults; tol 1e-6, rtol 1e-8) at its torus near
+    #: 212.8 J: with orbits to 1e-8 (chord_tol_factor alone) the pair's imaginary part (2.8e-6 to 3.9e-6, the threshold
+    #: 3.5e-6) jumped between evaluations 1.5e-8 of the step apart by more than it changes over the tolerance's
+    #: 2e-8 (the noise ~7e-12 in the squared part against a change of ~4e-14), and the follower ended in 6-10
+    #: one-sided halvings; with 1e-10 none.  Its cost is state sweeps (the chord iterations' residuals, ~2 ms each
+    #: on the aircraft): to NNM 20's first energy fold 648 -> 775 in the event location, against 73 -> 58 local
+    #: evaluations and 217 -> 191 sensitivity sweeps (~17 ms each); NNM 20 skipping tongues to 200 J 4577 -> 4996
+    #: state sweeps in the run, the same sensitivity sweeps.  A tolerance from each point's distance to the latest
+    #: one instead (looser while the iterates are far apart): 4587 state sweeps there, but to the fold 67 local
+    #: evaluations and the halvings back (the final bracket's other end computed far from its neighbours)
+    chord_event_fraction: float = 1e-2
     #: ... and must lie within this many times the pseudo-arclength difference from it (the same cut of the curve)
     chord_continuity: float = 3.0
     #: (roots.py) Locator.root bisects once Illinois halved the same end's value this many times running (the
@@ -87,6 +100,10 @@ class StabilitySettings:
     #: the map by the point's own family tangent (a Jacobian at the point); farther away neither is needed
     #: (Locator.local_collision)
     trivial_reach: float = 0.1
+    #: the Krein follower's secant iterate within this fraction of the bracket's width from one of its ends is moved
+    #: krein_overshoot times as far from that end (krein_follow._clear_of_ends)
+    krein_end_fraction: float = 1e-2
+    krein_overshoot: float = 10.0
     #: the full flag's change is bracketed around a located collision to this fraction of the locator's energy
     #: tolerance (the two margin points of _flag_change_near)
     krein_margin: float = 0.8
