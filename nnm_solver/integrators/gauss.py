@@ -32,17 +32,20 @@ the (s, s) Pade approximant of exp, R(z) = P(z) / P(-z), so a step rotates a mod
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
 from .gauss_constants import GaussConstants, _constants, constants, rotation, tableau  # noqa: F401 (the names gauss gave)
-from .gauss_monodromy import monodromy as _monodromy, monodromy_factors as _monodromy_factors
+from .gauss_monodromy import (monodromy as _monodromy, monodromy_factors as _monodromy_factors,
+                              subtract_product as _subtract_product, velocity_factors as _velocity_factors)
 from .lowrank import DiagonalPlusLowRank
 from .newmark import solve_stages
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
-           "sweep_sensitivity", "sweep_factors"]
+           "sweep_sensitivity", "sweep_factors", "SweepStages", "sweep_sensitivity_stages", "reversible_half_block"]
 
 
 @_jit
@@ -190,6 +193,21 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n or n), Sv = dv_N/d[q0; v0], and
     sq_h = dq_N/dh, sv_h = dv_N/dh (n,).
     """
+    return sweep_sensitivity_stages(q0, v0, h, nsteps, system_kernel, s, all_columns, velocities)[0]
+
+
+@dataclass(frozen=True)
+class SweepStages:
+    """What a sensitivity sweep of nsteps steps of size h (s) leaves for more columns of its map at the same orbit: the
+    stage tangents Dseq (nsteps, s n_s) (reversible_half_block)."""
+
+    h: float
+    nsteps: int
+    Dseq: np.ndarray
+
+
+def sweep_sensitivity_stages(q0, v0, h, nsteps, system_kernel, s, all_columns=True, velocities=True):
+    """sweep_sensitivity's outputs and the sweep's SweepStages (None when the sweep failed)."""
     omega2, Bq, powers, coeffs, kinks = system_kernel
     k = _constants(omega2, Bq, h, s)
     n = q0.shape[0]
@@ -197,9 +215,36 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
     q, v, sq, sv, Dseq, ok = _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, k.C1, k.Cc, k.F,
                                            k.G, k.b, k.bbar, k.c, k.Abar, k.Minv)
     if not ok:
-        return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False
+        return (q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False), None
     Sq, Sv = _monodromy(k, Bq, nsteps, Dseq, ncols, velocities)
-    return q, v, Sq, Sv, sq, sv, True
+    return (q, v, Sq, Sv, sq, sv, True), SweepStages(float(h), int(nsteps), Dseq)
+
+
+def reversible_half_block(Gqq, stages, system_kernel, s):
+    r"""A11 = dq(2 t)/dq0 (n, n) of a symmetric reversible orbit (v0 = 0, q(t) = 0 at t = nsteps h) from its
+    quarter-period map G = d[q; v](t)/d[q0; v0]: Gqq = dq(t)/dq0 (the quarter-period shooting Jacobian's) and the
+    sweep's SweepStages, without integrating from t to 2 t.
+
+    The discrete Gauss map phi of q'' = f(q) with an odd f is symmetric (reversible: R phi R = phi^-1 for R = diag(I,
+    -I)) and commutes with -I, so P phi P = phi^-1 for P = diag(-I, I).  At z1 = (0, v1), a fixed point of P, the map
+    over the next quarter period is D phi(z1) = P G^-1 P, so the half-period map is M = P G^-1 P G; the scheme is
+    symplectic (G^-1 = -J G^T J), hence M_qq = Gvv^T Gqq + Gqv^T Gvq = 2 Gvv^T Gqq - I (G^T J G = J: Gqq^T Gvv -
+    Gvq^T Gqv = I).  With Gvv = diag(d) - U W (gauss_monodromy.velocity_factors, rank r = nsteps s n_s):
+
+        A11 = 2 diag(d) Gqq - 2 W^T (U^T Gqq) - I,
+
+    two n x r x n products (the half-period sweep's monodromy: one n x 2r x n product after a Volterra solve of twice
+    the size and twice the steps).  Exact for the discrete orbit when q(t) = 0; a converged shooting point has q(t) =
+    O(tol) |q0|, and A11 then differs from the half-period sweep's by about that (tests/test_gauss_monodromy.py)."""
+    omega2, Bq, _, _, _ = system_kernel
+    k = _constants(omega2, Bq, stages.h, s)
+    d, U, W = _velocity_factors(k, Bq, stages.nsteps, stages.Dseq)
+    Gqq = np.ascontiguousarray(Gqq[:, :Gqq.shape[0]])
+    A = (2.0 * d)[:, None] * Gqq
+    A[np.diag_indices_from(A)] -= 1.0
+    if U.shape[1]:
+        _subtract_product(A, np.ascontiguousarray(W.T), U.T @ Gqq, 2.0)
+    return A
 
 
 def sweep_factors(q0, v0, h, nsteps, system_kernel, s):
