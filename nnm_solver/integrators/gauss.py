@@ -57,8 +57,10 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
     ns = Bq.shape[0]
     s = b.shape[0]
     Qlin = np.empty((s, n))
-    for l in range(s):
-        Qlin[l] = C1[:, l] * q + h * Cc[:, l] * v
+    for i in range(n):              # (one pass over the modes, rows of C1 and Cc contiguous: the same numbers as
+        qi, vi = q[i], v[i]         # numpy's C1[:, l] * q + h * Cc[:, l] * v)
+        for l in range(s):
+            Qlin[l, i] = C1[i, l] * qi + (h * Cc[i, l]) * vi
     P = np.zeros((s, n))
     J = np.eye(s * ns)
     Dg = np.zeros(s * ns)
@@ -66,24 +68,36 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
     if ns > 0:
         Dlin = np.empty(s * ns)
         Dguess = np.empty(s * ns)
+        x = np.empty(n)
         for l in range(s):
             Dlin[l * ns:(l + 1) * ns] = Bq @ Qlin[l]
             tl = c[l] * h
-            Dguess[l * ns:(l + 1) * ns] = Bq @ (q + tl * v + 0.5 * tl * tl * a)
+            t2 = 0.5 * tl * tl
+            for i in range(n):                  # q + tl v + tl^2 a / 2 without numpy's temporaries
+                x[i] = (q[i] + tl * v[i]) + t2 * a[i]
+            Dguess[l * ns:(l + 1) * ns] = Bq @ x
         D, J, g, Dg, ok = solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess, 0)
         for l in range(s):
             P[l] = -(Bq.T @ g[l * ns:(l + 1) * ns])
+    # f(Q_l) = -w^2 (Qlin_l + sum_j F_lj P_j) + P_l, then q1, v1: one pass over the modes (each F[i] contiguous),
+    # each mode's operations in numpy's order (the same numbers)
     fQ = np.empty((s, n))
-    for l in range(s):
-        Ql = Qlin[l].copy()
-        for j in range(s):
-            Ql += F[:, l, j] * P[j]
-        fQ[l] = -omega2 * Ql + P[l]
-    q1 = q + h * v
-    v1 = v.copy()
-    for l in range(s):
-        q1 += (h * h * bbar[l]) * fQ[l]
-        v1 += (h * b[l]) * fQ[l]
+    q1 = np.empty(n)
+    v1 = np.empty(n)
+    for i in range(n):
+        qi = q[i] + h * v[i]
+        vi = v[i]
+        w2 = -omega2[i]
+        for l in range(s):
+            Ql = Qlin[l, i]
+            for j in range(s):
+                Ql += F[i, l, j] * P[j, i]
+            f = w2 * Ql + P[l, i]
+            fQ[l, i] = f
+            qi += (h * h * bbar[l]) * f
+            vi += (h * b[l]) * f
+        q1[i] = qi
+        v1[i] = vi
     if ns > 0:
         a1 = -omega2 * q1 - Bq.T @ law_force(Bq @ q1, powers, coeffs, kinks)
     else:
@@ -153,17 +167,22 @@ def _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, C1, Cc, 
         if not ok:
             return q1, v1, sq, sv, Dseq, False
         Dseq[k] = Dg
-        # r0[l, m] = sq 1 + c_l (v + h sv) + 2 h (Abar fQ)_l ;  Q'lin = Minv r0
-        r0 = np.empty((s, n))
-        for l in range(s):
-            acc = sq + c[l] * (v + h * sv)
-            for j in range(s):
-                acc = acc + (2.0 * h * Abar[l, j]) * fQ[j]
-            r0[l] = acc
-        Qp = np.zeros((s, n))
-        for l in range(s):
-            for j in range(s):
-                Qp[l] += Minv[:, l, j] * r0[j]
+        # r0[l, m] = sq 1 + c_l (v + h sv) + 2 h (Abar fQ)_l ;  Q'lin = Minv r0: one pass over the modes (each
+        # Minv[i] contiguous), each mode's operations in the order of numpy's expressions (the same numbers)
+        Qp = np.empty((s, n))
+        r0 = np.empty(s)
+        for i in range(n):
+            base = v[i] + h * sv[i]
+            for l in range(s):
+                acc = sq[i] + c[l] * base
+                for j in range(s):
+                    acc = acc + (2.0 * h * Abar[l, j]) * fQ[j, i]
+                r0[l] = acc
+            for l in range(s):
+                acc = 0.0
+                for j in range(s):
+                    acc += Minv[i, l, j] * r0[j]
+                Qp[l, i] = acc
         Pp = np.zeros((s, n))
         if ns > 0:
             rhs = np.empty(s * ns)
@@ -173,15 +192,24 @@ def _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, C1, Cc, 
             w = Dg * dd
             for l in range(s):
                 Pp[l] = -(Bq.T @ w[l * ns:(l + 1) * ns])
+            for i in range(n):
+                for l in range(s):
+                    acc = Qp[l, i]
+                    for j in range(s):
+                        acc += F[i, l, j] * Pp[j, i]
+                    Qp[l, i] = acc
+        sq1 = np.empty(n)
+        sv1 = np.empty(n)
+        for i in range(n):
+            a_q = (sq[i] + v[i]) + h * sv[i]
+            a_v = sv[i]
+            w2 = -omega2[i]
             for l in range(s):
-                for j in range(s):
-                    Qp[l] += F[:, l, j] * Pp[j]
-        sq1 = sq + v + h * sv
-        sv1 = sv.copy()
-        for l in range(s):
-            fp = -omega2 * Qp[l] + Pp[l]
-            sq1 += (2.0 * h * bbar[l]) * fQ[l] + (h * h * bbar[l]) * fp
-            sv1 += b[l] * fQ[l] + (h * b[l]) * fp
+                fp = w2 * Qp[l, i] + Pp[l, i]
+                a_q += (2.0 * h * bbar[l]) * fQ[l, i] + (h * h * bbar[l]) * fp
+                a_v += b[l] * fQ[l, i] + (h * b[l]) * fp
+            sq1[i] = a_q
+            sv1[i] = a_v
         sq, sv = sq1, sv1
         q, v, a = q1, v1, a1
     return q, v, sq, sv, Dseq, True

@@ -123,7 +123,7 @@ class OrbitSettings:
     half_map: str = "reversible"
     #: ... the reversible route is taken when the quarter residual |q(T/4)| is at most this fraction of |q0| (its A11
     #: differs from the sweep's by about that, relative: tests/test_gauss_monodromy.py)
-    reversible_residual: float = 1e-6
+    reversible_residual: float = 1e-7
     #: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
     #: (relative to max(1, max |diag A|)); above it the call counts as failed (local_collision: the shift's real
     #: part, then the full spectrum)
