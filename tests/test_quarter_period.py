@@ -176,8 +176,8 @@ def test_the_half_period_map_from_the_quarter_period_sweep(monkeypatch, integrat
     assert np.max(np.abs(A_sweep - np.diag(np.diag(A_sweep)))) > 1e-2    # (the springs couple the modes)
     assert np.allclose(np.sort_complex(prob.multipliers(u)), mu_rev, atol=1e-9)
     # a residual above the bound: the sweep
-    monkeypatch.setattr(shooting_stability, "ORBITS", dataclasses.replace(shooting_stability.ORBITS, half_map="reversible",
-                                                                           reversible_residual=0.0))
+    monkeypatch.setattr(shooting_stability, "ORBITS", dataclasses.replace(
+        shooting_stability.ORBITS, half_map="reversible", reversible_residual=0.0))
     prob._accepted_maps = None
     prob.stability_maps()
     assert calls == [prob.spp // 2] * 2

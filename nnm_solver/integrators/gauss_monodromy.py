@@ -202,8 +202,8 @@ def monodromy_factors(k, Bq, nsteps, Dseq):
 
 
 def velocity_factors(k, Bq, nsteps, Dseq):
-    """dv_N / dv0 as (d (n,), U (n, r), W (r, n)) with dv_N / dv0 = diag(d) - U @ W, r = nsteps s n_s: the block Sv[:, n:]
-    of monodromy's with ncols = 2n, without the dq0 columns' Volterra solve or any n x n product (the reversible
+    """dv_N / dv0 as (d (n,), U (n, r), W (r, n)) with dv_N / dv0 = diag(d) - U @ W, r = nsteps s n_s: the block
+    Sv[:, n:] of monodromy's with ncols = 2n, without the dq0 columns' Volterra solve or any n x n product (the reversible
     half-period map, gauss.reversible_half_block, needs only this block beside the quarter map's dq/dq0)."""
     n = Bq.shape[1]
     N = int(nsteps)

@@ -92,7 +92,8 @@ class Integrator:
         return None
 
     def sensitivity_stages(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
-        """(sensitivity's outputs, a record of the sweep for reversible_half_block or None where the scheme has none)."""
+        """(sensitivity's outputs, a record of the sweep for reversible_half_block; None where the scheme has
+        none)."""
         return self.sensitivity(system, q0, v0, h, nsteps, all_columns, velocities), None
 
     def reversible_half_block(self, system, stages, Gqq):
