@@ -24,7 +24,8 @@ stage perturbations dQ_k = C_m z_k + F_m p_k and p_k = -Bq^T (D_k dd_k), D_k = g
 The monodromy is assembled exactly, as for Newmark, from the per-mode linear maps and a recursion on
 the s n_s stage deformations only (gauss_monodromy.py); the derivative with respect to h is carried as
 one extra column in the sweep.  Both are the exact derivatives of the discrete map (tested against
-finite differences).
+finite differences).  The map is symplectic and, for odd forces, reversible: the half-period block A11 of a
+reversible orbit follows from its quarter-period map (``reversible_half_block``), without the second quarter's sweep.
 
 Per-mode rotation of the linear discrete map: the stability function of the s-stage Gauss method is
 the (s, s) Pade approximant of exp, R(z) = P(z) / P(-z), so a step rotates a mode of frequency w by
