@@ -264,7 +264,7 @@ def reversible_half_block(Gqq, stages, system_kernel, s):
 
     two n x r x n products (the half-period sweep's monodromy: one n x 2r x n product after a Volterra solve of twice
     the size and twice the steps).  Exact for the discrete orbit when q(t) = 0; a converged shooting point has q(t) =
-    O(tol) |q0|, and A11 then differs from the half-period sweep's by about that (tests/test_gauss_monodromy.py)."""
+    O(tol) |q0|, and A11 then differs from the half-period sweep's by about that (tests/test_quarter_period.py)."""
     omega2, Bq, _, _, _ = system_kernel
     k = _constants(omega2, Bq, stages.h, s)
     d, U, W = _velocity_factors(k, Bq, stages.nsteps, stages.Dseq)

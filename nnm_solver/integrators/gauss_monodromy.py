@@ -203,8 +203,8 @@ def monodromy_factors(k, Bq, nsteps, Dseq):
 
 def velocity_factors(k, Bq, nsteps, Dseq):
     """dv_N / dv0 as (d (n,), U (n, r), W (r, n)) with dv_N / dv0 = diag(d) - U @ W, r = nsteps s n_s: the block
-    Sv[:, n:] of monodromy's with ncols = 2n, without the dq0 columns' Volterra solve or any n x n product (the reversible
-    half-period map, gauss.reversible_half_block, needs only this block beside the quarter map's dq/dq0)."""
+    Sv[:, n:] of monodromy's with ncols = 2n, without the dq0 columns' Volterra solve or any n x n product (the
+    reversible half-period map, gauss.reversible_half_block, needs only this block beside the quarter map's dq/dq0)."""
     n = Bq.shape[1]
     N = int(nsteps)
     PN, Hom, HomV, CAE, Uq, Uv = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N, True)

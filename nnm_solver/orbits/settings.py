@@ -122,7 +122,7 @@ class OrbitSettings:
     #: by a sensitivity sweep over T/2 (the reference route; Newmark always)
     half_map: str = "reversible"
     #: ... the reversible route is taken when the quarter residual |q(T/4)| is at most this fraction of |q0| (its A11
-    #: differs from the sweep's by about that, relative: tests/test_gauss_monodromy.py)
+    #: differs from the sweep's by about that, relative: tests/test_quarter_period.py)
     reversible_residual: float = 1e-7
     #: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
     #: (relative to max(1, max |diag A|)); above it the call counts as failed (local_collision: the shift's real
