@@ -118,3 +118,42 @@ def test_no_springs_is_the_linear_map():
     P = np.linalg.matrix_power(k.A_lin, 12)
     assert np.allclose(Sq, np.hstack([np.diag(P[:, 0, 0]), np.diag(P[:, 0, 1])]), rtol=0, atol=1e-14)
     assert np.allclose(Sv, np.hstack([np.diag(P[:, 1, 0]), np.diag(P[:, 1, 1])]), rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("N", [1, 7, 25])
+def test_velocity_factors_are_the_monodromys_dv_dv0_block(N):
+    """gauss_monodromy.velocity_factors: diag(d) - U W is monodromy's Sv[:, n:] (the dv0 columns alone)."""
+    system = _system()
+    n, ns = system.n, system.Bq.shape[0]
+    k = gauss.GaussConstants(system.omega2, system.Bq, 0.07, 3)
+    Dseq = np.random.default_rng(N).uniform(-0.5, 3.0, size=(N, 3 * ns))
+    d, U, W = gauss_monodromy.velocity_factors(k, system.Bq, N, Dseq)
+    assert U.shape == (n, N * 3 * ns) and W.shape == (N * 3 * ns, n)
+    Sv = monodromy_reference(k, system.Bq, N, Dseq, 2 * n)[1][:, n:]
+    assert np.max(np.abs(np.diag(d) - U @ W - Sv)) <= 1e-13 * np.max(np.abs(Sv))
+
+
+def test_reversible_half_block_is_the_quarter_maps_formula():
+    """gauss.reversible_half_block from the record of a dq0-columns-only sweep equals 2 Gvv^T Gqq - I of the full
+    quarter map (all columns and velocity rows), at any state; and that map is symplectic (G^T J G = J, which the
+    formula assumes) to round-off."""
+    system = _system()
+    n = system.n
+    z0 = np.random.default_rng(3).normal(size=2 * n)
+    h, N = 0.08, 30
+    out, stages = gauss.sweep_sensitivity_stages(z0[:n], z0[n:], h, N, system.kernel, 3, False, False)
+    assert out[-1] and out[3] is None and stages.nsteps == N and stages.Dseq.shape == (N, 3 * system.Bq.shape[0])
+    A11 = gauss.reversible_half_block(out[2], stages, system.kernel, 3)
+    _, _, Sq, Sv, _, _, ok = gauss.sweep_sensitivity(z0[:n], z0[n:], h, N, system.kernel, 3, True, True)
+    assert np.array_equal(out[2], Sq[:, :n])
+    G = np.vstack([Sq, Sv])
+    J = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
+    assert np.max(np.abs(G.T @ J @ G - J)) < 1e-12 * np.max(np.abs(G)) ** 2
+    assert np.max(np.abs(G - np.eye(2 * n))) > 0.1                       # (the springs matter)
+    dense = 2 * Sv[:, n:].T @ Sq[:, :n] - np.eye(n)
+    assert np.max(np.abs(A11 - dense)) <= 1e-13 * np.max(np.abs(dense))
+    no_springs = modal_system(nnm.Model(np.eye(3), np.diag([1.0, 4.0, 9.0]), []))
+    out, stages = gauss.sweep_sensitivity_stages(np.ones(3), np.zeros(3), 0.1, 5, no_springs.kernel, 3, False, False)
+    P = np.linalg.matrix_power(gauss.GaussConstants(no_springs.omega2, no_springs.Bq, 0.1, 3).A_lin, 10)
+    assert np.allclose(gauss.reversible_half_block(out[2], stages, no_springs.kernel, 3), np.diag(P[:, 0, 0]),
+                       rtol=0, atol=1e-14)                             # the linear modes: cos 2 theta = 2 cos^2 - 1

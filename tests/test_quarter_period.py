@@ -1,10 +1,13 @@
 """Quarter-period shooting (orbits/shooting.py): H = q(T/4) for reversible orbits of odd systems, the square
 corrector it gives, and the continuation guards that came with it (continuation.py)."""
+import dataclasses
+
 import numpy as np
 import pytest
 
 import nnm_solver as nnm
 from nnm_solver.continuation.engine import ContinuationSettings, LeastSquares, _unseen_turns, correct
+from nnm_solver.integrators.registry import get_integrator
 from nnm_solver.model.modal import modal_system
 from nnm_solver.orbits.shooting import ShootingProblem
 
@@ -136,3 +139,59 @@ def test_an_exactly_singular_least_squares_system_gives_a_non_finite_solution_no
     for A in (tall, np.hstack([np.vstack([tall] * 40), np.zeros((120, 70))])):
         x = LeastSquares(np.array(A, order="F")).solve(np.ones(A.shape[0]))
         assert not np.all(np.isfinite(x))
+
+
+def _half_sweeps(monkeypatch, prob):
+    """Count the sensitivity sweeps the problem's integrator makes (their numbers of steps)."""
+    calls = []
+    cls = type(prob.integrator)
+    sensitivity = cls.sensitivity
+
+    def counted(self, system, q0, v0, h, nsteps, *args):
+        calls.append(nsteps)
+        return sensitivity(self, system, q0, v0, h, nsteps, *args)
+    monkeypatch.setattr(cls, "sensitivity", counted)
+    return calls
+
+
+@pytest.mark.parametrize("integrator", ["gauss4", "gauss6"])
+def test_the_half_period_map_from_the_quarter_period_sweep(monkeypatch, integrator):
+    """Quarter-period shooting with a Gauss scheme makes the multipliers' A11 = dq(T/2)/dq0 from the accepted point's
+    quarter-period Jacobian (its discrete map's reversibility and symplecticity: no sweep over T/2); the same A11
+    and multipliers as the sweep route (ORBITS.half_map = "sweep") to the corrector's accuracy.  A residual above
+    ORBITS.reversible_residual, or Newmark (not symplectic), takes the sweep."""
+    from nnm_solver.orbits import shooting_stability
+    ms = modal_system(_three_dof())
+    prob, u = _converge(ms, 1, integrator, quarter=None, amplitude=0.9)
+    assert prob.quarter and np.array_equal(prob.last_evaluated(), u)
+    calls = _half_sweeps(monkeypatch, prob)
+    A_rev = prob.stability_maps()[0].copy()
+    mu_rev = np.sort_complex(prob.multipliers(u))
+    assert calls == []                                       # no sweep over T/2
+    monkeypatch.setattr(shooting_stability, "ORBITS", dataclasses.replace(shooting_stability.ORBITS, half_map="sweep"))
+    prob._accepted_maps = None
+    A_sweep = prob.stability_maps()[0].copy()
+    assert calls == [prob.spp // 2]
+    assert np.max(np.abs(A_rev - A_sweep)) < 1e-10 * np.max(np.abs(A_sweep))
+    assert np.max(np.abs(A_sweep - np.diag(np.diag(A_sweep)))) > 1e-2    # (the springs couple the modes)
+    assert np.allclose(np.sort_complex(prob.multipliers(u)), mu_rev, atol=1e-9)
+    # a residual above the bound: the sweep
+    monkeypatch.setattr(shooting_stability, "ORBITS", dataclasses.replace(
+        shooting_stability.ORBITS, half_map="reversible", reversible_residual=0.0))
+    prob._accepted_maps = None
+    prob.stability_maps()
+    assert calls == [prob.spp // 2] * 2
+
+
+def test_the_reversible_half_map_needs_the_orbit():
+    """Away from a reversible orbit (q(T/4) far from 0) the formula is not the half-period map: the premise the
+    residual bound guards."""
+    ms = modal_system(_three_dof())
+    prob = ShootingProblem(ms, 1, 100, integrator="gauss6")
+    q0 = np.array([0.3, 0.9, -0.4])
+    u = prob.pack(q0, np.zeros(3), prob.T_r * 0.9)
+    prob.jacobian(u)
+    A_rev = prob.integrator.reversible_half_block(ms, prob._stages, prob._maps[0])
+    A_sweep = prob.integrator.sensitivity(ms, q0, np.zeros(3), prob._h(prob.T_r * 0.9), prob.spp // 2, False, False)[2]
+    assert np.max(np.abs(A_rev - A_sweep)) > 1e-3 * np.max(np.abs(A_sweep))
+    assert get_integrator("newmark").reversible_half_block(ms, prob._stages, prob._maps[0]) is None

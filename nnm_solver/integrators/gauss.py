@@ -24,7 +24,8 @@ stage perturbations dQ_k = C_m z_k + F_m p_k and p_k = -Bq^T (D_k dd_k), D_k = g
 The monodromy is assembled exactly, as for Newmark, from the per-mode linear maps and a recursion on
 the s n_s stage deformations only (gauss_monodromy.py); the derivative with respect to h is carried as
 one extra column in the sweep.  Both are the exact derivatives of the discrete map (tested against
-finite differences).
+finite differences).  The map is symplectic and, for odd forces, reversible: the half-period block A11 of a
+reversible orbit follows from its quarter-period map (``reversible_half_block``), without the second quarter's sweep.
 
 Per-mode rotation of the linear discrete map: the stability function of the s-stage Gauss method is
 the (s, s) Pade approximant of exp, R(z) = P(z) / P(-z), so a step rotates a mode of frequency w by
@@ -32,17 +33,20 @@ the (s, s) Pade approximant of exp, R(z) = P(z) / P(-z), so a step rotates a mod
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
 from .gauss_constants import GaussConstants, _constants, constants, rotation, tableau  # noqa: F401 (the names gauss gave)
-from .gauss_monodromy import monodromy as _monodromy, monodromy_factors as _monodromy_factors
+from .gauss_monodromy import (monodromy as _monodromy, monodromy_factors as _monodromy_factors,
+                              subtract_product as _subtract_product, velocity_factors as _velocity_factors)
 from .lowrank import DiagonalPlusLowRank
 from .newmark import solve_stages
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
-           "sweep_sensitivity", "sweep_factors"]
+           "sweep_sensitivity", "sweep_factors", "SweepStages", "sweep_sensitivity_stages", "reversible_half_block"]
 
 
 @_jit
@@ -54,8 +58,10 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
     ns = Bq.shape[0]
     s = b.shape[0]
     Qlin = np.empty((s, n))
-    for l in range(s):
-        Qlin[l] = C1[:, l] * q + h * Cc[:, l] * v
+    for i in range(n):              # (one pass over the modes, rows of C1 and Cc contiguous: the same numbers as
+        qi, vi = q[i], v[i]         # numpy's C1[:, l] * q + h * Cc[:, l] * v)
+        for l in range(s):
+            Qlin[l, i] = C1[i, l] * qi + (h * Cc[i, l]) * vi
     P = np.zeros((s, n))
     J = np.eye(s * ns)
     Dg = np.zeros(s * ns)
@@ -63,24 +69,36 @@ def _step(q, v, a, h, omega2, Bq, powers, coeffs, kinks, C1, Cc, F, G, b, bbar, 
     if ns > 0:
         Dlin = np.empty(s * ns)
         Dguess = np.empty(s * ns)
+        x = np.empty(n)
         for l in range(s):
             Dlin[l * ns:(l + 1) * ns] = Bq @ Qlin[l]
             tl = c[l] * h
-            Dguess[l * ns:(l + 1) * ns] = Bq @ (q + tl * v + 0.5 * tl * tl * a)
+            t2 = 0.5 * tl * tl
+            for i in range(n):                  # q + tl v + tl^2 a / 2 without numpy's temporaries
+                x[i] = (q[i] + tl * v[i]) + t2 * a[i]
+            Dguess[l * ns:(l + 1) * ns] = Bq @ x
         D, J, g, Dg, ok = solve_stages(Dlin, G, s, ns, powers, coeffs, kinks, Dguess, 0)
         for l in range(s):
             P[l] = -(Bq.T @ g[l * ns:(l + 1) * ns])
+    # f(Q_l) = -w^2 (Qlin_l + sum_j F_lj P_j) + P_l, then q1, v1: one pass over the modes (each F[i] contiguous),
+    # each mode's operations in numpy's order (the same numbers)
     fQ = np.empty((s, n))
-    for l in range(s):
-        Ql = Qlin[l].copy()
-        for j in range(s):
-            Ql += F[:, l, j] * P[j]
-        fQ[l] = -omega2 * Ql + P[l]
-    q1 = q + h * v
-    v1 = v.copy()
-    for l in range(s):
-        q1 += (h * h * bbar[l]) * fQ[l]
-        v1 += (h * b[l]) * fQ[l]
+    q1 = np.empty(n)
+    v1 = np.empty(n)
+    for i in range(n):
+        qi = q[i] + h * v[i]
+        vi = v[i]
+        w2 = -omega2[i]
+        for l in range(s):
+            Ql = Qlin[l, i]
+            for j in range(s):
+                Ql += F[i, l, j] * P[j, i]
+            f = w2 * Ql + P[l, i]
+            fQ[l, i] = f
+            qi += (h * h * bbar[l]) * f
+            vi += (h * b[l]) * f
+        q1[i] = qi
+        v1[i] = vi
     if ns > 0:
         a1 = -omega2 * q1 - Bq.T @ law_force(Bq @ q1, powers, coeffs, kinks)
     else:
@@ -150,17 +168,22 @@ def _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, C1, Cc, 
         if not ok:
             return q1, v1, sq, sv, Dseq, False
         Dseq[k] = Dg
-        # r0[l, m] = sq 1 + c_l (v + h sv) + 2 h (Abar fQ)_l ;  Q'lin = Minv r0
-        r0 = np.empty((s, n))
-        for l in range(s):
-            acc = sq + c[l] * (v + h * sv)
-            for j in range(s):
-                acc = acc + (2.0 * h * Abar[l, j]) * fQ[j]
-            r0[l] = acc
-        Qp = np.zeros((s, n))
-        for l in range(s):
-            for j in range(s):
-                Qp[l] += Minv[:, l, j] * r0[j]
+        # r0[l, m] = sq 1 + c_l (v + h sv) + 2 h (Abar fQ)_l ;  Q'lin = Minv r0: one pass over the modes (each
+        # Minv[i] contiguous), each mode's operations in the order of numpy's expressions (the same numbers)
+        Qp = np.empty((s, n))
+        r0 = np.empty(s)
+        for i in range(n):
+            base = v[i] + h * sv[i]
+            for l in range(s):
+                acc = sq[i] + c[l] * base
+                for j in range(s):
+                    acc = acc + (2.0 * h * Abar[l, j]) * fQ[j, i]
+                r0[l] = acc
+            for l in range(s):
+                acc = 0.0
+                for j in range(s):
+                    acc += Minv[i, l, j] * r0[j]
+                Qp[l, i] = acc
         Pp = np.zeros((s, n))
         if ns > 0:
             rhs = np.empty(s * ns)
@@ -170,15 +193,24 @@ def _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, C1, Cc, 
             w = Dg * dd
             for l in range(s):
                 Pp[l] = -(Bq.T @ w[l * ns:(l + 1) * ns])
+            for i in range(n):
+                for l in range(s):
+                    acc = Qp[l, i]
+                    for j in range(s):
+                        acc += F[i, l, j] * Pp[j, i]
+                    Qp[l, i] = acc
+        sq1 = np.empty(n)
+        sv1 = np.empty(n)
+        for i in range(n):
+            a_q = (sq[i] + v[i]) + h * sv[i]
+            a_v = sv[i]
+            w2 = -omega2[i]
             for l in range(s):
-                for j in range(s):
-                    Qp[l] += F[:, l, j] * Pp[j]
-        sq1 = sq + v + h * sv
-        sv1 = sv.copy()
-        for l in range(s):
-            fp = -omega2 * Qp[l] + Pp[l]
-            sq1 += (2.0 * h * bbar[l]) * fQ[l] + (h * h * bbar[l]) * fp
-            sv1 += b[l] * fQ[l] + (h * b[l]) * fp
+                fp = w2 * Qp[l, i] + Pp[l, i]
+                a_q += (2.0 * h * bbar[l]) * fQ[l, i] + (h * h * bbar[l]) * fp
+                a_v += b[l] * fQ[l, i] + (h * b[l]) * fp
+            sq1[i] = a_q
+            sv1[i] = a_v
         sq, sv = sq1, sv1
         q, v, a = q1, v1, a1
     return q, v, sq, sv, Dseq, True
@@ -190,6 +222,21 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
     Returns (q, v, Sq, Sv, sq_h, sv_h, ok): Sq = dq_N/d[q0; v0] (n, 2n or n), Sv = dv_N/d[q0; v0], and
     sq_h = dq_N/dh, sv_h = dv_N/dh (n,).
     """
+    return sweep_sensitivity_stages(q0, v0, h, nsteps, system_kernel, s, all_columns, velocities)[0]
+
+
+@dataclass(frozen=True)
+class SweepStages:
+    """What a sensitivity sweep of nsteps steps of size h (s) leaves for more columns of its map at the same orbit: the
+    stage tangents Dseq (nsteps, s n_s) (reversible_half_block)."""
+
+    h: float
+    nsteps: int
+    Dseq: np.ndarray
+
+
+def sweep_sensitivity_stages(q0, v0, h, nsteps, system_kernel, s, all_columns=True, velocities=True):
+    """sweep_sensitivity's outputs and the sweep's SweepStages (None when the sweep failed)."""
     omega2, Bq, powers, coeffs, kinks = system_kernel
     k = _constants(omega2, Bq, h, s)
     n = q0.shape[0]
@@ -197,9 +244,36 @@ def sweep_sensitivity(q0, v0, h, nsteps, system_kernel, s, all_columns=True, vel
     q, v, sq, sv, Dseq, ok = _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, k.C1, k.Cc, k.F,
                                            k.G, k.b, k.bbar, k.c, k.Abar, k.Minv)
     if not ok:
-        return q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False
+        return (q, v, np.zeros((n, ncols)), np.zeros((n, ncols)), sq, sv, False), None
     Sq, Sv = _monodromy(k, Bq, nsteps, Dseq, ncols, velocities)
-    return q, v, Sq, Sv, sq, sv, True
+    return (q, v, Sq, Sv, sq, sv, True), SweepStages(float(h), int(nsteps), Dseq)
+
+
+def reversible_half_block(Gqq, stages, system_kernel, s):
+    r"""A11 = dq(2 t)/dq0 (n, n) of a symmetric reversible orbit (v0 = 0, q(t) = 0 at t = nsteps h) from its
+    quarter-period map G = d[q; v](t)/d[q0; v0]: Gqq = dq(t)/dq0 (the quarter-period shooting Jacobian's) and the
+    sweep's SweepStages, without integrating from t to 2 t.
+
+    The discrete Gauss map phi of q'' = f(q) with an odd f is symmetric (reversible: R phi R = phi^-1 for R = diag(I,
+    -I)) and commutes with -I, so P phi P = phi^-1 for P = diag(-I, I).  At z1 = (0, v1), a fixed point of P, the map
+    over the next quarter period is D phi(z1) = P G^-1 P, so the half-period map is M = P G^-1 P G; the scheme is
+    symplectic (G^-1 = -J G^T J), hence M_qq = Gvv^T Gqq + Gqv^T Gvq = 2 Gvv^T Gqq - I (G^T J G = J: Gqq^T Gvv -
+    Gvq^T Gqv = I).  With Gvv = diag(d) - U W (gauss_monodromy.velocity_factors, rank r = nsteps s n_s):
+
+        A11 = 2 diag(d) Gqq - 2 W^T (U^T Gqq) - I,
+
+    two n x r x n products (the half-period sweep's monodromy: one n x 2r x n product after a Volterra solve of twice
+    the size and twice the steps).  Exact for the discrete orbit when q(t) = 0; a converged shooting point has q(t) =
+    O(tol) |q0|, and A11 then differs from the half-period sweep's by about that (tests/test_quarter_period.py)."""
+    omega2, Bq, _, _, _ = system_kernel
+    k = _constants(omega2, Bq, stages.h, s)
+    d, U, W = _velocity_factors(k, Bq, stages.nsteps, stages.Dseq)
+    Gqq = np.ascontiguousarray(Gqq[:, :Gqq.shape[0]])
+    A = (2.0 * d)[:, None] * Gqq
+    A[np.diag_indices_from(A)] -= 1.0
+    if U.shape[1]:
+        _subtract_product(A, np.ascontiguousarray(W.T), U.T @ Gqq, 2.0)
+    return A
 
 
 def sweep_factors(q0, v0, h, nsteps, system_kernel, s):

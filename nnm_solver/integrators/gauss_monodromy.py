@@ -25,7 +25,7 @@ from scipy.linalg import blas
 from ..jit import jit as _jit, small_inverse
 from .settings import KERNELS
 
-__all__ = ["monodromy", "monodromy_factors"]
+__all__ = ["monodromy", "monodromy_factors", "velocity_factors", "subtract_product"]
 
 
 @_jit
@@ -201,6 +201,20 @@ def monodromy_factors(k, Bq, nsteps, Dseq):
     return PN[:, 0, 0].copy(), -Uq, W
 
 
+def velocity_factors(k, Bq, nsteps, Dseq):
+    """dv_N / dv0 as (d (n,), U (n, r), W (r, n)) with dv_N / dv0 = diag(d) - U @ W, r = nsteps s n_s: the block
+    Sv[:, n:] of monodromy's with ncols = 2n, without the dq0 columns' Volterra solve or any n x n product (the
+    reversible half-period map, gauss.reversible_half_block, needs only this block beside the quarter map's dq/dq0)."""
+    n = Bq.shape[1]
+    N = int(nsteps)
+    PN, Hom, HomV, CAE, Uq, Uv = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N, True)
+    if Bq.shape[0] == 0 or N == 0:
+        return PN[:, 1, 1].copy(), np.zeros((n, 0)), np.zeros((0, n))
+    # the dv0 columns' system is the dq0 columns' with HomV for Hom (the same triangular L)
+    W = _volterra(HomV, HomV[:0], _kernel(CAE, k.BB, k.s, Bq.shape[0]), k.G, Dseq, n)
+    return PN[:, 1, 1].copy(), Uv, W
+
+
 def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
     """Exact derivative of the discrete flow map d[q_N; v_N]/d[q0 (; v0)]: (Sq, Sv) (n, ncols) each (Sv None
     unless velocities).
@@ -226,16 +240,18 @@ def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):
     if ns == 0 or N == 0:
         return Sq, Sv
     W = _volterra(Hom, HomV, _kernel(CAE, k.BB, s, ns), k.G, Dseq, ncols)
-    _subtract_product(Sq, Uq, W)                          # - sum_j A^(N-1-j) E Bq^T w_j
+    subtract_product(Sq, Uq, W)                           # - sum_j A^(N-1-j) E Bq^T w_j
     if velocities:
-        _subtract_product(Sv, Uv, W)
+        subtract_product(Sv, Uv, W)
     return Sq, Sv
 
 
-def _subtract_product(S, U, W):
-    """S -= U @ W in place (BLAS dgemm with beta = 1 on the transposed, Fortran-ordered views: no temporary)."""
+def subtract_product(S, U, W, alpha=1.0):
+    """S -= alpha U @ W in place (C-ordered S (n, p), U (n, r), W (r, p)): BLAS dgemm on the transposed views, no
+    temporary of S's size."""
     if U.shape[1] == 0 or S.size == 0:
         return
-    out = blas.dgemm(-1.0, np.ascontiguousarray(W).T, np.ascontiguousarray(U).T, beta=1.0, c=S.T, overwrite_c=1)
+    out = blas.dgemm(-float(alpha), np.ascontiguousarray(W).T, np.ascontiguousarray(U).T, beta=1.0, c=S.T,
+                     overwrite_c=1)
     if not np.shares_memory(out, S):      # (BLAS worked on a copy: write it back)
         S[...] = out.T

@@ -10,6 +10,9 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
                                                   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
                                                      (velocities=False: Sv is None, not assembled)
     sensitivity_factors(system, q0, v0, h, nsteps) -> (q, v, dq_N/dq0 as diagonal + low rank, ok) or None
+    sensitivity_stages(...), reversible_half_block(system, stages, Gqq)
+                                                  -> a sweep with its record; the half-period dq/dq0 of a
+                                                     reversible orbit from its quarter map (Gauss: symplectic)
     linear_period(omega, steps_per_period)        -> T (s) whose discrete orbit closes for frequency omega
     relative_error(y)                             -> relative frequency error of a harmonic with h w = y
 
@@ -88,6 +91,16 @@ class Integrator:
         form (then use sensitivity)."""
         return None
 
+    def sensitivity_stages(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        """(sensitivity's outputs, a record of the sweep for reversible_half_block; None where the scheme has
+        none)."""
+        return self.sensitivity(system, q0, v0, h, nsteps, all_columns, velocities), None
+
+    def reversible_half_block(self, system, stages, Gqq):
+        """dq(2 t)/dq0 of a symmetric reversible orbit from its quarter-period sweep (sensitivity_stages' record, Gqq
+        = dq(t)/dq0; gauss.reversible_half_block), or None where the scheme is not symplectic or kept no record."""
+        return None
+
 
 def _general(system):
     """True when the model has coupled elements (PolynomialStiffness): the general kernels (general.py)."""
@@ -140,6 +153,16 @@ class _Gauss(Integrator):
         if _general(system):
             return None
         return gauss.sweep_factors(q0, v0, h, nsteps, system.kernel, self.stages)
+
+    def sensitivity_stages(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
+        if _general(system):
+            return super().sensitivity_stages(system, q0, v0, h, nsteps, all_columns, velocities)
+        return gauss.sweep_sensitivity_stages(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
+
+    def reversible_half_block(self, system, stages, Gqq):
+        if stages is None or _general(system):
+            return None
+        return gauss.reversible_half_block(Gqq, stages, system.kernel, self.stages)
 
 
 #: Default steps per period: Newmark 200 (a fundamental-dominated orbit's frequency to 8e-5, the seed paper's

@@ -117,6 +117,13 @@ class OrbitSettings:
     #: period, is at most this share of n: the Krein follower's shifted solves then skip the n x n LU (setup
     #: O(n r^2) against O(n^3 / 3))
     low_rank_share: float = 1.0 / 3.0
+    #: quarter-period shooting's half-period map dq(T/2)/dq0 for the multipliers: "reversible" from the accepted point's
+    #: quarter-period sweep (integrators/gauss.py reversible_half_block: Gauss schemes; about half the cost), "sweep"
+    #: by a sensitivity sweep over T/2 (the reference route; Newmark always)
+    half_map: str = "reversible"
+    #: ... the reversible route is taken when the quarter residual |q(T/4)| is at most this fraction of |q0| (its A11
+    #: differs from the sweep's by about that, relative: tests/test_quarter_period.py)
+    reversible_residual: float = 1e-7
     #: Ritz pairs of the Woodbury shift-invert Arnoldi are trusted up to this residual ||A x - c x|| / ||x||
     #: (relative to max(1, max |diag A|)); above it the call counts as failed (local_collision: the shift's real
     #: part, then the full spectrum)

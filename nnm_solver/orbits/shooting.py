@@ -108,6 +108,7 @@ class ShootingProblem(ShootingError, ShootingStability):
         # the dv0 columns of the sensitivity are needed for v0 unknowns or the full-size Floquet problem
         self.all_columns = not (self.reversible and self.symmetric)
         self._maps = None         # (dq, dv)(T/4, T/2 or T) / dz0 at the last Jacobian evaluation (half_map)
+        self._stages = None       # ... and that sweep's record (Integrator.sensitivity_stages), or None
         #: real-line coordinates of the last multipliers where Krein collisions happen (events.py), or None
         self.collision = None
         self._accepted_maps = None  # ... at the last accepted point (accepted_map)
@@ -171,14 +172,16 @@ class ShootingProblem(ShootingError, ShootingStability):
             return bad
         h = self._h(T)
         # (quarter-period shooting needs no velocity rows: H = q(T/4))
-        q, v, Sq, Sv, sq_h, sv_h, ok = self.integrator.sensitivity(self.sys, q0, v0, h, self.nsteps,
-                                                                   self.all_columns, not self.quarter)
+        out, stages = self.integrator.sensitivity_stages(self.sys, q0, v0, h, self.nsteps, self.all_columns,
+                                                         not self.quarter)
+        q, v, Sq, Sv, sq_h, sv_h, ok = out
         if not ok:
             return bad
         self._end_state = (u.copy(), q, v)
         r = self._assemble(q, v, q0, v0)
         self._last_residual = (u.copy(), r)
         self._maps = (Sq, Sv)                           # d[q; v](end) / d[q0 (; v0)], kept as two blocks
+        self._stages = stages                           # ... and the sweep's record (shooting_stability: half_block)
         dh_du = self.frac * self.T_r / self.nsteps      # dh / du_T
         sgn = 1.0 if self.symmetric else -1.0
         # J = dH/du directly in the free unknowns (reversible: [q0; T], else [q0; v0; T] plus the phase row)

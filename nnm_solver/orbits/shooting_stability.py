@@ -2,8 +2,10 @@
 
 The sensitivity sweep of a shooting Jacobian gives the map d[q; v](T/2 or T) / d[q0 (; v0)] at no extra cost
 (kept as its two blocks, ``_maps``; ``accept`` keeps those of the accepted point).  Quarter-period shooting
-(the default, shooting.py) sweeps only to T/4: the half-period map is then swept once at the accepted point,
-when the multipliers are first asked for (``stability_maps``).  Symmetric reversible orbits
+(the default, shooting.py) sweeps only to T/4: the half-period block A11 is then made once at the accepted point,
+when the multipliers are first asked for (``stability_maps``): from the quarter-period map of the Jacobian there by
+the reversibility and symplecticity of the Gauss schemes' discrete map (ORBITS.half_map, gauss.reversible_half_block),
+or by a sensitivity sweep over T/2.  Symmetric reversible orbits
 (the default: odd forces, v0 = 0) need only its n x n block A11 = dq(T/2)/dq0, whose eigenvalues c give the
 multipliers (floquet.reversible_spectrum); other orbits use the full 2n x 2n monodromy.  ``ShootingProblem``
 inherits these methods.
@@ -55,8 +57,10 @@ class ShootingStability:
 
     def stability_maps(self):
         """(dq, dv)(T/2 or T) / d[q0 (; v0)] at the last accepted point: the blocks of the half-period (symmetric
-        orbits) or full-period map.  Quarter-period shooting sweeps them here, once per accepted point (one
-        sensitivity sweep over T/2); None if that integration fails or no point was accepted."""
+        orbits) or full-period map.  Quarter-period shooting makes them here, once per accepted point: A11 from the
+        quarter-period Jacobian's sweep at that point where the discrete map's reversibility gives it
+        (_reversible_half_block), else one sensitivity sweep over T/2; None if that integration fails or no point was
+        accepted."""
         maps = self._accepted_maps
         stale = maps is None or (self.all_columns and maps[0].shape[1] < 2 * self.n)
         if stale and getattr(self, "quarter", False) and hasattr(self, "accepted_u"):
@@ -68,7 +72,10 @@ class ShootingStability:
                 out = factored(self.sys, q0, v0, h, half)       # diagonal + low rank (lowrank.py)
             else:
                 out = None
-            if out is not None:
+            A11 = None if out is not None or self.all_columns else self._reversible_half_block()
+            if A11 is not None:
+                self._accepted_maps = (A11, None)
+            elif out is not None:
                 if out[-1]:
                     self._accepted_maps = (out[2].dense(), None)
                     self._accepted_factors = (out[2], self._accepted_maps[0])
@@ -78,6 +85,23 @@ class ShootingStability:
                 if out[-1]:
                     self._accepted_maps = (out[2], out[3])
         return self._accepted_maps
+
+    def _reversible_half_block(self):
+        """A11 of the accepted point from its quarter-period Jacobian's sweep (Integrator.reversible_half_block: the
+        discrete map's reversibility and symplecticity, no sweep over the second quarter), or None: not the route
+        (ORBITS.half_map), the latest Jacobian not at the accepted point, the scheme keeps no record, or the quarter
+        residual |q(T/4)| above ORBITS.reversible_residual |q0| (the formula holds for q(T/4) = 0: its error is of the
+        residual's order)."""
+        last, stages = getattr(self, "_last_residual", None), getattr(self, "_stages", None)
+        if (ORBITS.half_map != "reversible" or stages is None or last is None
+                or not np.array_equal(last[0], self.accepted_u)):
+            return None
+        q0, _, T = self.unpack(self.accepted_u)
+        if stages.nsteps != self.nsteps or stages.h != self._h(T):        # (the steps changed since: refinement)
+            return None
+        if not np.linalg.norm(last[1]) <= ORBITS.reversible_residual * np.linalg.norm(q0):
+            return None
+        return self.integrator.reversible_half_block(self.sys, stages, self._maps[0])
 
     def _low_rank_a11(self, maps):
         """The accepted point's A11 as a lowrank.DiagonalPlusLowRank when stability_maps kept that form for
