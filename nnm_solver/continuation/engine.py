@@ -14,6 +14,7 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
     problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
                                               (e.g. too large a change of period), or ''
     problem.energy(u) -> float                optional: the conserved energy, for the fold guard
+    problem.chord_iterations(...)             optional: the corrector's chord iterations compiled (CHORD_JUDGE)
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
@@ -109,6 +110,13 @@ class CorrectorFailure(Exception):
     pass
 
 
+#: the codes of a problem's compiled chord iterations (``problem.chord_iterations(u, u_pred, row, factor, last_norm,
+#: it, tol, settings) -> (u, r, it, last_norm, code)`` or None where it has none; e.g. orbits/condensed_chord.py): they
+#: stopped at an iterate whose residual r the corrector judges (converged, not finite, the last iteration); the step
+#: from it is not finite; the step contracted poorly (u is the next iterate: a fresh Jacobian there)
+CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = 0, 1, 2
+
+
 def correct(problem, u_pred, p, settings, tol, w=None):
     """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p in the
     norm |w * u|.
@@ -132,14 +140,26 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     u = u_pred.copy() if start is None else start[0].copy()
     factor = None if start is None else start[1]
     last_norm = None
-    for it in range(settings.max_iter + 1):
+    chord = getattr(problem, "chord_iterations", None)
+    it = 0
+    while True:
         fresh = False
         if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(stacked(J, row))
         else:
-            r = problem.residual(u)
+            # the problem's compiled chord iterations where it has them (the same iterates), else one residual
+            done = chord(u, u_pred, row, factor, last_norm, it, tol, settings) if chord is not None else None
+            if done is None:
+                r = problem.residual(u)
+            else:
+                u, r, it, last_norm, code = done
+                if code == CHORD_REFRESH:       # poor contraction: the Jacobian at the new iterate
+                    factor = None
+                    continue
+                if code == CHORD_SINGULAR:
+                    raise CorrectorFailure("singular corrector system")
         if not all_finite(r):
             raise CorrectorFailure("the time integration diverged (non-finite state)")
         err = problem.error(u, r)
@@ -166,6 +186,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             factor = None  # poor contraction: refresh the Jacobian at the next iterate
         last_norm = nrm
         u = u + du
+        it += 1
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 

@@ -115,6 +115,12 @@ class LeastSquares:
             (self._h, self._tau), self.R = sla.qr(A, mode="raw", overwrite_a=True, check_finite=False)
 
     @property
+    def compiled_qr(self):
+        """(Q, R) where ``solve`` is the compiled R^-1 Q^T b (``_qr_solve``, which compiled callers may run on them:
+        the same numbers), else None."""
+        return (self._Q, self.R) if _GEQRF is not None and self._lu is None and self._Q is not None else None
+
+    @property
     def rcond(self):
         """min |d_i| / max |d_i| of the triangular factor's diagonal (R, or U of the LU): a cheap conditioning
         indicator, made when read (the corrector does not read it)."""

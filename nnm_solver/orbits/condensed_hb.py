@@ -49,6 +49,7 @@ import math
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from . import condensed_chord as chord
 from . import condensed_energy_kernels as energy_kernels
 from . import condensed_kernels as kernels
 from .condensed_energy import condensed_energy, condensed_energy_gradient
@@ -203,6 +204,15 @@ class CondensedHBProblem(HBTruncationError):
                 J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
                 J[row, nD + 1] = -2.0 * w * a * c * self.w_r
         return r, J
+
+    def chord_iterations(self, u, u_pred, row, factor, last_norm, it, tol, settings):
+        """The corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates): (u, r, it,
+        last_norm, code), or None without the compiled kernels or the compiled QR (the engine iterates itself)."""
+        qr = factor.compiled_qr
+        if self._kernel is None or qr is None:
+            return None
+        return chord.chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
+                                      settings.max_iter, settings.refresh_ratio, *self._kernel[0])
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
