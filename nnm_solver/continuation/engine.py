@@ -111,7 +111,8 @@ class CorrectorFailure(Exception):
 
 
 #: the codes of a problem's compiled chord iterations (``problem.chord_iterations(u, u_pred, row, factor, last_norm,
-#: it, tol, settings) -> (u, r, it, last_norm, code)`` or None where it has none; e.g. orbits/condensed_chord.py): they
+#: it, tol, settings, fresh) -> (u, r, it, last_norm, code)`` or None where it has none, fresh the residual evaluated
+#: with the factorised Jacobian or None; e.g. orbits/condensed_chord.py): they
 #: stopped at an iterate whose residual r the corrector judges (converged, not finite, the last iteration); the step
 #: from it is not finite; the step contracted poorly (u is the next iterate: a fresh Jacobian there)
 CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = 0, 1, 2
@@ -148,18 +149,21 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(stacked(J, row))
-        else:
-            # the problem's compiled chord iterations where it has them (the same iterates), else one residual
-            done = chord(u, u_pred, row, factor, last_norm, it, tol, settings) if chord is not None else None
-            if done is None:
+        # the problem's compiled chord iterations where it has them (the same iterates), else one residual here
+        done = (chord(u, u_pred, row, factor, last_norm, it, tol, settings, r if fresh else None)
+                if chord is not None else None)
+        if done is None:
+            if not fresh:
                 r = problem.residual(u)
-            else:
-                u, r, it, last_norm, code = done
-                if code == CHORD_REFRESH:       # poor contraction: the Jacobian at the new iterate
-                    factor = None
-                    continue
-                if code == CHORD_SINGULAR:
-                    raise CorrectorFailure("singular corrector system")
+        else:
+            first = it
+            u, r, it, last_norm, code = done
+            fresh = fresh and it == first       # (J is the iterate's own only where no step was taken)
+            if code == CHORD_REFRESH:           # poor contraction: the Jacobian at the new iterate
+                factor = None
+                continue
+            if code == CHORD_SINGULAR:
+                raise CorrectorFailure("singular corrector system")
         if not all_finite(r):
             raise CorrectorFailure("the time integration diverged (non-finite state)")
         err = problem.error(u, r)

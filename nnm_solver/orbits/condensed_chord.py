@@ -7,7 +7,8 @@ The pseudo-arclength corrector (continuation/engine.py ``correct_factored``) ite
 
 until the relative residual ||F(u)|| / ||u[:-1]|| (CondensedHBProblem.error) falls below tol.  In Python each
 iteration costs ~25 us of calls around a ~10 us residual (the finiteness test, the error's two norms, the right-hand
-side, the solve's checks, the update).  ``chord_iterations`` runs them in one compiled call on the residual's kernel
+side, the solve's checks, the update).  ``chord_iterations`` runs them (and the step from an iterate whose Jacobian
+was just evaluated) in one compiled call on the residual's kernel
 (condensed_kernels.residual_jacobian) and the corrector's compiled QR solve (continuation/linalg.py ``_qr_solve``),
 with the engine's operations in its order: dot products by BLAS's ddot (numba's ``np.dot``: numpy's ``x.dot(y)`` and
 ``x @ y`` of 1-D arrays call the same routine; tests/test_per_point_round4.py checks the two agree bit for bit), so the
@@ -36,17 +37,22 @@ REFRESH = 2
 
 
 @jit
-def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh_ratio, cos1, r, beta, w_r, h2, fund,
-                     b_r, omega2, pairs, index, R0, R1, complete, E, P, powers, coeffs, kinks):
+def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh_ratio, fresh, cos1, r, beta, w_r, h2,
+                     fund, b_r, omega2, pairs, index, R0, R1, complete, E, P, powers, coeffs, kinks):
     """(u, F(u), it, last_norm, code): chord iterations of the corrector from the iterate u (number ``it``), with the
     factorisation Q R of [J; row^T] and the last step's norm ``last_norm`` (NaN: none to compare with), until a code
     (module docstring): JUDGE with the residual at u, SINGULAR with the residual at u, REFRESH with u the next iterate
-    (its residual not yet evaluated: the one returned is the previous iterate's).  The remaining arguments are the
-    residual kernel's constants (condensed_kernels.kernel_arguments)."""
+    (its residual not yet evaluated: the one returned is the previous iterate's).  fresh : the residual at u, evaluated
+    with the Jacobian that Q R factorises (its step is not tested for contraction), or an empty array.  The remaining
+    arguments are the residual kernel's constants (condensed_kernels.kernel_arguments)."""
     nD = u.shape[0] - 2
+    first = fresh.shape[0] > 0
     while True:
-        res = residual_jacobian(u, False, cos1, r, beta, w_r, h2, fund, b_r, omega2, pairs, index, R0, R1, complete,
-                                E, P, powers, coeffs, kinks)[0]
+        if first:
+            res = fresh
+        else:
+            res = residual_jacobian(u, False, cos1, r, beta, w_r, h2, fund, b_r, omega2, pairs, index, R0, R1,
+                                    complete, E, P, powers, coeffs, kinks)[0]
         for i in range(res.shape[0]):
             if not np.isfinite(res[i]):
                 return u, res, it, last_norm, JUDGE
@@ -62,7 +68,8 @@ def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh
         nrm = math.sqrt(np.dot(du, du))
         if not math.isfinite(nrm):
             return u, res, it, last_norm, SINGULAR
-        poor = nrm > refresh_ratio * last_norm          # (False against NaN: no earlier step)
+        poor = not first and nrm > refresh_ratio * last_norm          # (False against NaN: no earlier step)
+        first = False
         last_norm = nrm
         u = u + du
         it += 1
