@@ -14,7 +14,10 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
     problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
                                               (e.g. too large a change of period), or ''
     problem.energy(u) -> float                optional: the conserved energy, for the fold guard
-    problem.chord_iterations(...)             optional: the corrector's chord iterations compiled (CHORD_JUDGE)
+    problem.chord_iterations(u, u_pred, row, factor, last_norm, it, tol, settings, fresh)
+                                              optional: the corrector's chord iterations from iterate number it in one
+                                              call, the same iterates (e.g. orbits/condensed_chord.py): (u, r, it,
+                                              last_norm, CHORD_*), or None; fresh: r of the factorised Jacobian or None
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
@@ -110,11 +113,8 @@ class CorrectorFailure(Exception):
     pass
 
 
-#: the codes of a problem's compiled chord iterations (``problem.chord_iterations(u, u_pred, row, factor, last_norm,
-#: it, tol, settings, fresh) -> (u, r, it, last_norm, code)`` or None where it has none, fresh the residual evaluated
-#: with the factorised Jacobian or None; e.g. orbits/condensed_chord.py): they
-#: stopped at an iterate whose residual r the corrector judges (converged, not finite, the last iteration); the step
-#: from it is not finite; the step contracted poorly (u is the next iterate: a fresh Jacobian there)
+#: the codes of ``problem.chord_iterations`` (module docstring): stopped at an iterate whose residual the corrector
+#: judges; a non-finite step; poor contraction (u is the next iterate: a fresh Jacobian there)
 CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = 0, 1, 2
 
 

@@ -26,7 +26,7 @@ from ..continuation.linalg import _qr_solve
 from ..jit import jit
 from .condensed_kernels import residual_jacobian
 
-__all__ = ["JUDGE", "SINGULAR", "REFRESH", "chord_iterations"]
+__all__ = ["JUDGE", "SINGULAR", "REFRESH", "chord_iterations", "problem_chord_iterations"]
 
 #: chord_iterations stopped at an iterate whose residual the engine judges (converged, not finite, or the last one)
 JUDGE = 0
@@ -75,3 +75,19 @@ def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh
         it += 1
         if poor:
             return u, res, it, last_norm, REFRESH
+
+
+_NONE = np.zeros(0)          # (no residual of a fresh Jacobian given)
+
+
+def problem_chord_iterations(prob, u, u_pred, row, factor, last_norm, it, tol, settings, fresh=None):
+    """CondensedHBProblem.chord_iterations (the engine's hook, continuation/engine.py CHORD_JUDGE): (u, r, it, last_norm,
+    code) of ``chord_iterations`` for the condensed problem prob, or None without the compiled kernels or the compiled
+    QR (the engine iterates itself).  factor : the engine's LeastSquares; fresh : the residual at u evaluated with the
+    factorised Jacobian, or None.  (A problem class that changes the residual must not inherit this.)"""
+    qr = factor.compiled_qr
+    if prob._kernel is None or qr is None:
+        return None
+    return chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
+                            settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh,
+                            *prob._kernel[0])

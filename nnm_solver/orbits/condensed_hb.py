@@ -61,8 +61,6 @@ from .hill import hill_multipliers
 
 __all__ = ["LinearPart", "CondensedHBProblem"]
 
-_NONE = np.zeros(0)          # (chord_iterations: no residual of a fresh Jacobian given)
-
 
 class CondensedHBProblem(HBTruncationError):
     """Condensed harmonic-balance equations of one NNM branch (module docstring), for the
@@ -207,16 +205,8 @@ class CondensedHBProblem(HBTruncationError):
                 J[row, nD + 1] = -2.0 * w * a * c * self.w_r
         return r, J
 
-    def chord_iterations(self, u, u_pred, row, factor, last_norm, it, tol, settings, fresh=None):
-        """The corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates): (u, r, it,
-        last_norm, code), or None without the compiled kernels or the compiled QR (the engine iterates itself).
-        fresh : the residual at u evaluated with the factorised Jacobian, or None."""
-        qr = factor.compiled_qr
-        if self._kernel is None or qr is None:
-            return None
-        return chord.chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
-                                      settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh,
-                                      *self._kernel[0])
+    #: the corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates)
+    chord_iterations = chord.problem_chord_iterations
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
