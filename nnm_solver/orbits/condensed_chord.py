@@ -15,6 +15,8 @@ with the engine's operations in its order: dot products by BLAS's ddot (numba's 
 iterates are the engine's bit for bit.  It returns to the engine where the engine decides something other than the
 next chord step: the residual at an iterate that converged, is not finite, or is the last one (``max_iter``); a
 non-finite step (a singular system); a step that contracted poorly (the engine refreshes the Jacobian there).
+(numba caches this kernel with the residual's and the solve's code inside: after editing condensed_kernels.py or
+continuation/linalg.py, touch this file so that it is compiled again; jit.py.)
 """
 from __future__ import annotations
 
