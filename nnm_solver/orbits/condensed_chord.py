@@ -24,9 +24,13 @@ import math
 
 import numpy as np
 
-from ..continuation.linalg import _qr_solve
+from ..continuation import linalg
 from ..jit import jit
 from .condensed_kernels import residual_jacobian
+
+#: the corrector's compiled QR solve (absent without numba's LAPACK: then LeastSquares.compiled_qr is None and the
+#: kernel is never called)
+_qr_solve = getattr(linalg, "_qr_solve", None)
 
 __all__ = ["JUDGE", "SINGULAR", "REFRESH", "chord_iterations", "problem_chord_iterations"]
 
