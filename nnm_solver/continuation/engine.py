@@ -171,11 +171,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             if not fresh and not refresh:
                 return u, None, it, err, None
             if not fresh:  # the monodromy/Jacobian must belong to the converged point
-                r, J = problem.jacobian(u)
-                err = problem.error(u, r)
-                if not err < tol:
-                    raise CorrectorFailure("the residual changed when the Jacobian was refreshed")
-                factor = LeastSquares(stacked(J, row))
+                J, err, factor = jacobian_at(problem, u, row, tol)
             return u, J, it, err, factor
         if it == settings.max_iter:
             break
@@ -192,6 +188,17 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
         u = u + du
         it += 1
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
+
+
+def jacobian_at(problem, u, row, tol):
+    """(J, error, factorisation of [J; row^T]) at a point u the chord iterations converged to on an older Jacobian:
+    the Jacobian (and the problem's monodromy) must belong to the converged point.  CorrectorFailure if u's residual,
+    evaluated again with it, is no longer within tol."""
+    r, J = problem.jacobian(u)
+    err = problem.error(u, r)
+    if not err < tol:
+        raise CorrectorFailure("the residual changed when the Jacobian was refreshed")
+    return J, err, LeastSquares(stacked(J, row))
 
 
 def scale_of(problem, u):
@@ -231,7 +238,9 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
     while True:
         u_pred = u + s * p
         try:
-            u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w)
+            # (the Jacobian at the converged point only once the step passed the checks that need no Jacobian:
+            # on the aircraft's NNM 20 skipping its tongues 36 refused steps had a Jacobian and a factorisation made)
+            u_new, J_new, it, err, factor_new = correct_factored(problem, u_pred, p, settings, tol, w, refresh=False)
             dist = _norm(w * (u_new - u_pred))
             # (a step far below the corrector's own accuracy, ~tol in the scaled units, is not judged by it)
             if dist > settings.max_correction * s and dist > 10 * tol:
@@ -240,6 +249,8 @@ def pseudo_arclength(problem, u0, p0, settings, tol):
                 reason = check_step(u, u_new)
                 if reason:
                     raise CorrectorFailure(reason)
+            if J_new is None:
+                J_new, err, factor_new = jacobian_at(problem, u_new, w * w * p, tol)
             p_new, factor_new = tangent_factored(J_new, p, w, factor_new)
             if not all_finite(p_new):
                 raise CorrectorFailure("no tangent at the new point (a singular Jacobian)")
