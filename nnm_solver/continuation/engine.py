@@ -115,7 +115,7 @@ class CorrectorFailure(Exception):
 
 #: the codes of ``problem.chord_iterations`` (module docstring): stopped at an iterate whose residual the corrector
 #: judges; a non-finite step; poor contraction (u is the next iterate: a fresh Jacobian there)
-CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = 0, 1, 2
+CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = "judge", "singular", "refresh"
 
 
 def correct(problem, u_pred, p, settings, tol, w=None):

@@ -63,6 +63,10 @@ if _GEQRF is not None:
         return x
 
 
+#: the compiled R^-1 Q^T b on LeastSquares.compiled_qr's factors, for compiled callers (None without numba's LAPACK)
+compiled_qr_solve = _qr_solve if _GEQRF is not None else None
+
+
 def all_finite(x):
     """np.all(np.isfinite(x)), its answer: x . x is finite exactly when every x_i is, unless the
     squares overflow (|x_i| > 1e154), for which the elementwise test is taken (one dot product, ~1 us, against

@@ -24,13 +24,10 @@ import math
 
 import numpy as np
 
-from ..continuation import linalg
+from ..continuation.engine import CHORD_JUDGE, CHORD_REFRESH, CHORD_SINGULAR
+from ..continuation.linalg import compiled_qr_solve as _qr_solve
 from ..jit import jit
 from .condensed_kernels import residual_jacobian
-
-#: the corrector's compiled QR solve (absent without numba's LAPACK: then LeastSquares.compiled_qr is None and the
-#: kernel is never called)
-_qr_solve = getattr(linalg, "_qr_solve", None)
 
 __all__ = ["JUDGE", "SINGULAR", "REFRESH", "chord_iterations", "problem_chord_iterations"]
 
@@ -84,6 +81,7 @@ def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh
 
 
 _NONE = np.zeros(0)          # (no residual of a fresh Jacobian given)
+_CODES = (CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH)       # the kernel's codes as the engine's
 
 
 def problem_chord_iterations(prob, u, u_pred, row, factor, last_norm, it, tol, settings, fresh=None):
@@ -94,6 +92,7 @@ def problem_chord_iterations(prob, u, u_pred, row, factor, last_norm, it, tol, s
     qr = factor.compiled_qr
     if prob._kernel is None or qr is None:
         return None
-    return chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
-                            settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh,
-                            *prob._kernel[0])
+    u, r, it, last_norm, code = chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm,
+                                                 it, tol, settings.max_iter, settings.refresh_ratio,
+                                                 _NONE if fresh is None else fresh, *prob._kernel[0])
+    return u, r, it, last_norm, _CODES[code]
