@@ -14,6 +14,10 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
     problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
                                               (e.g. too large a change of period), or ''
     problem.energy(u) -> float                optional: the conserved energy, for the fold guard
+    problem.chord_iterations(u, u_pred, row, factor, last_norm, it, tol, settings, fresh)
+                                              optional: the corrector's chord iterations from iterate number it in one
+                                              call, the same iterates (e.g. orbits/condensed_chord.py): (u, r, it,
+                                              last_norm, CHORD_*), or None; fresh: r of the factorised Jacobian or None
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.
@@ -109,6 +113,11 @@ class CorrectorFailure(Exception):
     pass
 
 
+#: the codes of ``problem.chord_iterations`` (module docstring): stopped at an iterate whose residual the corrector
+#: judges; a non-finite step; poor contraction (u is the next iterate: a fresh Jacobian there)
+CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = "judge", "singular", "refresh"
+
+
 def correct(problem, u_pred, p, settings, tol, w=None):
     """Newton-Moore-Penrose corrector (eq. 9-10) from the prediction u_pred, orthogonal to p in the
     norm |w * u|.
@@ -132,14 +141,29 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     u = u_pred.copy() if start is None else start[0].copy()
     factor = None if start is None else start[1]
     last_norm = None
-    for it in range(settings.max_iter + 1):
+    chord = getattr(problem, "chord_iterations", None)
+    it = 0
+    while True:
         fresh = False
         if factor is None:
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(stacked(J, row))
+        # the problem's compiled chord iterations where it has them (the same iterates), else one residual here
+        done = (chord(u, u_pred, row, factor, last_norm, it, tol, settings, r if fresh else None)
+                if chord is not None else None)
+        if done is None:
+            if not fresh:
+                r = problem.residual(u)
         else:
-            r = problem.residual(u)
+            first = it
+            u, r, it, last_norm, code = done
+            fresh = fresh and it == first       # (J is the iterate's own only where no step was taken)
+            if code == CHORD_REFRESH:           # poor contraction: the Jacobian at the new iterate
+                factor = None
+                continue
+            if code == CHORD_SINGULAR:
+                raise CorrectorFailure("singular corrector system")
         if not all_finite(r):
             raise CorrectorFailure("the time integration diverged (non-finite state)")
         err = problem.error(u, r)
@@ -162,6 +186,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             factor = None  # poor contraction: refresh the Jacobian at the next iterate
         last_norm = nrm
         u = u + du
+        it += 1
     raise CorrectorFailure(f"no convergence in {settings.max_iter} corrector iterations (error {err:.2e})")
 
 

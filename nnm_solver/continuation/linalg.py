@@ -63,6 +63,10 @@ if _GEQRF is not None:
         return x
 
 
+#: the compiled R^-1 Q^T b on LeastSquares.compiled_qr's factors, for compiled callers (None without numba's LAPACK)
+compiled_qr_solve = _qr_solve if _GEQRF is not None else None
+
+
 def all_finite(x):
     """np.all(np.isfinite(x)), its answer: x . x is finite exactly when every x_i is, unless the
     squares overflow (|x_i| > 1e154), for which the elementwise test is taken (one dot product, ~1 us, against
@@ -113,6 +117,12 @@ class LeastSquares:
         else:
             self._Q = None
             (self._h, self._tau), self.R = sla.qr(A, mode="raw", overwrite_a=True, check_finite=False)
+
+    @property
+    def compiled_qr(self):
+        """(Q, R) where ``solve`` is the compiled R^-1 Q^T b (``_qr_solve``, which compiled callers may run on them:
+        the same numbers), else None."""
+        return (self._Q, self.R) if _GEQRF is not None and self._lu is None and self._Q is not None else None
 
     @property
     def rcond(self):

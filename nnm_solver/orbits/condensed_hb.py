@@ -49,6 +49,7 @@ import math
 import numpy as np
 
 from ..stability.floquet import without_nearest_to_one
+from . import condensed_chord as chord
 from . import condensed_energy_kernels as energy_kernels
 from . import condensed_kernels as kernels
 from .condensed_energy import condensed_energy, condensed_energy_gradient
@@ -203,6 +204,9 @@ class CondensedHBProblem(HBTruncationError):
                 J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
                 J[row, nD + 1] = -2.0 * w * a * c * self.w_r
         return r, J
+
+    #: the corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates)
+    chord_iterations = chord.problem_chord_iterations
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""

@@ -72,13 +72,12 @@ class Locator(BracketRoots):
         and 0.39.  Not judged ('') when a tangent at an end is nearly parallel to the hyperplanes (no Hermite
         interpolant, e.g. at a fold) or b was not seeded."""
         s = self.step
-        if s is None or float(s) not in self.factors or self._ends_interpolant(0.5 * s) is None:
+        sigma = 0.5 * s if s is not None else None
+        # (the interpolant of the two known points is also ``prediction``'s at sigma: the same numbers)
+        u_pred = self._ends_interpolant(sigma) if s is not None and float(s) in self.factors else None
+        if u_pred is None:
             return ""
-        sigma = 0.5 * s
-        u_pred = self.prediction(sigma)
-        r = self.problem.residual(u_pred)
-        if np.all(np.isfinite(r)) and self.problem.error(u_pred, r) < self.tol:
-            return ""                # the interpolant is on the branch already (most steps)
+        # (where the interpolant is on the branch already, the corrector returns it after one residual: d = 0)
         try:
             u, J, _, _, factor = correct_factored(self.problem, u_pred, self.p_a, self.settings, self.tol, self.w,
                                                   start=(u_pred, self.factors[float(s)]), refresh=False)
