@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ..continuation.engine import CHORD_JUDGE, CHORD_REFRESH, CHORD_SINGULAR
+from ..continuation.corrector import CHORD_JUDGE, CHORD_REFRESH, CHORD_SINGULAR
 from ..continuation.linalg import compiled_qr_solve as _qr_solve
 from ..jit import jit
 from .condensed_kernels import residual_jacobian
