@@ -10,7 +10,7 @@ import numpy as np
 
 from ..jit import jit
 from ..model.laws import law_scalar
-from .condensed_kernels import _forces, _galerkin, _modal_amplitudes, _weights, jit_modes
+from .condensed_kernels import _forces, _galerkin, _modal_amplitudes, _weights, jit_modes, unknowns
 
 __all__ = ["energy_gradient"]
 
@@ -62,9 +62,7 @@ def energy_gradient(u, want_gradient, with_potential, cos1, r, beta, w_r, h2, fu
     nb = h2.shape[0]
     ns = Bq.shape[0]
     nD = nb * ns
-    a = u[nD] / beta
-    w = u[nD + 1] * w_r
-    D = u[:nD].reshape((nb, ns))
+    a, w, D = unknowns(u, nb, ns, beta, w_r)
     d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_gradient)
     W, W2 = _weights(w, h2, fund, r, omega2, False)
     A = _modal_amplitudes(F, W, Bq, cos1, r, a)

@@ -26,7 +26,7 @@ from ..jit import jit, numba
 from ..model.laws import law_scalar
 from .spring_kernels import int_power
 
-__all__ = ["AVAILABLE", "kernel_arguments", "element_pairs", "flexibility", "residual_jacobian", "amplitudes"]
+__all__ = ["AVAILABLE", "kernel_arguments", "element_pairs", "flexibility", "residual_jacobian", "unknowns", "amplitudes"]
 
 #: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
 #: modes would be far slower than them)
@@ -196,6 +196,13 @@ def _galerkin(tg, E, P):
 
 
 @jit
+def unknowns(u, nb, ns, beta, w_r):
+    """(a, omega rad/s, D (nb, ns) m) of the condensed unknowns u = [D (nb ns, m); a beta; omega / w_r]."""
+    nD = nb * ns
+    return u[nD] / beta, u[nD + 1] * w_r, u[:nD].reshape((nb, ns))
+
+
+@jit
 def residual_jacobian(u, want_jacobian, cos1, r, beta, w_r, h2, fund, b_r, omega2, pairs, index, R0, R1, complete,
                       E, P, powers, coeffs, kinks):
     """(residual, Jacobian) of the condensed equations at u (condensed_hb.CondensedHBProblem: residual [R_D; R_a beta /
@@ -203,9 +210,7 @@ def residual_jacobian(u, want_jacobian, cos1, r, beta, w_r, h2, fund, b_r, omega
     nb = h2.shape[0]
     ns = b_r.shape[0]
     nD = nb * ns
-    a = u[nD] / beta
-    w = u[nD + 1] * w_r
-    D = u[:nD].reshape((nb, ns))
+    a, w, D = unknowns(u, nb, ns, beta, w_r)
     G, dG = flexibility(w, h2, fund, r, omega2, pairs, index, R0, R1, complete, want_jacobian)
     d, F, tg = _forces(D, E, P, powers, coeffs, kinks, want_jacobian)
     nf = 0
