@@ -25,10 +25,10 @@ from ..backbone.labels import Verdict
 from ..backbone.settings import LabelSettings
 from ..backbone.policy import Finish, FollowPolicy, Jump
 from .candidate import record_candidate
+from .stop_rules import closed_loop, stop_after_point, stop_on_failure, turning_ratio
 from .refinement import HarmonicRefinement, StepRefinement, accuracy_note
 from ..orbits.hb_basis import harmonics_in
-from ..results.settings import RESULTS
-from ..results.stops import LoopDetector, escape_message, restoring_ratio
+from ..results.stops import LoopDetector
 from ..results.tongues import continue_hint
 from ..threads import blas_limited
 
@@ -141,25 +141,17 @@ class NNMIterator:
             cand.release()
         loop = self._loops.add(q0, v0, self._w_r, T, 2 * np.pi / self._w_r)
         if loop is not None:
-            p = self.points[loop]
-            self._finish("closed_loop", f"closed loop: from point {N - 1} on the continuation re-traverses points "
-                                        f"{loop}..{loop + 1} (E = {p.energy:.6g} J, f = {p.frequency_hz:.6g} Hz); "
-                                        f"one lap is kept")
+            self._finish(*closed_loop(self.points, N, loop))
             raise StopIteration
         self.points.append(point)
         self._disc_errors.append(cand.disc_error)
-        E, E0 = point.energy, self.points[0].energy
         # (a lower bound over samples that include the turning point's, above the thresholds: its ratio is too)
-        ratio = cand.restoring if cand.restoring_bound else min(self._turning_ratio(q0, v0), cand.restoring)
-        if ratio < RESULTS.escape_ratio:
-            self._finish("escape", escape_message(point, ratio))
-        elif E >= self.energy_max or self._landed:
-            self._finish("done", f"reached energy_max = {self.energy_max:g} J" + self._policy.note(self.points))
-        elif N + 1 >= self.max_points:
-            self._finish("max_points", f"stopped at max_points = {self.max_points} (energy {E:.4g} J); "
-                                       f"raise max_points to go on")
-        elif N + 1 > 3 and E < 0.5 * E0 and self._start_is_low:
-            self._finish("done", "the branch returned to low energy")
+        ratio = (cand.restoring if cand.restoring_bound
+                 else min(turning_ratio(self._system, self._w_r, q0, v0), cand.restoring))
+        stop = stop_after_point(self.points, ratio, self.energy_max, self.max_points, self._landed,
+                                self._start_is_low, self._policy.note)
+        if stop is not None:
+            self._finish(stop.status, stop.message)
         self._last = (q0, v0)
         return point
 
@@ -189,26 +181,14 @@ class NNMIterator:
             cand.point.stable = is_stable(cand.point.floquet, STABILITY.stability_tol)
             cand.spectrum = None
 
-    def _turning_ratio(self, q0, v0):
-        """Restoring-force ratio at the orbit's turning point (stops.py); 1 if t = 0 is not one."""
-        if np.linalg.norm(v0) > 1e-6 * self._w_r * np.linalg.norm(q0):
-            return 1.0
-        return restoring_ratio(self._system, q0)
-
     def _failed(self, reason):
-        N = len(self.points)
+        """The continuation could not go on: escape next to a saddle, the family's end (the policy), else failed."""
         restoring = self._last_kept[1].restoring if self._last_kept else 1.0
-        ratio = min(self._turning_ratio(*self._last), restoring) if N else 1.0
-        if ratio < RESULTS.escape_ratio_failed:
-            self._finish("escape", escape_message(self.points[-1], ratio) +
-                         f" (the continuation could not go further: {reason})")
+        ratio = min(turning_ratio(self._system, self._w_r, *self._last), restoring) if self.points else 1.0
+        stop = stop_on_failure(self.points, ratio, reason)
+        if stop.status == "failed" and self.points and self._family_ends(reason):
             return
-        if N and self._family_ends(reason):
-            return
-        where = (f"after point {N} (E = {self.points[-1].energy:.4g} J, "
-                 f"f = {self.points[-1].frequency_hz:.5g} Hz)" if N else "at the start")
-        self._finish("failed", f"no convergence {where}: {reason or 'continuation stopped'}; the points "
-                               f"so far are kept (try a larger steps_per_period or tol, or the branch ends here)")
+        self._finish(stop.status, stop.message)
 
     def _family_ends(self, reason):
         """The continuation failed where the backbone family itself ends (the policy's ``stopped``): finish there.
