@@ -47,8 +47,9 @@ def _orbit(ms, amp, u0=None, all_columns=False, integrator="gauss6"):
 
 
 def _scan(model, amps):
-    """Per amplitude: (frequency (rad/s), c (n,), signatures, the dense J-form's signatures (0 where c is complex or
-    the trivial -1))."""
+    """Per amplitude: (frequency (rad/s), c (n,), signatures, the dense J-form's signatures: -i z^H J z of the
+    eigenvectors of the half-period map (at lambda) and of the monodromy (at mu = lambda^2), 9 where those two
+    disagree, 0 where c is complex or the trivial -1)."""
     ms = modal_system(model)
     n, u, out = ms.n, None, []
     Jf = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
@@ -58,12 +59,16 @@ def _scan(model, amps):
         kappa = signatures(c, prob.krein_form(X))
         full, _ = _orbit(ms, amp, u, all_columns=True)
         lam, Z = np.linalg.eig(full.accepted_map)                  # the half-period map, 2n x 2n
+        mu, V = np.linalg.eig(full.monodromy())                     # the monodromy, its square
         dense = np.zeros(n, dtype=int)
         for i, ci in enumerate(c):
             if abs(ci.imag) > 1e-9 or abs(ci + 1) < 1e-6:
                 continue
-            z = Z[:, np.argmin(np.abs(lam - (ci.real + 1j * np.sqrt(1 - ci.real ** 2))))]
-            dense[i] = int(np.sign(np.real(-1j * z.conj() @ Jf @ z)))
+            lam_i = ci.real + 1j * np.sqrt(1 - ci.real ** 2)
+            z = Z[:, np.argmin(np.abs(lam - lam_i))]
+            v = V[:, np.argmin(np.abs(mu - lam_i ** 2))]             # the multiplier lambda^2: the same eigenvector
+            half, mono = (int(np.sign(np.real(-1j * y.conj() @ Jf @ y))) for y in (z, v))
+            dense[i] = half if half == mono else 9
         out.append((2 * np.pi / prob.unpack(u)[2], c, kappa, dense))
     return out
 

@@ -10,6 +10,7 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
                                                   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
                                                      (velocities=False: Sv is None, not assembled)
     sensitivity_factors(system, q0, v0, h, nsteps) -> (q, v, dq_N/dq0 as diagonal + low rank, ok) or None
+    directional(system, q0, v0, h, nsteps, X)     -> (dq_N/dq0 @ X, dv_N/dq0 @ X, ok) for a few directions X
     sensitivity_stages(...), reversible_half_block(system, stages, Gqq)
                                                   -> a sweep with its record; the half-period dq/dq0 of a
                                                      reversible orbit from its quarter map (Gauss: symplectic)
