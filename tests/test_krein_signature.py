@@ -14,6 +14,7 @@ from nnm_solver.continuation.engine import ContinuationSettings, correct
 from nnm_solver.integrators import gauss, gauss_monodromy
 from nnm_solver.integrators.registry import get_integrator
 from nnm_solver.model.modal import modal_system
+from nnm_solver.orbits import shooting_stability
 from nnm_solver.orbits.shooting import ShootingProblem
 from nnm_solver.stability.krein_signature import opposite_neighbours, signatures
 
@@ -157,3 +158,34 @@ def test_a_cluster_gets_its_inertia():
     F[0, 1] = F[1, 0] = 3.0                                               # indefinite: undetermined
     assert list(signatures(c, F)) == [0, 0, 1]
     assert [p[:2] for p in opposite_neighbours(c, signatures(c, F))] == [(0, 1), (1, 2)]
+
+
+def test_a_window_of_a_larger_model_by_shift_invert(monkeypatch):
+    """A 50-DOF chain (the shift-invert Arnoldi path of local_eigenpairs: the coupled block is larger than 8 k): the
+    6 coordinates nearest a shift are the dense spectrum's 6 nearest, and their signatures equal those of the dense
+    half map's eigenvectors' J-form."""
+    n = 50
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    model = nnm.Model(M=np.eye(n), K=K, springs=[nnm.CubicSpring(dof=0, k3=1.0)])
+    ms = modal_system(model)
+    prob, u = _orbit(ms, 0.5)
+    full, _ = _orbit(ms, 0.5, u, all_columns=True)
+    lam, Z = np.linalg.eig(full.accepted_map)
+    c_all = np.linalg.eigvals(prob.stability_maps()[0][:, :n])
+    Jf = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
+    arnoldi, eigs = [], shooting_stability.eigs
+
+    def counted(*a, **k):
+        arnoldi.append(k["sigma"])
+        return eigs(*a, **k)
+    monkeypatch.setattr(shooting_stability, "eigs", counted)
+    for shift in (0.31, -0.52):
+        c, X = prob.local_eigenpairs(shift, 6)
+        nearest = c_all[np.argsort(np.abs(c_all - shift))[:6]]
+        assert np.allclose(np.sort(c.real), np.sort(nearest.real), atol=1e-10)
+        assert np.allclose(np.abs(prob.stability_maps()[0][:, :n] @ X - X * c), 0, atol=1e-9)
+        kappa = signatures(c, prob.krein_form(X))
+        for ci, ki in zip(c, kappa):
+            z = Z[:, np.argmin(np.abs(lam - (ci.real + 1j * np.sqrt(1 - ci.real ** 2))))]
+            assert ki == int(np.sign(np.real(-1j * z.conj() @ Jf @ z))) != 0
+    assert arnoldi == [0.31, -0.52]                           # (not the dense fallback)
