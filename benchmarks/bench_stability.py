@@ -19,10 +19,15 @@ Printed per case and route: the median time, the load average before and after e
 Krein follower's local evaluations among them, the event location's CPU time and the integrator's sweeps during it
 (gauss6's sensitivity and state sweeps), the events, and each event's relative
 energy difference from the dense route's; the CPU time of the process (all its threads) beside the wall time (the
-steadier number on a shared machine).  Usage::
+steadier number on a shared machine).  ``--signatures CASE`` instead runs CASE once in this process and prints, at each top-level Krein location, the Krein
+signatures (stability/krein_signature.py) of every coupled coordinate c at the step's stable end and at the located
+collision's stable side (the interval the probes check): how many real coordinates carry each sign, and whether the
+two sign sequences (sorted by c) are the same -- the test that would replace the probes, had no opposite-signature
+pair passed between the two points -- with the cost of the signatures of a local window of 6.  Usage::
 
     git archive b28e431 | (mkdir -p /tmp/base && tar -x -C /tmp/base)
     python benchmarks/bench_stability.py --before /tmp/base --cases m20 --repeats 3
+    python benchmarks/bench_stability.py --signatures m20
 """
 from __future__ import annotations
 
@@ -149,6 +154,73 @@ def worker(case, route):
                           solver=nnm.__file__)))
 
 
+def signature_orders(case):
+    """--signatures: the full signature sequences at both ends of each top-level Krein location's probed interval."""
+    import scipy.linalg as sla
+    import nnm_solver as nnm
+    import nnm_solver.stability.events as ev
+    import nnm_solver.stability.krein as kr
+    from nnm_solver.stability.krein_signature import signatures
+    from nnm_solver.threads import blas_limited
+
+    def sequence(loc, x):
+        u, J, _ = loc.at(x)
+        loc.refresh(u, J)
+        p = loc.problem
+        idx = p.coupled_modes
+        idx = np.arange(p.n) if idx is None else idx
+        A11 = p.stability_maps()[0][:, :p.n]
+        c, Y = sla.eig(A11[np.ix_(idx, idx)])
+        X = np.zeros((p.n, len(c)), dtype=complex)
+        X[idx] = Y
+        kappa = signatures(c, p.krein_form(X))
+        t = time.process_time()
+        cw, Xw = p.local_eigenpairs(float(c.real[0]), 6)
+        signatures(cw, p.krein_form(Xw))
+        window = time.process_time() - t
+        real = (np.abs(c.imag) <= 1e-12) & (np.abs(c + 1) > 1e-6)
+        order = np.argsort(c.real[real])
+        return c.real[real][order], kappa[real][order], c[c.imag > 1e-12], window
+
+    def without(c, kappa, pairs):
+        """The sequence without the two real coordinates nearest each complex pair's real part (the colliding pair)."""
+        keep = np.ones(len(c), dtype=bool)
+        for z in pairs:
+            keep[np.argsort(np.abs(c - z.real))[:2]] = False
+        return kappa[keep]
+
+    locate = kr.locate_collision
+
+    def hooked(loc, lo, hi, rho_stars, ends=None, depth=0):
+        r = locate(loc, lo, hi, rho_stars, ends, depth)
+        if depth == 0:
+            start = lo if loc.stable(lo) else hi
+            x_s = min(r) if start == lo else max(r)
+            (ca, ka, za, wa), (cb, kb, zb, wb) = sequence(loc, start), sequence(loc, x_s)
+            ka, kb = without(ca, ka, zb), without(cb, kb, za)     # (the followed pair: complex at one end)
+            differ = int(np.sum(ka != kb)) if len(ka) == len(kb) else None
+            print(f"  {loc.energy(start):.6g} -> {loc.energy(x_s):.6g} J: {len(ka)} / {len(kb)} real coordinates "
+                  f"besides the complex pairs' (+ {np.sum(ka > 0)} / {np.sum(kb > 0)}, undetermined {np.sum(ka == 0)} "
+                  f"/ {np.sum(kb == 0)}); complex pairs {len(za)} / {len(zb)}; sign sequences "
+                  f"{'the same' if differ == 0 else f'differ at {differ} places'}; a window's signatures "
+                  f"{1e3 * wa:.0f} / {1e3 * wb:.0f} ms CPU", flush=True)
+        return r
+
+    kr.locate_collision = ev.locate_collision = hooked
+    model = _model(case)
+    with blas_limited():
+        if case == "m20":
+            it, E = nnm.iter_nnm(model, 20, 1e6), []
+            for point in it:
+                E.append(point.energy)
+                if len(E) > 2 and E[-1] < E[-2]:
+                    break
+        elif case == "m20skip":
+            nnm.continue_nnm(model, mode=20, energy_max=200.0, tongues="skip")
+        else:
+            nnm.continue_nnm(model, 1, 3.0, integrator="gauss6", steps_per_period=100)
+
+
 def run(case, route, tree):
     env = dict(os.environ, PYTHONPATH=str(tree))
     l0 = os.getloadavg()[0]
@@ -167,9 +239,12 @@ def main(argv=None):
     ap.add_argument("--before", default=None, help="a source tree of the solver before (omit: no 'before' route)")
     ap.add_argument("--cases", default="m20,2dof,3dof", help="comma-separated: m20, m20skip, m13, 2dof, 3dof")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--signatures", metavar="CASE", help="m20, m20skip or 3dof: the Krein signature sequences")
     args = ap.parse_args(argv)
     if args.worker:
         return worker(*args.worker)
+    if args.signatures:
+        return signature_orders(args.signatures)
     routes = [("dense", ROOT), ("local", ROOT)] + ([("before", Path(args.before))] if args.before else [])
     print(f"bench_stability: {os.cpu_count()} cores, BLAS 1 thread, numpy {np.__version__}; "
           f"{time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}; before: {args.before}")

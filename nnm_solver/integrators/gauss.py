@@ -40,13 +40,14 @@ import numpy as np
 from ..jit import jit as _jit, lapack_solve
 from ..model.laws import law_force
 from .gauss_constants import GaussConstants, _constants, constants, rotation, tableau  # noqa: F401 (the names gauss gave)
-from .gauss_monodromy import (monodromy as _monodromy, monodromy_factors as _monodromy_factors,
+from .gauss_monodromy import (directional as _directional, monodromy as _monodromy, monodromy_factors as _monodromy_factors,
                               subtract_product as _subtract_product, velocity_factors as _velocity_factors)
 from .lowrank import DiagonalPlusLowRank
 from .newmark import solve_stages
 
 __all__ = ["tableau", "rotation", "GaussConstants", "constants", "sweep_state", "sweep_record",
-           "sweep_sensitivity", "sweep_factors", "SweepStages", "sweep_sensitivity_stages", "reversible_half_block"]
+           "sweep_sensitivity", "sweep_factors", "SweepStages", "sweep_sensitivity_stages", "reversible_half_block",
+           "sweep_directional"]
 
 
 @_jit
@@ -287,3 +288,18 @@ def sweep_factors(q0, v0, h, nsteps, system_kernel, s):
     if not ok:
         return q, v, None, False
     return q, v, DiagonalPlusLowRank(*_monodromy_factors(k, Bq, nsteps, Dseq)), True
+
+
+def sweep_directional(q0, v0, h, nsteps, system_kernel, s, X):
+    """Integrate with the derivative of the final state along a few initial displacements X (n, p): (q, v, dq_N/dq0 @
+    X, dv_N/dq0 @ X, ok), the same numbers as sweep_sensitivity's Sq @ X and Sv @ X to round-off at the cost of a
+    state sweep and a Volterra solve of p columns (gauss_monodromy.directional)."""
+    omega2, Bq, powers, coeffs, kinks = system_kernel
+    k = _constants(omega2, Bq, h, s)
+    X = np.asarray(X, dtype=float)
+    q, v, _, _, Dseq, ok = _sweep_with_h(q0, v0, h, nsteps, omega2, Bq, powers, coeffs, kinks, k.C1, k.Cc, k.F,
+                                         k.G, k.b, k.bbar, k.c, k.Abar, k.Minv)
+    if not ok:
+        return q, v, np.zeros_like(X), np.zeros_like(X), False
+    SqX, SvX = _directional(k, Bq, nsteps, Dseq, X)
+    return q, v, SqX, SvX, True

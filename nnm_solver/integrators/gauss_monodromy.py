@@ -25,7 +25,7 @@ from scipy.linalg import blas
 from ..jit import jit as _jit, small_inverse
 from .settings import KERNELS
 
-__all__ = ["monodromy", "monodromy_factors", "velocity_factors", "subtract_product"]
+__all__ = ["monodromy", "monodromy_factors", "velocity_factors", "directional", "subtract_product"]
 
 
 @_jit
@@ -213,6 +213,22 @@ def velocity_factors(k, Bq, nsteps, Dseq):
     # the dv0 columns' system is the dq0 columns' with HomV for Hom (the same triangular L)
     W = _volterra(HomV, HomV[:0], _kernel(CAE, k.BB, k.s, Bq.shape[0]), k.G, Dseq, n)
     return PN[:, 1, 1].copy(), Uv, W
+
+
+def directional(k, Bq, nsteps, Dseq, X):
+    """(dq_N/dq0 @ X, dv_N/dq0 @ X) (n, p) each for a few real directions X (n, p) of the initial displacement (v0
+    unchanged): monodromy's dq0 columns applied to X, from the Volterra recursion with the right-hand side Hom @ X (p
+    columns instead of n; no n x n block is formed).  The Krein signatures of a few eigenvalues of a reversible
+    orbit need dv(T/2)/dq0 only along their eigenvectors (ShootingStability.krein_form)."""
+    X = np.ascontiguousarray(X, dtype=float)
+    N = int(nsteps)
+    PN, Hom, HomV, CAE, Uq, Uv = _linear_parts(k.A_lin, k.C, k.E, np.ascontiguousarray(Bq, dtype=float), N, True)
+    SqX, SvX = PN[:, 0, 0][:, None] * X, PN[:, 1, 0][:, None] * X
+    if Bq.shape[0] == 0 or N == 0 or X.shape[1] == 0:
+        return SqX, SvX
+    HomX = np.ascontiguousarray(Hom @ X)                         # (N, m, p): the stages' response to dq0 = X
+    W = _volterra(HomX, HomX[:, :, :0], _kernel(CAE, k.BB, k.s, Bq.shape[0]), k.G, Dseq, X.shape[1])
+    return SqX - Uq @ W, SvX - Uv @ W
 
 
 def monodromy(k, Bq, nsteps, Dseq, ncols, velocities=True):

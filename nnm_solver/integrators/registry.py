@@ -10,6 +10,7 @@ first and the default.  "gauss4" and "gauss6" are the 2- and 3-stage Gauss-Legen
                                                   -> (q, v, Sq, Sv, sq_h, sv_h, ok)   exact derivatives
                                                      (velocities=False: Sv is None, not assembled)
     sensitivity_factors(system, q0, v0, h, nsteps) -> (q, v, dq_N/dq0 as diagonal + low rank, ok) or None
+    directional(system, q0, v0, h, nsteps, X)     -> (dq_N/dq0 @ X, dv_N/dq0 @ X, ok) for a few directions X
     sensitivity_stages(...), reversible_half_block(system, stages, Gqq)
                                                   -> a sweep with its record; the half-period dq/dq0 of a
                                                      reversible orbit from its quarter map (Gauss: symplectic)
@@ -91,6 +92,12 @@ class Integrator:
         form (then use sensitivity)."""
         return None
 
+    def directional(self, system, q0, v0, h, nsteps, X):
+        """(dq_N/dq0 @ X, dv_N/dq0 @ X, ok) for a few initial displacements X (n, p); here from the full
+        sensitivity (Gauss: a Volterra solve of p columns, gauss.sweep_directional)."""
+        _, _, Sq, Sv, _, _, ok = self.sensitivity(system, q0, v0, h, nsteps, False, True)
+        return Sq[:, :len(q0)] @ X, Sv[:, :len(q0)] @ X, ok
+
     def sensitivity_stages(self, system, q0, v0, h, nsteps, all_columns=True, velocities=True):
         """(sensitivity's outputs, a record of the sweep for reversible_half_block; None where the scheme has
         none)."""
@@ -158,6 +165,11 @@ class _Gauss(Integrator):
         if _general(system):
             return super().sensitivity_stages(system, q0, v0, h, nsteps, all_columns, velocities)
         return gauss.sweep_sensitivity_stages(q0, v0, h, nsteps, system.kernel, self.stages, all_columns, velocities)
+
+    def directional(self, system, q0, v0, h, nsteps, X):
+        if _general(system):
+            return super().directional(system, q0, v0, h, nsteps, X)
+        return gauss.sweep_directional(q0, v0, h, nsteps, system.kernel, self.stages, X)[2:]
 
     def reversible_half_block(self, system, stages, Gqq):
         if stages is None or _general(system):

@@ -156,6 +156,60 @@ class ShootingStability:
                 self._stalled_shift = sigma
         return np.concatenate([sla.eigvals(C if C is not None else low.dense(), check_finite=False), fixed])
 
+    def local_eigenpairs(self, shift, k=6):
+        """(c (k,), X (n, k)): the k eigenvalues of the accepted point's A11 = dq(T/2)/dq0 nearest ``shift`` and their
+        right eigenvectors (complex, unit norm), for the Krein signatures of a cluster (krein_form); None unless the
+        orbits are symmetric and reversible.  A11 is not deflated (its trivial eigenvalue -1 is among them when the
+        shift is near it); only the coupled modes' block is solved (the decoupled modes' eigenvalues are its diagonal
+        entries, their eigenvectors unit vectors: they take no part in a collision), by shift-invert Arnoldi where it
+        is larger than 8 k (one LU of its size), else densely."""
+        maps = self.stability_maps() if self.symmetric and self.reversible else None
+        if maps is None:
+            return None
+        A11 = maps[0][:, :self.n]
+        coupled = self.coupled_modes
+        idx = np.arange(self.n) if coupled is None else np.asarray(coupled)
+        B = A11[np.ix_(idx, idx)]
+        k = min(int(k), B.shape[0])
+        c = None
+        if B.shape[0] > 8 * k:
+            try:
+                c, Y = eigs(B.astype(complex) if isinstance(shift, complex) else B, k=k, sigma=shift,
+                            maxiter=ORBITS.arpack_restarts)
+            except (ArpackNoConvergence, ArpackError, RuntimeError):
+                c = None
+        if c is None:
+            c, Y = sla.eig(B, check_finite=False)
+            near = np.argsort(np.abs(c - shift), kind="stable")[:k]
+            c, Y = c[near], Y[:, near]
+        X = np.zeros((self.n, len(c)), dtype=complex)
+        X[idx] = Y / np.linalg.norm(Y, axis=0)
+        return np.asarray(c, dtype=complex), X
+
+    def krein_form(self, X):
+        """F = X^H A21 X (p, p, Hermitian) at the accepted point for directions X (n, p) of q0 (e.g. eigenvectors of
+        A11, local_eigenpairs), A21 = dv(T/2)/dq0 of the half-period map, or None (not a symmetric reversible orbit,
+        or the sweep failed).
+
+        The half-period map A = [[A11, A12], [A21, A22]] of a symmetric reversible orbit is symplectic (A^T J A = J)
+        and reversible (R A R = A^-1, R = diag(I, -I)), so A21 is symmetric and A21 A11 = A11^T A21: A11 is
+        self-adjoint in the (indefinite) form x^T A21 x.  For an eigenvalue c = cos(theta) of A11 (|c| < 1) with
+        eigenvector x, A's eigenvector at lambda = c + i sqrt(1 - c^2) is z = [x; -i A21 x / sqrt(1 - c^2)] and its
+        symplectic form -i z^H J z = -2 x^T A21 x / sqrt(1 - c^2): the Krein signature of the pair is -sign(x^T
+        A21 x) (krein_signature.py).  Two real c collide and leave the axis only with opposite signatures.  Cost: one
+        state sweep over T/2 and a Volterra solve of 2p columns (Integrator.directional), no n x n block."""
+        if not (self.symmetric and self.reversible) or getattr(self, "accepted_u", None) is None:
+            return None
+        X = np.asarray(X, dtype=complex)
+        p = X.shape[1]
+        q0, v0, T = self.unpack(self.accepted_u)
+        _, SvX, ok = self.integrator.directional(self.sys, q0, v0, T / self.spp, self.spp // 2,
+                                                 np.column_stack([X.real, X.imag]))
+        if not ok:
+            return None
+        F = X.conj().T @ (SvX[:, :p] + 1j * SvX[:, p:])
+        return 0.5 * (F + F.conj().T)
+
     @property
     def coupled_modes(self):
         """Indices of the modes that see the nonlinear elements (floquet.coupled_modes), or None when all do: the
