@@ -238,7 +238,7 @@ NOT_THRESHOLDS = {
     "files/importers/nastran.py": {"_SMALLEST": "the range of a FORMATTED OUTPUT4 field (two-digit exponents)"},
     "integrators/newmark.py": {"_STATE": "an enumeration: what a sweep records", "_RECORD": "(the same enumeration)",
                                "_TANGENTS": "(the same enumeration)"},
-    "orbits/condensed_chord.py": {"JUDGE": "an enumeration: why the compiled chord iterations returned",
+    "continuation/chord.py": {"JUDGE": "an enumeration: why the compiled chord iterations returned",
                                   "SINGULAR": "(the same enumeration)", "REFRESH": "(the same enumeration)"},
     "threads.py": {"BLAS_THREADS": "a process setting a user assigns at run time (None: BLAS left alone), read at "
                                    "each call; it changes no result",

@@ -48,8 +48,8 @@ import math
 
 import numpy as np
 
+from ..continuation.chord import residual_kernel
 from ..stability.floquet import without_nearest_to_one
-from . import condensed_chord as chord
 from . import condensed_energy_kernels as energy_kernels
 from . import condensed_kernels as kernels
 from .condensed_energy import condensed_energy, condensed_energy_gradient
@@ -94,6 +94,9 @@ class CondensedHBProblem(HBTruncationError):
         self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last 3 orbits
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = kernels.kernel_arguments(self)  # the compiled kernels' constants, or None (numpy forms)
+        #: the residual as a compiled kernel for the corrector's chord iterations (continuation/chord.py), or None
+        self.residual_kernel = (None if self._kernel is None else
+                                residual_kernel(kernels.chord_residual, self._kernel[0]))
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -204,9 +207,6 @@ class CondensedHBProblem(HBTruncationError):
                 J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
                 J[row, nD + 1] = -2.0 * w * a * c * self.w_r
         return r, J
-
-    #: the corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates)
-    chord_iterations = chord.problem_chord_iterations
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""

@@ -1,0 +1,150 @@
+r"""The corrector's chord iterations in one compiled call, for a problem whose residual is a compiled kernel.
+
+The pseudo-arclength corrector (corrector.py ``correct_factored``) iterates, on a factorisation [J; row^T] = Q R kept
+from an earlier iterate, u <- u + du with
+
+    [J; row^T] du = [-F(u); -row . (u - u_pred)]        (least squares, F the residual, row = w^2 p)
+
+until the problem's relative error ||F(u)|| / ||u[:-1]|| falls below tol.  In Python each iteration costs ~25 us of
+calls around a residual of ~10 us (the finiteness test, the error's two norms, the right-hand side, the solve's checks,
+the update).  ``chord_iterations`` runs them (and the step from an iterate whose Jacobian was just evaluated) in one
+compiled call, with the corrector's operations in its order: dot products by BLAS's ddot (numba's ``np.dot``: numpy's
+``x.dot(y)`` and ``x @ y`` of 1-D arrays call the same routine), the solve by linalg.py's compiled ``_qr_solve`` on
+``LeastSquares.compiled_qr`` (``LeastSquares.solve``'s own), so the iterates are the Python loop's bit for bit
+(tests/test_per_point_round4.py).  It returns to the corrector wherever it decides something other than the next chord
+step: the residual at an iterate that converged, is not finite, or is the last one (``max_iter``); a non-finite step
+(a singular system); a step that contracted poorly (the corrector refreshes the Jacobian there).
+
+The residual is the problem's (orbits/ holds it: e.g. condensed_kernels.chord_residual), passed as a numba
+first-class function: a ``ResidualKernel`` wraps a compiled ``residual(u, args) -> F(u)`` (u and F 1-D float arrays,
+args a tuple of the problem's constants) at its native address and signature, so this one loop serves every such
+kernel and stays in numba's disk cache (the kernel's type is its signature, not the function: a loop compiled around a
+given function, a closure, is compiled again in every process).  This is the continuation layer's only Newton/chord
+loop; a problem offers its kernel as ``problem.residual_kernel`` ((ResidualKernel, args) or None; engine.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..jit import jit, numba
+from .linalg import compiled_qr_solve as _qr_solve
+
+__all__ = ["AVAILABLE", "ResidualKernel", "residual_kernel", "chord_iterations", "iterate",
+           "JUDGE", "SINGULAR", "REFRESH"]
+
+#: chord_iterations stopped at an iterate whose residual the corrector judges (converged, not finite, or the last one)
+JUDGE = 0
+#: the step from the iterate is not finite (a singular corrector system)
+SINGULAR = 1
+#: the step contracted poorly (|du_k| > refresh_ratio |du_k-1|): u is the next iterate, the Jacobian is refreshed there
+REFRESH = 2
+
+_WAP = None
+if numba is not None and _qr_solve is not None:
+    try:   # numba's first-class functions (numba/core/types/function_type.py, numba/experimental/function_type.py)
+        from numba.core import types as _types
+        from numba.core.types.function_type import WrapperAddressProtocol as _WAP
+        from numba.core.typing.typeof import typeof_impl as _typeof_impl
+        from numba.experimental.function_type import _get_wrapper_address
+    except Exception:  # pragma: no cover - another numba version: the corrector iterates in Python
+        _WAP = None
+
+#: the compiled chord iterations can run (numba with its LAPACK and first-class functions)
+AVAILABLE = _WAP is not None
+
+
+if AVAILABLE:
+    class ResidualKernel(_WAP):
+        """A compiled residual ``kernel(u, args) -> F(u)`` as a numba first-class function of the signature
+        float64[::1](float64[::1], typeof(args)): its native address, taken once; numba types it by that signature
+        (registered below, no per-call typing of the function)."""
+
+        def __init__(self, kernel, args):
+            arr = _types.float64[::1]
+            self._signature = arr(arr, numba.typeof(args))
+            kernel.compile(self._signature.args)
+            self._address = _get_wrapper_address(kernel, self._signature)
+            self.numba_type = _types.FunctionType(self._signature)
+            self.kernel = kernel                   # (kept alive: the address is into its compiled code)
+
+        def __wrapper_address__(self):
+            return self._address
+
+        def signature(self):
+            return self._signature
+
+    @_typeof_impl.register(ResidualKernel)
+    def _typeof_residual_kernel(val, c):
+        return val.numba_type
+else:  # pragma: no cover
+    ResidualKernel = None
+
+
+_KERNELS = {}
+
+
+def residual_kernel(kernel, args):
+    """(ResidualKernel, args) for a compiled ``kernel(u, args)`` and its constants args, one ResidualKernel per kernel
+    and argument types (kept), or None where the chord iterations are not compiled (the corrector iterates itself)."""
+    if not AVAILABLE:
+        return None
+    key = (kernel, numba.typeof(args))
+    found = _KERNELS.get(key)
+    if found is None:
+        found = _KERNELS[key] = ResidualKernel(kernel, args)
+    return found, args
+
+
+@jit
+def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh_ratio, fresh, residual, args):
+    """(u, F(u), it, last_norm, code): chord iterations of the corrector from the iterate u (number ``it``), with the
+    factorisation Q R of [J; row^T] and the last step's norm ``last_norm`` (NaN: none to compare with), until a code
+    (module docstring): JUDGE with the residual at u, SINGULAR with the residual at u, REFRESH with u the next iterate
+    (its residual not yet evaluated: the one returned is the previous iterate's).  fresh : the residual at u, evaluated
+    with the Jacobian that Q R factorises (its step is not tested for contraction), or an empty array.  residual, args:
+    the problem's residual kernel (a ResidualKernel) and its constants; the relative error is ||F|| / ||u[:-1]||."""
+    n = u.shape[0] - 1
+    first = fresh.shape[0] > 0
+    while True:
+        if first:
+            res = fresh
+        else:
+            res = residual(u, args)
+        for i in range(res.shape[0]):
+            if not np.isfinite(res[i]):
+                return u, res, it, last_norm, JUDGE
+        x = u[:n]
+        err = math.sqrt(np.dot(res, res)) / max(math.sqrt(np.dot(x, x)), 1e-300)
+        if err < tol or it == max_iter:
+            return u, res, it, last_norm, JUDGE
+        rhs = np.empty(res.shape[0] + 1)
+        for i in range(res.shape[0]):
+            rhs[i] = -res[i]
+        rhs[-1] = -np.dot(row, u - u_pred)
+        du = _qr_solve(Q, R, rhs)
+        nrm = math.sqrt(np.dot(du, du))
+        if not math.isfinite(nrm):
+            return u, res, it, last_norm, SINGULAR
+        poor = not first and nrm > refresh_ratio * last_norm          # (False against NaN: no earlier step)
+        first = False
+        last_norm = nrm
+        u = u + du
+        it += 1
+        if poor:
+            return u, res, it, last_norm, REFRESH
+
+
+_NONE = np.zeros(0)          # (no residual of a fresh Jacobian given)
+
+
+def iterate(kernel, u, u_pred, row, factor, last_norm, it, tol, settings, fresh=None):
+    """(u, r, it, last_norm, code) of ``chord_iterations`` with the problem's ``residual_kernel`` (kernel, args) and the
+    corrector's LeastSquares ``factor``, or None where the factorisation has no compiled solve (the corrector iterates
+    itself).  fresh : the residual at u evaluated with the factorised Jacobian, or None."""
+    qr = factor.compiled_qr
+    if qr is None:
+        return None
+    return chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
+                            settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh, *kernel)
