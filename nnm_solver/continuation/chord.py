@@ -15,11 +15,12 @@ compiled call, with the corrector's operations in its order: dot products by BLA
 step: the residual at an iterate that converged, is not finite, or is the last one (``max_iter``); a non-finite step
 (a singular system); a step that contracted poorly (the corrector refreshes the Jacobian there).
 
-The residual is the problem's (orbits/ holds it: e.g. condensed_kernels.chord_residual), passed as a numba
-first-class function: a ``ResidualKernel`` wraps a compiled ``residual(u, args) -> F(u)`` (u and F 1-D float arrays,
-args a tuple of the problem's constants) at its native address and signature, so this one loop serves every such
-kernel and stays in numba's disk cache (the kernel's type is its signature, not the function: a loop compiled around a
-given function, a closure, is compiled again in every process).  This is the continuation layer's only Newton/chord
+The residual is the problem's (orbits/ holds it: e.g. condensed_kernels.chord_residual), called as a numba first-class
+function: a ``ResidualKernel`` holds the native address of a compiled ``residual(u, args) -> F(u)`` (u and F 1-D float
+arrays, args a tuple of the problem's constants), and the loop calls it through that address with the signature
+float64[::1](float64[::1], typeof(args)), so this one loop serves every such kernel and stays in numba's disk cache
+(its types are an integer and the args' tuple, not the function: a loop compiled around a given function, a closure,
+is compiled again in every process; a function object as an argument costs ~8 us of typing a call).  This is the continuation layer's only Newton/chord
 loop; a problem offers its kernel as ``problem.residual_kernel`` ((ResidualKernel, args) or None; engine.py).
 """
 from __future__ import annotations
@@ -41,45 +42,49 @@ SINGULAR = 1
 #: the step contracted poorly (|du_k| > refresh_ratio |du_k-1|): u is the next iterate, the Jacobian is refreshed there
 REFRESH = 2
 
-_WAP = None
+_ADDRESS = None
 if numba is not None and _qr_solve is not None:
     try:   # numba's first-class functions (numba/core/types/function_type.py, numba/experimental/function_type.py)
+        from numba.core import cgutils as _cgutils
         from numba.core import types as _types
-        from numba.core.types.function_type import WrapperAddressProtocol as _WAP
-        from numba.core.typing.typeof import typeof_impl as _typeof_impl
-        from numba.experimental.function_type import _get_wrapper_address
+        from numba.core.extending import intrinsic as _intrinsic
+        from numba.experimental.function_type import _get_wrapper_address as _ADDRESS
     except Exception:  # pragma: no cover - another numba version: the corrector iterates in Python
-        _WAP = None
+        _ADDRESS = None
 
 #: the compiled chord iterations can run (numba with its LAPACK and first-class functions)
-AVAILABLE = _WAP is not None
+AVAILABLE = _ADDRESS is not None
+
+
+class ResidualKernel:
+    """A compiled residual ``kernel(u, args) -> F(u)`` (u, F 1-D float arrays) compiled for the signature
+    float64[::1](float64[::1], typeof(args)): ``address`` is its native entry point (numba's C wrapper of it), which
+    ``chord_iterations`` calls as a first-class function of that signature (``_residual_at``).  An integer argument:
+    numba types it without Python (a function object as the argument costs ~8 us of typing and unboxing a call)."""
+
+    def __init__(self, kernel, args):
+        arr = _types.float64[::1]
+        signature = arr(arr, numba.typeof(args))
+        kernel.compile(signature.args)
+        self.address = _ADDRESS(kernel, signature)
+        self.kernel = kernel                   # (kept alive: the address is into its compiled code)
 
 
 if AVAILABLE:
-    class ResidualKernel(_WAP):
-        """A compiled residual ``kernel(u, args) -> F(u)`` as a numba first-class function of the signature
-        float64[::1](float64[::1], typeof(args)): its native address, taken once; numba types it by that signature
-        (registered below, no per-call typing of the function)."""
+    @_intrinsic
+    def _residual_at(typingctx, address, args):
+        """The first-class function float64[::1](float64[::1], typeof(args)) at the native address (a
+        ResidualKernel's, made for this args type)."""
+        arr = _types.float64[::1]
+        function = _types.FunctionType(arr(arr, args))
 
-        def __init__(self, kernel, args):
-            arr = _types.float64[::1]
-            self._signature = arr(arr, numba.typeof(args))
-            kernel.compile(self._signature.args)
-            self._address = _get_wrapper_address(kernel, self._signature)
-            self.numba_type = _types.FunctionType(self._signature)
-            self.kernel = kernel                   # (kept alive: the address is into its compiled code)
-
-        def __wrapper_address__(self):
-            return self._address
-
-        def signature(self):
-            return self._signature
-
-    @_typeof_impl.register(ResidualKernel)
-    def _typeof_residual_kernel(val, c):
-        return val.numba_type
+        def codegen(context, builder, signature, llargs):
+            value = _cgutils.create_struct_proxy(function)(context, builder)
+            value.c_addr = builder.inttoptr(llargs[0], _cgutils.voidptr_t)
+            return value._getvalue()
+        return function(address, args), codegen
 else:  # pragma: no cover
-    ResidualKernel = None
+    _residual_at = None
 
 
 _KERNELS = {}
@@ -98,13 +103,14 @@ def residual_kernel(kernel, args):
 
 
 @jit
-def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh_ratio, fresh, residual, args):
+def chord_iterations(u, u_pred, row, Q, R, last_norm, it, tol, max_iter, refresh_ratio, fresh, address, args):
     """(u, F(u), it, last_norm, code): chord iterations of the corrector from the iterate u (number ``it``), with the
     factorisation Q R of [J; row^T] and the last step's norm ``last_norm`` (NaN: none to compare with), until a code
     (module docstring): JUDGE with the residual at u, SINGULAR with the residual at u, REFRESH with u the next iterate
     (its residual not yet evaluated: the one returned is the previous iterate's).  fresh : the residual at u, evaluated
-    with the Jacobian that Q R factorises (its step is not tested for contraction), or an empty array.  residual, args:
-    the problem's residual kernel (a ResidualKernel) and its constants; the relative error is ||F|| / ||u[:-1]||."""
+    with the Jacobian that Q R factorises (its step is not tested for contraction), or an empty array.  address, args:
+    the problem's residual kernel (ResidualKernel.address) and its constants; the relative error is ||F|| / ||u[:-1]||."""
+    residual = _residual_at(address, args)
     n = u.shape[0] - 1
     first = fresh.shape[0] > 0
     while True:
@@ -147,4 +153,5 @@ def iterate(kernel, u, u_pred, row, factor, last_norm, it, tol, settings, fresh=
     if qr is None:
         return None
     return chord_iterations(u, u_pred, row, *qr, math.nan if last_norm is None else last_norm, it, tol,
-                            settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh, *kernel)
+                            settings.max_iter, settings.refresh_ratio, _NONE if fresh is None else fresh,
+                            kernel[0].address, kernel[1])
