@@ -155,6 +155,16 @@ def test_one_compiled_loop_serves_every_kernel_of_the_same_argument_types():
     assert all("int64" in str(sig[11]) for sig in chord.chord_iterations.signatures)     # the kernel's address
     k1, k2 = (chord.residual_kernel(k, ToyProblem().args)[0] for k in (_toy_residual, _other_residual))
     assert k1.address != k2.address and chord.residual_kernel(_toy_residual, ToyProblem().args)[0] is k1
+    # the kept kernels are told apart by what numba's types depend on (a read-only or Fortran-ordered constant: another
+    # signature of the kernel, another entry point)
+    A, c, b = ToyProblem().args
+    frozen = A.copy()
+    frozen.setflags(write=False)
+    for other in ((frozen, c, b), (np.asfortranarray(A + 0.0), c, b)):
+        k3 = chord.residual_kernel(_toy_residual, other)[0]
+        assert k3 is not k1 and k3.address != k1.address
+        u = np.append(np.linalg.solve(A, 0.3 * b), 0.3)
+        assert np.array_equal(_toy_residual(u, other), _toy_residual(u, (A, c, b)))
 
 
 @needs_chord
