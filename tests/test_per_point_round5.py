@@ -167,6 +167,54 @@ def test_one_compiled_loop_serves_every_kernel_of_the_same_argument_types():
         assert np.array_equal(_toy_residual(u, other), _toy_residual(u, (A, c, b)))
 
 
+@numba.njit
+def _raising_residual(u, args):
+    """_toy_residual, raising beyond lam = 5 (a kernel's own error)."""
+    if u[u.shape[0] - 1] > 5.0:
+        raise ValueError("the kernel's own error: lam beyond 5")
+    return _toy_residual(u, args)
+
+
+@needs_chord
+def test_a_kernels_exception_reaches_the_caller():
+    """An exception raised by the kernel inside the compiled chord loop reaches its caller with its message (the kernel
+    is called by numba's calling convention, as a compiled call raises it), and below lam = 5 the same kernel runs."""
+    from nnm_solver.continuation.linalg import LeastSquares, stacked
+    good, bad = ToyProblem(), ToyProblem(kernel=_raising_residual)
+    n = len(good.b)
+    row = np.eye(n + 1)[n]
+    u = np.append(np.linalg.solve(good.A, 0.3 * good.b), 0.3)
+    factor = LeastSquares(stacked(good.jacobian(u)[1], row))
+    settings = ContinuationSettings(0.1, 1e-6, 1.0)
+    out = chord.iterate(bad.residual_kernel, u, u, row, factor, None, 0, 1e-12, settings)
+    assert np.array_equal(out[1], good.residual(out[0]))
+    far = u.copy()
+    far[n] = 6.0
+    with pytest.raises(ValueError, match="lam beyond 5"):
+        chord.iterate(bad.residual_kernel, far, far, row, factor, None, 0, 1e-12, settings)
+
+
+@needs_chord
+def test_a_pickled_problem_takes_its_kernels_address_again():
+    """A ResidualKernel pickles as its kernel and signature, not its address (a process's own): unpickled, the
+    condensed problem's kernel has this process's entry point and its corrector the same iterates."""
+    import pickle
+    from nnm_solver.model.modal import modal_system
+    from nnm_solver.orbits.condensed_hb import CondensedHBProblem
+    from nnm_solver.orbits.hb_basis import HBBasis
+    model = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+    prob = CondensedHBProblem(modal_system(model), 0, HBBasis(5, "odd"))
+    kernel = prob.residual_kernel[0]
+    again = pickle.loads(pickle.dumps(kernel))
+    assert again is not kernel and again.address == kernel.address and again.signature == kernel.signature
+    copy = pickle.loads(pickle.dumps(prob))
+    u0, p0 = prob.start(0.3)
+    cs = ContinuationSettings(0.1, 1e-6, 1.0)
+    a = correct_factored(prob, u0, p0, cs, 1e-12)
+    b = correct_factored(copy, u0, p0, cs, 1e-12)
+    assert np.array_equal(a[0], b[0]) and a[2] == b[2]
+
+
 @needs_chord
 def test_the_condensed_problem_offers_its_kernel_and_branches_are_the_python_loops(monkeypatch):
     """The condensed problem's residual_kernel is orbits' kernel (condensed_kernels.chord_residual) on its constants,

@@ -48,7 +48,7 @@ if numba is not None and _qr_solve is not None:
         from numba.core import cgutils as _cgutils
         from numba.core import types as _types
         from numba.core.extending import intrinsic as _intrinsic
-        from numba.experimental.function_type import _get_wrapper_address as _ADDRESS
+        from numba.experimental.function_type import _get_jit_address as _ADDRESS
     except Exception:  # pragma: no cover - another numba version: the corrector iterates in Python
         _ADDRESS = None
 
@@ -58,16 +58,28 @@ AVAILABLE = _ADDRESS is not None
 
 class ResidualKernel:
     """A compiled residual ``kernel(u, args) -> F(u)`` (u, F 1-D float arrays) compiled for the signature
-    float64[::1](float64[::1], typeof(args)): ``address`` is its native entry point (numba's C wrapper of it), which
-    ``chord_iterations`` calls as a first-class function of that signature (``_residual_at``).  An integer argument:
-    numba types it without Python (a function object as the argument costs ~8 us of typing and unboxing a call)."""
+    float64[::1](float64[::1], typeof(args)): ``address`` is its native entry point (numba's own calling convention, so
+    an exception it raises reaches the caller as from any compiled call), which ``chord_iterations`` calls as a
+    first-class function of that signature (``_residual_at``).  An integer argument:
+    numba types it without Python (a function object as the argument costs ~8 us of typing and unboxing a call).
+    Pickled as the kernel and its signature (the address is this process's: taken again when unpickled)."""
 
-    def __init__(self, kernel, args):
-        arr = _types.float64[::1]
-        signature = arr(arr, numba.typeof(args))
+    def __init__(self, kernel, args=None, signature=None):
+        if signature is None:
+            arr = _types.float64[::1]
+            signature = arr(arr, numba.typeof(args))
         kernel.compile(signature.args)
+        self.signature = signature
         self.address = _ADDRESS(kernel, signature)
         self.kernel = kernel                   # (kept alive: the address is into its compiled code)
+
+    def __reduce__(self):
+        return _residual_kernel_of, (self.kernel, self.signature)
+
+
+def _residual_kernel_of(kernel, signature):
+    """The ResidualKernel of ``kernel`` for ``signature`` in this process (unpickling)."""
+    return ResidualKernel(kernel, signature=signature)
 
 
 if AVAILABLE:
@@ -80,7 +92,7 @@ if AVAILABLE:
 
         def codegen(context, builder, signature, llargs):
             value = _cgutils.create_struct_proxy(function)(context, builder)
-            value.c_addr = builder.inttoptr(llargs[0], _cgutils.voidptr_t)
+            value.jit_addr = builder.inttoptr(llargs[0], _cgutils.voidptr_t)      # (called by numba's convention)
             return value._getvalue()
         return function(address, args), codegen
 else:  # pragma: no cover
