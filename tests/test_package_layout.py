@@ -160,9 +160,10 @@ def _loops(path, predicate):
 
 def _newton_loop(names):
     """A Newton loop: a Jacobian (or, for chord Newton, a residual) evaluated and a linear system solved in the same
-    loop."""
-    return (bool({"jacobian", "jacobian_of", "residual", "residual_parts"} & names)
-            and bool({"solve", "lstsq", "lu_solve", "solve_triangular"} & names))
+    loop (also a compiled one: a residual kernel, e.g. ``residual_jacobian``, and the compiled QR solve)."""
+    return (bool({"jacobian", "jacobian_of", "residual", "residual_parts"} & names
+                 or any(n.startswith("residual_") for n in names))
+            and bool({"solve", "lstsq", "lu_solve", "solve_triangular", "_qr_solve"} & names))
 
 
 #: the places a Newton loop may live: the engine's corrector and the fixed-parameter Newton (continuation/), and the
@@ -196,6 +197,11 @@ def test_the_check_finds_a_newton_loop(tmp_path):
     assert _loops(p, _newton_loop) == [2]                   # chord Newton: an old factorisation, a new residual
     p.write_text("def f(prob, u):\n    for _ in range(9):\n        u = newton(prob, u)\n    return u\n")
     assert _loops(p, _newton_loop) == []
+    # a compiled chord loop around one residual kernel (orbits/condensed_chord.py before round 5 of issue 52: the
+    # loop now lives in continuation/chord.py, the kernel passed to it)
+    p.write_text("def f(u, Q, R, c):\n    while True:\n        res = residual_jacobian(u, False, *c)[0]\n"
+                 "        u = u + _qr_solve(Q, R, -res)\n    return u\n")
+    assert _loops(p, _newton_loop) == [2]
 
 
 def _stepping_loop(names):
@@ -238,7 +244,7 @@ NOT_THRESHOLDS = {
     "files/importers/nastran.py": {"_SMALLEST": "the range of a FORMATTED OUTPUT4 field (two-digit exponents)"},
     "integrators/newmark.py": {"_STATE": "an enumeration: what a sweep records", "_RECORD": "(the same enumeration)",
                                "_TANGENTS": "(the same enumeration)"},
-    "orbits/condensed_chord.py": {"JUDGE": "an enumeration: why the compiled chord iterations returned",
+    "continuation/chord.py": {"JUDGE": "an enumeration: why the compiled chord iterations returned",
                                   "SINGULAR": "(the same enumeration)", "REFRESH": "(the same enumeration)"},
     "threads.py": {"BLAS_THREADS": "a process setting a user assigns at run time (None: BLAS left alone), read at "
                                    "each call; it changes no result",

@@ -1,8 +1,8 @@
 """Round 4 of the lean per-point path of condensed harmonic balance (issue 52): each cut computes the numbers of the form
 it replaced (checked here against that form), and the branches are the same bit for bit.
 
-* the corrector's chord iterations in one compiled call for the condensed problem (orbits/condensed_chord.py, the
-  engine's hook ``problem.chord_iterations``): the engine's iterates, errors, iteration counts and failures;
+* the corrector's chord iterations in one compiled call for the condensed problem (continuation/chord.py around the
+  problem's residual kernel, the engine's hook ``problem.residual_kernel``; orbits/condensed_chord.py before round 5): the engine's iterates, errors, iteration counts and failures;
 * Locator.jumped: the ends' interpolant made once (it is ``prediction``'s at mid-step) and no residual of its own at
   it (the corrector's first iterate is that residual: where it has converged already, d = 0).
 """
@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
-from nnm_solver.continuation import engine, linalg
+from nnm_solver.continuation import chord, engine, linalg
 from nnm_solver.continuation.engine import ContinuationSettings, CorrectorFailure, correct_factored
 from nnm_solver.model.modal import modal_system
-from nnm_solver.orbits import condensed_chord, condensed_kernels
+from nnm_solver.orbits import condensed_kernels
 from nnm_solver.orbits.condensed_hb import CondensedHBProblem
 from nnm_solver.orbits.hb_basis import HBBasis
 from nnm_solver.stability import locator
@@ -61,7 +61,7 @@ def _problem(model, mode=1, harmonics=5):
 
 
 def _without_chord(monkeypatch):
-    monkeypatch.setattr(CondensedHBProblem, "chord_iterations", lambda self, *a: None)
+    monkeypatch.setattr(chord, "AVAILABLE", False)
 
 
 def _corrected(prob, u_pred, p, settings, tol, w, start=None, refresh=True):
@@ -97,13 +97,13 @@ def test_the_compiled_chord_iterations_are_the_engines(monkeypatch):
     for s in (0.05, 0.3):                 # the locator's start: the point moved to the hyperplane, its factorisation
         cases.append((u + s * p, ContinuationSettings(0.1, 1e-6, 1.0), False, (u + s * p, cp.factor)))
     calls = []
-    real = condensed_chord.chord_iterations
+    real = chord.chord_iterations
 
     def counted(*a):
         calls.append(a[9])
         return real(*a)
 
-    monkeypatch.setattr(condensed_chord, "chord_iterations", counted)
+    monkeypatch.setattr(chord, "chord_iterations", counted)
     new = [_corrected(prob, up, p, cs, 1e-10, w, start, refresh) for up, cs, refresh, start in cases]
     assert len(calls) >= len(cases) and row.dot(row) > 0
     with monkeypatch.context() as m:

@@ -1,8 +1,8 @@
 """The engine's corrector: Newton-Moore-Penrose on [F(u); (w^2 p)^T (u - u_pred)] = 0 (seed eq. 9-10) with chord
 iterations (the Jacobian re-used while the iterates contract fast), the one Newton loop of the continuation layer; the
-engine (engine.py), the event locator and the tongue jumps call it.  A problem may run the chord iterations in one
-compiled call of its own (``problem.chord_iterations``, engine.py's protocol: the same iterates, e.g.
-orbits/condensed_chord.py); the codes it returns are CHORD_*.
+engine (engine.py), the event locator and the tongue jumps call it.  A problem whose residual is a compiled kernel
+(``problem.residual_kernel``, engine.py's protocol) has the chord iterations run in one compiled call (chord.py: the
+same iterates); the codes it returns are chord.py's, CHORD_* here.
 """
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from . import chord as _chord
 from .linalg import LeastSquares, all_finite, stacked
 
 __all__ = ["CorrectorFailure", "correct", "correct_factored", "jacobian_at", "CHORD_JUDGE", "CHORD_SINGULAR",
@@ -26,9 +27,9 @@ class CorrectorFailure(Exception):
     pass
 
 
-#: the codes of ``problem.chord_iterations`` (module docstring): stopped at an iterate whose residual the corrector
-#: judges; a non-finite step; poor contraction (u is the next iterate: a fresh Jacobian there)
-CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = "judge", "singular", "refresh"
+#: the codes of the compiled chord iterations (chord.py): stopped at an iterate whose residual the corrector judges; a
+#: non-finite step; poor contraction (u is the next iterate: a fresh Jacobian there)
+CHORD_JUDGE, CHORD_SINGULAR, CHORD_REFRESH = _chord.JUDGE, _chord.SINGULAR, _chord.REFRESH
 
 
 def correct(problem, u_pred, p, settings, tol, w=None):
@@ -54,7 +55,7 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
     u = u_pred.copy() if start is None else start[0].copy()
     factor = None if start is None else start[1]
     last_norm = None
-    chord = getattr(problem, "chord_iterations", None)
+    kernel = getattr(problem, "residual_kernel", None) if _chord.AVAILABLE else None
     it = 0
     while True:
         fresh = False
@@ -62,9 +63,9 @@ def correct_factored(problem, u_pred, p, settings, tol, w=None, start=None, refr
             r, J = problem.jacobian(u)
             fresh = True
             factor = LeastSquares(stacked(J, row))
-        # the problem's compiled chord iterations where it has them (the same iterates), else one residual here
-        done = (chord(u, u_pred, row, factor, last_norm, it, tol, settings, r if fresh else None)
-                if chord is not None else None)
+        # the compiled chord iterations where the problem's residual is a kernel (the same iterates), else one here
+        done = (_chord.iterate(kernel, u, u_pred, row, factor, last_norm, it, tol, settings, r if fresh else None)
+                if kernel is not None else None)
         if done is None:
             if not fresh:
                 r = problem.residual(u)

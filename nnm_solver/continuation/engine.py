@@ -14,10 +14,10 @@ Generic: it knows nothing about shooting or harmonic balance.  A *problem* provi
     problem.check_step(u_old, u_new) -> str   optional: a reason to refuse a converged step
                                               (e.g. too large a change of period), or ''
     problem.energy(u) -> float                optional: the conserved energy, for the fold guard
-    problem.chord_iterations(u, u_pred, row, factor, last_norm, it, tol, settings, fresh)
-                                              optional: the corrector's chord iterations from iterate number it in one
-                                              call, the same iterates (e.g. orbits/condensed_chord.py): (u, r, it,
-                                              last_norm, CHORD_*), or None; fresh: r of the factorised Jacobian or None
+    problem.residual_kernel -> (kernel, args) optional: the residual as a compiled kernel (chord.residual_kernel,
+                                              e.g. orbits/condensed_kernels.py; error(u, r) is then
+                                              |r| / |u[:-1]|), or None: the corrector's chord iterations then run in
+                                              one compiled call (chord.py), the same iterates
 
 The system may be over-determined with a redundant row (shooting of a conservative system has
 one: energy conservation), so every linear solve is a least-squares (Moore-Penrose) solve.

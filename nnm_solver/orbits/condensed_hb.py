@@ -48,12 +48,13 @@ import math
 
 import numpy as np
 
+from ..continuation.chord import residual_kernel
 from ..stability.floquet import without_nearest_to_one
-from . import condensed_chord as chord
 from . import condensed_energy_kernels as energy_kernels
 from . import condensed_kernels as kernels
+from . import condensed_numpy as numpy_forms
 from .condensed_energy import condensed_energy, condensed_energy_gradient
-from .condensed_linear import LinearPart, coupled_galerkin, flexibility_times_tangent
+from .condensed_linear import LinearPart, coupled_galerkin
 from .harmonic_balance import HBProblem
 from .hb_basis import harmonics_in
 from .hb_error import HBTruncationError
@@ -94,6 +95,9 @@ class CondensedHBProblem(HBTruncationError):
         self._last_energy = ()                         # (u.tobytes(), energy, gradient or None) of the last 3 orbits
         self._Bq = np.ascontiguousarray(self.lin.Bq, dtype=float)
         self._kernel = kernels.kernel_arguments(self)  # the compiled kernels' constants, or None (numpy forms)
+        #: the residual as a compiled kernel for the corrector's chord iterations (continuation/chord.py), or None
+        self.residual_kernel = (None if self._kernel is None else
+                                residual_kernel(kernels.chord_residual, self._kernel[0]))
 
     # --------------------------------------------------------------- packing
     def pack(self, D, a, omega):
@@ -133,33 +137,15 @@ class CondensedHBProblem(HBTruncationError):
         return u0, p0
 
     # --------------------------------------------------------------- equations
-    def _forces(self, D):
-        d = self.basis.E @ D                                     # (N, n_s) deformations at the samples
-        return d, self.basis.P @ self.sys.force(d)                # F (N_b, n_s) element force coefficients
-
-    def _parts(self, u):
-        D, a, w = self.unpack(u)
-        Omega2 = self.h2 * w * w
-        W = self.lin.weights(Omega2, self.r, self.fund)
-        G = self.lin.flexibility(W, Omega2)
-        d, F = self._forces(D)
-        RD = D + np.einsum("jst,jt->js", G, F)
-        RD[self.cos1] -= a * self.b_r
-        alpha = np.zeros(len(self.fund))
-        alpha[self.fund == self.cos1] = a
-        Ra = (self.w_r ** 2 - w * w) * alpha + F[self.fund] @ self.b_r
-        r = np.concatenate([RD.ravel(), Ra * self.beta / self.w_r ** 2])
-        return D, a, w, Omega2, W, G, d, F, r
-
     def residual(self, u):
         if self._kernel is not None:
             return kernels.residual_jacobian(np.asarray(u, dtype=float), False, *self._kernel[0])[0]
-        return self._parts(u)[-1]
+        return numpy_forms.residual_parts(self, u)[-1]
 
     def jacobian(self, u):
         if self._kernel is not None:
             return kernels.residual_jacobian(np.asarray(u, dtype=float), True, *self._kernel[0])
-        return self.jacobian_of(self._parts(u))
+        return numpy_forms.jacobian_of(self, numpy_forms.residual_parts(self, u))
 
     def residual_parts(self, u):
         """The residual's intermediate results at u, its last item the residual: what ``jacobian_of`` needs (with
@@ -167,46 +153,14 @@ class CondensedHBProblem(HBTruncationError):
         if self._kernel is not None:
             u = np.array(u, dtype=float)
             return u, self.residual(u)
-        return self._parts(u)
+        return numpy_forms.residual_parts(self, u)
 
     def jacobian_of(self, parts):
-        """(r, J) from the parts of the residual already computed at u (``_parts``: e.g. where a Newton loop
+        """(r, J) from the parts of the residual already computed at u (``residual_parts``: e.g. where a Newton loop
         tested the residual first and needs the Jacobian only when it is not converged)."""
         if self._kernel is not None:
             return self.jacobian(parts[0])
-        D, a, w, Omega2, W, G, d, F, r = parts
-        bs, nb, ns = self.basis, self.nb, self.ns
-        nD = nb * ns
-        J = np.zeros((len(r), nD + 2))                                       # unknowns: D, a, omega
-        if self.sys.elements.coupled:
-            blocks = coupled_galerkin(bs, self.sys.elements, d)
-            JD = flexibility_times_tangent(G, blocks, nb, ns).reshape(nD, nD)
-        else:
-            C = bs.galerkin(self.sys.tangent(d))       # dF[j, s] / dD[l, s]
-            # dR_D[j, s] / dD[l, t] = delta + G[j, s, t] C[t, j, l]
-            JD = np.einsum("jst,tjl->jslt", G, C).reshape(nD, nD)
-        JD[np.diag_indices(nD)] += 1.0
-        J[:nD, :nD] = JD
-        J[self.cos1 * ns:(self.cos1 + 1) * ns, nD] = -self.b_r / self.beta
-        dG = self.lin.flexibility_slope(W, Omega2)                             # dG / dOmega2
-        J[:nD, nD + 1] = (np.einsum("jst,jt->js", dG, F) * (2 * self.h2 * w)[:, None]).ravel() * self.w_r
-        c = self.beta / self.w_r ** 2
-        for i, j in enumerate(self.fund):
-            row = nD + i
-            if self.sys.elements.coupled:
-                R = np.zeros((nb, ns))                                      # [l, t] = sum_u b_r[u] dF[j, u] / dD[l, t]
-                for u_, t_, C_ in blocks:
-                    R[:, t_] += (self.b_r[u_][:, None] * C_[:, j, :]).T
-                J[row, :nD] = c * R.ravel()
-            else:
-                J[row, :nD] = c * (self.b_r[:, None] * C[:, j, :]).T.ravel()
-            if j == self.cos1:
-                J[row, nD] = (self.w_r ** 2 - w * w) / self.w_r ** 2
-                J[row, nD + 1] = -2.0 * w * a * c * self.w_r
-        return r, J
-
-    #: the corrector's chord iterations in one compiled call (condensed_chord.py; the engine's iterates)
-    chord_iterations = chord.problem_chord_iterations
+        return numpy_forms.jacobian_of(self, parts)
 
     def error(self, u, r):
         """Relative residual ||r|| / ||(D, a beta)|| (both in m)."""
@@ -243,7 +197,7 @@ class CondensedHBProblem(HBTruncationError):
             W = self.lin.weights(Omega2, self.r, self.fund) if self._kernel[1] is None else None
         else:
             W = self.lin.weights(Omega2, self.r, self.fund)
-            d, F = self._forces(D)
+            d, F = numpy_forms.forces(self, D)
             A = -W * (F @ self.lin.Bq)
             A[self.cos1, self.r] = a
         parts = (A, W, F, Omega2, d)

@@ -26,7 +26,8 @@ from ..jit import jit, numba
 from ..model.laws import law_scalar
 from .spring_kernels import int_power
 
-__all__ = ["AVAILABLE", "kernel_arguments", "element_pairs", "flexibility", "residual_jacobian", "unknowns", "amplitudes"]
+__all__ = ["AVAILABLE", "kernel_arguments", "element_pairs", "flexibility", "residual_jacobian", "chord_residual",
+           "unknowns", "amplitudes"]
 
 #: the kernels are compiled (numba installed); without numba the numpy forms are used (a Python loop over the
 #: modes would be far slower than them)
@@ -266,6 +267,13 @@ def residual_jacobian(u, want_jacobian, cos1, r, beta, w_r, h2, fund, b_r, omega
                 J[row, nD + 1] = -2.0 * w * a * c * w_r
             i += 1
     return res, J
+
+
+@jit
+def chord_residual(u, args):
+    """The residual of ``residual_jacobian`` at u, args its constants (``kernel_arguments``' equations): the corrector's
+    compiled chord iterations call it (continuation/chord.py, as a first-class function)."""
+    return residual_jacobian(u, False, *args)[0]
 
 
 @jit_modes
