@@ -6,13 +6,13 @@ it replaced (checked here against that form), and the branches are the same bit 
 * Locator.jumped: the ends' interpolant made once (it is ``prediction``'s at mid-step) and no residual of its own at
   it (the corrector's first iterate is that residual: where it has converged already, d = 0).
 """
-import importlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import nnm_solver as nnm
+from corrector_runs import corrected, same_run
 from nnm_solver.continuation import chord, engine, linalg
 from nnm_solver.continuation.engine import ContinuationSettings, CorrectorFailure, correct_factored
 from nnm_solver.model.modal import modal_system
@@ -64,21 +64,6 @@ def _without_chord(monkeypatch):
     monkeypatch.setattr(chord, "AVAILABLE", False)
 
 
-def _corrected(prob, u_pred, p, settings, tol, w, start=None, refresh=True):
-    try:
-        return correct_factored(prob, u_pred, p, settings, tol, w, start=start, refresh=refresh)
-    except CorrectorFailure as exc:
-        return str(exc)
-
-
-def _same(a, b):
-    if isinstance(a, str) or isinstance(b, str):
-        return a == b
-    return all((x is None and y is None) or (x is not None and y is not None and
-                                            (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y))
-               for x, y in zip(a[:4], b[:4]))
-
-
 @needs_kernels
 def test_the_compiled_chord_iterations_are_the_engines(monkeypatch):
     """correct_factored with the condensed problem's compiled chord iterations and with the engine's own loop: the same
@@ -104,15 +89,15 @@ def test_the_compiled_chord_iterations_are_the_engines(monkeypatch):
         return real(*a)
 
     monkeypatch.setattr(chord, "chord_iterations", counted)
-    new = [_corrected(prob, up, p, cs, 1e-10, w, start, refresh) for up, cs, refresh, start in cases]
+    new = [corrected(prob, up, p, cs, 1e-10, w, start, refresh) for up, cs, refresh, start in cases]
     assert len(calls) >= len(cases) and row.dot(row) > 0
     with monkeypatch.context() as m:
         _without_chord(m)
-        old = [_corrected(prob, up, p, cs, 1e-10, w, start, refresh) for up, cs, refresh, start in cases]
+        old = [corrected(prob, up, p, cs, 1e-10, w, start, refresh) for up, cs, refresh, start in cases]
     assert sum(isinstance(x, str) for x in old) >= 4 and sum(not isinstance(x, str) for x in old) >= 8
     assert max(x[2] for x in old if not isinstance(x, str)) >= 5
     for a, b in zip(new, old):
-        assert _same(a, b), (a, b)
+        assert same_run(a, b), (a, b)
 
 
 @needs_kernels

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import nnm_solver as nnm
+from corrector_runs import corrected, same_run
 from nnm_solver.continuation import chord
-from nnm_solver.continuation.engine import ContinuationSettings, CorrectorFailure, correct_factored, tangent
+from nnm_solver.continuation.engine import ContinuationSettings, correct_factored, tangent
 
 numba = pytest.importorskip("numba")
 needs_chord = pytest.mark.skipif(not chord.AVAILABLE, reason="numba (with its LAPACK) is not installed")
@@ -81,21 +82,6 @@ class ToyProblem:
         return float(np.sqrt(r.dot(r)) / max(np.sqrt(x.dot(x)), 1e-300))
 
 
-def _run(prob, u_pred, p, settings, tol, w, start=None, refresh=True):
-    try:
-        return correct_factored(prob, u_pred, p, settings, tol, w, start=start, refresh=refresh)
-    except CorrectorFailure as exc:
-        return str(exc)
-
-
-def _same(a, b):
-    if isinstance(a, str) or isinstance(b, str):
-        return a == b
-    return all((x is None and y is None) or (x is not None and y is not None and
-                                            (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y))
-               for x, y in zip(a[:4], b[:4]))
-
-
 @needs_chord
 @pytest.mark.parametrize("kernel", [_toy_residual, _other_residual])
 def test_a_kernel_of_another_problem_gets_the_correctors_iterates(monkeypatch, kernel):
@@ -126,18 +112,18 @@ def test_a_kernel_of_another_problem_gets_the_correctors_iterates(monkeypatch, k
         return real(*a)
 
     monkeypatch.setattr(chord, "chord_iterations", counted)
-    new = [_run(prob, up, p, cs, 1e-12, w, start, refresh) for up, cs, refresh, start in cases]
+    new = [corrected(prob, up, p, cs, 1e-12, w, start, refresh) for up, cs, refresh, start in cases]
     assert len(calls) >= len(cases) and row.dot(row) > 0
     evaluated = []
     with monkeypatch.context() as m:
         m.setattr(chord, "AVAILABLE", False)
         real_residual = prob.residual
         m.setattr(prob, "residual", lambda v: evaluated.append(1) or real_residual(v))
-        old = [_run(prob, up, p, cs, 1e-12, w, start, refresh) for up, cs, refresh, start in cases]
+        old = [corrected(prob, up, p, cs, 1e-12, w, start, refresh) for up, cs, refresh, start in cases]
     assert len(evaluated) > len(cases)               # the Python loop iterated on residuals
     assert sum(not isinstance(x, str) for x in old) >= 8 and max(x[2] for x in old if not isinstance(x, str)) >= 3
     for a, b in zip(new, old):
-        assert _same(a, b), (a, b)
+        assert same_run(a, b), (a, b)
 
 
 @needs_chord
