@@ -23,31 +23,30 @@ needs_chord = pytest.mark.skipif(not chord.AVAILABLE, reason="numba (with its LA
 
 
 @numba.njit
-def _toy_residual(u, args):
-    """F(u) = A x + c x^3 - lam b (x = u[:-1], lam = u[-1]): n equations in n + 1 unknowns, a curve of solutions."""
-    A, c, b = args
+def _linear_part(u, A, b):
+    """A x - lam b (x = u[:-1], lam = u[-1])."""
     n = b.shape[0]
     r = np.empty(n)
     for i in range(n):
         acc = -u[n] * b[i]
         for j in range(n):
             acc += A[i, j] * u[j]
-        r[i] = acc + c[i] * u[i] ** 3
+        r[i] = acc
     return r
+
+
+@numba.njit
+def _toy_residual(u, args):
+    """F(u) = A x + c x^3 - lam b (x = u[:-1], lam = u[-1]): n equations in n + 1 unknowns, a curve of solutions."""
+    A, c, b = args
+    return _linear_part(u, A, b) + c * u[:-1] ** 3
 
 
 @numba.njit
 def _other_residual(u, args):
     """Another kernel of the same argument types: F(u) = A x + c sin(x) - lam b."""
     A, c, b = args
-    n = b.shape[0]
-    r = np.empty(n)
-    for i in range(n):
-        acc = -u[n] * b[i]
-        for j in range(n):
-            acc += A[i, j] * u[j]
-        r[i] = acc + c[i] * np.sin(u[i])
-    return r
+    return _linear_part(u, A, b) + c * np.sin(u[:-1])
 
 
 class ToyProblem:
