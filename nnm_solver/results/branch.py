@@ -9,7 +9,7 @@ from ..fourier import fourier_amplitudes
 from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
 from .multipliers import floquet_columns, multipliers_of
-from .point import Point, resolve_points
+from .point import PhysicalColumns, Point
 from .settings import settings_from_dict
 from .stops import STOP_STATUSES
 from .tongues import TongueRecord
@@ -54,18 +54,19 @@ class Branch:
         self.tongues = [TongueRecord.from_mapping(t) for t in (tongues or [])]
 
     def _set_columns(self, energy, frequency_hz, period, x0, v0, floquet, stable, coefficients, labels=None,
-                     freq_error=None, steps=None, fundamental_share=None):
+                     freq_error=None, steps=None, fundamental_share=None, physical=None):
+        """physical : the PhysicalColumns of x0, v0 and coefficients (then those three are not read), or None."""
         n = self.model.n
         self.energy = np.asarray(energy, dtype=float).reshape(-1)
         N = len(self.energy)
         self.frequency_hz = np.asarray(frequency_hz, dtype=float).reshape(N)
         self.period = np.asarray(period, dtype=float).reshape(N)
-        self.x0 = np.asarray(x0, dtype=float).reshape(N, n)
-        self.v0 = np.asarray(v0, dtype=float).reshape(N, n)
+        self._physical = PhysicalColumns(n, x0, v0, coefficients) if physical is None else physical
+        if len(self._physical) != N:
+            raise ValueError(f"x0 has {len(self._physical)} rows, energy {N}")
         self.floquet = floquet_columns(floquet, N, n, self.settings,
                                        width=getattr(self, "floquet", np.zeros((0, 2 * n))).shape[1])
         self.stable = np.ones(N, dtype=bool) if stable is None else np.asarray(stable, dtype=bool).reshape(N)
-        self.coefficients = None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(N, -1, n)
         self.labels = (np.full(N, "backbone", dtype=object) if labels is None
                        else np.asarray([str(x) for x in np.asarray(labels, dtype=object).reshape(N)], dtype=object))
         self.freq_error = (np.full(N, np.nan) if freq_error is None
@@ -92,27 +93,37 @@ class Branch:
         points = list(points)
         if not points:
             return self
-        resolve_points(points)          # the physical states still held as modal ones, in one product
-        n = self.model.n
 
         def col(key, shape=(), dtype=float):
             return np.array([getattr(p, key) for p in points], dtype=dtype).reshape((len(points),) + shape)
 
-        coeffs = None
-        if points[0].coefficients is not None and (self.coefficients is not None or len(self) == 0):
-            coeffs = np.concatenate([np.zeros((0,) + points[0].coefficients.shape) if self.coefficients is None
-                                     else self.coefficients, col("coefficients", points[0].coefficients.shape)])
+        # (x0, v0 and coefficients mapped from the points' modal states when first read: PhysicalColumns)
         self._set_columns(np.r_[self.energy, col("energy")], np.r_[self.frequency_hz, col("frequency_hz")],
-                          np.r_[self.period, col("period")], np.vstack([self.x0, col("x0", (n,))]),
-                          np.vstack([self.v0, col("v0", (n,))]),
+                          np.r_[self.period, col("period")], None, None,
                           np.vstack([self.floquet, col("floquet", (-1,), complex)]) if len(self)
                           else col("floquet", (-1,), complex),
-                          np.r_[self.stable, col("stable", dtype=bool)], coeffs,
+                          np.r_[self.stable, col("stable", dtype=bool)], None,
                           np.r_[self.labels, col("label", dtype=object)], np.r_[self.freq_error, col("freq_error")],
                           np.r_[self.steps, col("steps", dtype=int)],
-                          np.r_[self.fundamental_share, col("fundamental_share")])
+                          np.r_[self.fundamental_share, col("fundamental_share")],
+                          physical=self._physical.appended(points))
         self.events = detect_events(self.energy, self.frequency_hz, self.floquet, self.stable)
         return self
+
+    @property
+    def x0(self):
+        """(N, n) initial displacements (m)."""
+        return self._physical.arrays()[0]
+
+    @property
+    def v0(self):
+        """(N, n) initial velocities (m/s)."""
+        return self._physical.arrays()[1]
+
+    @property
+    def coefficients(self):
+        """(N, N_b, n) Fourier coefficients (m) of a harmonic-balance branch, else None."""
+        return self._physical.arrays()[2]
 
     @property
     def multipliers_of(self):
