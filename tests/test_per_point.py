@@ -342,3 +342,23 @@ def test_restoring_ratio_from_the_coefficients_is_that_of_the_sampled_orbit(kind
             assert abs(got - want) <= 1e-10 * want + 1e-15 / want, (scale, got, want)      # r^2 to 1e-15
             seen.append(want)
     assert min(seen) < 0.05 and max(seen) > 0.99
+
+
+@pytest.mark.parametrize("kind", ["cubic", "polynomial", "piecewise", "coupled"])
+def test_the_modal_curvature_is_the_nonlinear_force_derivative(kind):
+    """ModalSystem.curvature (content.tongue_partner's averaged partner frequency) equals the central difference of
+    the modal nonlinear force's entry j along q_j, at random states, for springs, kinks and coupled elements (to the
+    extrapolated difference's own error, ~1e-9 relative)."""
+    sys_ = modal_system(MODELS[kind]())
+    rng = np.random.default_rng(3)
+    q = 0.4 * rng.standard_normal((6, sys_.n))
+    def central(j, h):
+        e = np.zeros(sys_.n)
+        e[j] = h
+        return (sys_.nonlinear_force(q + e)[:, j] - sys_.nonlinear_force(q - e)[:, j]) / (2 * h)
+
+    for j in range(sys_.n):
+        fd = (4 * central(j, 1e-6) - central(j, 2e-6)) / 3          # Richardson (kinks smoothed over 2e-4)
+        got = sys_.curvature(q, j)
+        assert got.shape == (6,)
+        assert np.allclose(got, fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max()), (j, got, fd)

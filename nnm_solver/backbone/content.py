@@ -145,15 +145,11 @@ def tongue_partner(content, frequency_hz, system, share=_LABELS.partner_share, m
     if not (top >= _LABELS.fold_content and frequency_hz > 0):   # no harmonic k >= 2 (an HB orbit at H = 1): none
         return None
     q = Q[:: max(1, len(Q) // 32)]                      # 32 samples of the orbit are enough for a mean
-    eps = 1e-6 * max(float(np.abs(q).max()), 1e-300)
     f_eff = {}
 
     def off(k, j):                                      # |k f / f_j - 1| of harmonic k (>= 2) and mode j
         if j not in f_eff:
-            e = np.zeros(Q.shape[1])
-            e[j] = eps
-            curv = (system.nonlinear_force(q + e)[:, j] - system.nonlinear_force(q - e)[:, j]) / (2 * eps)
-            w2 = float(system.omega2[j] + np.mean(curv))
+            w2 = float(system.omega2[j] + np.mean(system.curvature(q, j)))
             f_eff[j] = np.sqrt(w2) / (2 * np.pi) if w2 > 0 else np.nan
         return abs(k * frequency_hz / f_eff[j] - 1.0)
 

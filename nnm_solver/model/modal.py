@@ -70,6 +70,18 @@ class ModalSystem:
         q = np.asarray(q, dtype=float)
         return self.elements.force(q @ self.Bq.T) @ self.Bq
 
+    def curvature(self, q, j):
+        """d^2 V_nl / dq_j^2 (...) at the modal states q (..., n), V_nl the elements' potential (the modal stiffness's
+        diagonal entry j): sum over the springs of Bq[s, j]^2 g_s'(d_s) plus w^T T(d) w over the coupled elements (w
+        their rows of Bq's column j, T their tangent blocks), d = Bq q.  O(n n_s) a state."""
+        d = np.asarray(q, dtype=float) @ self.Bq.T
+        b = self.Bq[:, j]
+        c = self.elements.tangent(d) @ (b * b)
+        for rows, T in self.elements.coupled_tangents(d):
+            w = b[rows]                                                        # (G, m)
+            c = c + np.einsum("ga,...gab,gb->...", w, T, w)
+        return c
+
     def energy(self, q0, v0):
         """Energy (J) of the modal state (q0, v0): |v0|^2 / 2 + q0^T Omega^2 q0 / 2 + element potentials."""
         return float(0.5 * v0 @ v0 + 0.5 * q0 @ (self.omega2 * q0) + np.sum(self.elements.potential(self.Bq @ q0)))
