@@ -140,7 +140,8 @@ def sparse_cantilever(n_el, length=1.0, EI=43.75, rhoA=0.78, k3=1e7):
 
 def test_ritz_basis_equals_the_full_basis_on_a_model_where_both_run():
     """A 60-element cantilever (120 DOFs): the Ritz basis (modes below 2 H f + residual flexibility) gives the
-    full basis's frequencies to 1e-9 and its orbits to 1e-6 at the tip; the basis holds the exact low modes."""
+    full basis's frequencies to 1e-9 beyond the two bases' linear frequency difference (their eigen-solvers' round-off)
+    and its orbits to 1e-6 at the tip; the basis holds the exact low modes."""
     from nnm_solver.model.ritz import ritz_system
     model = sparse_cantilever(60)
     a = nnm.continue_nnm(model, 1, 5e-3, method="hb", harmonics=5, condensed=True, floquet=False, modal_basis="full",
@@ -148,12 +149,15 @@ def test_ritz_basis_equals_the_full_basis_on_a_model_where_both_run():
     b = nnm.continue_nnm(model, 1, 5e-3, method="hb", harmonics=5, condensed=True, floquet=False, modal_basis="ritz")
     assert a.status == b.status == "done"
     assert b.settings.modal_basis == "ritz" and b.settings.cutoff_hz > 9 * a.frequency_hz[0]
-    assert abs(b.frequency_hz[-1] / a.frequency_hz[-1] - 1) < 1e-9
+    system = ritz_system(model, 1, 5)
+    lam, _ = model.eigensolution
+    # the two bases' linear frequency of mode 1 differ by their eigen-solvers' round-off (1.7e-8 in lam on one
+    # machine): the nonlinear frequencies agree to that, plus 1e-9
+    linear = 0.5 * abs(system.omega2[0] / lam[0] - 1)
+    assert abs(b.frequency_hz[-1] / a.frequency_hz[-1] - 1) < 1e-9 + linear
     assert abs(a.frequency_hz[-1] / a.frequency_hz[0] - 1) > 1e-3                # nonlinear enough to matter
     tip = 2 * 60 - 2
     assert abs(b.x0[-1, tip] / a.x0[-1, tip] - 1) < 1e-6
-    system = ritz_system(model, 1, 5)
-    lam, _ = model.eigensolution
     m = system.exact_modes
     # the dense eigensolution's own round-off on this pencil (eigenvalues spanning 1e10) is ~1e-8
     assert np.allclose(system.omega2[:m], lam[:m], rtol=1e-7)
