@@ -147,13 +147,14 @@ class PhysicalColumns:
     of the 41 ms its 34 points cost, issue 52).  The numbers are those of mapping the points as they are appended.
     Thread-safe."""
 
-    def __init__(self, n, x0, v0, coefficients=None):
+    def __init__(self, n, x0, v0, coefficients=None, batches=()):
+        """batches : rows appended after those of x0, v0 and coefficients (``appended``'s)."""
         x0 = np.asarray(x0, dtype=float).reshape(-1, n)
         self.n = n
         self._arrays = (x0, np.asarray(v0, dtype=float).reshape(len(x0), n),
                         None if coefficients is None else np.asarray(coefficients, dtype=float).reshape(len(x0), -1, n))
-        self._batches = []          # per appended list of points: its rows, each (point, its ModalState) or (x0, v0,
-                                    # coefficients)
+        self._batches = list(batches)   # per appended list of points: its rows, each (point, its ModalState) or (x0,
+                                        # v0, coefficients)
         self._lock = threading.Lock()
 
     def appended(self, points):
@@ -165,11 +166,9 @@ class PhysicalColumns:
             batch.append((p, modal) if modal is not None else
                          (np.array(p.x0, dtype=float), np.array(p.v0, dtype=float),
                           None if p.coefficients is None else np.array(p.coefficients, dtype=float)))
-        out = PhysicalColumns.__new__(PhysicalColumns)
         with self._lock:
-            out.n, out._arrays, out._batches = self.n, self._arrays, self._batches + [batch]
-        out._lock = threading.Lock()
-        return out
+            arrays, batches = self._arrays, self._batches + [batch]
+        return PhysicalColumns(self.n, *arrays, batches=batches)
 
     def arrays(self):
         """(x0, v0, coefficients or None), every row mapped to physical coordinates."""
