@@ -109,8 +109,8 @@ def _lazy_points(model, mode, energy_max, **kw):
 
 @pytest.mark.parametrize("case", ["chain", "aircraft"])
 def test_the_physical_states_computed_when_read_are_the_eager_ones(case):
-    """x0, v0 and the coefficients that the Branch maps in one product when first read (PhysicalColumns) equal the point-by-point products
-    (to 1e-14 of each vector's size), and the energy taken from the modal state equals the model's physical energy
+    """x0, v0 and the coefficients that the Branch maps in one product when first read (PhysicalColumns) equal the
+    point-by-point products (to 1e-14 of each vector's size), and the energy taken from the modal state equals the model's physical energy
     of (x0, v0) (the eager definition) to 1e-12 relative or the physical one's round-off, eps w_max^2 / w_mode^2 (the
     modal sum of squares is the accurate one; x^T K x of the aircraft's stiffness rounds to eps w_max^2 / w_20^2 =
     2.6e-11: 5.4e-13 measured on one machine, 1.7e-12 on another)."""

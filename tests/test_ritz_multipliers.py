@@ -67,7 +67,8 @@ def test_ritz_multipliers_are_the_full_models_where_both_bases_run():
     # (to 1e-6 plus what the two orbits' period difference moves the multipliers by: exp(i w_k T) turns by w_k dT, the
     # highest exact mode's w_k T ~ 9,400: 1.4e-6 on one machine, whose two branches' frequencies differ by 1.5e-10)
     gap = np.sort([np.min(np.abs(mu_full - mu)) for mu in mu_ritz])
-    drift = np.sqrt(system.omega2[system.exact_modes - 1]) * b.period[j] * abs(b.frequency_hz[j] / a.frequency_hz[j] - 1)
+    w_top = np.sqrt(system.omega2[system.exact_modes - 1])
+    drift = w_top * b.period[j] * abs(b.frequency_hz[j] / a.frequency_hz[j] - 1)
     assert gap[2 * system.exact_modes - 1] < 1e-6 + 2 * drift, gap[:2 * system.exact_modes]
     # ... which the orbit has moved from their linear values exp(+-i w_k T) by far more than that
     linear = np.exp(1j * np.sqrt(system.omega2) * b.period[j])

@@ -142,10 +142,10 @@ def resolve_points(points):
 class PhysicalColumns:
     """A branch's physical columns: x0, v0 (N, n) (m, m/s) and coefficients (N, N_b, n) (m) or None.  Rows given as
     arrays, then the rows of points appended to the branch (``appended``): a point still holding its modal state is
-    kept with that state, and both are mapped (map_modal: one product for all of them) when a column is first read.  A branch's points
-    then cost no O(n m) work each unless their physical states are read (a condensed-HB branch of the aircraft: 2.2 ms
-    of the 41 ms its 34 points cost, issue 52).  The numbers are those of mapping the points as they are appended.
-    Thread-safe."""
+    kept with that state, and both are mapped (map_modal: one product for all of them) when a column is first read.
+    A branch's points then cost no O(n m) work each unless their physical states are read (a condensed-HB branch of
+    the aircraft: 2.2 ms of the 41 ms its 34 points cost, issue 52).  The numbers are those of mapping the points as
+    they are appended.  Thread-safe."""
 
     def __init__(self, n, x0, v0, coefficients=None, batches=()):
         """batches : rows appended after those of x0, v0 and coefficients (``appended``'s)."""
