@@ -110,10 +110,10 @@ def _lazy_points(model, mode, energy_max, **kw):
 @pytest.mark.parametrize("case", ["chain", "aircraft"])
 def test_the_physical_states_computed_when_read_are_the_eager_ones(case):
     """x0, v0 and the coefficients that the Branch maps in one product when first read (PhysicalColumns) equal the
-    point-by-point products (to 1e-14 of each vector's size), and the energy taken from the modal state equals the model's physical energy
-    of (x0, v0) (the eager definition) to 1e-12 relative or the physical one's round-off, eps w_max^2 / w_mode^2 (the
-    modal sum of squares is the accurate one; x^T K x of the aircraft's stiffness rounds to eps w_max^2 / w_20^2 =
-    2.6e-11: 5.4e-13 measured on one machine, 1.7e-12 on another)."""
+    point-by-point products (to 1e-14 of each vector's size), and the energy taken from the modal state equals the
+    model's physical energy of (x0, v0) (the eager definition) to 1e-12 relative or the physical one's round-off,
+    eps w_max^2 / w_mode^2 (the modal sum of squares is the accurate one; x^T K x of the aircraft's stiffness rounds to
+    eps w_max^2 / w_20^2 = 2.6e-11: 5.4e-13 measured on one machine, 1.7e-12 on another)."""
     if case == "chain":
         model, mode, E, kw = MODELS["cubic"](), 1, 2.0, dict(harmonics=7)
     else:
@@ -123,7 +123,7 @@ def test_the_physical_states_computed_when_read_are_the_eager_ones(case):
     rounding = max(1e-12, np.finfo(float).eps * lam[-1] / lam[mode - 1])      # the aircraft's: 2.6e-11
     assert len(b) == len(points) > 5 and b.status == "done"
     assert all(p.__dict__["modal"] is not None for p in points)     # the Branch maps nothing until its columns are read
-    b.x0
+    b.x0                                                      # (read: mapped now)
     for i, (p, (x0, v0, C)) in enumerate(zip(points, eager)):
         assert p.__dict__["modal"] is None                    # mapped, once, when the Branch's columns were read
         for got, want in ((b.x0[i], x0), (b.v0[i], v0), (b.coefficients[i], C), (p.x0, x0)):
