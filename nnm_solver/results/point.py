@@ -35,6 +35,11 @@ class ModalState:
         parts = [self.q0[None], self.v0[None]] + ([] if self.coefficients is None else [self.coefficients])
         return np.concatenate(parts)
 
+    def split(self, rows):
+        """(x0, v0, coefficients or None) of mapped rows (rows() times phi^T)."""
+        n_b = 0 if self.coefficients is None else len(self.coefficients)
+        return rows[0], rows[1], (rows[2:2 + n_b] if n_b else None)
+
 
 @dataclass
 class Point:
@@ -85,10 +90,8 @@ class Point:
 
     def _set_physical(self, modal, rows):
         """Store x0, v0 and coefficients mapped from ``modal`` (rows: its rows() times phi^T)."""
-        n_b = 0 if modal.coefficients is None else len(modal.coefficients)
         d = self.__dict__
-        d["_x0"], d["_v0"] = rows[0], rows[1]
-        d["_coefficients"] = rows[2:2 + n_b] if n_b else None
+        d["_x0"], d["_v0"], d["_coefficients"] = modal.split(rows)
         self.modal = None
 
 
@@ -190,8 +193,7 @@ class PhysicalColumns:
                     (p, modal), m = r, mapped[id(r[1])]
                     if p.__dict__.get("modal") is modal:        # the point itself, still unmapped: mapped once
                         p._set_physical(modal, m)
-                    n_b = 0 if modal.coefficients is None else len(modal.coefficients)
-                    r = (m[0], m[1], m[2:2 + n_b] if n_b else None)
+                    r = modal.split(m)
                 rows.append(r)
             x0 = np.vstack([x0, np.array([r[0] for r in rows]).reshape(len(rows), n)])
             v0 = np.vstack([v0, np.array([r[1] for r in rows]).reshape(len(rows), n)])
