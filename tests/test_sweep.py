@@ -289,3 +289,56 @@ def test_branch_is_recomputed_when_the_cluster_loses_its_scattered_model(client)
     assert got[0].sweep_info["source"] == "computed", got[0].message
     assert got[0].sweep_info["pid"] != killed[0]
     assert_same(nnm.continue_nnm(m, 1, **LONG), got[0])
+
+
+def test_cli_sweep_takes_the_branch_flags(monkeypatch, tmp_path, capsys):
+    """--modes / --sweep compute every branch with the branch flags a single --mode N takes (method, integrator,
+    steps, harmonics, condensed, freq_tol, tongues, tol, max_points, energy_min: they were dropped, so a sweep with
+    --tongues skip --method hb ran shooting with the default tongues), the flags over the sweep file's options, and
+    refuse in one line the flags a sweep does not use."""
+    from nnm_solver.cli import solve
+
+    seen = []
+
+    def fake_sweep(model, modes, energy_max, variants=None, client=None, out=None, progress=None, **options):
+        seen.append(options)
+        return []
+
+    monkeypatch.setattr(sweeps, "sweep", fake_sweep)
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, chain())
+    base = [str(p), "--modes", "1-2", "--energy-max", "1", "--out", str(tmp_path / "o.h5")]
+    assert solve.main(base + ["--tongues", "skip", "--method", "hb", "--harmonics", "5", "--condensed",
+                              "--freq-tol", "1e-5", "--tol", "1e-7", "--max-points", "30"]) == 0
+    assert seen[-1] == dict(method="hb", harmonics=5, condensed=True, freq_tol=1e-5, tongues="skip", tol=1e-7,
+                            max_points=30)
+    assert solve.main(base + ["--integrator", "newmark", "--steps-per-period", "64", "--energy-min", "0.01"]) == 0
+    assert seen[-1] == dict(integrator="newmark", steps_per_period=64, energy_min=0.01)
+    assert solve.main(base) == 0 and seen[-1] == {}
+    toml = tmp_path / "s.toml"
+    toml.write_text('[options]\nmethod = "hb"\nharmonics = 7\ncondensed = true\ntongues = "follow"\n')
+    assert solve.main(base + ["--sweep", str(toml), "--harmonics", "9", "--tongues", "skip"]) == 0
+    assert seen[-1] == dict(method="hb", harmonics=9, condensed=True, tongues="skip")
+    capsys.readouterr()
+    assert solve.main(base + ["--sweep", str(toml), "--steps-per-period", "64"]) == 2
+    assert "belong(s) to --method shooting" in capsys.readouterr().err
+    assert solve.main(base + ["--csv", str(tmp_path / "t.csv"), "--damping", "0.02"]) == 2
+    err = capsys.readouterr().err
+    assert "--damping, --csv: not used by a sweep" in err and len(err.strip().splitlines()) == 1
+    assert len(seen) == 4
+
+
+def test_cli_sweep_branch_equals_continue_nnm_with_the_same_flags(tmp_path):
+    pytest.importorskip("distributed")
+    p, out = tmp_path / "m.h5", tmp_path / "out.h5"
+    nnm.save_model(p, chain())
+    r = run(p, "--modes", "1", "--energy-max", 1.0, "--method", "hb", "--harmonics", 5, "--tongues", "skip",
+            "--max-points", 30, "--workers", 1, "--out", out)
+    assert r.returncode == 0, r.stderr
+    (b,) = nnm.load_branches(out)
+    ref = nnm.continue_nnm(chain(), 1, 1.0, method="hb", harmonics=5, tongues="skip", max_points=30)
+    for key in ("method", "harmonics", "condensed", "tol"):
+        assert b.settings[key] == ref.settings[key], key
+    assert b.settings["method"] == "harmonic_balance"            # (shooting before: --method was dropped)
+    np.testing.assert_array_equal(b.energy, ref.energy)
+    np.testing.assert_array_equal(b.frequency_hz, ref.frequency_hz)

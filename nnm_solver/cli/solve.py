@@ -283,6 +283,33 @@ def _run_family(args):
     return report_and_save(args, model, family, out, title, title, time.perf_counter() - t0)
 
 
+def _sweep_unused_flags(args, parser):
+    """The flags given on the command line that a sweep does not use (a single branch's exports, the forced
+    response's, a family started on a saved branch), in the order of --help."""
+    given = {"--tongue": args.tongue, "--switch": args.switch, "--branch": args.branch, "--forced": args.forced or None,
+             "--force-dof": args.force_dof, "--force": args.force, "--f-range": args.f_range,
+             "--damping": args.damping if args.damping != parser.get_default("damping") else None,
+             "--csv": args.csv, "--uff": args.uff, "--backbone": args.backbone, "--backbone-dof": args.backbone_dof,
+             "--backbone-kind": (args.backbone_kind if args.backbone_kind != parser.get_default("backbone_kind")
+                                 else None)}
+    return [flag for flag, value in given.items() if value is not None]
+
+
+def _sweep_options(args, parser, options):
+    """continue_nnm's keywords of every branch of a sweep: the sweep file's ``options`` with the branch flags given on
+    the command line (--method, --integrator, --steps-per-period, --harmonics, --condensed, --freq-tol, --tongues,
+    --tol, --max-points, --energy-min) over them, as a single branch (--mode N) takes them.  The method is the
+    command line's where --method is given, else the file's; a flag of the other method is one NNMInputError line."""
+    method_given = args.method != parser.get_default("method")
+    method = args.method if method_given else options.get("method", parser.get_default("method"))
+    flags = _method_arguments(argparse.Namespace(**{**vars(args), "method": method}))
+    if not args.condensed:
+        flags.pop("condensed", None)            # (a sweep file's condensed = true stays unless the flag is given)
+    if not method_given and method == parser.get_default("method"):
+        flags.pop("method", None)
+    return {**options, **flags, **_continuation_options(args)}
+
+
 def _run_sweep(args, parser):
     """nnm-solve FILE --modes ... : many branches (modes x variants) in parallel on Dask (nnm_solver.sweep)."""
     from ..sweeps.dask_sweep import sweep
@@ -294,18 +321,19 @@ def _run_sweep(args, parser):
         raise NNMInputError("--list-modes does not go with --modes / --sweep")
     if args.workers is not None and args.workers < 1:
         raise NNMInputError(f"--workers must be at least 1, got {args.workers}")
+    unused = _sweep_unused_flags(args, parser)
+    if unused:
+        them = "it" if len(unused) == 1 else "them"
+        raise NNMInputError(f"{', '.join(unused)}: not used by a sweep (--modes / --sweep computes and saves whole "
+                            f"branches; export or continue a saved branch with nnm-solve OUT.h5 afterwards); "
+                            f"leave {them} out")
     spec = load_sweep_file(args.sweep) if args.sweep else None
     modes = args.modes if args.modes is not None else (spec.modes if spec else None)
     energy_max = args.energy_max if args.energy_max is not None else (spec.energy_max if spec else None)
     if modes is None or energy_max is None:
         raise NNMInputError("a sweep needs --modes (e.g. 10-24) and --energy-max E, on the command line or as "
                             "modes = ... and energy_max = ... in the sweep file")
-    options = dict(spec.options) if spec else {}
-    for key in ("steps_per_period", "tol", "max_points", "energy_min"):   # explicit flags win over the file
-        value = getattr(args, key)
-        if key not in options or value != parser.get_default(key):
-            if value is not None:
-                options[key] = value
+    options = _sweep_options(args, parser, dict(spec.options) if spec else {})
     model, _ = _load(args.file)
     out = output_file(args, "the branches will be saved to {out} (--out chooses another file)")
     if args.plot and not Path(args.plot).resolve().parent.is_dir():
