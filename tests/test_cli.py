@@ -120,6 +120,10 @@ def test_errors_are_one_line(tmp_path):
         ((p, "--mode", 3, "--energy-max", 1), "out of range"),
         ((p, "--mode", 1, "--energy-max", -1), "energy_max"),
         ((p, "--mode", 1), "--energy-max"),
+        ((p, "--list-modes", "--count", 0), "--count"),
+        ((p, "--mode", 1, "--energy-max", 1, "--damping", 0.02), "--damping: goes with --forced"),
+        ((p, "--mode", 1, "--energy-max", 1, "--workers", 2), "--workers: goes with --modes"),
+        ((p, "--mode", 1, "--energy-max", 1, "--plot", tmp_path / "fep.xyz"), "fep.xyz"),
     ]
     for args, fragment in cases:
         r = run(*args)
@@ -127,3 +131,16 @@ def test_errors_are_one_line(tmp_path):
         assert fragment in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
         assert r.stdout == "", (args, r.stdout)
+
+
+def test_progress_into_a_pipe_has_every_point(tmp_path):
+    """Into a pipe (not a terminal) one progress line per point, the last ones too (the lines of the points
+    computed after the last poll were dropped: 8 of 57 lines), and --floquet goes to the branch."""
+    p = tmp_path / "m.h5"
+    nnm.save_model(p, two_dof_model())
+    r = run(p, "--mode", 1, "--energy-max", 10, "--out", tmp_path / "o.h5", "--method", "hb", "--floquet")
+    assert r.returncode == 0, r.stderr
+    (b,) = nnm.load_branches(tmp_path / "o.h5")
+    lines = [line for line in r.stderr.splitlines() if line.startswith("point ")]
+    assert len(lines) == len(b) and lines[-1].startswith(f"point {len(b):4d}")
+    assert b.settings["floquet"] is True and np.all(np.isfinite(b.floquet))

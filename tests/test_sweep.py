@@ -319,13 +319,19 @@ def test_cli_sweep_takes_the_branch_flags(monkeypatch, tmp_path, capsys):
     toml.write_text('[options]\nmethod = "hb"\nharmonics = 7\ncondensed = true\ntongues = "follow"\n')
     assert solve.main(base + ["--sweep", str(toml), "--harmonics", "9", "--tongues", "skip"]) == 0
     assert seen[-1] == dict(method="hb", harmonics=9, condensed=True, tongues="skip")
+    hb_only = tmp_path / "hb.toml"
+    hb_only.write_text('[options]\nmethod = "hb"\n')
+    assert solve.main(base + ["--sweep", str(hb_only), "--method", "shooting", "--floquet"]) == 0
+    assert seen[-1] == dict(method="shooting", floquet=True)         # an explicit --method over the file's
     capsys.readouterr()
     assert solve.main(base + ["--sweep", str(toml), "--steps-per-period", "64"]) == 2
     assert "belong(s) to --method shooting" in capsys.readouterr().err
-    assert solve.main(base + ["--csv", str(tmp_path / "t.csv"), "--damping", "0.02"]) == 2
+    assert solve.main(base + ["--csv", str(tmp_path / "t.csv"), "--tongue", "1"]) == 2
     err = capsys.readouterr().err
-    assert "--damping, --csv: not used by a sweep" in err and len(err.strip().splitlines()) == 1
-    assert len(seen) == 4
+    assert "--tongue, --csv: not used by a sweep" in err and len(err.strip().splitlines()) == 1
+    assert solve.main(base + ["--damping", "0.02"]) == 2
+    assert "--damping: goes with --forced" in capsys.readouterr().err
+    assert len(seen) == 5
 
 
 def test_cli_sweep_branch_equals_continue_nnm_with_the_same_flags(tmp_path):
@@ -342,3 +348,36 @@ def test_cli_sweep_branch_equals_continue_nnm_with_the_same_flags(tmp_path):
     assert b.settings["method"] == "harmonic_balance"            # (shooting before: --method was dropped)
     np.testing.assert_array_equal(b.energy, ref.energy)
     np.testing.assert_array_equal(b.frequency_hz, ref.frequency_hz)
+
+
+def test_a_saved_branch_computed_otherwise_is_refused(tmp_path):
+    """A rerun keeps a saved branch only if it is what the sweep asks for: another method, a method field
+    recorded otherwise, or a branch that stopped at fewer points than max_points now allows give one line
+    (they were returned as they were: 'raise max_points to go on' did nothing); harmonic balance's harmonics
+    raised by its accuracy target are not a difference."""
+    from nnm_solver.driver.api import from_keywords
+    from nnm_solver.sweeps.sweep_files import prepare_file, stale_reason
+
+    def request(method=None, **kw):
+        return from_keywords(method, None, None, kw)[:2]
+
+    m = chain()
+    b = nnm.continue_nnm(m, 1, 1.0, steps_per_period=64, max_points=5)
+    assert b.status == "max_points"
+    assert stale_reason(b, *request(steps_per_period=64, max_points=5)) == ""
+    assert "max_points = 5" in stale_reason(b, *request(steps_per_period=64, max_points=10))
+    assert "this sweep: harmonic_balance" in stale_reason(b, *request("hb", max_points=5))
+    assert "integrator" in stale_reason(b, *request(integrator="newmark", max_points=5))
+    assert "tol" in stale_reason(b, *request(steps_per_period=64, tol=1e-8, max_points=5))
+    h = nnm.continue_nnm(m, 1, 1.0, method="hb", harmonics=3)
+    assert stale_reason(h, *request("hb", harmonics=3)) == ""
+    assert stale_reason(h, *request("hb", harmonics=5)) == ""       # (the target decides the harmonics)
+    assert "harmonics" in stale_reason(h, *request("hb", harmonics=5, freq_tol=None))
+    out = tmp_path / "s.h5"
+    variants = sweeps.as_variants(None)
+    prepare_file(out, m, variants, 1.0, {"base:mode1"})
+    nnm.save_branch(out, b, name="base:mode1")
+    found = prepare_file(out, m, variants, 1.0, {"base:mode1"}, request(steps_per_period=64, max_points=5))
+    assert list(found) == ["base:mode1"]
+    with pytest.raises(nnm.NNMInputError, match="already holds branch base:mode1 computed to max_points = 5"):
+        prepare_file(out, m, variants, 1.0, {"base:mode1"}, request(steps_per_period=64, max_points=50))

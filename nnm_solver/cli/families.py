@@ -37,7 +37,7 @@ def unused_flags(args):
     given = {"--integrator": args.integrator, "--steps-per-period": args.steps_per_period, "--freq-tol": args.freq_tol,
              "--method": args.method if args.method != solver_defaults()["method"] else None,
              "--harmonics": args.harmonics, "--condensed": args.condensed or None, "--energy-min": args.energy_min,
-             "--tongues": args.tongues}
+             "--tongues": args.tongues, "--floquet": args.floquet or None}
     used, why = FAMILY_FLAGS[flag]
     return flag, [f for f, v in given.items() if v is not None and f not in used], why
 

@@ -6,7 +6,7 @@ import importlib.util
 import os
 from pathlib import Path
 
-__all__ = ["SHIPPED_EXAMPLES", "is_shipped_example", "default_out", "output_file"]
+__all__ = ["SHIPPED_EXAMPLES", "is_shipped_example", "default_out", "output_file", "check_plot_path"]
 
 
 #: the example files shipped with the viewer (nnm_viewer/data), never written to by default
@@ -56,3 +56,24 @@ def output_file(args, notice):
     if reason:
         print(f"nnm-solve: {reason}: " + notice.format(out=out), flush=True)
     return out
+
+
+def check_plot_path(path):
+    """NNMInputError (one line) if --plot PATH cannot be written: its folder missing, or a file type matplotlib does
+    not write (from the suffix: .png, .pdf, .svg, ...; none: PNG); nothing for None.  Checked before anything is computed (an
+    unknown suffix failed in matplotlib after the branch, with a traceback)."""
+    from ..errors import NNMInputError
+
+    if not path:
+        return
+    p = Path(path)
+    if not p.resolve().parent.is_dir():
+        raise NNMInputError(f"cannot write the plot: folder {p.parent} does not exist")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    kinds = FigureCanvasAgg(Figure()).get_supported_filetypes()
+    suffix = p.suffix.lower().lstrip(".")
+    if suffix and suffix not in kinds:              # (no suffix: matplotlib writes PNG, adding .png)
+        raise NNMInputError(f"cannot write the plot {p.name}: give a file name ending in one of "
+                            f"{', '.join('.' + k for k in sorted(kinds))}")

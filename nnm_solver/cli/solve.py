@@ -26,7 +26,7 @@ from ..errors import NNMInputError, run_reporting_errors
 from .defaults import TONGUE_CHOICES, solver_defaults
 from .report import accuracy_line, report_and_save  # noqa: F401 (accuracy_line: part of the cli's API)
 from .modes import list_modes
-from .outputs import output_file
+from .outputs import check_plot_path, output_file
 
 
 def _load(path):
@@ -48,13 +48,15 @@ def _progress(job, stream, interval=0.2):
     isatty = getattr(stream, "isatty", None)
     if not (callable(isatty) and isatty()):
         shown = 0
-        while not job.done:
+        while True:
+            done = job.done                 # (read first: the rows read after it include the last point's)
             for i, (energy, freq) in enumerate(job.rows(shown), start=shown):
                 stream.write(f"point {i + 1:4d}  E = {energy:.4e} J  f = {freq:.6f} Hz\n")
                 shown = i + 1
             stream.flush()
+            if done:
+                return
             time.sleep(interval)
-        return
     while not job.done:
         f = job.progress
         count, energy, freq = job.latest()
@@ -88,7 +90,7 @@ def main(argv=None):
     parser.add_argument("--energy-max", type=float, help="energy (J) where the continuation stops")
     parser.add_argument("--energy-min", type=float, default=None, help="energy (J) of the first point")
     D = solver_defaults()
-    parser.add_argument("--method", choices=("shooting", "hb"), default=D["method"], help=f"shooting (Gauss-Legendre or "
+    parser.add_argument("--method", choices=("shooting", "hb"), default=None, help=f"shooting (Gauss-Legendre or "
                         f"Newmark time integration, the seed paper's method) or hb (harmonic balance); default "
                         f"{D['method']}")
     parser.add_argument("--harmonics", type=int, default=None, help=f"hb: highest harmonic (default {D['harmonics']})")
@@ -109,6 +111,9 @@ def main(argv=None):
                         f"(default {D['freq_tol']:g}; e.g. 1e-6)")
     parser.add_argument("--tol", type=float, default=None, help="relative periodicity tolerance (default 1e-6; "
                         "hb: relative residual, default 1e-8)")
+    parser.add_argument("--floquet", action="store_true", help="compute the Floquet multipliers (stability, "
+                        "branch points) at every point also where the default leaves them out (harmonic balance of a "
+                        "large model, driver/problems.hb_floquet_default)")
     parser.add_argument("--max-points", type=int, default=None, metavar="N",
                         help=f"largest number of points of the branch (default {D['max_points']}); the continuation "
                         f"stops there if --energy-max is not reached first (status max_points)")
@@ -147,6 +152,9 @@ def main(argv=None):
                        "e.g. tcp://host:8786")
     cli_exchange.add_export_arguments(parser)
     args = parser.parse_args(argv)
+    stray = _stray_flags(args, parser)
+    if stray:
+        return run_reporting_errors("nnm-solve", _refuse_stray, stray)
     if args.modes or args.sweep:
         return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
     if args.forced:
@@ -156,12 +164,35 @@ def main(argv=None):
     return run_reporting_errors("nnm-solve", _run, args)
 
 
+def _stray_flags(args, parser):
+    """(flags, what they belong to) for the flags of a forced response given without --forced, or a sweep's
+    (--workers, --scheduler) without --modes / --sweep (they were silently ignored); None when there are none."""
+    if not args.forced:
+        forced = {"--force-dof": args.force_dof, "--force": args.force, "--f-range": args.f_range,
+                  "--damping": args.damping if args.damping != parser.get_default("damping") else None}
+        given = [flag for flag, value in forced.items() if value is not None]
+        if given:
+            return given, "--forced (a forced response)"
+    if not (args.modes or args.sweep):
+        given = [flag for flag, value in (("--workers", args.workers), ("--scheduler", args.scheduler))
+                 if value is not None]
+        if given:
+            return given, "--modes / --sweep (a sweep on Dask)"
+    return None
+
+
+def _refuse_stray(stray):
+    flags, owner = stray
+    raise NNMInputError(f"{', '.join(flags)}: {'go' if len(flags) > 1 else 'goes'} with {owner}; add it or leave "
+                        f"{'them' if len(flags) > 1 else 'it'} out")
+
+
 def _method_arguments(args):
     """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
     given = dict(steps_per_period=args.steps_per_period, integrator=args.integrator)
     given = {k: v for k, v in given.items() if v is not None}      # the solver's defaults for the others
     target = {} if args.freq_tol is None else dict(freq_tol=args.freq_tol)     # both methods have one
-    if args.method == "shooting":
+    if (args.method or solver_defaults()["method"]) == "shooting":
         if args.condensed:
             raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
         if args.harmonics is not None:
@@ -177,7 +208,8 @@ def _method_arguments(args):
 
 def _continuation_options(args):
     """continue_nnm's keywords given on the command line (the solver's defaults for the others)."""
-    opts = dict(tol=args.tol, max_points=args.max_points, energy_min=args.energy_min, tongues=args.tongues)
+    opts = dict(tol=args.tol, max_points=args.max_points, energy_min=args.energy_min, tongues=args.tongues,
+                floquet=True if args.floquet else None)
     return {k: v for k, v in opts.items() if v is not None}
 
 
@@ -192,11 +224,30 @@ def _check_arguments(model, args):
                            args.energy_min, modes_known=model.n <= MODEL.max_dense_dof)
 
 
-def _run_forced(args):
-    """nnm-solve FILE --forced --force-dof D --force F --f-range A B [--damping Z] [--harmonics H]."""
-    from ..driver.forced import forced_response
-    from ..files.forced_io import save_forced_response
+def _forced_unused_flags(args):
+    """The flags given on the command line that a forced response does not use (an NNM branch's: its mode, energy,
+    method and time integration, tongues, families, exports), in the order of --help."""
+    given = {"--list-modes": args.list_modes or None, "--mode": args.mode, "--energy-max": args.energy_max,
+             "--energy-min": args.energy_min, "--method": args.method, "--steps-per-period": args.steps_per_period,
+             "--integrator": args.integrator, "--freq-tol": args.freq_tol, "--tol": args.tol,
+             "--tongues": args.tongues, "--tongue": args.tongue, "--switch": args.switch, "--branch": args.branch,
+             "--csv": args.csv, "--uff": args.uff, "--backbone": args.backbone, "--backbone-dof": args.backbone_dof,
+             "--floquet": args.floquet or None}
+    return [flag for flag, value in given.items() if value is not None]
 
+
+def _run_forced(args):
+    """nnm-solve FILE --forced --force-dof D --force F --f-range A B [--damping Z] [--harmonics H] [--condensed]
+    [--max-points N] [--plot FRF.png] [--out OUT.h5]: harmonic balance with modal damping (driver/forced.py)."""
+    from ..driver.forced import forced_response
+    from ..files.forced_io import check_forced_file, save_forced_response
+
+    unused = _forced_unused_flags(args)
+    if unused:
+        them = "it" if len(unused) == 1 else "them"
+        raise NNMInputError(f"{', '.join(unused)}: not used by --forced (a forced response by harmonic balance: "
+                            f"--harmonics, --condensed, --max-points, --damping, --plot and --out apply); "
+                            f"leave {them} out")
     model, _ = _load(args.file)
     dofs, values = args.force_dof or [], args.force or []
     if not dofs or not values or args.f_range is None:
@@ -208,9 +259,13 @@ def _run_forced(args):
         if not 0 <= d < model.n:
             raise NNMInputError(f"--force-dof {d} is not a DOF of the model (0..{model.n - 1})")
         force[d] += v
+    check_plot_path(args.plot)
     out = output_file(args, "the response will be saved to {out} (--out chooses another file)")
+    check_forced_file(out, model)           # a file of another model: refused before anything is computed
+    options = {k: v for k, v in dict(harmonics=args.harmonics, max_points=args.max_points,
+                                     condensed=True if args.condensed else None).items() if v is not None}
     t0 = time.perf_counter()
-    r = forced_response(model, force, tuple(args.f_range), args.damping, harmonics=args.harmonics)
+    r = forced_response(model, force, tuple(args.f_range), args.damping, **options)
     dof = int(dofs[0])
     pk = r.peak(dof) if len(r) else None
     print(f"forced response: {len(r)} points in {time.perf_counter() - t0:.1f} s, {r.status}: {r.message}")
@@ -218,6 +273,10 @@ def _run_forced(args):
         print(f"  peak at DOF {dof}: {pk['amplitude']:.4e} m at {pk['frequency_hz']:.6g} Hz; folds: {len(r.folds)}")
     if len(r):
         print(f"saved as /forced/{save_forced_response(out, r)} in {out}")
+        if args.plot:
+            from ..results.forced_plot import plot_forced
+            plot_forced([r], dof, path=args.plot)
+            print(f"frequency response at DOF {dof} written to {args.plot}")
     return 1 if r.status == "failed" else 0
 
 
@@ -228,6 +287,8 @@ def _run(args):
 
     model, ref = _load(args.file)
     if args.list_modes:
+        if args.count < 1:
+            raise NNMInputError(f"--count must be at least 1 (the number of modes listed), got {args.count}")
         list_modes(model, ref, args.count)
         return 0
     if args.mode is None or args.energy_max is None:
@@ -235,8 +296,7 @@ def _run(args):
     _check_arguments(model, args)            # bad input: its one line, before any notice about the output file
     out = output_file(args, "the branch will be saved to {out} (the model and the branch; --out chooses another file)")
     check_branch_file(out, model)              # a file of another model: refused before anything is computed
-    if args.plot and not Path(args.plot).resolve().parent.is_dir():
-        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    check_plot_path(args.plot)
     cli_exchange.check_exports(args, model)
     job = start_branch(model, args.mode, args.energy_max, **_continuation_options(args), **_method_arguments(args))
     t0 = time.perf_counter()
@@ -271,8 +331,7 @@ def _run_family(args):
         them = "it" if len(unused) == 1 else "them"
         raise NNMInputError(f"{', '.join(unused)}: not used by {flag} K ({why}); leave {them} out")
     model, _ = _load(args.file)
-    if args.plot and not Path(args.plot).resolve().parent.is_dir():
-        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    check_plot_path(args.plot)
     cli_exchange.check_exports(args, model)
     options = {**_continuation_options(args), **_method_arguments(args)}
     options.pop("tongues", None)
@@ -300,13 +359,12 @@ def _sweep_options(args, parser, options):
     the command line (--method, --integrator, --steps-per-period, --harmonics, --condensed, --freq-tol, --tongues,
     --tol, --max-points, --energy-min) over them, as a single branch (--mode N) takes them.  The method is the
     command line's where --method is given, else the file's; a flag of the other method is one NNMInputError line."""
-    method_given = args.method != parser.get_default("method")
-    method = args.method if method_given else options.get("method", parser.get_default("method"))
+    method = args.method or options.get("method") or solver_defaults()["method"]
     flags = _method_arguments(argparse.Namespace(**{**vars(args), "method": method}))
     if not args.condensed:
         flags.pop("condensed", None)            # (a sweep file's condensed = true stays unless the flag is given)
-    if not method_given and method == parser.get_default("method"):
-        flags.pop("method", None)
+    if args.method is not None:
+        flags["method"] = args.method
     return {**options, **flags, **_continuation_options(args)}
 
 
@@ -336,8 +394,7 @@ def _run_sweep(args, parser):
     options = _sweep_options(args, parser, dict(spec.options) if spec else {})
     model, _ = _load(args.file)
     out = output_file(args, "the branches will be saved to {out} (--out chooses another file)")
-    if args.plot and not Path(args.plot).resolve().parent.is_dir():
-        raise NNMInputError(f"cannot write the plot: folder {Path(args.plot).parent} does not exist")
+    check_plot_path(args.plot)
     client = args.scheduler or args.workers
     t0 = time.perf_counter()
     try:

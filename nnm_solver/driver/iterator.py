@@ -343,7 +343,7 @@ class NNMIterator:
                                      self._harmonics.max_harmonics if self._harmonics.freq_tol else None)
         if not self.settings.floquet and self.points:
             message += ("; stability was not computed (floquet off: the points are not known to be stable, and "
-                        "stability changes and branch points are not detected; pass floquet=True)")
+                        "stability changes and branch points are not detected; pass floquet=True, nnm-solve --floquet)")
         return Branch.from_points(self.model, self.mode, self.points, settings=self.settings,
                                   status=self.status, message=message,
                                   events=self.events if self.locate else None, tongues=self.tongues)

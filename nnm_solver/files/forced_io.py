@@ -28,9 +28,25 @@ from .branch_io import _close, _jsonable      # the same model comparison and JS
 from .io import read_model_group, spring_law_json, write_model_group
 from .settings import FILES
 
-__all__ = ["save_forced_response", "load_forced_responses", "FORCED_GROUP"]
+__all__ = ["check_forced_file", "save_forced_response", "load_forced_responses", "FORCED_GROUP"]
 
 FORCED_GROUP = "forced"
+
+
+def check_forced_file(path, model):
+    """NNMInputError (one line) if a forced response of ``model`` may not be saved into the nnm file ``path``: an
+    imported model file (not an nnm HDF5 file), or a file of another model; nothing if the file does not exist yet.
+    Callers check a target before computing (nnm-solve --forced)."""
+    path = Path(path)
+    if is_import_path(path):
+        raise NNMInputError(f"{path} is an imported model file, not an nnm HDF5 file: save forced responses to a .h5 "
+                            f"file")
+    if path.exists():
+        with open_nnm(path) as f:
+            problem = _model_difference(f, path, model)
+        if problem:
+            raise NNMInputError(f"{path} holds another model than this forced response's ({problem}); the file was "
+                                f"left unchanged: save it to another file")
 
 
 def save_forced_response(path, result, name=None):
@@ -40,15 +56,7 @@ def save_forced_response(path, result, name=None):
     if not isinstance(result, ForcedResponse):
         raise NNMInputError(f"save_forced_response needs an nnm_solver.ForcedResponse, got {type(result).__name__}")
     path = Path(path)
-    if is_import_path(path):
-        raise NNMInputError(f"{path} is an imported model file, not an nnm HDF5 file: save forced responses to a .h5 "
-                            f"file")
-    if path.exists():
-        with open_nnm(path) as f:
-            problem = _model_difference(f, path, result.model)
-        if problem:
-            raise NNMInputError(f"{path} holds another model than this forced response's ({problem}); the file was "
-                                f"left unchanged: save it to another file")
+    check_forced_file(path, result.model)
     with atomic_h5(path, copy_existing=True) as f:
         if "model" not in f:
             write_model_group(f, result.model)

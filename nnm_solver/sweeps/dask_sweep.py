@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..results.branch import Branch
-from ..driver.api import continue_nnm
+from ..driver.api import continue_nnm, from_keywords
 from ..errors import NNMInputError
 from ..model.model import Model
 from .progress import SweepProgress, reporter
@@ -214,7 +214,10 @@ def sweep(model, modes, energy_max, variants=None, client=None, out=None, **cont
     report = reporter(progress)
     if out is not None:
         out = Path(out)
-        found = prepare_file(out, model, variants, energy_max, {t[2] for t in tasks})
+        request = from_keywords(options.get("method"), options.get("continuation"), options.get("tongues"),
+                                {k: v for k, v in options.items() if k not in ("method", "continuation", "tongues", "floquet",
+                                                                             "locate_events", "energy_min")})[:2]
+        found = prepare_file(out, model, variants, energy_max, {t[2] for t in tasks}, request)
         for i, (vi, mode, name) in enumerate(tasks):
             if name in found:
                 b = found[name]

@@ -4,6 +4,7 @@ branch names: ``files/sweep_groups.py``.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -31,8 +32,10 @@ def _same_model(a, b):
             and np.allclose(a.k3, b.k3, rtol=1e-12, atol=0))
 
 
-def prepare_file(out, model, variants, energy_max, names):
-    """Create ``out`` with the base model, record the variants; return {name: Branch} of the sweep's saved branches."""
+def prepare_file(out, model, variants, energy_max, names, request=None):
+    """Create ``out`` with the base model, record the variants; return {name: Branch} of the sweep's saved branches.
+    request : optional (method settings, Continuation) the sweep asks for (driver/api.from_keywords): a saved branch
+    computed otherwise (stale_reason) is refused in one line, as one computed to another energy_max is."""
 
     wanted = {v.name: v.as_dict() for v in variants}
     if not out.exists():
@@ -63,7 +66,40 @@ def prepare_file(out, model, variants, energy_max, names):
         if math.isfinite(e) and not math.isclose(e, energy_max, rel_tol=1e-9):
             raise NNMInputError(f"{out} already holds branch {name} computed up to energy_max = {e:g} J (this sweep: "
                                 f"{energy_max:g} J); write this sweep to another file or remove that branch")
+        why = stale_reason(b, *request) if request is not None else ""
+        if why:
+            raise NNMInputError(f"{out} already holds branch {name} computed {why}; write this sweep to another file "
+                                f"or remove that branch")
     return found
+
+
+def stale_reason(branch, method, continuation):
+    """Why a saved ``branch`` is not what a sweep asking for ``method`` (Shooting / HarmonicBalance settings, None
+    fields: the solver resolves them) and ``continuation`` (Continuation settings) would compute, or '' (then a rerun
+    keeps it): another method, a requested method field the branch recorded with another value, or a branch that
+    stopped at fewer points (status 'max_points') than this sweep's max_points allows.  Fields a file written before
+    they existed does not record are not compared, nor harmonic balance's harmonics and samples where its accuracy
+    target (freq_tol) raises them (the branch records its end's)."""
+    saved = branch.settings
+    if saved is None:
+        return ""
+    if saved.method != method.method:
+        return f"by {saved.method} (this sweep: {method.method})"
+    refined = getattr(method, "freq_tol", None) is not None and getattr(method, "error_estimate", True)
+    for f in dataclasses.fields(method):
+        asked = getattr(method, f.name)
+        if f.name in method.record_fields or asked is None or f.name not in saved:
+            continue
+        if f.name == "freq_tol" and not getattr(method, "error_estimate", True):
+            continue                                # (no estimate, no target: the branch records None)
+        if f.name in ("harmonics", "samples") and refined:
+            continue                                # (harmonic balance's target raised them: the branch's end's)
+        had = saved[f.name]
+        if had != asked and not (isinstance(had, float) and isinstance(asked, float) and math.isclose(had, asked)):
+            return f"with {f.name} = {had!r} (this sweep: {asked!r})"
+    if branch.status == "max_points" and len(branch) < continuation.max_points:
+        return (f"to max_points = {len(branch)} (stopped there; this sweep allows {continuation.max_points} points)")
+    return ""
 
 
 def load_sweep(path):
