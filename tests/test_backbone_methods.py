@@ -47,11 +47,14 @@ def test_the_skip_backbone_is_the_same_from_every_method(model, energy_max, stat
     runs = {"default": nnm.continue_nnm(m, 1, energy_max, tongues=nnm.Skip(), floquet=False),
             "hb": nnm.continue_nnm(m, 1, energy_max, nnm.HarmonicBalance(harmonics=9, condensed=True),
                                    tongues=nnm.Skip(), floquet=False),
-            # Newmark at its fixed 200 steps: with the accuracy target (freq_tol 1e-4, its steps raised near the 2-DOF's
-            # 5:1 tongue) it entered that tongue at 1.54e4 J and found no landing beyond it (status 'tongue'; issue 51's
-            # closing note): the target's refined steps and the jump's candidates are not yet made to work together
+            # Newmark at its fixed 200 steps, and with the accuracy target (freq_tol 1e-4: its steps raised, 200 -> 404
+            # near the 2-DOF's 5:1 tongue).  The labels once measured every point with the bias of the 200 steps asked
+            # (b0 = -8.2e-5, against -2.0e-5 at 404): none of the landings beyond that tongue was accepted and the
+            # branch ended in it at 1.54e4 J (status 'tongue'; issue 51's closing note)
             "newmark": nnm.continue_nnm(m, 1, energy_max, nnm.Shooting(integrator="newmark", freq_tol=None),
-                                        tongues=nnm.Skip(), floquet=False)}
+                                        tongues=nnm.Skip(), floquet=False),
+            "newmark-refined": nnm.continue_nnm(m, 1, energy_max, nnm.Shooting(integrator="newmark"),
+                                                tongues=nnm.Skip(), floquet=False)}
     for name, b in runs.items():
         assert b.status == status, (name, b.message)
         assert set(b.labels) == {"backbone"}, (name, sorted(set(b.labels)))
@@ -63,3 +66,17 @@ def test_the_skip_backbone_is_the_same_from_every_method(model, energy_max, stat
         for y in runs:
             if x != y:
                 assert disagreement(runs[x], runs[y]) <= 0, (x, y, disagreement(runs[x], runs[y]))
+
+
+@pytest.mark.parametrize("tongues", ["follow", "skip"])
+def test_newmark_labels_follow_the_steps_the_accuracy_target_raises(tongues):
+    """Newmark asked for 100 steps a period, raised by the accuracy target (freq_tol 1e-4) to 364 at the first
+    point: the labels' bias is Newmark's period error at each point's own steps (-2.5e-5), not at the 100 steps
+    asked (-3.3e-4).  With the bias of the steps asked every point from 0.0102 J on was 3e-4 off the skeleton and
+    labelled 'tongue 3:1' (with mode 2, whose 0.276 Hz is far from 3 x 0.159 Hz), and tongues='skip' stopped at
+    0.0052 J unable to jump a tongue that does not exist."""
+    b = nnm.continue_nnm(two_dof(), 1, 10.0, integrator="newmark", steps_per_period=100, tongues=tongues)
+    assert b.settings.freq_tol == 1e-4 and set(b.steps) != {100}, sorted(set(b.steps))    # the steps were raised
+    assert b.status == "done", b.message
+    assert b.energy[-1] == pytest.approx(10.0)
+    assert set(b.labels) == {"backbone"}, sorted(set(b.labels))

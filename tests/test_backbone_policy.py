@@ -83,6 +83,22 @@ def test_a_point_on_the_family_is_kept_one_off_it_jumps_to_the_skeleton_beyond()
     assert d.record.order == 3 and d.record.entry_energy == 1.0 and d.record.entry_index == 4
 
 
+def test_the_bias_is_the_methods_at_each_points_own_time_step():
+    """f_method as a function of the steps per period (Newmark's linear frequency, relative error -(omega h)^2 / 12):
+    a point computed with 364 steps (the accuracy target raised them from 100) is measured with the bias at 364
+    steps, -2.5e-5, not at 100 (-3.3e-4, which put it 3e-4 off the family: a tongue)."""
+    sk = CannedSkeleton()
+    lab = FamilyLabels(sk, sk.f0, lambda steps: sk.f0 * (1 - (2 * math.pi / steps) ** 2 / 12), order=2)
+    assert lab.offset(100) == pytest.approx(-3.29e-4, rel=1e-2) and lab.offset(364) == pytest.approx(-2.48e-5, rel=1e-2)
+    f = sk.frequency_at(2.0) * (1 + lab.offset(364))
+    v = lab.verdict(2.0, f, ON, steps=364)
+    assert v.text == "backbone" and v.dev == pytest.approx(0.0, abs=1e-12)
+    assert lab.verdict(2.0, f, ON, steps=100).text == "tongue 3:1"
+    # one frequency (a method without time step): the same bias whatever the steps
+    one = FamilyLabels(sk, sk.f0, sk.f0 * (1 - 3.29e-4))
+    assert one.bias(None, 364) == one.bias(None, 100) == one.offset() == pytest.approx(-3.29e-4)
+
+
 def test_the_tongue_just_passed_entered_again_is_one_record_with_longer_jumps():
     sk = CannedSkeleton()
     lab, pol = labels(sk), SkipPolicy(nnm.Skip(), sk, mode=1)

@@ -76,7 +76,7 @@ def land(prob, system, skeleton, E_t, settings, tol):
 def find_landing(prob, system, policy, labels, jump, run, settings, tol):
     """((u, J, E J, f Hz) or None, energies tried): the first of the Jump's targets whose orbit, corrected by the
     branch problem ``prob`` (``land``), the policy accepts as on the family (the labels' verdict, the same as the
-    points', with the lock test from ``run``, the kept points before the jump)."""
+    points', at the problem's time step, with the lock test from ``run``, the kept points before the jump)."""
     from .content import content_of
     tried = []
     for E_t in jump.targets:
@@ -85,7 +85,8 @@ def find_landing(prob, system, policy, labels, jump, run, settings, tol):
         if u is None:
             continue
         E, f = float(prob.energy(u)), float(1.0 / prob.state(u)[2])
-        verdict = labels.verdict(E, f, content_of(prob.modal_orbit(u), policy.mode - 1), run=run)
+        verdict = labels.verdict(E, f, content_of(prob.modal_orbit(u), policy.mode - 1), run=run,
+                                 steps=int(getattr(prob, "spp", 0)))
         if policy.landed(verdict, E, jump.base):
             return (u, J, E, f), tried
     return None, tried

@@ -11,7 +11,9 @@ tongues).  A point at energy E (J) with frequency f (Hz) is measured by
 
 bias being the branch's own offset from the exact linear frequency at the linear mode (the skeleton is exact there;
 Newmark's period error grows for the orbit's harmonic k as k^p for an integrator of order p: bias = b0 sum_k w_k
-k^p, w_k the harmonics' shares of the orbit's kinetic energy), and it is on the family when
+k^p, w_k the harmonics' shares of the orbit's kinetic energy), b0 = f_method / f_linear - 1 at the point's own time
+step (point.steps: the freq_tol refinement raises the steps along a branch, and |b0| falls as steps^-p with them:
+Newmark's -3.3e-4 at 100 steps a period, -2.5e-5 at 364), and it is on the family when
 
     dev <= on_family + 2 (its own estimated error) + 2 (the skeleton's truncation estimate at E),
 
@@ -66,30 +68,45 @@ class Verdict:
 
 class FamilyLabels:
     """Labels a branch's points against its skeleton (module docstring).  skeleton : the Skeleton or None;
-    f_linear : the followed linear mode's frequency (Hz); f_method : the same as the branch's method computes it
-    (Newmark's, at its time step); order : the integrator's order (0: no time step)."""
+    f_linear : the followed linear mode's frequency (Hz); f_method : the same as the branch's method computes it,
+    either a function of the time steps per period returning it (Hz; shooting: 1 / the integrator's discrete linear
+    period at that step, so that each point is measured at its own, point.steps) or one frequency (Hz: a method
+    without time step; None: f_linear, no offset); order : the integrator's order (0: no time step).  The ``steps``
+    of offset, bias, deviation and verdict are a point's time steps per period (point.steps; 0: a method without
+    time step, with one frequency f_method)."""
 
     def __init__(self, skeleton, f_linear, f_method=None, order=0, settings=LabelSettings()):
         self.skeleton = skeleton
         self.settings = settings
         self.f_linear = float(f_linear)
-        self._bias = 0.0 if f_method is None else float(f_method) / self.f_linear - 1.0
+        self.f_method = f_method
         self.order = int(order)
 
-    def bias(self, amps=None):
-        """The method's relative frequency offset for an orbit of harmonic amplitudes ``amps``."""
-        if amps is None or not self._bias or len(amps) < 2:
-            return self._bias
+    def offset(self, steps=0):
+        """b0: the method's relative offset from the exact linear frequency at the linear mode, f_method / f_linear
+        - 1, with ``steps`` time steps per period (0: one frequency f_method for every point)."""
+        f = self.f_method
+        if f is None:
+            return 0.0
+        return float(f(steps) if callable(f) else f) / self.f_linear - 1.0
+
+    def bias(self, amps=None, steps=0):
+        """The method's relative frequency offset for an orbit of harmonic amplitudes ``amps`` computed with
+        ``steps`` time steps per period (the module docstring's b0 sum_k w_k k^p)."""
+        b0 = self.offset(steps)
+        if amps is None or not b0 or len(amps) < 2:
+            return b0
         k = np.arange(len(amps), dtype=float)
         w = (k * np.asarray(amps)) ** 2
-        return self._bias * float(np.sum(w * k ** self.order) / max(np.sum(w), 1e-300))
+        return b0 * float(np.sum(w * k ** self.order) / max(np.sum(w), 1e-300))
 
-    def deviation(self, energy, frequency_hz, amps=None):
-        """dev of a point, or None when no skeleton covers its energy."""
+    def deviation(self, energy, frequency_hz, amps=None, steps=0):
+        """dev of a point (computed with ``steps`` time steps per period), or None when no skeleton covers its
+        energy."""
         sk = self.skeleton
         if sk is None or not sk.covers(energy):
             return None
-        return abs(frequency_hz / sk.frequency_at(energy) - 1.0 - self.bias(amps))
+        return abs(frequency_hz / sk.frequency_at(energy) - 1.0 - self.bias(amps, steps))
 
     def locked(self, energy, frequency_hz, run):
         """Is the frequency locked (module docstring)?  run : (energy J, frequency Hz) of the kept points since the
@@ -109,15 +126,16 @@ class FamilyLabels:
                 return abs(math.log(frequency_hz / f0)) < s.lock_ratio * abs(expected)
         return False
 
-    def verdict(self, energy, frequency_hz, content, error=0.0, run=(), reference_hz=None, falling=False):
+    def verdict(self, energy, frequency_hz, content, error=0.0, run=(), reference_hz=None, falling=False, steps=0):
         """The Verdict of a point of energy (J), frequency (Hz), Content (content.py) and estimated relative
         frequency error (NaN or inf: unknown or not resolved, taken as 0; the branch's freq_error says it); run : the kept points of its run
         (``locked``); reference_hz : the frequency of the skeleton's own orbit at that energy (a jump's landing),
         instead of its interpolated one; falling : its energy is below the branch's point before it (the backbone
-        continued in energy has no fold: past one the branch is off the family, e.g. in a 1:1 resonance)."""
+        continued in energy has no fold: past one the branch is off the family, e.g. in a 1:1 resonance); steps :
+        the time steps per period it was computed with (point.steps; the bias is the method's at that step)."""
         s, sk = self.settings, self.skeleton
         shift = frequency_hz / self.f_linear - 1.0
-        if content.fraction < s.linear_regime and abs(shift - self._bias) < s.linear_regime and (
+        if content.fraction < s.linear_regime and abs(shift - self.offset(steps)) < s.linear_regime and (
                 sk is None or not len(sk.energy) or energy <= sk.energy[-1]):
             return self._by_content(content)
         if sk is None:
@@ -130,7 +148,7 @@ class FamilyLabels:
             # resonance's, not the backbone family's
             k_end = sk.partner[0] if sk.partner[1] else content.order
             return Verdict(f"tongue {k_end}:1", math.inf, beyond_end=True, order=k_end)
-        dev = self.deviation(energy, frequency_hz, content.amplitudes)
+        dev = self.deviation(energy, frequency_hz, content.amplitudes, steps)
         if dev is None or not math.isfinite(dev):
             return self._by_content(content)
         err = error if math.isfinite(error) else 0.0
@@ -141,7 +159,7 @@ class FamilyLabels:
             if not math.isfinite(reference_hz):
                 reference_hz = None            # no own orbit of the family there: the interpolated frequency, strictly
         if reference_hz is not None:           # the skeleton's own orbit at that energy (a jump's landing, or above)
-            dev = abs(frequency_hz / reference_hz - 1.0 - self.bias(content.amplitudes))
+            dev = abs(frequency_hz / reference_hz - 1.0 - self.bias(content.amplitudes, steps))
         trunc = sk.truncation_at(energy) if dev > strict else 0.0   # a solve per skeleton point: asked here only
         tol = strict + 2 * (trunc if math.isfinite(trunc) else 0.0)
         drop = sk.share_at(energy) - content.share if content.amplitudes is not None else 0.0

@@ -11,6 +11,7 @@ which runs the generic pseudo-arclength engine (continuation.py) and turns each 
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -131,7 +132,7 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
     problem, u0, p0, settings = build(system, k, a0, dict(method.options(), max_rel_step=cont.max_rel_step,
                                                            max_period_step=cont.max_period_step),
                                       tol, energy_max, floquet)
-    f_method = 1.0 / problem.state(u0)[2]      # the linear mode's frequency as the method computes it (labels.py)
+    f_method = method_frequency(problem, u0)   # the linear mode's frequency as the method computes it (labels.py)
     if _start is not None:                     # start at a given orbit, towards another (continue_tongue)
         (xa, va, Ta), (xb, vb, Tb) = _start
         u0 = problem.pack(system.to_modal(xa), system.to_modal(va), Ta)
@@ -160,6 +161,19 @@ def iter_nnm(model, mode, energy_max, method=None, *, continuation=None, tongues
                        max_refusals=cont.max_refusals,
                        max_steps_per_period=getattr(method, "max_steps_per_period", 0) or 1,
                        max_harmonics=0 if ritz else getattr(method, "max_harmonics", 0))
+
+
+def method_frequency(problem, u0):
+    """The followed linear mode's frequency (Hz) as the branch's method computes it (labels.FamilyLabels' f_method):
+    shooting, a function of a point's time steps per period (the integrator's discrete linear period at that step,
+    Integrator.linear_period; Newmark's relative period error (omega h)^2 / 12 changes with the steps the freq_tol
+    refinement gives the points, driver/refinement.py); harmonic balance, with no time step, the frequency of its
+    first orbit u0 (the linear mode's)."""
+    integrator = getattr(problem, "integrator", None)
+    if integrator is None:
+        return 1.0 / problem.state(u0)[2]
+    omega = problem.w_r
+    return functools.lru_cache(maxsize=None)(lambda steps: 1.0 / integrator.linear_period(omega, steps))
 
 
 def skeleton_harmonics(method, default, refined):

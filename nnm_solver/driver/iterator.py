@@ -207,7 +207,7 @@ class NNMIterator:
             self._refinement.estimate(cand)
             falling = bool(self.points) and point.energy < self.points[-1].energy * (1 - 1e-9)
             verdict = self._labels.verdict(point.energy, point.frequency_hz, obs[0], point.freq_error, self._run,
-                                           falling=falling)
+                                           falling=falling, steps=point.steps)
             point.label = verdict.text
             cand.distance = (verdict.dev, verdict.tolerance)
         return self._policy.decide(point, verdict, obs[0], obs[1], self._last_kept[1].point if self._last_kept else None,
@@ -288,7 +288,8 @@ class NNMIterator:
             c = self._record(ContinuationPoint(u, p, J, 0, sigma, 0.0), loc.problem,
                              known=loc.spectra.get(float(sigma)))[0]
             if self._labels is not None:
-                c.point.label = self._labels.verdict(c.point.energy, c.point.frequency_hz, c.observed[0]).text
+                c.point.label = self._labels.verdict(c.point.energy, c.point.frequency_hz, c.observed[0],
+                                                     steps=c.point.steps).text
             c.observed = None
             made[id(c.point)] = c
             if not np.isnan(c.point.floquet).any():     # its multipliers and Krein coordinates, for the locators
