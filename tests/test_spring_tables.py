@@ -76,6 +76,7 @@ def test_mat_old_tables_still_load_and_versions_are_checked(tmp_path):
     (dict(piecewise_springs=np.array([[1, 0, 1.0, 0.1, 2.0, 0.3, NAN]])), "expected k0 followed by pairs"),
     (dict(piecewise_springs=np.array([[4, 0, 1.0, 0.1, 2.0]])), "piecewise_springs row 1: dof 4 is not a DOF"),
     (dict(piecewise_springs=np.array([[1, 0.5, 1.0, 0.1, 2.0]])), "dof and other must be whole numbers"),
+    (dict(springs=np.array([[1.5, 0, 0.5]])), "springs row 1: dof and other must be whole numbers"),  # (was DOF 2)
     (dict(piecewise_springs=np.array([[1, 0, 1.0, 0.1, 2.0]]), piecewise_eps=0.7), "eps=0.7 must be in"),
 ])
 def test_mat_bad_spring_tables_one_line(tmp_path, tables, match):

@@ -113,13 +113,8 @@ def springs_from_table(table, n, where):
         raise NNMFileError(f"{where}: 'springs' must have 3 columns [dof other k3] (1-based), got {table.shape}")
     springs = []
     for r, row in enumerate(table, 1):
-        dof, other, k3 = int(round(row[0])), int(round(row[1])), float(row[2])
-        if not 1 <= dof <= n:
-            raise NNMFileError(f"{where}: springs row {r}: dof {dof} is not a DOF of the model (1..{n}, 1-based)")
-        if not 0 <= other <= n:
-            raise NNMFileError(f"{where}: springs row {r}: other {other} is not a DOF of the model "
-                               f"(1..{n}, 1-based; 0 for a grounded spring)")
-        springs.append(CubicSpring(dof=dof - 1, other=None if other == 0 else other - 1, k3=k3))
+        dof, other = _ends(row, r, n, "springs", where)     # (whole 1-based numbers: 1.5 was rounded to DOF 2)
+        springs.append(CubicSpring(dof=dof, other=other, k3=float(row[2])))
     return springs
 
 
