@@ -395,6 +395,23 @@ def test_a_crossing_within_the_orbits_energy_spread_is_the_folds(spread, rate, c
         assert events[1]["stability_change"] == change and abs(events[1]["x0"][0] - s_cross) < 1e-3
 
 
+@pytest.mark.parametrize("rate, change, end", [(1.0, "loss", 1.0), (-1.0, "gain", 0.0)])
+def test_a_stability_change_quotes_the_multiplier_of_the_point_it_names(rate, change, end):
+    """The event's text quotes the largest multiplier of the step's unstable end and names that point: the next
+    one for a loss, the previous one for a gain (a gain once quoted the unstable point before it as 'next point',
+    though the next point is stable)."""
+    from nnm_solver.stability.events import locate_between
+    loc, point, slope = _fold_and_crossing_step(2.0, 0.45, rate)        # (the fold outside the step: none in it)
+    a, b = point(0.0), point(1.0)
+    events, _ = locate_between(loc, 1.0, (a, slope(0.0)), (b, slope(1.0)), 5, point)
+    (e,) = events
+    assert e["kind"] == "branch_point" and e["stability_change"] == change
+    unstable = point(end)
+    assert not unstable.stable and abs(unstable.floquet[0]) > 1.5
+    which = "next point" if change == "loss" else "previous point"
+    assert e["detail"].endswith(f"({which}: {unstable.floquet[0]:.5g})"), e["detail"]
+
+
 def test_hb_energy_spread_vanishes_on_exact_orbits_and_measures_the_truncation():
     """The energy of an HB orbit varies over its period by what the truncation leaves out: ~0 for the linear mode
     (an exact orbit), and on the 2-DOF benchmark's NNM 1 it shrinks with the harmonics (H = 3 -> 9 at ~20 J)."""

@@ -122,13 +122,16 @@ def _number(k, count, flag, what, branch):
 def compute_family(args, model, options):
     """(the parent branch, the family computed from it, a title) for --tongue K or --switch K; ``options``: the
     continuation options given on the command line (max_points, tol, steps...)."""
-    from ..driver.switching import switch_branch
-    from ..driver.tongue_branch import continue_tongue
+    from ..driver.switching import switch_arguments, switch_branch
+    from ..driver.tongue_branch import continue_tongue, tongue_arguments
 
     if args.tongue is not None:
         parent = saved_branch(args.file, model, args.branch, args.mode, lambda b: bool(tongues_of(b)), "tongues")
         i = _number(args.tongue, len(tongues_of(parent)), "--tongue", "tongues", parent)
         tongue = tongues_of(parent)[i]
+        # the family's limits checked before anything is printed: bad input is the one error line
+        limits = {k: v for k, v in options.items() if k in ("max_points", "tol")}
+        tongue_arguments(parent, tongue, args.energy_max, **limits)
         print(f"continuing tongue {args.tongue} ({tongue.get('label', 'tongue')}) of {parent.name or parent.mode}, "
               f"from E = {tongue['entry_energy']:.4g} J", flush=True)
         kw = {k: v for k, v in options.items() if k in ("max_points", "tol", "steps_per_period", "integrator")}
@@ -140,9 +143,10 @@ def compute_family(args, model, options):
                           "a located branch point or period doubling")
     i = _number(args.switch, len(switch_events(parent)), "--switch", "branch points or period doublings", parent)
     event = switch_events(parent)[i]
+    kw = {k: v for k, v in options.items() if k in ("max_points", "tol")}
+    switch_arguments(parent, event, args.energy_max, **kw)         # (as for --tongue: before anything is printed)
     print(f"switching at {event['kind'].replace('_', ' ')} {args.switch} of {parent.name or parent.mode} "
           f"(E = {event['energy']:.4g} J)", flush=True)
-    kw = {k: v for k, v in options.items() if k in ("max_points", "tol")}
     family = switch_branch(parent, event, args.energy_max, **kw)
     return parent, family, f"family born at {event['kind'].replace('_', ' ')} {args.switch} of " \
                            f"{parent.name or f'NNM {parent.mode}'}"

@@ -75,14 +75,37 @@ def from_keywords(method=None, continuation=None, tongues=None, keywords=None):
     return replace(m, **mk), replace(c, **ck), t
 
 
+def check_limits(energy_max, tol):
+    """NNMInputError (one line) unless energy_max (J) and tol are positive numbers: limits every continuation shares
+    (continue_nnm, switch_branch, continue_tongue; with check_max_points)."""
+    check_positive("energy_max", energy_max)
+    check_positive("tol", tol)
+
+
+def check_max_points(max_points):
+    """NNMInputError (one line) unless max_points is a positive integer (every continuation's, as check_limits)."""
+    check_positive("max_points", max_points, integer=True)
+
+
+def check_family_start(energy_max, start_energy, start):
+    """NNMInputError (one line) unless energy_max (J) lies above ``start_energy`` (J), the energy of the orbit a family
+    starts from (``start``: what that orbit is, for the message).  A family may head down in energy from its start
+    (either side of a branch point, a tongue that dips below its entry), but energy_max is the continuation's ceiling
+    whichever way it goes: it stops at the first orbit at or above it (stop_rules.stop_after_point), so a ceiling at or
+    below the start would end the family at its first orbit."""
+    if not energy_max > start_energy:
+        raise NNMInputError(f"energy_max = {energy_max:g} J is not above the family's start, {start} at E = "
+                            f"{start_energy:.6g} J; energy_max caps the continuation whichever way in energy the "
+                            f"family goes: give one above {start_energy:.6g} J")
+
+
 def check_branch_arguments(model, mode, energy_max, tol, max_points, energy_min, modes_known=True):
     """Validate the arguments every branch computation shares; returns the 0-based mode index.
     modes_known=False: the mode number is only checked against the DOF count (the Ritz basis checks the rest)."""
     if not isinstance(model, Model):
         raise NNMInputError(f"model must be an nnm_solver.Model, got {type(model).__name__}")
-    check_positive("energy_max", energy_max)
-    check_positive("tol", tol)
-    check_positive("max_points", max_points, integer=True)
+    check_limits(energy_max, tol)
+    check_max_points(max_points)
     if energy_min is not None:
         check_positive("energy_min", energy_min)
         if energy_min >= energy_max:

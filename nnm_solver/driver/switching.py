@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..continuation.engine import ContinuationSettings, pseudo_arclength
-from .api import NNMIterator
+from .api import NNMIterator, check_family_start, check_limits, check_max_points
 from .problems import check_positive
 from ..errors import NNMInputError
 from ..model.modal import modal_system
@@ -28,7 +28,7 @@ from ..orbits.shooting import ShootingProblem
 from ..integrators.registry import get_integrator
 from ..results.settings import Shooting, ShootingSettings
 
-__all__ = ["switch_branch"]
+__all__ = ["switch_branch", "switch_arguments"]
 
 SWITCHABLE = ("branch_point", "period_doubling")
 
@@ -55,6 +55,23 @@ def _parent_tangent(branch, event, system, problem, period_factor):
     return us[1] - us[0]
 
 
+def switch_arguments(branch, event, energy_max, *, max_points=None, tol=None):
+    """The located event (a dict) and the corrector tolerance (relative) of the family ``switch_branch`` starts at
+    ``event`` of ``branch`` (a record of branch.events or its index); tol None: the parent's own (a shooting parent),
+    else 1e-6; max_points None: switch_branch's default.  NNMInputError (one line), before any computation, for an
+    event no family can start from, energy_max, tol or max_points that continue_nnm refuses (api.check_limits,
+    api.check_max_points), or energy_max (J) not above the event's energy (api.check_family_start: the family may go
+    down in energy from there, but energy_max is its ceiling)."""
+    event = _event(branch, event)
+    s = branch.settings
+    tol = (s.tol if s.method == "shooting" else 1e-6) if tol is None else tol
+    check_limits(energy_max, tol)
+    if max_points is not None:                 # (None: not given, switch_branch's default)
+        check_max_points(max_points)
+    check_family_start(energy_max, float(event["energy"]), f"the {event['kind'].replace('_', ' ')}")
+    return event, float(tol)
+
+
 def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_points=300, tol=None, floquet=True,
                   max_angle=0.35, max_correction=0.5, max_rel_step=0.4, max_period_step=0.005):
     """Continue the family that bifurcates from ``event`` of ``branch`` (a located ``branch_point`` or
@@ -63,10 +80,12 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     step : first step, relative to the orbit; direction : +1 or -1, which side of the null direction.
     Other options as ``continue_nnm``.  Returns a Branch (general full-period shooting: v0 free,
     symmetric=False, reversible=False; doubled period for period doubling) whose message says how it
-    ended.
+    ended.  energy_max must lie above the event's energy (the family may head down in energy from there, but
+    the continuation stops at its first orbit at or above energy_max); it, tol and max_points are checked as
+    ``continue_nnm`` checks them, before any computation (``switch_arguments``).
     """
-    event = _event(branch, event)
-    check_positive("energy_max", energy_max)
+    check_max_points(max_points)               # (None refused here: switch_arguments reads it as not given)
+    event, tol = switch_arguments(branch, event, energy_max, max_points=max_points, tol=tol)
     check_positive("step", step)
     if direction not in (1, -1):
         raise NNMInputError(f"direction must be +1 or -1, got {direction!r}")
@@ -75,7 +94,6 @@ def switch_branch(branch, event, energy_max, *, step=0.05, direction=1, max_poin
     # (Shooting(): gauss6 at its registry's steps), not the first release's Newmark at 200
     integrator = getattr(s, "integrator", None) or Shooting().integrator
     spp = int(getattr(s, "steps_per_period", None) or get_integrator(integrator).steps)
-    tol = float(s.tol if tol is None and s.method == "shooting" else (1e-6 if tol is None else tol))
     factor = 2 if event["kind"] == "period_doubling" else 1
     model = branch.model
     system = modal_system(model)

@@ -10,9 +10,9 @@ import numpy as np
 from ..backbone.settings import Follow, TongueBranchSettings
 from ..errors import NNMInputError
 from ..results.branch import Point
-from .api import iter_nnm
+from .api import check_family_start, check_limits, check_max_points, iter_nnm
 
-__all__ = ["continue_tongue"]
+__all__ = ["continue_tongue", "tongue_arguments"]
 
 
 def _on_backbone(branch, p, rtol):
@@ -27,6 +27,32 @@ def _on_backbone(branch, p, rtol):
     return abs(p.frequency_hz - f_b) <= rtol * f_b
 
 
+def tongue_arguments(branch, tongue, energy_max=None, *, max_points=None, tol=None):
+    """(the tongue record, energy_max J, tol) of the branch ``continue_tongue`` starts at ``tongue`` of ``branch``
+    (one of branch.tongues or its index): energy_max None is 100 x the entry energy, tol None the backbone's own,
+    max_points None continue_tongue's default.  NNMInputError (one line), before any computation, for a record no
+    tongue branch starts from, a backbone not computed by shooting, energy_max, tol or max_points that continue_nnm
+    refuses (api.check_limits, api.check_max_points), or energy_max (J) not above the tongue's entry energy
+    (api.check_family_start: the tongue may dip below its entry, but energy_max is the continuation's ceiling)."""
+    tongue = branch.pick("tongues", tongue)
+    if tongue.get("family_end"):
+        raise NNMInputError(f"this record marks where the backbone family ends ({tongue.get('note', '')}): there is "
+                            f"no tongue branch to start from it")
+    if "entry_x0" not in tongue:
+        raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
+    s = branch.settings
+    if s.method != "shooting":
+        raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
+    E_in = float(tongue["entry_energy"])
+    energy_max = 100 * E_in if energy_max is None else energy_max
+    tol = s.tol if tol is None else tol
+    check_limits(energy_max, tol)
+    if max_points is not None:                 # (None: not given, continue_tongue's default)
+        check_max_points(max_points)
+    check_family_start(energy_max, E_in, f"the {tongue.get('label', 'tongue')}'s entry orbit")
+    return tongue, energy_max, tol
+
+
 def continue_tongue(branch, tongue, energy_max=None, max_points=500, *, settings=TongueBranchSettings(), **options):
     """The internal-resonance tongue ``tongue`` (one of ``branch.tongues``, or its index) as its own branch.
 
@@ -37,24 +63,18 @@ def continue_tongue(branch, tongue, energy_max=None, max_points=500, *, settings
     a loop, or reaches energy_max (default: 100 x the entry energy).  Points are labelled by their
     harmonic content; the branch is named after the tongue.  Options as ``continue_nnm`` (the
     branch's own steps_per_period, symmetric and tol are the defaults); settings : TongueBranchSettings
-    (backbone/settings.py).
+    (backbone/settings.py).  energy_max must lie above the entry energy (the tongue may dip below its entry, but
+    the continuation stops at its first orbit at or above energy_max); it, tol and max_points are checked as
+    ``continue_nnm`` checks them, before any computation (``tongue_arguments``).
     """
-    tongue = branch.pick("tongues", tongue)
-    if tongue.get("family_end"):
-        raise NNMInputError(f"this record marks where the backbone family ends ({tongue.get('note', '')}): there is "
-                            f"no tongue branch to start from it")
-    if "entry_x0" not in tongue:
-        raise NNMInputError("tongue must be one of branch.tongues (from continue_nnm(..., tongues='skip'))")
+    tongue, energy_max, tol = tongue_arguments(branch, tongue, energy_max, max_points=max_points,
+                                               tol=options.pop("tol", None))
     s = branch.settings
-    if s.method != "shooting":
-        raise NNMInputError("continue_tongue needs a shooting branch (tongues are passed by shooting backbones)")
-    for key in ("steps_per_period", "symmetric", "tol", "integrator"):
+    for key in ("steps_per_period", "symmetric", "integrator"):
         options.setdefault(key, getattr(s, key))
     E_in = float(tongue["entry_energy"])
-    energy_max = 100 * E_in if energy_max is None else energy_max
     start = ((np.asarray(tongue["entry_x0"]), np.asarray(tongue["entry_v0"]), tongue["entry_period"]),
              (np.asarray(tongue["inside_x0"]), np.asarray(tongue["inside_v0"]), tongue["inside_period"]))
-    tol = options.pop("tol")
     # the tongue is followed whatever its order (Follow's max_order applies to departures from a backbone)
     it = iter_nnm(branch.model, branch.mode, energy_max, "shooting", tol=tol, max_points=max_points,
                   tongues=Follow(max_order=None), _start=start, **options)

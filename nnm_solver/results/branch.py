@@ -294,22 +294,44 @@ class Branch:
         """The branch of the same model with every k3 multiplied by ``factor`` (> 0).
 
         Exact for cubic springs (scaling.py): frequencies and multipliers unchanged, displacements
-        and velocities / sqrt(factor), energies / factor.
+        and velocities / sqrt(factor), energies / factor.  Every stored orbit is scaled so: the points', the
+        located events' (x0, v0, energy) and the tongue records' (entry and inside orbits, entry and exit
+        energies), so switch_branch and continue_tongue start from orbits of the scaled model; settings.energy_max
+        (J) / factor too.  The message is free text written for the branch as computed: it is kept, with a note
+        that the branch was scaled (its energies are those before the scaling).
         """
         sc = cubic_scaling(factor)
         el = self.model.elements
         if len(el) and not el.cubic_only:
             raise NNMInputError("the scaling law holds for cubic springs only; compute the branch of the scaled model")
-        events = [dict(e, energy=e["energy"] * sc.energy) for e in self.events]
-        settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio)
+        events = [_scaled_event(e, sc) for e in self.events]
+        settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio,
+                                         energy_max=self.settings.energy_max * sc.energy)
         return Branch(self.model.scaled(sc.ratio), self.mode, self.energy * sc.energy, self.frequency_hz,
                       self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
-                      self.status, self.message, settings, self.name,
+                      self.status, _scaled_message(self.message, sc), settings, self.name,
                       None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
-                      [t.replace(entry_energy=t.entry_energy * sc.energy,
-                                 exit_energy=None if t.exit_energy is None else t.exit_energy * sc.energy)
-                       for t in self.tongues], self.freq_error,
+                      [t.scaled(sc.amplitude, sc.energy) for t in self.tongues], self.freq_error,
                       self.steps, self.fundamental_share)
+
+
+def _scaled_event(event, sc):
+    """An event record (a dict) of a branch scaled by ``sc`` (scaling.CubicScaling): energy (J) x sc.energy, a
+    located event's orbit x0, v0 (m, m/s) x sc.amplitude; frequency, period, multipliers and text unchanged."""
+    out = dict(event, energy=float(event["energy"]) * sc.energy)
+    for key in ("x0", "v0"):
+        if key in event:
+            out[key] = (np.asarray(event[key], dtype=float) * sc.amplitude).tolist()
+    return out
+
+
+def _scaled_message(message, sc):
+    """A scaled branch's message: the computed branch's (free text, its numbers unchanged), with a note that says
+    so; '' stays ''."""
+    if not message:
+        return message
+    return (f"{message} [then scaled: every k3 x {sc.ratio:g}, so the energies quoted before this note are x "
+            f"{sc.energy:g} on this branch]")
 
 
 def _match_energy(model, x, v, energy):

@@ -66,6 +66,18 @@ class TongueRecord:
     def replace(self, **changes):
         return dataclasses.replace(self, **changes)
 
+    def scaled(self, amplitude, energy):
+        """The record of the same tongue on a branch whose orbits are scaled (Branch.scaled, model/scaling.py): its
+        orbits' displacements (m) and velocities (m/s) x ``amplitude``, its energies (J) x ``energy``; frequencies,
+        periods, indices and free text (jump, note) unchanged."""
+        def orbit(x):
+            return tuple(float(a) * amplitude for a in x)
+
+        return self.replace(entry_energy=self.entry_energy * energy,
+                            exit_energy=None if self.exit_energy is None else self.exit_energy * energy,
+                            entry_x0=orbit(self.entry_x0), entry_v0=orbit(self.entry_v0),
+                            inside_x0=orbit(self.inside_x0), inside_v0=orbit(self.inside_v0))
+
     # mapping-style access (the records of earlier releases were dicts)
     def keys(self):
         return list(self.as_dict())

@@ -31,7 +31,8 @@ from .locator import EVENT_RTOL, Locator
 from .settings import STABILITY
 from . import settings as _settings         # (the Krein route read at each call: a reference run swaps STABILITY)
 
-__all__ = ["Locator", "classify_multipliers", "EVENT_KINDS", "EVENT_RTOL", "locate_between", "stability_changes"]
+__all__ = ["Locator", "classify_multipliers", "EVENT_KINDS", "EVENT_RTOL", "locate_between", "stability_changes",
+           "change_detail"]
 
 EVENT_KINDS = ("fold", "branch_point", "period_doubling", "torus")
 
@@ -127,12 +128,19 @@ def locate_between(loc, s, a, b, index, record, energy_max=None):
             # example 09, H = 5: 1e-4 relative past its 5:1 tongue's energy maximum, spread 3e-3)
             return _the_folds(events, change, f"the multiplier through +1 located {abs(pe.energy - fold[1].energy):.3g}"
                                               f" J away, within the fold orbit's energy spread {spread:.3g} J"), end
-        crit = pu.floquet[0]
-        through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
-        events.append(event_record(kind, index, pe, f"{change} of stability, multiplier through {through} "
-                                                    f"(next point: {crit:.5g})", stability_change=change,
+        events.append(event_record(kind, index, pe, change_detail(kind, change, pu.floquet[0]), stability_change=change,
                                    **({} if located else dict(located=False))))
     return events, end
+
+
+def change_detail(kind, change, critical):
+    """The text of a classified stability change (``kind``: branch_point / period_doubling / torus; ``change``: "loss"
+    or "gain") quoting ``critical``, the largest multiplier of the step's unstable end: the point after the event
+    for a loss of stability, the point before it for a gain (the other end is stable: its multipliers lie on the
+    unit circle)."""
+    through = {"branch_point": "+1", "period_doubling": "-1", "torus": "a complex pair"}[kind]
+    end = "next point" if change == "loss" else "previous point"
+    return f"{change} of stability, multiplier through {through} ({end}: {critical:.5g})"
 
 
 def _energy_spread(loc, sigma):
