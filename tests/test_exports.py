@@ -168,3 +168,13 @@ def test_cli_export_options_and_subcommand(beam_branch, tmp_path, capsys):
     assert not (tmp_path / "x.csv").exists() and len(nnm.load_branches(h5)) == 1
     assert solve_main(["export", str(h5), "--branch", "nope", "--csv", str(tmp_path / "y.csv")]) == 2
     assert "no such branch" in capsys.readouterr().err and not (tmp_path / "y.csv").exists()
+    # --branch by its 1-based number, as --tongue / --switch take it (it was 0-based here: 1 was the second branch)
+    assert solve_main([str(h5), "--mode", "2", "--energy-max", "1", "--max-points", "4"]) == 0
+    first, second = tmp_path / "first.csv", tmp_path / "second.csv"
+    assert solve_main(["export", str(h5), "--branch", "1", "--csv", str(first)]) == 0
+    assert solve_main(["export", str(h5), "--branch", "2", "--csv", str(second)]) == 0
+    assert first.read_text() == out["csv"].read_text() and len(_read_csv(second)) == 4
+    capsys.readouterr()
+    assert solve_main(["export", str(h5), "--branch", "0", "--csv", str(tmp_path / "z.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "1: " in err and "2: " in err and "1..2" in err and not (tmp_path / "z.csv").exists()

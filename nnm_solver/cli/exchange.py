@@ -121,12 +121,14 @@ def main_import(argv):
 
 def main_export(argv):
     from ..files.branch_io import load_branches
+    from .pick import numbered_names, pick_branch
     from ..files.io import load_model
 
     p = argparse.ArgumentParser(prog="nnm-solve export", description="Export a stored branch (CSV, UFF 55 shapes, "
                                 "amplitude-frequency backbone).")
     p.add_argument("file", help="nnm HDF5 file with branches")
-    p.add_argument("--branch", help="branch name (as listed) or 0-based index; needed when the file holds several")
+    p.add_argument("--branch", help="branch name (as listed) or its 1-based number, as nnm-solve --tongue / --switch "
+                   "take it; needed when the file holds several")
     add_export_arguments(p)
     args = p.parse_args(argv)
     if not (args.csv or args.uff or args.backbone):
@@ -135,18 +137,13 @@ def main_export(argv):
     branches = load_branches(args.file, model=model)
     if not branches:
         raise NNMInputError(f"{args.file} holds no branch")
-    names = [b.name for b in branches]
     if args.branch is None:
         if len(branches) > 1:
-            raise NNMInputError(f"{args.file} holds {len(branches)} branches ({', '.join(names)}); "
-                                f"choose one with --branch")
+            raise NNMInputError(f"{args.file} holds {len(branches)} branches ({numbered_names(branches)}); "
+                                f"choose one with --branch NAME or number")
         branch = branches[0]
-    elif args.branch in names:
-        branch = branches[names.index(args.branch)]
-    elif args.branch.isdigit() and int(args.branch) < len(branches):
-        branch = branches[int(args.branch)]
     else:
-        raise NNMInputError(f"--branch {args.branch}: no such branch in {args.file} ({', '.join(names)})")
+        branch = pick_branch(branches, args.branch, args.file)
     check_exports(args, branch.model)
     write_exports(args, branch)
     return 0

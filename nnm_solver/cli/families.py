@@ -11,6 +11,7 @@ from __future__ import annotations
 import shlex
 
 from ..errors import NNMInputError
+from .pick import numbered_names, pick_branch
 
 __all__ = ["SWITCHABLE", "FAMILY_FLAGS", "unused_flags", "tongue_lines", "switch_events", "switch_lines",
            "saved_branch", "compute_family"]
@@ -96,18 +97,13 @@ def saved_branch(path, model, name, mode, has, what):
     if not branches:
         raise NNMInputError(f"{path} holds no branch to start {what} from; compute one first (nnm-solve FILE --mode N "
                             f"--energy-max E --tongues skip)")
-    names = [b.name for b in branches]
     if name is not None:
-        if name in names:
-            return branches[names.index(name)]
-        if name.isdigit() and 1 <= int(name) <= len(branches):
-            return branches[int(name) - 1]
-        raise NNMInputError(f"--branch {name}: no such branch in {path} ({', '.join(names)}; or 1..{len(branches)})")
+        return pick_branch(branches, name, path)
     fit = [b for b in branches if (mode is None or b.mode == mode) and has(b)]
     if not fit:
         where = f" of mode {mode}" if mode is not None else ""
-        raise NNMInputError(f"{path} holds no branch{where} with {what} ({', '.join(names)}); compute one first or "
-                            f"choose one with --branch NAME")
+        raise NNMInputError(f"{path} holds no branch{where} with {what} ({numbered_names(branches)}); compute one "
+                            f"first or choose one with --branch NAME or number")
     return fit[-1]
 
 
