@@ -148,6 +148,19 @@ def test_at_energy_and_interpolate(two_dof_nnm1):
     assert np.allclose(q.x0[0], b.x0[3])
 
 
+def test_at_energy_of_a_harmonic_balance_branch_is_one_orbit():
+    """An interpolated HB point's orbit (from its coefficients: orbit, motion) starts at its x0 and has its energy:
+    the coefficients are scaled to the energy with x0 and v0 (they were not: x(0) 1.3 % below x0, the orbit's
+    energy 2.7 % below the point's, between the widely spaced low-energy points of a Duffing branch)."""
+    model = nnm.Model(np.eye(1), np.eye(1), springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+    b = nnm.continue_nnm(model, mode=1, energy_max=10.0, method="hb")
+    for E in (1e-3, 0.37, 3.0):
+        a = b.at_energy(E)
+        t, x, v = a.orbit(0)
+        assert x[0, 0] == pytest.approx(a.x0[0, 0], rel=1e-12)
+        assert model.energy(x[0], v[0]) == pytest.approx(E, rel=1e-9) and a.energy[0] == pytest.approx(E, rel=1e-9)
+
+
 def test_stop_event_stops_continue_nnm():
     ev = threading.Event()
     ev.set()

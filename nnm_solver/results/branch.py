@@ -198,12 +198,15 @@ class Branch:
         def lerp(a):
             return (1 - w) * a[j] + w * a[k]
 
-        x0, v0 = _match_energy(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
+        # (the orbit scaled as a whole: harmonic balance's coefficients too, which motion() and orbit() use; x0 =
+        # the coefficients' orbit at t = 0, linear in them)
+        c = _energy_factor(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
+        x0, v0 = c * lerp(self.x0), c * lerp(self.v0)
         near = j if w < 0.5 else k
         return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
                       [lerp(self.period)], x0[None], v0[None], self.floquet[near][None],
                       [self.stable[near]], [], self.status, f"interpolated at index {s:.3f}", self.settings,
-                      self.name, None if self.coefficients is None else lerp(self.coefficients)[None],
+                      self.name, None if self.coefficients is None else c * lerp(self.coefficients)[None],
                       [self.labels[near]], None, [lerp(self.freq_error)], [self.steps[near]],
                       [lerp(self.fundamental_share)])
 
@@ -334,11 +337,11 @@ def _scaled_message(message, sc):
             f"{sc.energy:g} on this branch]")
 
 
-def _match_energy(model, x, v, energy):
-    """Scale (x, v) by c > 0 so that its energy is ``energy`` (J): secant iteration on E(c x, c v) = energy from
-    c = 1, for any element law; (x, v) unchanged if it does not converge to 1e-9."""
+def _energy_factor(model, x, v, energy):
+    """The factor c > 0 that gives the state (c x, c v) the energy ``energy`` (J): secant iteration on E(c x, c v) =
+    energy from c = 1, for any element law; 1 if it does not converge to 1e-9."""
     if energy <= 0 or not model.energy(x, v) > 0:
-        return x, v
+        return 1.0
     f = lambda c: float(model.energy(c * x, c * v)) - energy
     c0, c1 = 1.0, 1.0 + 1e-3
     f0, f1 = f(c0), f(c1)
@@ -351,5 +354,5 @@ def _match_energy(model, x, v, energy):
         if abs(f1) <= 1e-12 * energy:
             break
     if not abs(f1) <= 1e-9 * energy:
-        return x, v
-    return c1 * x, c1 * v
+        return 1.0
+    return c1
