@@ -178,3 +178,19 @@ def test_cli_export_options_and_subcommand(beam_branch, tmp_path, capsys):
     assert solve_main(["export", str(h5), "--branch", "0", "--csv", str(tmp_path / "z.csv")]) == 2
     err = capsys.readouterr().err
     assert "1: " in err and "2: " in err and "1..2" in err and not (tmp_path / "z.csv").exists()
+
+
+def test_stability_not_computed_is_exported_as_unknown(tmp_path):
+    """With floquet off a point's ``stable`` is True for want of a test: the CSV and backbone exports say 'unknown'
+    (they wrote True, also for the 2-DOF's points past its branch point at 40.97 J, which are unstable)."""
+    model = two_dof_model()
+    ref = nnm.continue_nnm(model, 1, energy_max=100.0)
+    off = nnm.continue_nnm(model, 1, energy_max=100.0, floquet=False)
+    assert ref.stability_known.all() and not off.stability_known.any() and (~ref.stable).sum() > 0
+    for b, path in ((ref, tmp_path / "ref.csv"), (off, tmp_path / "off.csv")):
+        nnm.export_csv(path, b)
+    assert [r["stable"] for r in _read_csv(tmp_path / "ref.csv")] == [str(bool(s)) for s in ref.stable]
+    assert {r["stable"] for r in _read_csv(tmp_path / "off.csv")} == {"unknown"}
+    nnm.export_backbone_csv(tmp_path / "bb.csv", off, dof=0)
+    rows = list(csv.reader(line for line in open(tmp_path / "bb.csv") if not line.startswith("#")))
+    assert rows[0][3] == "stable" and {r[3] for r in rows[1:]} == {"unknown"}

@@ -1,7 +1,7 @@
 """Results out to the test lab: CSV tables, UFF 55 shapes / UFF 58 orbits (``pyuff``), amplitude backbones.
 
 * ``export_csv(path, branch)``: one row per point -- energy (J), frequency (Hz), period (s), stable
-  (True/False), label (``branch.labels[i]`` when the branch has labels, else ``"backbone"``);
+  (True/False; ``unknown`` where the point's stability was not computed, ``branch.stability_known``), label (``branch.labels[i]`` when the branch has labels, else ``"backbone"``);
 * ``export_uff(path, branch, points=None)``: one UFF 55 data set (data at nodes, normal-mode
   analysis type) per point: its mode shape x0 (the orbit's displacement at t = 0, m / rad), the
   point's frequency, NNM number and energy in the ID lines.  Nodes: the model's DOF map
@@ -80,6 +80,23 @@ def _point_indices(branch, points):
     return [branch.check_index(i) for i in points]
 
 
+def _known(branch, i):
+    known = getattr(branch, "stability_known", None)
+    return True if known is None else bool(known[i])
+
+
+def _stable_text(branch, i):
+    """The CSV cell of point i's stability: True, False, or unknown (its multipliers were not computed)."""
+    return str(bool(branch.stable[i])) if _known(branch, i) else "unknown"
+
+
+def _stability_word(branch, i):
+    """stable, unstable, or stability unknown (a UFF data set's ID line)."""
+    if not _known(branch, i):
+        return "stability unknown"
+    return "stable" if branch.stable[i] else "unstable"
+
+
 # ---------------------------------------------------------------------- CSV
 def export_csv(path, branch):
     """Write one row per point of ``branch``: energy (J), frequency (Hz), period (s), stable, label."""
@@ -90,7 +107,7 @@ def export_csv(path, branch):
         w.writerow(CSV_COLUMNS)
         for i in range(len(branch)):
             w.writerow([repr(float(branch.energy[i])), repr(float(branch.frequency_hz[i])),
-                        repr(float(branch.period[i])), str(bool(branch.stable[i])), labels[i]])
+                        repr(float(branch.period[i])), _stable_text(branch, i), labels[i]])
     return Path(path)
 
 
@@ -187,7 +204,7 @@ def export_backbone_csv(path, branch, dof=None, kind="peak", samples=256, *, ver
         wr.writerow(("energy", "frequency", "amplitude", "stable", "label"))
         for i in range(len(branch)):
             wr.writerow([repr(float(branch.energy[i])), repr(float(bb.frequency_hz[i])), repr(float(bb.amplitude[i])),
-                         str(bool(branch.stable[i])), labels[i]])
+                         _stable_text(branch, i), labels[i]])
     return bb
 
 
@@ -246,8 +263,8 @@ def export_uff(path, branch, points=None):
         r = {f"r{c + 1}": v[:, c].astype(float) for c in range(k)}
         sets.append(pyuff.prepare_55(
             id1=f"NNM {branch.mode} of {model.name or 'model'}"[:80],
-            id2=f"point {i}: E = {branch.energy[i]:.6e} J, f = {branch.frequency_hz[i]:.6f} Hz, "
-                f"{'stable' if branch.stable[i] else 'unstable'}"[:80],
+            id2=f"point {i + 1}: E = {branch.energy[i]:.6e} J, f = {branch.frequency_hz[i]:.6f} Hz, "
+                f"{_stability_word(branch, i)}"[:80],
             id3="shape x0: displacement at t = 0 of the periodic orbit (m, rad)",
             id4=f"label: {labels[i]}"[:80], id5="nnm nonlinear normal mode",
             model_type=1, analysis_type=2, data_ch=3 if k == 6 else 2, spec_data_type=8, data_type=2,

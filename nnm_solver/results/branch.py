@@ -126,6 +126,15 @@ class Branch:
         return self._physical.arrays()[2]
 
     @property
+    def stability_known(self):
+        """(N,) bool: whether each point's stability was computed (its Floquet multipliers are; with floquet off,
+        e.g. harmonic balance of a large model by default, ``stable`` is True for want of a test, not a finding)."""
+        mu = np.asarray(self.floquet)
+        if mu.ndim < 2 or mu.shape[1] == 0:
+            return np.zeros(len(self.energy), dtype=bool)
+        return ~np.all(np.isnan(mu), axis=1)
+
+    @property
     def multipliers_of(self):
         """Whose Floquet multipliers ``floquet`` holds: 'model' (the model's 2n) or 'ritz' (the 2r of the Ritz
         system a Ritz-basis harmonic balance solved: the modes below settings.cutoff_hz and the residual vectors;
