@@ -26,7 +26,7 @@ Two structures:
     python examples/bilinear_attachment.py --two-dof-only      # a few seconds
     python examples/bilinear_attachment.py --summary out.json  # the numbers, as JSON
 
-Figures: docs/img/bilinear_two_dof.png, docs/img/bilinear_paris_mode20.png.  Results: docs/bilinear_attachments.md.
+Figures: bilinear_two_dof.png, bilinear_paris_mode20.png in --out-dir (the docs': --out-dir docs/img).  Results: docs/bilinear_attachments.md.
 """
 from __future__ import annotations
 
@@ -232,7 +232,8 @@ def report(name, r):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--two-dof-only", action="store_true", help="skip the aircraft (a few seconds)")
-    p.add_argument("--out-dir", default=str(ROOT / "docs" / "img"), help="folder of the PNG figures")
+    p.add_argument("--out-dir", default=".", help="folder of the PNG figures (default: the current one; the docs' "
+                   "figures: --out-dir docs/img)")
     p.add_argument("--summary", default=None, help="optional JSON file with the numbers shown")
     args = p.parse_args(argv)
     out_dir = Path(args.out_dir)

@@ -13,7 +13,7 @@ with the level, as the test showed.
     python examples/forced_aircraft.py --levels 2,5 --zeta 0.005 --plot /tmp/frf.png --save-to /tmp/f.h5
     nnm-view /tmp/paris_forced.h5                             # the model and the backbone (forced: not shown yet)
 
-Written: the amplitude-frequency plot (``--plot``, default docs/img/forced_aircraft.png) and an nnm file with
+Written: the amplitude-frequency plot (``--plot``, default forced_aircraft.png in the current folder) and an nnm file with
 the model, the backbone and the forced responses (``--save-to``, default paris_forced.h5 in the temporary
 folder), read back to check it.
 """
@@ -65,7 +65,8 @@ def main(argv=None):
                                                   "frequency x [0.98, 1.005])")
     ap.add_argument("--energy", type=float, default=4.0, help="energy_max of the backbone (J)")
     ap.add_argument("--harmonics", type=int, default=5)
-    ap.add_argument("--plot", default=str(ROOT / "docs" / "img" / "forced_aircraft.png"))
+    ap.add_argument("--plot", default="forced_aircraft.png", help="the amplitude-frequency plot (default: in the "
+                    "current folder; the docs' figure: --plot docs/img/forced_aircraft.png)")
     ap.add_argument("--save-to", default=str(Path(tempfile.gettempdir()) / "paris_forced.h5"))
     args = ap.parse_args(argv)
     levels = [float(s) for s in args.levels.split(",")]
