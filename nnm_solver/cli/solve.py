@@ -18,24 +18,13 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
-
-import numpy as np
 
 from ..errors import NNMInputError, run_reporting_errors
 from .defaults import TONGUE_CHOICES, solver_defaults
 from .report import accuracy_line, report_and_save  # noqa: F401 (accuracy_line: part of the cli's API)
 from .modes import list_modes
+from .branch_options import continuation_options, load_input, method_arguments
 from .outputs import check_plot_path, output_file
-
-
-def _load(path):
-    from ..files.importers import is_import_path
-    from ..files.io import load_extra, load_model
-
-    p = Path(path)
-    model = load_model(p)          # nnm HDF5, or an import by suffix (.mat, .toml, .full)
-    return model, None if is_import_path(p) else load_extra(p, "reference")
 
 
 def _progress(job, stream, interval=0.2):
@@ -156,9 +145,11 @@ def main(argv=None):
     if stray:
         return run_reporting_errors("nnm-solve", _refuse_stray, stray)
     if args.modes or args.sweep:
-        return run_reporting_errors("nnm-solve", _run_sweep, args, parser)
+        from .sweep_run import run_sweep
+        return run_reporting_errors("nnm-solve", run_sweep, args, parser)
     if args.forced:
-        return run_reporting_errors("nnm-solve", _run_forced, args)
+        from .forced_run import run_forced
+        return run_reporting_errors("nnm-solve", run_forced, args)
     if args.tongue is not None or args.switch is not None:
         return run_reporting_errors("nnm-solve", _run_family, args)
     return run_reporting_errors("nnm-solve", _run, args)
@@ -187,32 +178,6 @@ def _refuse_stray(stray):
                         f"{'them' if len(flags) > 1 else 'it'} out")
 
 
-def _method_arguments(args):
-    """The method's keywords of continue_nnm from the command line; NNMInputError for another method's option."""
-    given = dict(steps_per_period=args.steps_per_period, integrator=args.integrator)
-    given = {k: v for k, v in given.items() if v is not None}      # the solver's defaults for the others
-    target = {} if args.freq_tol is None else dict(freq_tol=args.freq_tol)     # both methods have one
-    if (args.method or solver_defaults()["method"]) == "shooting":
-        if args.condensed:
-            raise NNMInputError("--condensed belongs to --method hb (harmonic balance)")
-        if args.harmonics is not None:
-            raise NNMInputError("--harmonics belongs to --method hb (harmonic balance)")
-        return {**given, **target}
-    if given:
-        flags = ", ".join("--" + k.replace("_", "-") for k in given)
-        raise NNMInputError(f"{flags} belong(s) to --method shooting; harmonic balance has no time steps "
-                            f"(raise --harmonics instead)")
-    return dict(method="hb", condensed=args.condensed, **target,
-                **({} if args.harmonics is None else dict(harmonics=args.harmonics)))
-
-
-def _continuation_options(args):
-    """continue_nnm's keywords given on the command line (the solver's defaults for the others)."""
-    opts = dict(tol=args.tol, max_points=args.max_points, energy_min=args.energy_min, tongues=args.tongues,
-                floquet=True if args.floquet else None)
-    return {k: v for k, v in opts.items() if v is not None}
-
-
 def _check_arguments(model, args):
     """NNMInputError for a mode out of range, a non-positive --energy-max, --tol, --max-points or
     --energy-min (the checks continue_nnm makes, done before anything is printed or written)."""
@@ -224,68 +189,12 @@ def _check_arguments(model, args):
                            args.energy_min, modes_known=model.n <= MODEL.max_dense_dof)
 
 
-def _forced_unused_flags(args):
-    """The flags given on the command line that a forced response does not use (an NNM branch's: its mode, energy,
-    method and time integration, tongues, families, exports), in the order of --help."""
-    given = {"--list-modes": args.list_modes or None, "--mode": args.mode, "--energy-max": args.energy_max,
-             "--energy-min": args.energy_min, "--method": args.method, "--steps-per-period": args.steps_per_period,
-             "--integrator": args.integrator, "--freq-tol": args.freq_tol, "--tol": args.tol,
-             "--tongues": args.tongues, "--tongue": args.tongue, "--switch": args.switch, "--branch": args.branch,
-             "--csv": args.csv, "--uff": args.uff, "--backbone": args.backbone, "--backbone-dof": args.backbone_dof,
-             "--floquet": args.floquet or None}
-    return [flag for flag, value in given.items() if value is not None]
-
-
-def _run_forced(args):
-    """nnm-solve FILE --forced --force-dof D --force F --f-range A B [--damping Z] [--harmonics H] [--condensed]
-    [--max-points N] [--plot FRF.png] [--out OUT.h5]: harmonic balance with modal damping (driver/forced.py)."""
-    from ..driver.forced import forced_response
-    from ..files.forced_io import check_forced_file, save_forced_response
-
-    unused = _forced_unused_flags(args)
-    if unused:
-        them = "it" if len(unused) == 1 else "them"
-        raise NNMInputError(f"{', '.join(unused)}: not used by --forced (a forced response by harmonic balance: "
-                            f"--harmonics, --condensed, --max-points, --damping, --plot and --out apply); "
-                            f"leave {them} out")
-    model, _ = _load(args.file)
-    dofs, values = args.force_dof or [], args.force or []
-    if not dofs or not values or args.f_range is None:
-        raise NNMInputError("--forced needs --force-dof DOF, --force N and --f-range F_START F_END")
-    if len(values) not in (1, len(dofs)):
-        raise NNMInputError(f"give one --force for each --force-dof ({len(dofs)}) or a single one, got {len(values)}")
-    force = np.zeros(model.n)
-    for d, v in zip(dofs, values * len(dofs) if len(values) == 1 else values):
-        if not 0 <= d < model.n:
-            raise NNMInputError(f"--force-dof {d} is not a DOF of the model (0..{model.n - 1})")
-        force[d] += v
-    check_plot_path(args.plot)
-    out = output_file(args, "the response will be saved to {out} (--out chooses another file)")
-    check_forced_file(out, model)           # a file of another model: refused before anything is computed
-    options = {k: v for k, v in dict(harmonics=args.harmonics, max_points=args.max_points,
-                                     condensed=True if args.condensed else None).items() if v is not None}
-    t0 = time.perf_counter()
-    r = forced_response(model, force, tuple(args.f_range), args.damping, **options)
-    dof = int(dofs[0])
-    pk = r.peak(dof) if len(r) else None
-    print(f"forced response: {len(r)} points in {time.perf_counter() - t0:.1f} s, {r.status}: {r.message}")
-    if pk is not None:
-        print(f"  peak at DOF {dof}: {pk['amplitude']:.4e} m at {pk['frequency_hz']:.6g} Hz; folds: {len(r.folds)}")
-    if len(r):
-        print(f"saved as /forced/{save_forced_response(out, r)} in {out}")
-        if args.plot:
-            from ..results.forced_plot import plot_forced
-            plot_forced([r], dof, path=args.plot)
-            print(f"frequency response at DOF {dof} written to {args.plot}")
-    return 1 if r.status == "failed" else 0
-
-
 def _run(args):
     from . import exchange as cli_exchange
     from ..files.branch_io import check_branch_file
     from ..driver.jobs import start_branch
 
-    model, ref = _load(args.file)
+    model, ref = load_input(args.file)
     if args.list_modes:
         if args.count < 1:
             raise NNMInputError(f"--count must be at least 1 (the number of modes listed), got {args.count}")
@@ -298,7 +207,7 @@ def _run(args):
     check_branch_file(out, model)              # a file of another model: refused before anything is computed
     check_plot_path(args.plot)
     cli_exchange.check_exports(args, model)
-    job = start_branch(model, args.mode, args.energy_max, **_continuation_options(args), **_method_arguments(args))
+    job = start_branch(model, args.mode, args.energy_max, **continuation_options(args), **method_arguments(args))
     t0 = time.perf_counter()
     try:
         _progress(job, sys.stderr)
@@ -330,10 +239,10 @@ def _run_family(args):
     if unused:
         them = "it" if len(unused) == 1 else "them"
         raise NNMInputError(f"{', '.join(unused)}: not used by {flag} K ({why}); leave {them} out")
-    model, _ = _load(args.file)
+    model, _ = load_input(args.file)
     check_plot_path(args.plot)
     cli_exchange.check_exports(args, model)
-    options = {**_continuation_options(args), **_method_arguments(args)}
+    options = {**continuation_options(args), **method_arguments(args)}
     options.pop("tongues", None)
     t0 = time.perf_counter()
     parent, family, title = compute_family(args, model, options)
@@ -341,87 +250,6 @@ def _run_family(args):
     check_branch_file(out, model)
     return report_and_save(args, model, family, out, title, title, time.perf_counter() - t0)
 
-
-def _sweep_unused_flags(args, parser):
-    """The flags given on the command line that a sweep does not use (a single branch's exports, the forced
-    response's, a family started on a saved branch), in the order of --help."""
-    given = {"--tongue": args.tongue, "--switch": args.switch, "--branch": args.branch, "--forced": args.forced or None,
-             "--force-dof": args.force_dof, "--force": args.force, "--f-range": args.f_range,
-             "--damping": args.damping if args.damping != parser.get_default("damping") else None,
-             "--csv": args.csv, "--uff": args.uff, "--backbone": args.backbone, "--backbone-dof": args.backbone_dof,
-             "--backbone-kind": (args.backbone_kind if args.backbone_kind != parser.get_default("backbone_kind")
-                                 else None)}
-    return [flag for flag, value in given.items() if value is not None]
-
-
-def _sweep_options(args, parser, options):
-    """continue_nnm's keywords of every branch of a sweep: the sweep file's ``options`` with the branch flags given on
-    the command line (--method, --integrator, --steps-per-period, --harmonics, --condensed, --freq-tol, --tongues,
-    --tol, --max-points, --energy-min) over them, as a single branch (--mode N) takes them.  The method is the
-    command line's where --method is given, else the file's; a flag of the other method is one NNMInputError line."""
-    method = args.method or options.get("method") or solver_defaults()["method"]
-    flags = _method_arguments(argparse.Namespace(**{**vars(args), "method": method}))
-    if not args.condensed:
-        flags.pop("condensed", None)            # (a sweep file's condensed = true stays unless the flag is given)
-    if args.method is not None:
-        flags["method"] = args.method
-    return {**options, **flags, **_continuation_options(args)}
-
-
-def _run_sweep(args, parser):
-    """nnm-solve FILE --modes ... : many branches (modes x variants) in parallel on Dask (nnm_solver.sweep)."""
-    from ..sweeps.dask_sweep import sweep
-    from ..sweeps.spec import load_sweep_file
-
-    if args.mode is not None:
-        raise NNMInputError("give --mode N for one branch or --modes for a sweep, not both")
-    if args.list_modes:
-        raise NNMInputError("--list-modes does not go with --modes / --sweep")
-    if args.workers is not None and args.workers < 1:
-        raise NNMInputError(f"--workers must be at least 1, got {args.workers}")
-    unused = _sweep_unused_flags(args, parser)
-    if unused:
-        them = "it" if len(unused) == 1 else "them"
-        raise NNMInputError(f"{', '.join(unused)}: not used by a sweep (--modes / --sweep computes and saves whole "
-                            f"branches; export or continue a saved branch with nnm-solve OUT.h5 afterwards); "
-                            f"leave {them} out")
-    spec = load_sweep_file(args.sweep) if args.sweep else None
-    modes = args.modes if args.modes is not None else (spec.modes if spec else None)
-    energy_max = args.energy_max if args.energy_max is not None else (spec.energy_max if spec else None)
-    if modes is None or energy_max is None:
-        raise NNMInputError("a sweep needs --modes (e.g. 10-24) and --energy-max E, on the command line or as "
-                            "modes = ... and energy_max = ... in the sweep file")
-    options = _sweep_options(args, parser, dict(spec.options) if spec else {})
-    model, _ = _load(args.file)
-    out = output_file(args, "the branches will be saved to {out} (--out chooses another file)")
-    check_plot_path(args.plot)
-    client = args.scheduler or args.workers
-    t0 = time.perf_counter()
-    try:
-        branches = sweep(model, modes, energy_max, variants=spec.variants if spec else None, client=client, out=out,
-                         progress=True, **options)
-    except KeyboardInterrupt:
-        sys.stderr.write(f"\ninterrupted: the finished branches are saved in {out}; run the same command again to "
-                         f"compute the others\n")
-        return 130
-    dt = time.perf_counter() - t0
-    print(f"{'branch':<28} {'points':>6}  {'energy (J)':<19}  {'frequency (Hz)':<21}  {'time':>7}  status")
-    for b in branches:
-        info = getattr(b, "sweep_info", {})
-        took = f"{info['seconds']:6.1f}s" if info.get("seconds") is not None else f"{info.get('source', ''):>7}"
-        span = (f"{b.energy.min():.2e}..{b.energy.max():.2e}  {b.frequency_hz[0]:9.5f} -> {b.frequency_hz[-1]:9.5f}"
-                if len(b) else f"{'-':<19}  {'-':<21}")
-        print(f"{b.name:<28} {len(b):>6}  {span}  {took}  {b.status}: {b.message}")
-    computed = sum(getattr(b, "sweep_info", {}).get("source") == "computed" for b in branches)
-    in_file = sum(getattr(b, "sweep_info", {}).get("source") == "file" for b in branches)
-    failed = sum(b.status == "failed" for b in branches)
-    print(f"{len(branches)} branches in {dt:.1f} s: {computed} computed, {in_file} already in {out}"
-          f"{f', {failed} failed' if failed else ''}; saved as /branches/<variant>:mode<N> in {out}")
-    if args.plot and any(len(b) for b in branches):
-        from ..results.plotting import plot_atlas
-        plot_atlas(branches, path=args.plot, title=f"{model.name or Path(args.file).stem}: NNM atlas")
-        print(f"atlas written to {args.plot}")
-    return 1 if failed else 0
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
