@@ -67,7 +67,9 @@ def test_cli_families_refuse_bad_limits_in_one_line_before_anything(backbone, tm
                         (("--switch", 1, "--energy-max", 100, "--tol", -1), "tol must be a positive number"),
                         (("--switch", 1, "--energy-max", 100, "--max-points", -3), "max_points must be a positive"),
                         (("--tongue", 1, "--energy-max", 100), "is not above the family's start"),
-                        (("--tongue", 1, "--max-points", 0), "max_points must be a positive")):
+                        (("--tongue", 1, "--max-points", 0), "max_points must be a positive"),
+                        (("--tongue", 1, "--steps-per-period", 3), "steps_per_period=3 is too small"),
+                        (("--tongue", 1, "--integrator", "rk4"), "integrator must be one of")):
         r = _cli(path, *args)
         assert r.returncode == 2 and words in r.stderr and len(r.stderr.splitlines()) == 1, (args, r.stderr)
         assert r.stdout == "", (args, r.stdout)                 # nothing printed, nothing computed

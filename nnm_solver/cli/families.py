@@ -126,7 +126,7 @@ def compute_family(args, model, options):
         i = _number(args.tongue, len(tongues_of(parent)), "--tongue", "tongues", parent)
         tongue = tongues_of(parent)[i]
         # the family's limits checked before anything is printed: bad input is the one error line
-        limits = {k: v for k, v in options.items() if k in ("max_points", "tol")}
+        limits = {k: v for k, v in options.items() if k in ("max_points", "tol", "steps_per_period", "integrator")}
         tongue_arguments(parent, tongue, args.energy_max, **limits)
         print(f"continuing tongue {args.tongue} ({tongue.get('label', 'tongue')}) of {parent.name or parent.mode}, "
               f"from E = {tongue['entry_energy']:.4g} J", flush=True)

@@ -83,12 +83,19 @@ def modal_basis(model, opts):
     return basis
 
 
-def shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
-    integrator = get_integrator(opts["integrator"])
-    spp = integrator.steps if opts["steps_per_period"] is None else opts["steps_per_period"]
+def integrator_and_steps(integrator, steps_per_period):
+    """(Integrator, time steps a period) of a shooting request: the integrator's own steps where None; one-line
+    NNMInputError for an unknown integrator or fewer than 8 steps (checked before any computation)."""
+    integrator = get_integrator(integrator)
+    spp = integrator.steps if steps_per_period is None else steps_per_period
     check_positive("steps_per_period", spp, integer=True)
     if spp < 8:
         raise NNMInputError(f"steps_per_period={spp} is too small; use at least 8 (200 is typical)")
+    return integrator, spp
+
+
+def shooting_problem(system, k, a0, opts, tol, energy_max, floquet):
+    integrator, spp = integrator_and_steps(opts["integrator"], opts["steps_per_period"])
     odd = system.elements.odd
     symmetric = odd if opts["symmetric"] is None else bool(opts["symmetric"])
     if symmetric and not odd:

@@ -11,6 +11,7 @@ from ..backbone.settings import Follow, TongueBranchSettings
 from ..errors import NNMInputError
 from ..results.branch import Point
 from .api import check_family_start, check_limits, check_max_points, iter_nnm
+from .problems import integrator_and_steps
 
 __all__ = ["continue_tongue", "tongue_arguments"]
 
@@ -27,13 +28,15 @@ def _on_backbone(branch, p, rtol):
     return abs(p.frequency_hz - f_b) <= rtol * f_b
 
 
-def tongue_arguments(branch, tongue, energy_max=None, *, max_points=None, tol=None):
+def tongue_arguments(branch, tongue, energy_max=None, *, max_points=None, tol=None, steps_per_period=None,
+                     integrator=None):
     """(the tongue record, energy_max J, tol) of the branch ``continue_tongue`` starts at ``tongue`` of ``branch``
     (one of branch.tongues or its index): energy_max None is 100 x the entry energy, tol None the backbone's own,
     max_points None continue_tongue's default.  NNMInputError (one line), before any computation, for a record no
     tongue branch starts from, a backbone not computed by shooting, energy_max, tol or max_points that continue_nnm
     refuses (api.check_limits, api.check_max_points), or energy_max (J) not above the tongue's entry energy
-    (api.check_family_start: the tongue may dip below its entry, but energy_max is the continuation's ceiling)."""
+    (api.check_family_start: the tongue may dip below its entry, but energy_max is the continuation's ceiling), or
+    an integrator or steps_per_period shooting refuses (problems.integrator_and_steps)."""
     tongue = branch.pick("tongues", tongue)
     if tongue.get("family_end"):
         raise NNMInputError(f"this record marks where the backbone family ends ({tongue.get('note', '')}): there is "
@@ -50,6 +53,9 @@ def tongue_arguments(branch, tongue, energy_max=None, *, max_points=None, tol=No
     if max_points is not None:                 # (None: not given, continue_tongue's default)
         check_max_points(max_points)
     check_family_start(energy_max, E_in, f"the {tongue.get('label', 'tongue')}'s entry orbit")
+    if steps_per_period is not None or integrator is not None:      # (None: the backbone's own)
+        integrator_and_steps(integrator if integrator is not None else s.integrator,
+                             steps_per_period if steps_per_period is not None else s.steps_per_period)
     return tongue, energy_max, tol
 
 
