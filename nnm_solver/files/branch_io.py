@@ -52,8 +52,12 @@ def save_branch(path, branch, name=None):
     if is_import_path(path):
         raise NNMInputError(f"{path} is an imported model file, not an nnm HDF5 file: save branches to a .h5 file "
                             f"(nnm-solve import {path.name} --out {path.with_suffix('.h5').name} makes one)")
-    check_branch_file(path, branch.model, branch.name if name is None else str(name))
+    check_name = branch.name if name is None else str(name)
+    check_branch_file(path, branch.model, check_name)
     with atomic_h5(path, copy_existing=True) as f:
+        problem = _model_mismatch(f, path, branch.model, check_name)    # again under the lock: another process
+        if problem:                                                    # may have created the file meanwhile
+            raise _refusal(path, problem)
         if "model" not in f:
             write_model_group(f, branch.model)
         if name is not None:
@@ -98,9 +102,15 @@ def check_branch_file(path, model, name=None):
     with open_nnm(path) as f:
         problem = _model_mismatch(f, path, model, name)
     if problem:
-        alt = _free_name(path)
-        raise NNMInputError(f"{path} holds another model than this branch's ({problem}); the file was left "
-                            f"unchanged: save the branch to another file name, e.g. {alt} (nnm-solve: --out {alt})")
+        raise _refusal(path, problem)
+
+
+def _refusal(path, problem):
+    """The one-line NNMInputError refusing a branch of another model than the file ``path``'s (``problem``: what
+    differs)."""
+    alt = _free_name(path)
+    return NNMInputError(f"{path} holds another model than this branch's ({problem}); the file was left "
+                         f"unchanged: save the branch to another file name, e.g. {alt} (nnm-solve: --out {alt})")
 
 
 def _model_mismatch(f, path, model, name):

@@ -45,8 +45,13 @@ def check_forced_file(path, model):
         with open_nnm(path) as f:
             problem = _model_difference(f, path, model)
         if problem:
-            raise NNMInputError(f"{path} holds another model than this forced response's ({problem}); the file was "
-                                f"left unchanged: save it to another file")
+            raise _refusal(path, problem)
+
+
+def _refusal(path, problem):
+    """The one-line NNMInputError refusing a forced response of another model than the file ``path``'s."""
+    return NNMInputError(f"{path} holds another model than this forced response's ({problem}); the file was "
+                         f"left unchanged: save it to another file")
 
 
 def save_forced_response(path, result, name=None):
@@ -58,6 +63,9 @@ def save_forced_response(path, result, name=None):
     path = Path(path)
     check_forced_file(path, result.model)
     with atomic_h5(path, copy_existing=True) as f:
+        problem = _model_difference(f, path, result.model)   # again under the lock: another process may have
+        if problem:                                          # created the file meanwhile
+            raise _refusal(path, problem)
         if "model" not in f:
             write_model_group(f, result.model)
         root = f.require_group(FORCED_GROUP)

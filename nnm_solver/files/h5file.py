@@ -1,14 +1,17 @@
 """HDF5 mechanics of nnm files: atomic writes, opening with one-line errors, matrices, attributes
 and nested groups.  The schema of models and branches is in io.py (and docs/format.md).
 
-Every write goes to a temporary file in the same folder and is renamed over the target only when
-complete, so an interrupted write never damages an existing file.
+Every write goes to a temporary file in the folder of the real file (symbolic links resolved) and is renamed
+over it only when complete, so an interrupted write never damages an existing file and a link stays a link.
+An update of an existing file (copy, append, rename) holds an inter-process lock on ``<file>.lock``
+(file_lock), so concurrent appends from several processes all end up in the file.
 """
 from __future__ import annotations
 
 import os
 import shutil
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -17,27 +20,132 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import NNMFileError, NNMInputError
+from .settings import FILES
+
+try:                        # POSIX: flock locks (file_lock)
+    import fcntl
+except ImportError:         # Windows
+    fcntl = None
+try:
+    import msvcrt
+except ImportError:         # not Windows
+    msvcrt = None
 
 FORMAT = "nnm"
 FORMAT_VERSION = 1
 STR = h5py.string_dtype("utf-8")
 
 
+def real_target(path):
+    """The file a write to ``path`` has to replace: ``path`` with its symbolic links resolved (os.path.realpath),
+    so that saving through a link updates the linked file and keeps the link.  NNMInputError (one line) if the
+    folder of that file does not exist."""
+    real = Path(os.path.realpath(path))
+    if not real.parent.is_dir():
+        shown = f"{path} (a link to {real})" if real != Path(os.path.abspath(path)) else f"{path}"
+        raise NNMInputError(f"cannot write {shown}: folder {real.parent} does not exist")
+    return real
+
+
+def lock_path(path):
+    """The lock file of the nnm file ``path``: ``<real file>.lock`` beside the file the links of ``path`` lead to."""
+    real = Path(os.path.realpath(path))
+    return real.with_name(real.name + ".lock")
+
+
+def _try_lock(fd):
+    """Take the exclusive lock of the open lock file ``fd`` without waiting: True if taken, False if another
+    process (or another open of the lock file in this process) holds it."""
+    if fcntl is not None:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:     # flock's only way of answering "held by another"
+            return False
+        return True
+    os.lseek(fd, 0, os.SEEK_SET)
+    try:
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+    except OSError:                 # msvcrt's way of answering "held by another"
+        return False
+    return True
+
+
+def _unlock(fd):
+    if fcntl is not None:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+    else:
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
+
+
+def _still_at(fd, lock):
+    """True if the open file ``fd`` is still the file at the path ``lock`` (not removed by its previous holder)."""
+    try:
+        return os.path.samestat(os.fstat(fd), os.stat(lock))
+    except FileNotFoundError:   # removed between our open and our lock: a race with its holder, not an error
+        return False
+
+
+@contextmanager
+def file_lock(path):
+    """Hold the inter-process lock of the nnm file ``path`` for the block (exclusive; one writer at a time).
+
+    Held by every write of an nnm file (atomic_h5; ritz_store.store_basis_in_file), from before it reads the
+    existing file until after the rename, so two processes appending to one file both keep their data; readers need
+    no lock (the rename that publishes a write is atomic).  The lock is ``fcntl.flock`` on ``<file>.lock``
+    beside the real file (lock_path; links resolved, so a link and its target share one lock), created when
+    needed.  The holder removes it while still holding it, and a process that gets the lock of a lock file
+    already removed (it opened it before the removal) opens the new one and tries again, so two processes
+    never both hold a lock.  On Windows (no fcntl) ``msvcrt.locking`` of its first byte is used and the lock
+    file is left in place (an open file cannot be removed there); without either module there is no lock.
+    A lock is released by the OS if its holder dies, so a leftover lock file never blocks a later save.
+    Waiting is bounded by FILES.lock_timeout seconds: after that, NNMFileError (one line naming the file).
+    The lock is not re-entrant: a block holding it must not take it again for the same file.
+    """
+    if fcntl is None and msvcrt is None:
+        yield
+        return
+    lock = lock_path(real_target(path))
+    deadline = time.monotonic() + FILES.lock_timeout
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        taken = _try_lock(fd)
+        while not taken and time.monotonic() < deadline:
+            time.sleep(FILES.lock_poll)
+            taken = _try_lock(fd)
+        if not taken:
+            os.close(fd)
+            raise NNMFileError(f"cannot write {path}: another process has been updating it for more than "
+                               f"{FILES.lock_timeout:g} s (it holds the lock {lock}); the file is unchanged, "
+                               f"save again when that process has finished")
+        if fcntl is None or _still_at(fd, lock):
+            break
+        _unlock(fd)             # the lock of a removed lock file: take the new one
+        os.close(fd)
+    try:
+        yield
+    finally:
+        if fcntl is not None and _still_at(fd, lock):
+            os.unlink(lock)     # while holding it: whoever waits on this file sees it removed and retries
+        _unlock(fd)
+        os.close(fd)
+
+
 @contextmanager
 def atomic_file(path):
-    """A temporary path next to ``path`` (same folder), renamed over ``path`` when the block completes.
+    """A temporary path next to the file ``path`` leads to, renamed over that file when the block completes.
 
+    Symbolic links are resolved (real_target): the temporary file is written in the real file's folder and
+    renamed over the real file, so a link stays a link and the file it points to gets the new content.
     The file gets the permissions of the file it replaces, or the default ones for a new file (mkstemp
-    alone would make it private); on any error the temporary file is removed and ``path`` is untouched.
+    alone would make it private); on any error the temporary file is removed and the file is untouched.
+    This does not lock: the writes of nnm files hold file_lock around it (atomic_h5); exports need none.
     """
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise NNMInputError(f"cannot write {path}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    real = real_target(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".tmp", dir=real.parent)
     os.close(fd)
-    if path.exists():
-        mode_bits = path.stat().st_mode & 0o777
+    if real.exists():
+        mode_bits = real.stat().st_mode & 0o777
     else:
         umask = os.umask(0)
         os.umask(umask)
@@ -47,7 +155,7 @@ def atomic_file(path):
         yield tmp
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        os.replace(tmp, real)
     except BaseException:
         if os.path.exists(tmp):
             os.remove(tmp)
@@ -56,11 +164,17 @@ def atomic_file(path):
 
 @contextmanager
 def atomic_h5(path, copy_existing=False):
-    """Open a temporary HDF5 file next to ``path``; rename it over ``path`` on success."""
-    path = Path(path)
-    with atomic_file(path) as tmp:
-        if copy_existing and path.exists():
-            shutil.copyfile(path, tmp)
+    """Open a temporary HDF5 file next to the file ``path`` leads to; rename it over that file on success.
+
+    copy_existing : start from a copy of the existing file (to append to it) instead of an empty nnm file.
+    The write holds the file's inter-process lock (file_lock) from before the copy until after the rename, so
+    concurrent writes from several processes are applied one after the other and no append is lost; the block
+    sees the file as the previous writer left it.  Links are resolved as in atomic_file.
+    """
+    with file_lock(path), atomic_file(path) as tmp:
+        real = Path(os.path.realpath(path))
+        if copy_existing and real.exists():
+            shutil.copyfile(real, tmp)
             mode = "r+"
         else:
             mode = "w"

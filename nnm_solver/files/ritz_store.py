@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import NNMFileError
 from ..model.ritz import StoredBasis, register_stored_basis
-from .h5file import atomic_file, open_nnm
+from .h5file import atomic_file, file_lock, open_nnm
 
 GROUP = "ritz_basis"
 
@@ -41,8 +41,9 @@ def write_basis_group(dst, system, fingerprint, mode, harmonics):
 
 def store_basis_in_file(path, system, fingerprint, mode, harmonics):
     """Write the basis into the existing nnm file ``path`` atomically: a copy of everything in it but an older
-    basis (deleting a group in place would keep its space in the file), plus the new /ritz_basis."""
-    with atomic_file(path) as tmp:
+    basis (deleting a group in place would keep its space in the file), plus the new /ritz_basis.  The copy and
+    rename hold the file's inter-process lock (h5file.file_lock), so a concurrent save to it is not lost."""
+    with file_lock(path), atomic_file(path) as tmp:
         with open_nnm(path) as src, h5py.File(tmp, "w") as dst:
             for key, value in src.attrs.items():
                 dst.attrs[key] = value

@@ -20,6 +20,12 @@ class FileSettings:
     model_rtol: float = 1e-10
     #: ribbon width of line elements of an imported display mesh, as a fraction of the model's bounding box diagonal
     ribbon_width: float = 0.02
+    #: longest wait, in seconds, for another process's update of the same file (h5file.file_lock) before a save
+    #: gives up with a one-line error naming the file; an update holds the lock only while it copies, appends and
+    #: renames (never while computing), so a wait this long means a stuck writer
+    lock_timeout: float = 120.0
+    #: interval, in seconds, between two attempts to take a file's lock while waiting for it
+    lock_poll: float = 0.02
 
 
 #: the file layer's settings (the defaults above, written once)
