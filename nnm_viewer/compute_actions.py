@@ -171,7 +171,7 @@ class ComputeActions:
         self.layout.set(self.layout.h_save_msg, content="")     # a new job: the last save's message is old
         # the new branch is selected: its points replace the old animation
         self.set_view(sel_uid=runner.entry.uid, s=0.0, current_point=None, current_anim=None, current_uid=None,
-                      linear_mode=None)
+                      current_of=None, linear_mode=None)
         self.request("branches", "point", "progress")
         return runner
 

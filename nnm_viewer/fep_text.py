@@ -7,7 +7,7 @@ import numpy as np
 from nnm_solver.sweeps import parse_branch_name
 
 from .fep import energy_at, interp_at
-from .numbering import point_number, point_words
+from .numbering import nearest_row, point_number, point_words
 
 
 #: how a branch ended (Branch.status, nnm_solver/stops.py), as said in the branch dropdown
@@ -93,15 +93,37 @@ def branch_markdown(e):
     return text + "  \n**Events:** " + "; ".join(parts) + " — marked on the FEP"
 
 
+#: what the texts say of a point whose Floquet multipliers were not computed (floquet off: ``stable`` is True for
+#: want of a test, not a finding; Branch.stability_known)
+STABILITY_UNKNOWN = "stability not computed"
+
+
+def stability_known(branch, i):
+    """Whether the stability of row ``i`` of ``branch`` was computed (``Branch.stability_known``; True for a
+    branch object without it)."""
+    known = getattr(branch, "stability_known", None)
+    if known is None:
+        return True
+    known = np.asarray(known, dtype=bool).reshape(-1)
+    return bool(known[i]) if i < len(known) else True
+
+
+def stability_word(branch, i):
+    """'stable', 'unstable' or STABILITY_UNKNOWN for row ``i`` of ``branch``."""
+    if not stability_known(branch, i):
+        return STABILITY_UNKNOWN
+    return "stable" if bool(np.asarray(branch.stable)[i]) else "unstable"
+
+
 def point_facts(e, along):
-    """Words about point ``along`` (fractional index; the nearest computed point) of entry ``e``:
-    [stability, label ('backbone', 'tongue 3:1'; if the branch has labels), estimated frequency
-    error (if the branch has ``freq_error``: the solver's per-point relative error estimate)]."""
+    """Words about point ``along`` (fractional index; the nearest computed point, ``numbering.nearest_row``) of
+    entry ``e``: [stability ('stable', 'unstable', or 'stability not computed' when its multipliers were not),
+    label ('backbone', 'tongue 3:1'; if the branch has labels), estimated frequency error (if the branch has ``freq_error``: the solver's per-point relative error estimate)]."""
     from .point_view import point_label_and_error
 
     b = e.branch
-    i = int(np.clip(round(float(along)), 0, len(b) - 1))
-    facts = ["stable" if bool(np.asarray(b.stable)[i]) else "unstable"]
+    i = nearest_row(along, len(b))           # Branch.interpolate's nearer neighbour, as the Point tab's
+    facts = [stability_word(b, i)]
     label, err = point_label_and_error(b, along)
     if label:
         facts.append(label)

@@ -13,6 +13,7 @@ import nnm_solver
 from nnm_solver import analysis, cubic_scaling, fourier_amplitudes
 
 from .animation import format_length
+from .numbering import nearest_row
 
 N_HARMONICS = 15
 
@@ -22,7 +23,9 @@ class PointData:
     """One orbit of a branch, as computed by the solver for the branch's own springs.
 
     energy J, frequency Hz, period s, stable bool, floquet (2n,) complex, mac (n,),
-    t (S,) s, x (S, n) m over one period, harmonics (N_HARMONICS+1, n) m.
+    t (S,) s, x (S, n) m over one period, harmonics (N_HARMONICS+1, n) m.  stability_known: whether the
+    point's Floquet multipliers were computed (``Branch.stability_known``; without them ``stable`` is True for
+    want of a test, and the texts say the stability was not computed).
     """
 
     energy: float
@@ -36,6 +39,7 @@ class PointData:
     harmonics: np.ndarray
     note: str = ""                 # e.g. why another point than the requested one is shown
     description: str = ""          # what the orbit is, from its own harmonic content (solver's describe_orbit)
+    stability_known: bool = True   # False: no multipliers computed (floquet off), ``stable`` says nothing
 
     def scaled(self, ratio):
         """The same orbit when every k3 is multiplied by ``ratio`` (exact scaling law:
@@ -45,7 +49,7 @@ class PointData:
         law = cubic_scaling(ratio)
         return PointData(self.energy * law.energy, self.frequency, self.period, self.stable, self.floquet,
                          self.mac, self.t, self.x * law.amplitude, self.harmonics * law.amplitude, self.note,
-                         self.description)
+                         self.description, self.stability_known)
 
 
 def orbit_samples(branch):
@@ -74,7 +78,7 @@ def point_data(branch, s, samples=None, reference=False):
     take more than REFERENCE_MAX_STEPS steps or cannot be integrated."""
     if samples is None:
         samples = orbit_samples(branch)
-    i = int(np.clip(round(s), 0, len(branch) - 1))
+    i = nearest_row(s, len(branch))          # Branch.interpolate's nearer neighbour
     note = REFERENCE_NOTE if reference else ""
 
     def motion(b, j):
@@ -99,6 +103,8 @@ def point_data(branch, s, samples=None, reference=False):
     except Exception:
         mac = np.zeros(0)
     floquet = np.asarray(b.floquet[j]) if getattr(b, "floquet", None) is not None and len(b.floquet) else np.zeros(0)
+    known = getattr(b, "stability_known", None)
+    known = True if known is None else bool(np.asarray(known, dtype=bool).reshape(-1)[j])
     description = ""
     if not reference:
         try:
@@ -107,7 +113,8 @@ def point_data(branch, s, samples=None, reference=False):
             description = ""
     return PointData(energy=float(b.energy[j]), frequency=float(b.frequency_hz[j]), period=float(b.period[j]),
                      stable=bool(b.stable[j]), floquet=floquet, mac=mac, t=np.asarray(t, dtype=float),
-                     x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description)
+                     x=np.asarray(x, dtype=float), harmonics=harm, note=note, description=description,
+                     stability_known=known)
 
 
 #: samples per period of a linear mode's orbit (one harmonic: a few samples would do)
@@ -258,15 +265,18 @@ def info_markdown(pd, model, linear_freqs, k3_factor=1.0, where="", top=5, label
              + (f" · {method}" if method else ""),
              f"- energy **{pd.energy:.4g} J**",
              *([f"- k3 factor x{k3_factor:.3g}"] if k3_factor is not None else []),
-             f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**",
+             (f"- stability: **{'stable' if pd.stable else 'UNSTABLE'}**" if pd.stability_known else
+              "- stability: **not computed** (no Floquet multipliers for this point: computed with floquet off)"),
              *([f"- label: **{label}**{LABEL_WORDS.get(str(label).split(' ')[0], '')}"] if label else []),
              *orbit_lines(pd, model)]
     if pd.note:
         lines.append(f"- note: {pd.note}")
-    if pd.floquet.size:
-        mod = np.abs(pd.floquet)
+    mu = np.asarray(pd.floquet).reshape(-1) if pd.stability_known else np.zeros(0, complex)
+    mu = mu[np.isfinite(mu)]                      # NaN: not computed
+    if mu.size:
+        mod = np.abs(mu)
         order = np.argsort(-mod)[:6]
-        mults = ", ".join(f"{pd.floquet[k].real:+.4f}{pd.floquet[k].imag:+.4f}i" for k in order)
+        mults = ", ".join(f"{mu[k].real:+.4f}{mu[k].imag:+.4f}i" for k in order)
         lines.append(f"- Floquet multipliers: max |mu| = {mod.max():.6f}; largest: {mults}")
     if pd.mac.size:
         order = np.argsort(-pd.mac)[:top]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["point_number", "point_words", "slider_value", "along_from_slider"]
+__all__ = ["point_number", "point_words", "slider_value", "along_from_slider", "nearest_row"]
 
 
 def point_number(along):
@@ -29,3 +29,16 @@ def slider_value(along):
 def along_from_slider(value):
     """The 0-based position of the Along-branch slider's ``value`` (a 1-based point number)."""
     return max(float(value) - 1.0, 0.0)
+
+
+def nearest_row(along, n):
+    """The computed row (0-based) nearest to position ``along`` of a branch of ``n`` points, by the rule of
+    ``Branch.interpolate`` (whose stability, multipliers and label are the nearer neighbour's): between rows j and
+    j + 1 the upper one from half way on (weight >= 0.5), not Python's round (half to even: round(70.5) == 70).
+    The one nearest-point rule of the viewer's texts and orbits; ``along`` is clipped to 0..n-1."""
+    n = int(n)
+    if n <= 1:
+        return 0
+    s = min(max(float(along), 0.0), float(n - 1))
+    j = min(int(math.floor(s)), n - 2)
+    return j + 1 if s - j >= 0.5 else j

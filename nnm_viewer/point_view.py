@@ -10,7 +10,7 @@ from nnm_solver import cubic_scaling
 from . import scene as sc
 from .animation import orbit_animation
 from .colorbar import colorbar_image
-from .numbering import point_words
+from .numbering import nearest_row, point_words
 from .info import (auto_dofs, info_markdown, linear_mode_point, linear_mode_title, method_text, parse_dofs,
                    peak_text, point_data, uplot_harmonics, uplot_time_series)
 
@@ -24,7 +24,7 @@ def point_label_and_error(branch, along):
     branch's ``labels`` and ``freq_error`` (None where the branch, e.g. from an older file, has none; inf where a
     harmonic-balance point's truncation does not resolve its orbit, orbits/hb_error.py)."""
     n = len(branch)
-    i = int(np.clip(round(float(along)), 0, max(n - 1, 0)))
+    i = nearest_row(along, n)                 # Branch.interpolate's nearer neighbour
     labels = getattr(branch, "labels", None)
     label = str(labels[i]) if labels is not None and len(labels) == n else None
     err = getattr(branch, "freq_error", None)
@@ -59,23 +59,37 @@ class PointView:
             return self.compute_linear(v.linear_mode)
         e = s.selected_entry(v)
         if e is None or not len(e):
-            s.set_view(current_point=None, current_anim=None, current_uid=None if e is None else e.uid)
+            s.set_view(current_point=None, current_anim=None, current_uid=None if e is None else e.uid,
+                       current_of=None)
             return True
         # until the branch's integrator is compiled (warmup.py, then the session asks again) the orbit is
         # scipy's (Branch.reference_motion: no compiled kernel), replaced by the solver's own once ready
         reference = not s.shared.orbits_ready.is_set()
+        try:
+            pd, anim, ratio, along = self.orbit(e, v, reference)
+        except RuntimeError:
+            if not reference:
+                raise
+            # too slow or failed: the model at rest until the solver's orbit
+            _, old = s.change_view(lambda w: dict(current_point=None, current_anim=None, current_uid=e.uid,
+                                                  current_of=None))
+            return not (old.current_point is None and self.last_glb is not None)
+        s.set_view(current_point=pd, current_anim=anim, current_uid=e.uid, ratio=ratio, current_of=(e.uid, along))
+        return True
+
+    def orbit(self, e, v, reference=None):
+        """(PointData scaled to view ``v``'s k3 factor, its OrbitAnimation, that factor over the branch's, the
+        position along the branch) of the point view ``v`` asks for on entry ``e`` (cached per branch and
+        position; the caches are the drawing's: call under its lock).  reference: scipy's orbit (default: while
+        the solver's integrator is not compiled yet); RuntimeError if the orbit cannot be integrated."""
+        s = self.session
+        if reference is None:
+            reference = not s.shared.orbits_ready.is_set()
         along = float(np.clip(v.s, 0, len(e) - 1))
         key = (e.uid, len(e), round(along, 4), reference)
         pd = self._point_cache.get(key)
         if pd is None:
-            try:
-                pd = point_data(e.branch, along, reference=reference)
-            except RuntimeError:
-                if not reference:
-                    raise
-                # too slow or failed: the model at rest until the solver's orbit
-                _, old = s.change_view(lambda w: dict(current_point=None, current_anim=None, current_uid=e.uid))
-                return not (old.current_point is None and self.last_glb is not None)
+            pd = point_data(e.branch, along, reference=reference)
             if len(self._point_cache) > POINT_CACHE:
                 self._point_cache.clear()
             self._point_cache[key] = pd
@@ -86,13 +100,19 @@ class PointView:
                 self._anim_cache.clear()
             self._anim_cache[key] = anim
         ratio = s.view_factor(e, v) / e.k3_factor        # 1 unless the scaling law applies
-        s.set_view(current_point=pd.scaled(ratio), current_anim=anim, current_uid=e.uid, ratio=ratio)
-        return True
+        return pd.scaled(ratio), anim, ratio, along
 
     def compute_linear(self, k):
-        """Linear mode ``k`` as the point shown: its amplitude a is chosen so that its peak vertex
+        """Linear mode ``k`` as the point shown; True (see ``linear_orbit``)."""
+        pd, anim = self.linear_orbit(k)
+        self.session.set_view(current_point=pd, current_anim=anim, current_uid=None, ratio=1.0,
+                              current_of=("linear", int(k)))
+        return True
+
+    def linear_orbit(self, k):
+        """(PointData, OrbitAnimation) of linear mode ``k``: its amplitude a is chosen so that its peak vertex
         displacement is the auto amplification's (scene.AUTO_PEAK_FRACTION of the model size), so that it looks
-        the same with a manual amplification of 1; True."""
+        the same with a manual amplification of 1 (cached; call under the drawing's lock)."""
         s = self.session
         key = ("linear", int(k))
         cached = self._anim_cache.get(key)
@@ -107,8 +127,7 @@ class PointView:
             if len(self._anim_cache) > ANIM_CACHE:
                 self._anim_cache.clear()
             self._anim_cache[key] = cached
-        s.set_view(current_point=cached[0], current_anim=cached[1], current_uid=None, ratio=1.0)
-        return True
+        return cached
 
     def draw_glb(self):
         """The model: animated over one orbit, or at rest if no point is shown."""
@@ -125,7 +144,7 @@ class PointView:
             glb = anim.glb(amp * cubic_scaling(v.ratio).amplitude, display_period=shown, playing=v.playing,
                            phase=v.phase)
             if v.auto_amp:
-                ui.set(ui.h_amp, value=float(np.clip(round(np.log10(amp), 2), -1.0, 6.0)))
+                self.show_auto_amplification(amp)
             lin = v.linear_mode
             ui.set(ui.h_peak, content=(f"**{linear_mode_title(s.model, s.shared.linear_freqs, lin, freq=False)}** "
                                        "(amplitude chosen for display)  \n" if lin is not None else "")
@@ -135,6 +154,18 @@ class PointView:
         self.last_glb = glb
         if anim is not None:             # after the animation, which the user waits for
             self.draw_colorbar(s.amplification(v)[1])
+
+    def show_auto_amplification(self, amp):
+        """Auto amplification ``amp`` on the Amplification log10 slider and in the view's ``amp_log`` (the stored
+        value), together under the session's lock and only while Auto is still on: the slider always shows the
+        stored value, so unticking Auto keeps the factor the slider shows (docs/viewer.md: 'Off: the
+        Amplification log10 slider sets a fixed factor')."""
+        s, ui = self.session, self.ui
+        shown = float(np.clip(round(float(np.log10(amp)), 2), -1.0, 6.0))
+        with s.lock:
+            if s.view.auto_amp:               # unticked meanwhile: the slider keeps the value it shows
+                s.set_view(amp_log=shown)
+                ui.set(ui.h_amp, value=shown)
 
     def draw_colorbar(self, peak):
         """The colour bar of the displacement colours, 0 .. the true peak displacement (redrawn when

@@ -25,8 +25,9 @@ class ViewState:
     camera_preset : the last view preset.  canvas : (width, height) px of the tab's 3D canvas, as its last
     camera message said (None before one; the board's spheres are drawn again when it changes).  linear_mode : k (1-based) when linear mode k is shown instead of
     the selected point.  message : the tab's last status line.  current_point, current_anim, current_uid,
-    ratio : the point shown (PointData scaled to the view's k3, its OrbitAnimation, its branch's uid, the
-    view's k3 factor over the branch's), written by the drawing.
+    ratio, current_of : the point shown (PointData scaled to the view's k3, its OrbitAnimation, its branch's uid, the
+    view's k3 factor over the branch's, and which orbit it is: (uid, position along the branch) or ('linear', k)),
+    written by the drawing.
     """
 
     sel_uid: object = None
@@ -51,6 +52,7 @@ class ViewState:
     current_anim: object = None
     current_uid: object = None
     ratio: float = 1.0
+    current_of: object = None
 
     @property
     def factor(self):

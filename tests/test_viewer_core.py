@@ -256,3 +256,60 @@ def test_point_facts_and_info_say_when_the_harmonics_do_not_resolve_a_point(two_
     pd = point_data(b2, 3.0)
     assert "not resolved by the harmonics" in info_markdown(pd, b.model, b.model.linear_modes()[0], freq_error=np.inf)
     assert "estimated relative error 2.0e-05" in info_markdown(pd, b.model, b.model.linear_modes()[0], freq_error=2e-5)
+
+
+def test_one_nearest_point_rule_the_branchs_interpolate():
+    """Halfway between two computed points the texts and the orbit name the same neighbour: the upper one from
+    weight 0.5 on, as Branch.interpolate (numbering.nearest_row), not Python's round (round(70.5) == 70)."""
+    from pathlib import Path
+
+    import nnm_solver as nnm
+    from nnm_viewer.fep_text import point_facts
+    from nnm_viewer.info import point_data
+    from nnm_viewer.numbering import nearest_row
+    from nnm_viewer.point_view import point_label_and_error
+    from nnm_viewer.state import BranchEntry
+
+    assert [nearest_row(s, 5) for s in (0.0, 0.49, 0.5, 2.5, 3.5, 3.99, 4.0, 7.0, -1.0)] == [0, 0, 1, 3, 4, 4, 4, 4, 0]
+    assert nearest_row(0.0, 1) == 0 and nearest_row(0.7, 1) == 0
+    b = nnm.load_branches(Path(__file__).resolve().parents[1] / "assets" / "two_dof.h5")[0]
+    assert bool(b.stable[70]) and not bool(b.stable[71])
+    for s in (70.5, 70.49, 70.51, 71.0):
+        ref = b.interpolate(s)
+        assert bool(ref.stable[0]) == bool(b.stable[nearest_row(s, len(b))])
+    e = BranchEntry(b, "NNM 1")
+    assert point_facts(e, 70.5)[0] == "unstable" and point_facts(e, 70.49)[0] == "stable"
+    assert point_data(b, 70.5, samples=64).stable is False
+    # labels follow the same rule
+    labels = np.array(["a"] * len(b), dtype=object)
+    labels[71] = "b"
+    b2 = type(b).__new__(type(b))
+    b2.__dict__.update(b.__dict__)
+    b2.labels = labels
+    assert point_label_and_error(b2, 70.5)[0] == "b" and point_label_and_error(b2, 70.49)[0] == "a"
+
+
+def test_point_texts_of_a_branch_without_multipliers_say_stability_not_computed():
+    """floquet=False: ``stable`` is True for want of a test (Branch.stability_known False): the selection text
+    and the Point tab say the stability was not computed, and list no (NaN) multipliers."""
+    import nnm_solver as nnm
+    from nnm_viewer.fep_text import point_facts
+    from nnm_viewer.info import info_markdown, point_data
+    from nnm_viewer.state import BranchEntry
+    m = nnm.Model(np.eye(2), np.array([[2.0, -1.0], [-1.0, 2.0]]), springs=[nnm.CubicSpring(dof=0, k3=0.5)])
+    off = nnm.continue_nnm(m, 1, 1.0, floquet=False, max_points=8)
+    assert not off.stability_known.any()
+    facts = point_facts(BranchEntry(off, "NNM 1"), 2.0)
+    assert facts[0] == "stability not computed" and "stable" not in facts
+    for s in (2.0, 2.5):
+        pd = point_data(off, s)
+        assert pd.stability_known is False and pd.scaled(10.0).stability_known is False
+        text = info_markdown(pd, m, m.linear_modes()[0])
+        assert "stability: **not computed**" in text and "**stable**" not in text
+        assert "Floquet multipliers:" not in text and "nan" not in text
+    on = nnm.continue_nnm(m, 1, 1.0, max_points=8)
+    pd = point_data(on, 2.0)
+    assert pd.stability_known
+    text = info_markdown(pd, m, m.linear_modes()[0])
+    assert "stability: **stable**" in text and "Floquet multipliers: max |mu| = 1.0" in text
+    assert point_facts(BranchEntry(on, "NNM 1"), 2.0)[0] == "stable"

@@ -1317,3 +1317,48 @@ def test_compute_tab_integrator_reaches_the_job(server, demo_file, tmp_path):
     st = shared.entries[0].branch.settings
     assert f"· shooting, {st.integrator}, {st.steps_per_period} steps per period" in s.h_info.content
     s.close()
+
+
+def test_unticking_auto_amplification_keeps_the_factor_the_slider_shows(server, demo_file):
+    """With Auto on the drawing shows the auto factor on the Amplification slider and stores it (amp_log);
+    unticked, the factor used is the one the slider shows (docs/viewer.md), not a stale amp_log of 0 (x1)."""
+    s, _ = make_session(server, demo_file)
+    s.pick(s.sel_uid, 1)                                   # a small orbit: the auto factor is far from x1
+    amp_auto, _ = s.amplification()
+    shown = s.h_amp.value
+    assert abs(np.log10(amp_auto)) > 0.1 and shown == pytest.approx(np.log10(amp_auto), abs=0.006)
+    assert s.amp_log == shown
+    s.h_auto.value = False
+    assert s.h_amp.value == shown
+    assert s.amplification()[0] == pytest.approx(10.0 ** shown, rel=1e-12)
+    assert f"shown x{10.0 ** shown:.3g}" in s.h_peak.content and "(auto)" not in s.h_peak.content
+    s.h_amp.value = 1.0                                    # the manual slider still sets it
+    assert s.amplification()[0] == pytest.approx(10.0)
+    s.close()
+
+
+def test_selection_text_and_point_tab_agree_halfway_between_stable_and_unstable(server):
+    """assets/two_dof.h5 rows 70/71 are stable/unstable: at point 71.5 (s = 70.5) the selection text, the
+    readout and the Point tab all name the upper neighbour's stability, as Branch.interpolate."""
+    path = Path(__file__).resolve().parents[1] / "assets" / "two_dof.h5"
+    s, shared = make_session(server, path)
+    e = shared.entries[0]
+    assert bool(e.branch.stable[70]) and not bool(e.branch.stable[71])
+    s.pick(e.uid, 70)
+    assert "stable" in s.h_sel.content and "stability: **stable**" in s.h_info.content
+    s.h_along.value = 71.5
+    assert s.s == 70.5
+    assert "unstable" in s.h_sel.content and "stability: **UNSTABLE**" in s.h_info.content
+    s.close()
+
+
+def test_a_branch_without_multipliers_is_not_said_stable_in_the_session(server):
+    """floquet=False: the legend, the selection text and the Point tab all say the stability was not computed."""
+    m = nnm.Model(np.eye(2), np.array([[2., -1], [-1, 2]]), [nnm.CubicSpring(dof=0, k3=0.5)])
+    b = nnm.continue_nnm(m, mode=1, energy_max=1.0, max_points=10, floquet=False)
+    s = Session(server, SharedState(m, branches=[b]), sync=True)
+    s.pick(s.sel_uid, 3)
+    assert "stability not computed" in s.h_sel.content and ", stable" not in s.h_sel.content
+    assert "stability: **not computed**" in s.h_info.content
+    assert "Floquet multipliers:" not in s.h_info.content and "nan" not in s.h_info.content
+    s.close()

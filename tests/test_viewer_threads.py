@@ -111,3 +111,48 @@ def test_view_state_is_one_immutable_record(server, demo_file):
     with pytest.raises(Exception):
         after.s = 1.0
     s.close()
+
+
+def test_downloads_contain_the_orbit_their_name_says_while_the_drawing_catches_up(server, demo_file):
+    """A drawn tab (its own draw thread, as nnm-view): while the drawing has not yet drawn the point the view asks
+    for (here: its lock held), the orbit CSV and the GIF are of the view's position and k3 factor, as their names
+    say, not of the last orbit drawn."""
+    import csv
+    import io
+
+    import numpy as np
+
+    from nnm_viewer.info import point_data
+
+    model = nnm.load_model(demo_file)
+    shared = SharedState(model, path=demo_file, branches=nnm.load_branches(demo_file))
+    s = Session(server, shared)                            # drawn in its own thread
+    try:
+        wait_for(lambda: s.view.current_point is not None, timeout=60)
+        e = shared.entries[0]
+        assert s.view.current_of == (e.uid, 0.0)
+
+        def first_row(data):
+            return np.array(list(csv.reader(io.StringIO(data.decode())))[1], dtype=float)
+
+        with s.drawing._draw_lock:                         # the drawing busy: it has not drawn point 10 yet
+            s.h_along.value = 10.0
+            assert s.view.current_of == (e.uid, 0.0)          # point 1 still shown
+            name, data = s.orbit_csv()
+            assert name.endswith("_point10_orbit.csv") and "k3x" not in name
+            row = first_row(data)
+            pd = point_data(e.branch, 9.0, reference=not shared.orbits_ready.is_set())
+            np.testing.assert_allclose(row[1:], pd.x[0], rtol=1e-9, atol=1e-15)
+            assert not np.allclose(row[1:], e.branch.x0[0], rtol=1e-3)
+            s.h_k3.value = 1.0                             # every k3 x 10: displacements / sqrt(10)
+            name2, data2 = s.orbit_csv()
+            assert "k3x10" in name2 and name2.endswith("_point10_orbit.csv")
+            np.testing.assert_allclose(first_row(data2)[1:], pd.x[0] / np.sqrt(10), rtol=1e-9, atol=1e-15)
+            gif_name, gif = s.animation_gif()
+            assert "k3x10" in gif_name and gif_name.endswith("_point10.gif") and gif[:6] == b"GIF89a"
+            assert s.view.current_of == (e.uid, 0.0)          # the downloads did not change what is shown
+        wait_for(lambda: s.view.current_of == (e.uid, 9.0) and s.view.ratio == pytest.approx(10.0), timeout=60)
+        name3, data3 = s.orbit_csv()                       # drawn now: the orbit shown, the same file
+        assert name3 == name2 and data3 == data2
+    finally:
+        s.close()
