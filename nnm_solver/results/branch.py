@@ -9,6 +9,7 @@ from ..fourier import fourier_amplitudes
 from ..model.reduction import mac
 from ..model.scaling import cubic_scaling
 from .multipliers import floquet_columns, multipliers_of
+from .rescaled import energy_factor, scaled_event, scaled_message
 from .point import PhysicalColumns, Point
 from .settings import settings_from_dict
 from .stops import STOP_STATUSES
@@ -209,7 +210,7 @@ class Branch:
 
         # (the orbit scaled as a whole: harmonic balance's coefficients too, which motion() and orbit() use; x0 =
         # the coefficients' orbit at t = 0, linear in them)
-        c = _energy_factor(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
+        c = energy_factor(self.model, lerp(self.x0), lerp(self.v0), lerp(self.energy))
         x0, v0 = c * lerp(self.x0), c * lerp(self.v0)
         near = j if w < 0.5 else k
         return Branch(self.model, self.mode, [self.model.energy(x0, v0)], [lerp(self.frequency_hz)],
@@ -316,52 +317,12 @@ class Branch:
         el = self.model.elements
         if len(el) and not el.cubic_only:
             raise NNMInputError("the scaling law holds for cubic springs only; compute the branch of the scaled model")
-        events = [_scaled_event(e, sc) for e in self.events]
+        events = [scaled_event(e, sc) for e in self.events]
         settings = self.settings.replace(k3_factor=self.settings.k3_factor * sc.ratio,
                                          energy_max=self.settings.energy_max * sc.energy)
         return Branch(self.model.scaled(sc.ratio), self.mode, self.energy * sc.energy, self.frequency_hz,
                       self.period, self.x0 * sc.amplitude, self.v0 * sc.amplitude, self.floquet, self.stable, events,
-                      self.status, _scaled_message(self.message, sc), settings, self.name,
+                      self.status, scaled_message(self.message, sc), settings, self.name,
                       None if self.coefficients is None else self.coefficients * sc.amplitude, self.labels,
                       [t.scaled(sc.amplitude, sc.energy) for t in self.tongues], self.freq_error,
                       self.steps, self.fundamental_share)
-
-
-def _scaled_event(event, sc):
-    """An event record (a dict) of a branch scaled by ``sc`` (scaling.CubicScaling): energy (J) x sc.energy, a
-    located event's orbit x0, v0 (m, m/s) x sc.amplitude; frequency, period, multipliers and text unchanged."""
-    out = dict(event, energy=float(event["energy"]) * sc.energy)
-    for key in ("x0", "v0"):
-        if key in event:
-            out[key] = (np.asarray(event[key], dtype=float) * sc.amplitude).tolist()
-    return out
-
-
-def _scaled_message(message, sc):
-    """A scaled branch's message: the computed branch's (free text, its numbers unchanged), with a note that says
-    so; '' stays ''."""
-    if not message:
-        return message
-    return (f"{message} [then scaled: every k3 x {sc.ratio:g}, so the energies quoted before this note are x "
-            f"{sc.energy:g} on this branch]")
-
-
-def _energy_factor(model, x, v, energy):
-    """The factor c > 0 that gives the state (c x, c v) the energy ``energy`` (J): secant iteration on E(c x, c v) =
-    energy from c = 1, for any element law; 1 if it does not converge to 1e-9."""
-    if energy <= 0 or not model.energy(x, v) > 0:
-        return 1.0
-    f = lambda c: float(model.energy(c * x, c * v)) - energy
-    c0, c1 = 1.0, 1.0 + 1e-3
-    f0, f1 = f(c0), f(c1)
-    for _ in range(60):
-        if f1 == f0:
-            break
-        c2 = c1 - f1 * (c1 - c0) / (f1 - f0)
-        c2 = c2 if c2 > 0 else 0.5 * c1
-        c0, f0, c1, f1 = c1, f1, c2, f(c2)
-        if abs(f1) <= 1e-12 * energy:
-            break
-    if not abs(f1) <= 1e-9 * energy:
-        return 1.0
-    return c1
