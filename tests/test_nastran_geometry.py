@@ -62,6 +62,18 @@ def test_a_scalar_point_in_the_aset_only_is_scalar_and_ids_are_sorted_together(t
     assert read_aset_map(p).labels() == ["node 40 uz", "spoint 50 scalar", "node 60 uz", "spoint 70 modal"]
 
 
+def test_a_blank_component_with_several_scalar_points(tmp_path):
+    """QSET1 with a blank component and several IDs (docs/import.md: '0 or blank'): the first ID was read as the
+    components ('not ASET1, components, grid, ...'; small field: 'ID 1002 ... as a scalar point and as a grid')."""
+    p = tmp_path / "se.bdf"
+    want = ["node 7 ux", "node 7 uy", "node 7 uz", "node 7 rx", "node 7 ry", "node 7 rz",
+            "spoint 1001 modal", "spoint 1002 modal", "spoint 1003 modal"]
+    for text in ("ASET1,123456,7\nQSET1,,1001,THRU,1003\n", "ASET1   123456  7\nQSET1           1001    1002    1003\n",
+                 "ASET1,123456,7\nQSET1,0,1001,THRU,1003\n"):
+        p.write_text(text)
+        assert read_aset_map(p).labels() == want, text
+
+
 def test_the_geometry_is_the_display_mesh(bulk):
     dm = read_aset_map(bulk)
     mesh = read_bdf_mesh(bulk, len(dm), dm)

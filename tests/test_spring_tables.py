@@ -77,6 +77,8 @@ def test_mat_old_tables_still_load_and_versions_are_checked(tmp_path):
     (dict(piecewise_springs=np.array([[4, 0, 1.0, 0.1, 2.0]])), "piecewise_springs row 1: dof 4 is not a DOF"),
     (dict(piecewise_springs=np.array([[1, 0.5, 1.0, 0.1, 2.0]])), "dof and other must be whole numbers"),
     (dict(springs=np.array([[1.5, 0, 0.5]])), "springs row 1: dof and other must be whole numbers"),  # (was DOF 2)
+    (dict(springs="abc"), "'springs' must be a numeric table"),                           # (a traceback before)
+    (dict(piecewise_springs=np.array([[1, 0, 1.0, 0.1, 2.0]]), piecewise_eps="x"), "'piecewise_eps' must be a numeric"),
     (dict(piecewise_springs=np.array([[1, 0, 1.0, 0.1, 2.0]]), piecewise_eps=0.7), "eps=0.7 must be in"),
 ])
 def test_mat_bad_spring_tables_one_line(tmp_path, tables, match):
@@ -135,3 +137,13 @@ def test_toml_bad_springs_one_line(tmp_path, text, match):
     with pytest.raises(NNMInputError, match=match) as exc:
         nnm.load_model(_toml(tmp_path, "[[springs]]\n" + text))
     assert "\n" not in str(exc.value) and "model.toml" in str(exc.value)
+
+
+def test_a_mat_files_dof_labels_are_its_dof_map_in_a_description(tmp_path):
+    """A .mat named in a description keeps its dof_labels as the DOF map, as when it is loaded alone (they were
+    dropped: springs by node refused with 'these matrix files have none')."""
+    labels = np.array(["node 1 ux", "node 2 ux", "node 3 ux"], dtype=object)
+    p = _toml(tmp_path, '\n[[springs]]\nnode = 2\ndirection = "ux"\nk3 = 5.0\n', mat_tables=dict(dof_labels=labels))
+    m = nnm.load_model(p)
+    assert m.dof_labels == list(labels) == nnm.load_model(tmp_path / "m.mat").dof_labels
+    assert len(m.springs) == 1 and m.springs[0].dof == 1 and m.springs[0].k3 == 5.0

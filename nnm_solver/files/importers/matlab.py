@@ -96,7 +96,7 @@ def _v73_value(f, obj):
     return a.T
 
 
-def _strings(value):
+def strings_of(value):
     if isinstance(value, str):
         return [value]
     if isinstance(value, list):
@@ -104,9 +104,19 @@ def _strings(value):
     return [str(np.asarray(s).ravel()[0]) if np.asarray(s).size else "" for s in np.asarray(value, dtype=object).ravel()]
 
 
+def _numeric(value, name, where):
+    """The MATLAB variable ``name`` as a float array (sparse ones densified); one-line NNMFileError if it is not
+    numeric (a string, a cell array, a struct: numpy's conversion error, a traceback before)."""
+    try:
+        return np.asarray(value.toarray() if sp.issparse(value) else value, dtype=float)
+    except (TypeError, ValueError):
+        raise NNMFileError(f"{where}: '{name}' must be a numeric table (rows of numbers), got "
+                           f"{type(value).__name__} {np.asarray(value, dtype=object).ravel()[:3].tolist()!r}") from None
+
+
 def springs_from_table(table, n, where):
     """CubicSprings from rows [dof other k3] with 1-based DOFs (other = 0: grounded)."""
-    table = np.atleast_2d(np.asarray(table.toarray() if sp.issparse(table) else table, dtype=float))
+    table = np.atleast_2d(_numeric(table, "springs", where))
     if not table.size:
         return []
     if table.shape[1] != 3:
@@ -126,7 +136,7 @@ SPRINGS_VERSION = 2
 
 def _table(value, name, ncols, where, exact=True):
     """A numeric (rows, cols) table; one-line NNMFileError if its width is wrong."""
-    table = np.atleast_2d(np.asarray(value.toarray() if sp.issparse(value) else value, dtype=float))
+    table = np.atleast_2d(_numeric(value, name, where))
     if table.size and (table.shape[1] != ncols if exact else table.shape[1] < ncols):
         raise NNMFileError(f"{where}: '{name}' must have {'' if exact else 'at least '}{ncols} columns, "
                            f"got {table.shape[0]}x{table.shape[1]}")
@@ -151,7 +161,7 @@ def springs_from_mat(data, n, where):
     springs, polynomial_springs, piecewise_springs."""
     version = SPRINGS_VERSION if any(SPRING_VARIABLES[k] > 1 for k in data if k in SPRING_VARIABLES) else 1
     if "springs_version" in data:
-        v = np.asarray(data["springs_version"], dtype=float).ravel()
+        v = _numeric(data["springs_version"], "springs_version", where).ravel()
         if v.size != 1 or v[0] not in (1, 2):
             raise NNMFileError(f"{where}: springs_version = {v.tolist()} is not a spring-table version this nnm reads "
                                f"(1 or {SPRINGS_VERSION}); update nnm")
@@ -178,7 +188,7 @@ def springs_from_mat(data, n, where):
     if "piecewise_springs" in data:
         eps = MODEL.pwl_eps
         if "piecewise_eps" in data:
-            e = np.asarray(data["piecewise_eps"], dtype=float).ravel()
+            e = _numeric(data["piecewise_eps"], "piecewise_eps", where).ravel()
             if e.size != 1:
                 raise NNMFileError(f"{where}: piecewise_eps must be one number (kink width / d1)")
             eps = float(e[0])
@@ -214,7 +224,7 @@ def load_mat_model(path, name=None):
                            f"they must have the same size")
     n = M.shape[0]
     springs = springs_from_mat(data, n, path)
-    labels = _strings(data["dof_labels"]) if "dof_labels" in data else None
+    labels = strings_of(data["dof_labels"]) if "dof_labels" in data else None
     try:
         return Model(M, K, springs, dof_labels=labels, name=name or path.stem,
                      info={"source": str(path.name), "format": "matlab"})

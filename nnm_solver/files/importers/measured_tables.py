@@ -122,9 +122,9 @@ def read_csv_measurement(path):
 
 
 def _mat_strings(value):
-    from .matlab import _strings
+    from .matlab import strings_of
 
-    return _strings(value)
+    return strings_of(value)
 
 
 def read_mat_measurement(path):

@@ -157,7 +157,9 @@ _FIELD = re.compile(r"\s*,\s*")
 
 
 def _bulk_cards(text):
-    """(name, fields) of each small-field or free-field bulk data card, continuations joined."""
+    """(name, fields) of each small-field or free-field bulk data card, continuations joined.  The card's first field
+    keeps its place when blank ('' : an XSET1's blank component, e.g. 'QSET1,,1001,THRU,1003'); the other blank
+    fields are dropped."""
     cards = []
     for raw in text.splitlines():
         line = raw.split("$")[0].rstrip()
@@ -172,7 +174,7 @@ def _bulk_cards(text):
             if cards:
                 cards[-1][1].extend(f for f in fields[1:] if f != "")
             continue
-        cards.append((head.upper(), [f for f in fields[1:] if f != ""]))
+        cards.append((head.upper(), fields[1:2] + [f for f in fields[2:] if f != ""]))
     return cards
 
 
@@ -201,8 +203,8 @@ def read_aset_map(path):
     try:
         for name, fields in _bulk_cards(text):
             if name in ("ASET", "ASET1", "QSET", "QSET1"):
-                if name.endswith("1") and len(fields) == 1:  # QSET1 0 1001 written with a blank component
-                    fields = ["0"] + fields
+                if name.endswith("1") and fields and fields[0] == "":   # a blank component: a scalar point's 0
+                    fields = ["0"] + fields[1:]
                 (qset if name.startswith("Q") else aset).update(_set_dofs(name, fields))
     except (ValueError, IndexError):
         raise NNMFileError(f"{path}: an ASET/QSET card is not 'ASET1, components, grid, ...' or 'ASET, grid, "

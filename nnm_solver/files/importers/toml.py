@@ -43,7 +43,7 @@ import numpy as np
 
 from ...errors import NNMFileError, NNMInputError
 from ...model.model import Model
-from .common import Units, existing, read_dof_map_file
+from .common import DofMap, Units, existing, read_dof_map_file
 from .toml_springs import SPRING_TYPES, SpringType, _unknown, build_springs, to_si  # noqa: F401 (public here too)
 
 if sys.version_info >= (3, 11):
@@ -115,13 +115,16 @@ def read_matrices(mt, folder, where):
         from .ansys import read_full
         M, K, dof_map = read_full(f)
     else:
-        from .matlab import SPRING_VARIABLES, read_mat, springs_from_mat
-        data = read_mat(f, ["M", "K", "springs_version", *SPRING_VARIABLES])
+        from .matlab import SPRING_VARIABLES, read_mat, springs_from_mat, strings_of
+        data = read_mat(f, ["M", "K", "dof_labels", "springs_version", *SPRING_VARIABLES])
         for key in ("M", "K"):
             if key not in data:
                 raise NNMFileError(f"{f}: no variable '{key}'")
         M, K = data["M"], data["K"]
-        dof_map = None
+        # the file's dof_labels ('node 12 uz') are its DOF map, as when the .mat is loaded alone (they were dropped
+        # here: springs by node refused, rotations scaled as translations); the description's dof_map wins
+        dof_map = (DofMap.from_labels(strings_of(data["dof_labels"]))
+                   if "dof_labels" in data and "dof_map" not in mt else None)
         springs = springs_from_mat(data, M.shape[0], f)
     if M.shape != K.shape:
         raise NNMFileError(f"{where}: M is {M.shape[0]}x{M.shape[1]} but K is {K.shape[0]}x{K.shape[1]}; "
