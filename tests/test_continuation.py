@@ -93,6 +93,13 @@ def test_cancelled_job_keeps_its_points():
     assert job.done and job.error is None
     assert b.status == "cancelled" and len(b) >= 5
     assert np.all(np.isfinite(b.energy))
+    # its progress is the fraction it reached, in log energy from the first point to 1e8 J (it said 1)
+    expected = np.log(b.energy.max() / b.energy[0]) / np.log(1e8 / b.energy[0])
+    assert job.progress == pytest.approx(expected) and job.progress < 0.5
+    done = nnm.start_branch(m, 1, 1.0)
+    done.result(timeout=60)
+    done.cancel()                                      # after the end: nothing changes
+    assert done.progress == 1.0 and done.result().status == "done"
 
 
 def test_job_reports_solver_errors_without_raising_in_thread():

@@ -76,8 +76,10 @@ class Job:
 
     @property
     def progress(self):
-        """Fraction 0..1 of the way in log(energy) from the first point to energy_max."""
-        if self.done and self.error is None:
+        """Fraction 0..1 of the way in log(energy) from the first point to energy_max: 1 once the computation has
+        ended by itself (done, or a stop rule: max_points, escape, tongue, ...); a cancelled or failed one keeps the
+        fraction it reached (a cancelled job reported 1)."""
+        if self.done and self.error is None and self._result is not None and self._result.status != "cancelled":
             return 1.0
         pts = list(self._it.points)
         if not pts:
